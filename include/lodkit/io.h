@@ -1,0 +1,139 @@
+// lodkit: reading and writing meshes and scenes (OBJ, PLY, OFF, STL, glTF 2.0).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "lodkit/mesh.h"
+
+namespace lod {
+
+enum class FileFormat { obj, ply, off, stl, gltf, glb };
+
+// From the extension (case-insensitive); throws lod::Error (usage) for an unknown one.
+FileFormat format_from_path(const std::filesystem::path& path);
+const char* format_name(FileFormat format);
+
+struct ReadOptions {
+  // Called now and then with the fraction of the input consumed, in [0, 1]. May be empty.
+  std::function<void(double fraction)> progress;
+};
+
+struct WriteOptions {
+  bool binary = true;  // PLY and STL: binary little-endian (true) or ASCII (false)
+  // Text formats print floats with the shortest representation that reads back bit-exact.
+};
+
+// ---- glTF scene model --------------------------------------------------------------------------
+// Everything lodkit reads from a glTF file. Meshes are split into primitives; the rest (nodes,
+// skins, animations) is exposed read-only for later stages, and the source document is kept so that
+// writing changes only the primitives' geometry: materials, textures (image bytes identical), node
+// transforms, skins and animations are written back as they were.
+
+struct Primitive {
+  Mesh mesh;                    // triangles only; materials[] is empty (the primitive has one material)
+  uint32_t gltf_mesh = 0;       // index of the glTF mesh this primitive belongs to
+  uint32_t gltf_primitive = 0;  // index within that mesh
+  int32_t material = -1;        // glTF material index, -1 for none
+};
+
+struct Node {
+  std::string name;
+  int32_t parent = -1;
+  std::vector<int32_t> children;
+  int32_t mesh = -1;  // glTF mesh index
+  int32_t skin = -1;
+  // Local transform: `matrix` (column-major) when has_matrix, else T * R * S.
+  bool has_matrix = false;
+  std::array<float, 16> matrix = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  float3 translation;
+  float4 rotation = {0, 0, 0, 1};  // unit quaternion x, y, z, w
+  float3 scale = {1, 1, 1};
+};
+
+struct Skin {
+  std::string name;
+  std::vector<int32_t> joints;  // node indices
+  std::vector<std::array<float, 16>> inverse_bind_matrices;  // column-major, one per joint
+  int32_t skeleton = -1;
+};
+
+enum class AnimationPath { translation, rotation, scale, weights };
+enum class Interpolation { step, linear, cubic_spline };
+
+struct AnimationChannel {
+  int32_t node = -1;
+  AnimationPath path = AnimationPath::translation;
+  Interpolation interpolation = Interpolation::linear;
+  std::vector<float> times;   // seconds, one per key
+  std::vector<float> values;  // flattened; per key: components (x3 for cubic_spline: in-tangent, value, out-tangent)
+  uint32_t components = 3;    // 3 for translation/scale, 4 for rotation, morph-target count for weights
+};
+
+struct Animation {
+  std::string name;
+  std::vector<AnimationChannel> channels;
+};
+
+struct GltfSource;  // opaque: the parsed source document (src/io/gltf.cpp)
+
+struct Scene {
+  std::vector<Primitive> primitives;
+  std::vector<Node> nodes;
+  std::vector<int32_t> roots;  // root nodes of the default scene
+  std::vector<Skin> skins;
+  std::vector<Animation> animations;
+  std::vector<std::string> material_names;  // by glTF material index
+  uint32_t image_count = 0;
+  uint32_t texture_count = 0;
+  std::shared_ptr<const GltfSource> source;  // non-null when read from glTF
+};
+
+// ---- files --------------------------------------------------------------------------------------
+// Format follows the extension. Errors throw lod::Error: bad_input naming the file and the line or
+// byte offset; usage for unknown extensions. Directories and unreadable paths are bad_input.
+Mesh read_mesh(const std::filesystem::path& path, const ReadOptions& options = {});
+Scene read_scene(const std::filesystem::path& path, const ReadOptions& options = {});
+
+// Writes atomically (temporary file in the same folder, then rename). A glTF scene keeps everything
+// it was read with; writing a Mesh to glTF makes a one-node scene.
+void write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& options = {});
+void write_scene(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options = {});
+
+// Every primitive instance of the default scene, in world space, merged into one mesh.
+// Material ids are glTF material indices (+1, so 0 means "no material"); names follow.
+Mesh flatten(const Scene& scene);
+// A one-primitive scene around a mesh (no source document); materials become primitives.
+Scene scene_from_mesh(const Mesh& mesh);
+
+// ---- per format, in memory (used by the file functions, tests and fuzzers) ----------------------
+// `name` is used in error messages. Writers append to `out`.
+Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});
+Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});
+Mesh read_off(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});
+Mesh read_stl(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});
+// External buffer and image URIs are resolved against base_dir; with an empty base_dir only data:
+// URIs and the GLB binary chunk are allowed.
+Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const std::filesystem::path& base_dir = {},
+                const ReadOptions& options = {});
+
+void write_obj(const Mesh& mesh, std::string& out, const WriteOptions& options = {});
+void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options = {});
+void write_off(const Mesh& mesh, std::string& out, const WriteOptions& options = {});
+void write_stl(const Mesh& mesh, std::string& out, const WriteOptions& options = {});
+// glTF: `path` decides .gltf (JSON + a .bin beside it) or .glb; every file is written atomically.
+void write_gltf(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options = {});
+
+// Reads a whole file into memory; bad_input naming the path if it is missing, a directory or unreadable.
+std::vector<uint8_t> read_file_bytes(const std::filesystem::path& path);
+// Atomic write: a temporary file in the same folder, then rename over `path`.
+void write_file_atomic(const std::filesystem::path& path, std::span<const uint8_t> bytes);
+void write_file_atomic(const std::filesystem::path& path, const std::string& bytes);
+
+}  // namespace lod

@@ -1,0 +1,120 @@
+// lodkit: the indexed triangle mesh (structure of arrays) and what can be asked of it.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace lod {
+
+struct float2 {
+  float x = 0, y = 0;
+  friend bool operator==(const float2&, const float2&) = default;
+};
+struct float3 {
+  float x = 0, y = 0, z = 0;
+  friend bool operator==(const float3&, const float3&) = default;
+};
+struct float4 {
+  float x = 0, y = 0, z = 0, w = 0;
+  friend bool operator==(const float4&, const float4&) = default;
+};
+using ushort4 = std::array<uint16_t, 4>;
+
+inline constexpr size_t max_uv_sets = 4;
+
+// An indexed triangle mesh in structure-of-arrays form.
+// Every non-empty vertex stream has exactly vertex_count() entries; an empty stream is absent.
+// Triangles are counter-clockwise seen from outside (glTF / OpenGL convention).
+struct Mesh {
+  std::vector<float3> positions;                     // object space
+  std::vector<float3> normals;                       // unit length
+  std::vector<float4> tangents;                      // xyz unit, w = handedness (+1 or -1)
+  std::array<std::vector<float2>, max_uv_sets> uvs;  // texture coordinate sets, used in order 0, 1, ...
+  std::vector<float4> colors;                        // linear RGBA in [0, 1]
+  std::vector<ushort4> joints;                       // skin: joint indices per vertex
+  std::vector<float4> weights;                       // skin: weights per vertex, summing to 1
+
+  std::vector<uint32_t> indices;    // 3 per triangle
+  std::vector<uint32_t> materials;  // per triangle material id; empty means every triangle uses material 0
+  std::vector<std::string> material_names;  // indexed by material id; may be empty or shorter
+  std::vector<uint32_t> groups;             // per triangle group id (OBJ g/o); empty means no groups
+  std::vector<std::string> group_names;     // indexed by group id
+
+  size_t vertex_count() const { return positions.size(); }
+  size_t triangle_count() const { return indices.size() / 3; }
+  size_t uv_set_count() const;  // number of leading non-empty uv sets
+  uint32_t material(size_t triangle) const { return materials.empty() ? 0 : materials[triangle]; }
+
+  friend bool operator==(const Mesh&, const Mesh&) = default;
+};
+
+// Copies vertex `from` of `src` (all streams present in `dst`) to the end of `dst`.
+void append_vertex(Mesh& dst, const Mesh& src, uint32_t from);
+
+// Throws lod::Error (bad_input) naming `source` if streams have mismatched sizes, indices are out of
+// range, values are not finite, weights do not sum to 1 (within weight_tolerance), or per-triangle
+// streams do not match the triangle count.
+struct ValidateOptions {
+  float weight_tolerance = 1e-3f;  // |sum(weights) - 1| allowed per vertex
+};
+void validate(const Mesh& mesh, const std::string& source = "mesh", const ValidateOptions& options = {});
+
+// Position ids (the wedge / seam table): vertices with bit-identical positions share one id,
+// so attributes (wedges) and topology can be told apart. Ids are dense, in order of first appearance.
+// +0.0 and -0.0 are treated as equal.
+struct PositionIds {
+  std::vector<uint32_t> id;  // per vertex
+  uint32_t count = 0;        // number of unique positions
+};
+PositionIds position_ids(const Mesh& mesh);
+
+// Topological and geometric statistics. Topology is computed on position ids, so seams do not cut.
+struct ComponentStats {
+  uint32_t vertices = 0;   // unique positions
+  uint32_t edges = 0;      // undirected edges
+  uint32_t triangles = 0;  // non-degenerate triangles
+  uint32_t boundary_loops = 0;
+  int64_t euler_characteristic = 0;  // V - E + F
+  bool closed = false;      // no boundary edge
+  bool manifold = false;    // no non-manifold edge or vertex
+  bool orientable = false;  // triangles can be wound consistently (manifold components only)
+  // (2 - chi - b) / 2 for an orientable manifold with b boundary loops; -1 otherwise.
+  int64_t genus = -1;
+};
+
+struct MeshStats {
+  uint64_t vertices = 0;
+  uint64_t triangles = 0;
+  uint64_t unique_positions = 0;
+  uint64_t edges = 0;
+  uint64_t connected_components = 0;
+  uint64_t boundary_edges = 0;
+  uint64_t boundary_loops = 0;
+  uint64_t non_manifold_edges = 0;     // edges with more than two incident triangles
+  uint64_t non_manifold_vertices = 0;  // vertices whose incident triangles form more than one fan
+  uint64_t degenerate_triangles = 0;   // two corners share a position id
+  uint64_t zero_area_triangles = 0;    // distinct corners but zero area (collinear)
+  uint64_t duplicate_triangles = 0;    // same position-id set as an earlier triangle (any winding)
+  uint64_t seam_edges = 0;             // edges whose two sides use different vertices (attribute seams)
+  uint64_t materials = 0;
+  uint64_t unreferenced_positions = 0;  // unique positions used by no triangle
+  // V - E + F over the referenced unique positions, non-degenerate triangles and their edges;
+  // equals the sum over components.
+  int64_t euler_characteristic = 0;
+  float3 bbox_min, bbox_max;
+  double diagonal = 0;                 // length of the bounding-box diagonal
+  std::vector<ComponentStats> components;  // in order of their first triangle
+};
+MeshStats compute_stats(const Mesh& mesh);
+
+// 1 -> 4 midpoint subdivision; every vertex stream is interpolated (normals renormalised).
+// Edge midpoints are shared between triangles that share the two vertex indices.
+Mesh subdivide_midpoint(const Mesh& mesh);
+
+// Axis-aligned bounds of the positions ({0,0,0} for an empty mesh).
+void bounding_box(const Mesh& mesh, float3& min, float3& max);
+
+}  // namespace lod

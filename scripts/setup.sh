@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Installs every build and test dependency from Debian packages, fetches the test corpus, and builds
+# the release preset. Idempotent, and quiet when everything is already in place.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+cd "$root"
+
+packages=(
+  build-essential cmake ninja-build pkg-config git ca-certificates
+  clang-14 libclang-rt-14-dev           # the fuzz preset (libFuzzer)
+  libfmt-dev nlohmann-json3-dev libcli11-dev libtinygltf-dev libstb-dev
+  libeigen3-dev libtbb-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  libassimp-dev                          # bench/io: the peer loader
+  nodejs                                 # gltf-validator (Khronos) in the tests; npm ships with it
+  time                                   # /usr/bin/time -v for peak memory in benchmarks
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq >/dev/null
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/tmp/lodkit-apt.log 2>&1 ||
+    { cat /tmp/lodkit-apt.log >&2; exit 1; }
+fi
+
+scripts/fetch-corpus.sh
+
+# Khronos glTF validator for the glTF tests (npm registry); skipped quietly when npm is absent.
+if command -v npm >/dev/null && [ ! -d tests/gltf-validator/node_modules/gltf-validator ]; then
+  echo "setup: installing gltf-validator (npm)"
+  npm ci --prefix tests/gltf-validator --silent --no-audit --no-fund >/dev/null
+fi
+
+if [ ! -f build/release/build.ninja ]; then
+  cmake --preset release >/tmp/lodkit-configure.log 2>&1 || { cat /tmp/lodkit-configure.log >&2; exit 1; }
+fi
+# Quiet when nothing is to be done; the full log on failure.
+if ! cmake --build --preset release >/tmp/lodkit-build.log 2>&1; then
+  cat /tmp/lodkit-build.log >&2
+  exit 1
+fi
+grep -q "no work to do" /tmp/lodkit-build.log || echo "setup: built build/release (lodkit, tests, benchmarks)"

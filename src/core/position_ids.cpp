@@ -1,0 +1,54 @@
+#include "core/hash.h"
+#include "lodkit/mesh.h"
+
+namespace lod {
+
+namespace core {
+
+PositionWelder::PositionWelder(size_t expected) {
+  size_t cap = 64;
+  while (cap < expected * 2) cap <<= 1;
+  slots_.assign(cap, 0);
+  mask_ = cap - 1;
+  unique_.reserve(expected);
+}
+
+void PositionWelder::grow() {
+  std::vector<uint32_t> old = std::move(slots_);
+  slots_.assign(old.size() * 2, 0);
+  mask_ = slots_.size() - 1;
+  for (uint32_t s : old) {
+    if (!s) continue;
+    size_t i = hash_position(unique_[s - 1]) & mask_;
+    while (slots_[i]) i = (i + 1) & mask_;
+    slots_[i] = s;
+  }
+}
+
+uint32_t PositionWelder::insert(const float3& p) {
+  // Keep the load factor under 1/2 so linear probing stays short.
+  if ((unique_.size() + 1) * 2 > slots_.size()) grow();
+  size_t i = hash_position(p) & mask_;
+  for (;;) {
+    uint32_t s = slots_[i];
+    if (!s) break;
+    if (same_position(unique_[s - 1], p)) return s - 1;
+    i = (i + 1) & mask_;
+  }
+  unique_.push_back(p);
+  slots_[i] = uint32_t(unique_.size());
+  return uint32_t(unique_.size() - 1);
+}
+
+}  // namespace core
+
+PositionIds position_ids(const Mesh& mesh) {
+  PositionIds result;
+  result.id.resize(mesh.positions.size());
+  core::PositionWelder welder(mesh.positions.size());
+  for (size_t v = 0; v < mesh.positions.size(); ++v) result.id[v] = welder.insert(mesh.positions[v]);
+  result.count = welder.count();
+  return result;
+}
+
+}  // namespace lod

@@ -1,0 +1,159 @@
+// Internal: cursors shared by the readers. Every read is bounds-checked and every failure names the
+// source and the line (text) or byte offset (binary), so no reader repeats that bookkeeping.
+#pragma once
+
+#include <charconv>
+#include <cstdint>
+#include <cstring>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "lodkit/error.h"
+#include "lodkit/io.h"
+
+namespace lod::io {
+
+// Line-oriented tokenizer over a byte buffer. Tokens are separated by spaces/tabs; '\n', "\r\n" and
+// '\r' end lines.
+class TextReader {
+ public:
+  TextReader(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions* options = nullptr)
+      : begin_(reinterpret_cast<const char*>(bytes.data())), p_(begin_), end_(begin_ + bytes.size()),
+        name_(name), options_(options) {}
+
+  // Treat `c` as starting a comment that runs to the end of the line, even right after a token.
+  void set_comment(char c) { comment_ = c; }
+
+  bool at_end() const { return p_ >= end_; }
+  uint64_t line() const { return line_; }
+  const std::string& name() const { return name_; }
+  size_t offset() const { return size_t(p_ - begin_); }
+  size_t remaining() const { return size_t(end_ - p_); }
+
+  // Skips spaces and tabs (not newlines).
+  void skip_blanks() {
+    while (p_ < end_ && (*p_ == ' ' || *p_ == '\t')) ++p_;
+  }
+  bool at_line_end() {
+    skip_blanks();
+    return p_ >= end_ || *p_ == '\n' || *p_ == '\r' || (comment_ && *p_ == comment_);
+  }
+  // Moves past the end of the current line.
+  void next_line() {
+    while (p_ < end_ && *p_ != '\n' && *p_ != '\r') ++p_;
+    if (p_ < end_ && *p_ == '\r') ++p_;
+    if (p_ < end_ && *p_ == '\n') ++p_;
+    ++line_;
+    if (options_ && options_->progress && (line_ & 0x3ffff) == 0)
+      options_->progress(double(offset()) / double(end_ - begin_ ? end_ - begin_ : 1));
+  }
+  // Next blank-separated token on the current line; empty at the line end.
+  std::string_view token() {
+    skip_blanks();
+    const char* s = p_;
+    while (p_ < end_ && *p_ != ' ' && *p_ != '\t' && *p_ != '\n' && *p_ != '\r' && (!comment_ || *p_ != comment_)) ++p_;
+    return {s, size_t(p_ - s)};
+  }
+  // The next token without consuming it.
+  std::string_view peek_token() {
+    const char* save = p_;
+    std::string_view t = token();
+    p_ = save;
+    return t;
+  }
+  // The rest of the current line with surrounding blanks trimmed (not consumed past the line end).
+  std::string_view rest_of_line() {
+    skip_blanks();
+    const char* s = p_;
+    while (p_ < end_ && *p_ != '\n' && *p_ != '\r') ++p_;
+    const char* e = p_;
+    while (e > s && (e[-1] == ' ' || e[-1] == '\t')) --e;
+    return {s, size_t(e - s)};
+  }
+  // Skips blank lines and lines whose first token starts with `comment` (if non-zero); at_end() after.
+  void skip_empty_lines(char comment) {
+    for (;;) {
+      skip_blanks();
+      if (p_ >= end_) return;
+      if (*p_ == '\n' || *p_ == '\r' || (comment && *p_ == comment)) {
+        next_line();
+        continue;
+      }
+      return;
+    }
+  }
+
+  float read_float(const char* what);      // finite float, else error
+  double read_double(const char* what);    // finite double, else error
+  int64_t read_int(const char* what);      // signed integer
+  uint64_t read_uint(const char* what);    // unsigned integer
+  bool try_read_float(float& value);       // false (nothing consumed) at line end; errors on junk
+
+  [[noreturn]] void fail(const std::string& what) const { throw_bad_input_at_line(name_, line_, what); }
+
+ private:
+  const char* begin_;
+  const char* p_;
+  const char* end_;
+  std::string name_;
+  const ReadOptions* options_;
+  uint64_t line_ = 1;
+  char comment_ = 0;
+};
+
+// Little/big-endian binary cursor with bounds checks.
+class BinaryReader {
+ public:
+  BinaryReader(std::span<const uint8_t> bytes, const std::string& name, size_t offset = 0)
+      : bytes_(bytes), name_(name), offset_(offset) {}
+
+  size_t offset() const { return offset_; }
+  size_t remaining() const { return offset_ <= bytes_.size() ? bytes_.size() - offset_ : 0; }
+  const std::string& name() const { return name_; }
+  void seek(size_t offset) { offset_ = offset; }
+
+  // Fails unless `count` items of `item_size` bytes remain; use before reserving for a declared count,
+  // so a 200-byte file cannot make us allocate for four billion elements.
+  void require(uint64_t count, uint64_t item_size, const char* what) const {
+    if (item_size != 0 && count > remaining() / item_size)
+      fail(std::string("file declares ") + std::to_string(count) + " " + what + " but only " +
+           std::to_string(remaining()) + " bytes remain");
+  }
+  const uint8_t* take(size_t n, const char* what) {
+    if (n > remaining()) fail(std::string("unexpected end of file reading ") + what);
+    const uint8_t* p = bytes_.data() + offset_;
+    offset_ += n;
+    return p;
+  }
+  template <class T>
+  T read(bool big_endian, const char* what) {
+    const uint8_t* p = take(sizeof(T), what);
+    uint8_t tmp[sizeof(T)];
+    if (big_endian)
+      for (size_t i = 0; i < sizeof(T); ++i) tmp[i] = p[sizeof(T) - 1 - i];
+    else
+      std::memcpy(tmp, p, sizeof(T));
+    T v;
+    std::memcpy(&v, tmp, sizeof(T));
+    return v;
+  }
+  [[noreturn]] void fail(const std::string& what) const { throw_bad_input_at_byte(name_, offset_, what); }
+
+ private:
+  std::span<const uint8_t> bytes_;
+  std::string name_;
+  size_t offset_ = 0;
+};
+
+// Parses a whole token as a finite float (a leading '+' allowed; denormals kept). False otherwise.
+bool parse_float(std::string_view token, float& value);
+
+// Appends the shortest decimal text that reads back as exactly `value`.
+void append_float(std::string& out, float value);
+void append_uint(std::string& out, uint64_t value);
+
+// Largest polygon a reader accepts before triangulating; a face with a million corners is bad input.
+inline constexpr uint64_t max_face_corners = 65536;
+
+}  // namespace lod::io

@@ -1,0 +1,123 @@
+#include "test_support.h"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstring>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+extern char** environ;
+
+namespace lod::test {
+
+TempDir::TempDir() {
+  std::random_device rd;
+  for (;;) {
+    path = std::filesystem::temp_directory_path() / ("lodkit-test-" + std::to_string(rd()));
+    if (std::filesystem::create_directory(path)) break;
+  }
+}
+TempDir::~TempDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(path, ec);
+}
+
+RunResult run_cli(const std::vector<std::string>& args) {
+  TempDir tmp;
+  std::string out_path = (tmp.path / "out").string(), err_path = (tmp.path / "err").string();
+  std::vector<std::string> argv_s = {LODKIT_CLI};
+  argv_s.insert(argv_s.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : argv_s) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&fa, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+  pid_t pid = 0;
+  RunResult r;
+  if (posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ) != 0) {
+    posix_spawn_file_actions_destroy(&fa);
+    r.err = std::string("spawn failed: ") + std::strerror(errno);
+    return r;
+  }
+  posix_spawn_file_actions_destroy(&fa);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
+  if (WIFSIGNALED(status)) r.signal = WTERMSIG(status);
+  std::ifstream o(out_path), e(err_path);
+  std::stringstream so, se;
+  so << o.rdbuf();
+  se << e.rdbuf();
+  r.out = so.str();
+  r.err = se.str();
+  return r;
+}
+
+std::filesystem::path corpus_dir() {
+  std::filesystem::path p = LODKIT_CORPUS_DIR;
+  std::error_code ec;
+  if (std::filesystem::exists(p / "bunny00.off", ec)) return p;
+  return {};
+}
+
+std::vector<std::filesystem::path> corpus_files() {
+  std::vector<std::filesystem::path> files;
+  auto dir = corpus_dir();
+  if (dir.empty()) return files;
+  for (auto& e : std::filesystem::directory_iterator(dir))
+    if (e.is_regular_file()) files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream f(path, std::ios::binary);
+  f << text;
+}
+void write_bytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes) {
+  std::ofstream f(path, std::ios::binary);
+  f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+}
+
+namespace {
+template <class T>
+bool bits_equal(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+template <class T>
+std::string first_diff(const char* what, const std::vector<T>& a, const std::vector<T>& b) {
+  if (a.size() != b.size())
+    return std::string(what) + ": size " + std::to_string(a.size()) + " vs " + std::to_string(b.size());
+  for (size_t i = 0; i < a.size(); ++i)
+    if (std::memcmp(&a[i], &b[i], sizeof(T)) != 0) return std::string(what) + ": first difference at " + std::to_string(i);
+  return {};
+}
+}  // namespace
+
+std::string mesh_difference(const Mesh& a, const Mesh& b) {
+  std::string d;
+  auto check = [&](const char* what, const auto& x, const auto& y) {
+    if (d.empty() && !bits_equal(x, y)) d = first_diff(what, x, y);
+  };
+  check("positions", a.positions, b.positions);
+  check("normals", a.normals, b.normals);
+  check("tangents", a.tangents, b.tangents);
+  for (size_t k = 0; k < max_uv_sets; ++k) check("uvs", a.uvs[k], b.uvs[k]);
+  check("colors", a.colors, b.colors);
+  check("joints", a.joints, b.joints);
+  check("weights", a.weights, b.weights);
+  check("indices", a.indices, b.indices);
+  check("materials", a.materials, b.materials);
+  check("groups", a.groups, b.groups);
+  return d;
+}
+
+}  // namespace lod::test

@@ -1,0 +1,40 @@
+// Shared test helpers: temporary folders, running the CLI, the corpus location.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "lodkit/mesh.h"
+
+namespace lod::test {
+
+// A fresh empty folder under the system temp dir, removed by the destructor.
+struct TempDir {
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::filesystem::path path;
+  std::filesystem::path operator/(const std::string& name) const { return path / name; }
+};
+
+struct RunResult {
+  int exit_code = -1;   // exit status, or -1 when the process died from a signal
+  int signal = 0;       // the signal that ended it, 0 when it exited
+  std::string out, err;
+};
+// Runs the built `lodkit` CLI with arguments (no shell), capturing stdout and stderr.
+RunResult run_cli(const std::vector<std::string>& args);
+
+// data/corpus, or an empty path when the corpus is absent (call GTEST_SKIP then).
+std::filesystem::path corpus_dir();
+std::vector<std::filesystem::path> corpus_files();
+
+void write_text(const std::filesystem::path& path, const std::string& text);
+void write_bytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes);
+
+// Describes the first difference between two meshes ("" when equal, bitwise on floats).
+std::string mesh_difference(const Mesh& a, const Mesh& b);
+
+}  // namespace lod::test

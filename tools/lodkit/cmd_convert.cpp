@@ -1,0 +1,83 @@
+// lodkit convert IN OUT: any supported format to any other. A glTF written from a glTF keeps
+// everything but the geometry as it was.
+#include <fmt/format.h>
+
+#include <chrono>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "lodkit/error.h"
+#include "lodkit/io.h"
+#include "progress.h"
+
+namespace lod::cli {
+
+namespace {
+
+struct ConvertOptions {
+  std::string input, output, output_flag;
+  bool ascii = false;
+  bool force = false;
+  bool json = false;
+};
+
+// Refuses to write over the input (it would be lost if anything went wrong) unless --force.
+void check_not_input(const std::string& input, const std::string& output, bool force) {
+  std::error_code ec;
+  if (!force && std::filesystem::exists(output, ec) && std::filesystem::equivalent(input, output, ec))
+    throw_usage(output + ": refusing to overwrite the input file (use --force)");
+}
+
+}  // namespace
+
+Command register_convert(CLI::App& root) {
+  auto options = std::make_shared<ConvertOptions>();
+  CLI::App* app = root.add_subcommand("convert", "Convert a mesh between OBJ, PLY, OFF, STL, glTF and GLB");
+  app->add_option("input", options->input, "Input mesh file")->required();
+  app->add_option("output", options->output, "Output mesh file; the format follows the extension");
+  app->add_option("-o,--output", options->output_flag, "Output mesh file (same as the second argument)");
+  app->add_flag("--ascii", options->ascii, "Write PLY and STL as text instead of binary");
+  app->add_flag("--force", options->force, "Allow writing over the input file");
+  app->add_flag("--json", options->json, "Print a machine-readable report on stdout");
+  return {app, [options] {
+            ConvertOptions& o = *options;
+            if (!o.output_flag.empty()) {
+              if (!o.output.empty()) throw_usage("give the output once, either as OUTPUT or -o OUTPUT");
+              o.output = o.output_flag;
+            }
+            if (o.output.empty()) throw_usage("convert needs an output file: lodkit convert IN OUT");
+            format_from_path(o.input);
+            format_from_path(o.output);
+            check_not_input(o.input, o.output, o.force);
+            auto start = std::chrono::steady_clock::now();
+            Scene scene;
+            {
+              ProgressBar bar("loading");
+              scene = read_scene(o.input, bar.read_options());
+            }
+            double load_seconds = seconds_since(start);
+            size_t vertices = 0, triangles = 0;
+            for (const Primitive& p : scene.primitives) {
+              validate(p.mesh, o.input);
+              vertices += p.mesh.vertex_count();
+              triangles += p.mesh.triangle_count();
+            }
+            start = std::chrono::steady_clock::now();
+            write_scene(scene, o.output, {.binary = !o.ascii});
+            double write_seconds = seconds_since(start);
+            if (o.json) {
+              nlohmann::json j = {{"input", o.input}, {"output", o.output}, {"vertices", vertices},
+                                  {"triangles", triangles}, {"load_seconds", load_seconds},
+                                  {"write_seconds", write_seconds}};
+              fmt::print("{}\n", j.dump(2));
+            } else {
+              fmt::print("{:<8}{:>12}{:>12}{:>10}  {}\n", "step", "triangles", "vertices", "time", "file");
+              fmt::print("{:<8}{:>12}{:>12}{:>9.3f}s  {}\n", "read", triangles, vertices, load_seconds, o.input);
+              fmt::print("{:<8}{:>12}{:>12}{:>9.3f}s  {}\n", "write", triangles, vertices, write_seconds, o.output);
+            }
+            return 0;
+          }};
+}
+
+}  // namespace lod::cli

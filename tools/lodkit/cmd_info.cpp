@@ -1,0 +1,148 @@
+// lodkit info FILE [--json]: what a mesh file holds, and its topology.
+#include <fmt/format.h>
+
+#include <chrono>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "lodkit/io.h"
+#include "progress.h"
+
+namespace lod::cli {
+
+namespace {
+
+struct InfoOptions {
+  std::string input;
+  bool json = false;
+};
+
+nlohmann::json stats_json(const MeshStats& s) {
+  nlohmann::json components = nlohmann::json::array();
+  for (const ComponentStats& c : s.components)
+    components.push_back({{"vertices", c.vertices},
+                          {"edges", c.edges},
+                          {"triangles", c.triangles},
+                          {"boundary_loops", c.boundary_loops},
+                          {"euler_characteristic", c.euler_characteristic},
+                          {"closed", c.closed},
+                          {"manifold", c.manifold},
+                          {"orientable", c.orientable},
+                          {"genus", c.genus}});
+  return {{"vertices", s.vertices},
+          {"triangles", s.triangles},
+          {"unique_positions", s.unique_positions},
+          {"unreferenced_positions", s.unreferenced_positions},
+          {"edges", s.edges},
+          {"connected_components", s.connected_components},
+          {"boundary_edges", s.boundary_edges},
+          {"boundary_loops", s.boundary_loops},
+          {"non_manifold_edges", s.non_manifold_edges},
+          {"non_manifold_vertices", s.non_manifold_vertices},
+          {"degenerate_triangles", s.degenerate_triangles},
+          {"zero_area_triangles", s.zero_area_triangles},
+          {"duplicate_triangles", s.duplicate_triangles},
+          {"seam_edges", s.seam_edges},
+          {"materials", s.materials},
+          {"euler_characteristic", s.euler_characteristic},
+          {"bbox_min", {s.bbox_min.x, s.bbox_min.y, s.bbox_min.z}},
+          {"bbox_max", {s.bbox_max.x, s.bbox_max.y, s.bbox_max.z}},
+          {"diagonal", s.diagonal},
+          {"components", components}};
+}
+
+std::string streams_text(const Mesh& m) {
+  std::string s = "position";
+  if (!m.normals.empty()) s += " normal";
+  if (!m.tangents.empty()) s += " tangent";
+  for (size_t k = 0; k < m.uv_set_count(); ++k) s += fmt::format(" uv{}", k);
+  if (!m.colors.empty()) s += " color";
+  if (!m.joints.empty()) s += " joints weights";
+  return s;
+}
+
+void print_table(const InfoOptions& o, FileFormat format, const Scene& scene, const Mesh& mesh, const MeshStats& s,
+                 double load_seconds) {
+  auto row = [](const char* key, const std::string& value) { fmt::print("{:<24}{}\n", key, value); };
+  row("file", fmt::format("{} ({})", o.input, format_name(format)));
+  row("load time", fmt::format("{:.3f} s", load_seconds));
+  row("streams", streams_text(mesh));
+  if (scene.source) {
+    row("glTF primitives", std::to_string(scene.primitives.size()));
+    row("glTF nodes", std::to_string(scene.nodes.size()));
+    row("glTF materials", std::to_string(scene.material_names.size()));
+    row("glTF textures / images", fmt::format("{} / {}", scene.texture_count, scene.image_count));
+    row("glTF skins", std::to_string(scene.skins.size()));
+    row("glTF animations", std::to_string(scene.animations.size()));
+  }
+  row("vertices", std::to_string(s.vertices));
+  row("triangles", std::to_string(s.triangles));
+  row("unique positions", std::to_string(s.unique_positions));
+  row("unreferenced positions", std::to_string(s.unreferenced_positions));
+  row("edges", std::to_string(s.edges));
+  row("connected components", std::to_string(s.connected_components));
+  row("boundary edges", std::to_string(s.boundary_edges));
+  row("boundary loops", std::to_string(s.boundary_loops));
+  row("non-manifold edges", std::to_string(s.non_manifold_edges));
+  row("non-manifold vertices", std::to_string(s.non_manifold_vertices));
+  row("degenerate triangles", std::to_string(s.degenerate_triangles));
+  row("zero-area triangles", std::to_string(s.zero_area_triangles));
+  row("duplicate triangles", std::to_string(s.duplicate_triangles));
+  row("seam edges", std::to_string(s.seam_edges));
+  row("materials", std::to_string(s.materials));
+  row("Euler characteristic", std::to_string(s.euler_characteristic));
+  row("bounding box min", fmt::format("{:g} {:g} {:g}", s.bbox_min.x, s.bbox_min.y, s.bbox_min.z));
+  row("bounding box max", fmt::format("{:g} {:g} {:g}", s.bbox_max.x, s.bbox_max.y, s.bbox_max.z));
+  row("diagonal", fmt::format("{:g}", s.diagonal));
+  if (s.components.empty()) return;
+  constexpr size_t max_rows = 20;
+  fmt::print("\n{:>6} {:>9} {:>9} {:>9} {:>7} {:>8} {:>6} {:>8} {:>6}\n", "comp", "V", "E", "F", "V-E+F", "borders",
+             "closed", "manifold", "genus");
+  for (size_t i = 0; i < s.components.size() && i < max_rows; ++i) {
+    const ComponentStats& c = s.components[i];
+    fmt::print("{:>6} {:>9} {:>9} {:>9} {:>7} {:>8} {:>6} {:>8} {:>6}\n", i, c.vertices, c.edges, c.triangles,
+               c.euler_characteristic, c.boundary_loops, c.closed ? "yes" : "no",
+               c.manifold ? (c.orientable ? "yes" : "non-or.") : "no", c.genus >= 0 ? std::to_string(c.genus) : "-");
+  }
+  if (s.components.size() > max_rows) fmt::print("{:>6} (+{} more; --json lists all)\n", "...", s.components.size() - max_rows);
+}
+
+}  // namespace
+
+Command register_info(CLI::App& root) {
+  auto options = std::make_shared<InfoOptions>();
+  CLI::App* app = root.add_subcommand("info", "Print the statistics and topology of a mesh file");
+  app->add_option("input", options->input, "Mesh file (.obj .ply .off .stl .gltf .glb)")->required();
+  app->add_flag("--json", options->json, "Print a machine-readable report on stdout");
+  return {app, [options] {
+            const InfoOptions& o = *options;
+            FileFormat format = format_from_path(o.input);
+            auto start = std::chrono::steady_clock::now();
+            Scene scene;
+            Mesh mesh;
+            {
+              ProgressBar bar("loading");
+              scene = read_scene(o.input, bar.read_options());
+              mesh = scene.source ? flatten(scene) : std::move(scene.primitives.at(0).mesh);
+            }
+            double load_seconds = seconds_since(start);
+            validate(mesh, o.input);
+            MeshStats s = compute_stats(mesh);
+            if (o.json) {
+              nlohmann::json j = {{"file", o.input}, {"format", format_name(format)}, {"load_seconds", load_seconds},
+                                  {"streams", streams_text(mesh)}, {"stats", stats_json(s)}};
+              if (scene.source)
+                j["gltf"] = {{"primitives", scene.primitives.size()}, {"nodes", scene.nodes.size()},
+                             {"materials", scene.material_names.size()}, {"textures", scene.texture_count},
+                             {"images", scene.image_count}, {"skins", scene.skins.size()},
+                             {"animations", scene.animations.size()}};
+              fmt::print("{}\n", j.dump(2));
+            } else {
+              print_table(o, format, scene, mesh, s, load_seconds);
+            }
+            return 0;
+          }};
+}
+
+}  // namespace lod::cli

@@ -1,0 +1,18 @@
+// The lodkit CLI: one file per subcommand; each registers itself on the root app.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace lod::cli {
+
+// A subcommand's body; returns the process exit code. Library errors propagate as lod::Error.
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<int()> run;
+};
+
+Command register_info(CLI::App& root);
+Command register_convert(CLI::App& root);
+
+}  // namespace lod::cli
