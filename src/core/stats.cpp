@@ -1,7 +1,7 @@
 // Mesh statistics. Topology is taken on position ids (so UV and normal seams do not cut the surface):
 // one sort of the 3F edge records gives edges, boundary, non-manifold edges and seams; a union-find on
-// corners gives the fans around each vertex (non-manifold vertices) and pairs boundary half-edges
-// into loops even where two holes touch at a vertex.
+// corners gives the fans around each vertex (non-manifold vertices), and boundary edges chained
+// through those fans give the boundary loops, even where two holes touch at a vertex.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -191,28 +191,19 @@ MeshStats compute_stats(const Mesh& mesh) {
     }
   }
 
-  // Boundary loops: the successor of boundary half-edge u->v is the boundary half-edge leaving v in
-  // the same fan at v. Half-edges left unmatched (inconsistent winding) still form chains.
+  // Boundary loops: each boundary edge joins the fans at its two ends; a loop is a connected set of
+  // boundary edges. Fans (not vertices) keep two holes that touch at one vertex apart, and no edge
+  // direction is used, so inconsistent winding (a Moebius strip) still gives one loop.
   {
-    const size_t B = boundary_halfedges.size();
-    std::vector<std::pair<uint32_t, uint32_t>> by_start(B);  // (fan root at start, half-edge)
-    for (size_t h = 0; h < B; ++h) by_start[h] = {fans.find(boundary_halfedges[h]), uint32_t(h)};
-    std::sort(by_start.begin(), by_start.end());
-    std::vector<uint8_t> used(B, 0);
-    auto successor = [&](uint32_t h) -> uint32_t {
-      uint32_t c = boundary_halfedges[h];
-      uint32_t end_corner = 3 * (c / 3) + (c % 3 + 1) % 3;
-      uint32_t root = fans.find(end_corner);
-      auto it = std::lower_bound(by_start.begin(), by_start.end(), std::make_pair(root, 0u));
-      for (; it != by_start.end() && it->first == root; ++it)
-        if (!used[it->second]) return it->second;
-      return none;
-    };
-    for (size_t h0 = 0; h0 < B; ++h0) {
-      if (used[h0]) continue;
+    core::UnionFind loops(size_t(F) * 3);
+    for (uint32_t c : boundary_halfedges) loops.unite(fans.find(c), fans.find(3 * (c / 3) + (c % 3 + 1) % 3));
+    std::vector<uint8_t> counted(size_t(F) * 3, 0);
+    for (uint32_t c : boundary_halfedges) {
+      uint32_t root = loops.find(fans.find(c));
+      if (counted[root]) continue;
+      counted[root] = 1;
       ++s.boundary_loops;
-      ++s.components[triangle_component[boundary_halfedges[h0] / 3]].boundary_loops;
-      for (uint32_t h = uint32_t(h0); h != none; h = successor(h)) used[h] = 1;
+      ++s.components[triangle_component[c / 3]].boundary_loops;
     }
   }
 
