@@ -67,6 +67,7 @@ struct Corner {
 Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options) {
   io::TextReader in(bytes, name, &options);
   in.set_comment('#');
+  if (bytes.empty()) in.fail("empty file, expected OBJ statements");
   std::vector<float3> positions;
   std::vector<float4> position_colors;  // the "v x y z r g b" extension
   std::vector<float2> texcoords;

@@ -1,0 +1,109 @@
+// The CLI as a user drives it: exit codes, --json, atomic writes and the refusal to overwrite input.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "core/shapes.h"
+#include "lodkit/io.h"
+#include "test_support.h"
+
+namespace lod {
+namespace {
+
+TEST(Cli, InfoJsonMatchesTheLibrary) {
+  test::TempDir dir;
+  Mesh torus = shapes::torus(1.0f, 0.3f, 20, 10);
+  write_mesh(torus, dir / "torus.obj");
+  test::RunResult r = test::run_cli({"info", "--json", (dir / "torus.obj").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["stats"]["triangles"], 400);
+  EXPECT_EQ(j["stats"]["unique_positions"], 200);
+  EXPECT_EQ(j["stats"]["euler_characteristic"], 0);
+  EXPECT_EQ(j["stats"]["components"][0]["genus"], 1);
+  EXPECT_EQ(j["format"], "OBJ");
+}
+
+TEST(Cli, InfoTablePrintsAlignedRows) {
+  test::TempDir dir;
+  write_mesh(shapes::cube(), dir / "cube.off");
+  test::RunResult r = test::run_cli({"info", (dir / "cube.off").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("unique positions        8\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("triangles               12\n"), std::string::npos) << r.out;
+}
+
+TEST(Cli, UsageErrorsExitWith1) {
+  test::TempDir dir;
+  EXPECT_EQ(test::run_cli({}).exit_code, 1);
+  EXPECT_EQ(test::run_cli({"frobnicate"}).exit_code, 1);
+  EXPECT_EQ(test::run_cli({"info"}).exit_code, 1);
+  write_mesh(shapes::cube(), dir / "cube.obj");
+  EXPECT_EQ(test::run_cli({"info", (dir / "cube.xyz").string()}).exit_code, 1);  // unknown extension
+  EXPECT_EQ(test::run_cli({"convert", (dir / "cube.obj").string()}).exit_code, 1);  // no output
+  EXPECT_EQ(test::run_cli({"info", "--help"}).exit_code, 0);
+}
+
+TEST(Cli, ConvertBetweenEveryPairOfTextFormatsKeepsTheSurface) {
+  test::TempDir dir;
+  Mesh sphere = shapes::icosphere(2);
+  write_mesh(sphere, dir / "in.off");
+  for (const char* ext : {".obj", ".off"}) {
+    auto out = dir / (std::string("out") + ext);
+    test::RunResult r = test::run_cli({"convert", (dir / "in.off").string(), out.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    Mesh back = read_mesh(out);
+    EXPECT_EQ(back.triangle_count(), sphere.triangle_count());
+    for (size_t t = 0; t < sphere.triangle_count(); ++t)
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(back.positions[back.indices[3 * t + k]], sphere.positions[sphere.indices[3 * t + k]]);
+  }
+}
+
+TEST(Cli, ConvertRefusesToOverwriteItsInputUnlessForced) {
+  test::TempDir dir;
+  auto path = dir / "mesh.obj";
+  write_mesh(shapes::cube(), path);
+  auto before = std::filesystem::file_size(path);
+  test::RunResult r = test::run_cli({"convert", path.string(), path.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--force"), std::string::npos) << r.err;
+  EXPECT_EQ(std::filesystem::file_size(path), before);
+  // Also through another spelling of the same path.
+  r = test::run_cli({"convert", path.string(), "-o", (dir / "." / "mesh.obj").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  r = test::run_cli({"convert", path.string(), path.string(), "--force"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_mesh(path).triangle_count(), 12u);
+}
+
+TEST(Cli, FailedConvertLeavesNoPartialOutput) {
+  test::TempDir dir;
+  auto bad = dir / "bad.off";
+  test::write_text(bad, "OFF\n3 1 0\n0 0 0\n1 0 0\n");
+  auto out = dir / "out.obj";
+  test::RunResult r = test::run_cli({"convert", bad.string(), out.string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_FALSE(std::filesystem::exists(out));
+  // A write into a folder that does not exist fails cleanly too, and leaves no temporary file.
+  write_mesh(shapes::cube(), dir / "cube.obj");
+  r = test::run_cli({"convert", (dir / "cube.obj").string(), (dir / "no-such-dir" / "x.obj").string()});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  size_t files = 0;
+  for (auto& e : std::filesystem::directory_iterator(dir.path)) files += e.is_regular_file();
+  EXPECT_EQ(files, 2u);  // bad.off and cube.obj only
+}
+
+TEST(AtomicFile, ReplacesExistingFileCompletely) {
+  test::TempDir dir;
+  auto path = dir / "f.txt";
+  write_file_atomic(path, std::string(1000, 'a'));
+  write_file_atomic(path, std::string("short"));
+  auto bytes = read_file_bytes(path);
+  EXPECT_EQ(std::string(bytes.begin(), bytes.end()), "short");
+  size_t entries = 0;
+  for (auto& e : std::filesystem::directory_iterator(dir.path)) (void)e, ++entries;
+  EXPECT_EQ(entries, 1u);
+}
+
+}  // namespace
+}  // namespace lod

@@ -1,0 +1,129 @@
+#include <gtest/gtest.h>
+
+#include "core/shapes.h"
+#include "lodkit/error.h"
+#include "lodkit/io.h"
+#include "test_support.h"
+
+namespace lod {
+namespace {
+
+std::span<const uint8_t> bytes_of(const std::string& s) { return {reinterpret_cast<const uint8_t*>(s.data()), s.size()}; }
+
+Mesh obj_round_trip(const Mesh& m) {
+  std::string text;
+  write_obj(m, text);
+  return read_obj(bytes_of(text), "round-trip.obj");
+}
+
+TEST(Obj, ReadsPolygonsNegativeIndicesGroupsAndMaterials) {
+  const std::string text =
+      "# a quad and a triangle\n"
+      "mtllib scene.mtl\n"
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+      "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+      "vn 0 0 1\n"
+      "g floor\n"
+      "usemtl stone\n"
+      "f 1/1/1 2/2/1 3/3/1 4/4/1\n"
+      "g roof\n"
+      "usemtl wood\n"
+      "f -4/-4/-1 -2/-2/-1 -1/-1/-1\n";
+  Mesh m = read_obj(bytes_of(text), "hand.obj");
+  // The quad is fanned from its first corner: (0,1,2), (0,2,3).
+  ASSERT_EQ(m.triangle_count(), 3u);
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 0, 2, 3}));
+  ASSERT_EQ(m.vertex_count(), 4u);  // the triangle reuses v/vt/vn triples 1, 3 and 4
+  EXPECT_EQ(m.positions[2], (float3{1, 1, 0}));
+  EXPECT_EQ(m.uvs[0][3], (float2{0, 1}));
+  EXPECT_EQ(m.normals[1], (float3{0, 0, 1}));
+  EXPECT_EQ(m.materials, (std::vector<uint32_t>{0, 0, 1}));
+  EXPECT_EQ(m.material_names, (std::vector<std::string>{"stone", "wood"}));
+  EXPECT_EQ(m.groups, (std::vector<uint32_t>{0, 0, 1}));
+  EXPECT_EQ(m.group_names, (std::vector<std::string>{"floor", "roof"}));
+}
+
+TEST(Obj, PositionOnlyFilesKeepTheirVertexList) {
+  const std::string text = "v 0 0 0\nv 9 9 9\nv 1 0 0\nv 0 1 0\nf 1 3 4\n";
+  Mesh m = read_obj(bytes_of(text), "p.obj");
+  EXPECT_EQ(m.vertex_count(), 4u);  // the unused vertex stays, in file order
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 2, 3}));
+  EXPECT_TRUE(m.normals.empty());
+  EXPECT_TRUE(m.uvs[0].empty());
+}
+
+TEST(Obj, SplitsVerticesAtUvSeams) {
+  // Two triangles share positions 2 and 3 but with different texture coordinates on one side.
+  const std::string text =
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+      "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5\n"
+      "f 1/1 2/2 3/3\nf 1/5 3/3 4/4\n";
+  Mesh m = read_obj(bytes_of(text), "seam.obj");
+  EXPECT_EQ(m.vertex_count(), 5u);
+  EXPECT_EQ(position_ids(m).count, 4u);
+  EXPECT_EQ(compute_stats(m).seam_edges, 1u);  // the diagonal 1-3 has position 1 split
+}
+
+TEST(Obj, VertexColorsExtension) {
+  Mesh m = read_obj(bytes_of("v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n"), "c.obj");
+  ASSERT_EQ(m.colors.size(), 3u);
+  EXPECT_EQ(m.colors[1], (float4{0, 1, 0, 1}));
+}
+
+TEST(Obj, RoundTripIsExactForShapes) {
+  Mesh torus = shapes::torus();
+  Mesh multi = shapes::cube();
+  multi.materials.resize(12);
+  multi.material_names = {"red", "green", "blue"};
+  multi.groups.resize(12);
+  multi.group_names = {"a", "b"};
+  for (uint32_t t = 0; t < 12; ++t) multi.materials[t] = t / 4, multi.groups[t] = t / 6;
+  Mesh colored = shapes::icosphere(2);
+  colored.normals.clear();
+  for (const float3& p : colored.positions) colored.colors.push_back({p.x * 0.5f + 0.5f, 0.25f, 1.0f / 3.0f, 1});
+  for (const Mesh& shape : {shapes::icosphere(2), torus, multi, shapes::cylinder(), shapes::grid(4, 4), colored}) {
+    Mesh first = obj_round_trip(shape);  // vertices now in OBJ's first-use order
+    Mesh second = obj_round_trip(first);
+    EXPECT_EQ(test::mesh_difference(first, second), "");
+    EXPECT_EQ(first.triangle_count(), shape.triangle_count());
+    EXPECT_EQ(first.material_names, second.material_names);
+    EXPECT_EQ(first.group_names, second.group_names);
+    // Whatever the order, every triangle keeps its exact corner positions.
+    for (size_t t = 0; t < shape.triangle_count(); ++t)
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(first.positions[first.indices[3 * t + k]], shape.positions[shape.indices[3 * t + k]]);
+  }
+}
+
+TEST(Obj, WriterSharesPositionsAcrossSeams) {
+  std::string text;
+  write_obj(shapes::cube(), text);
+  size_t v_lines = 0;
+  for (size_t i = 0; (i = text.find("\nv ", i)) != std::string::npos; ++i) ++v_lines;
+  EXPECT_EQ(v_lines, 8u);  // one v per position, the seams carried by vt/vn
+}
+
+TEST(Obj, RejectsBadInput) {
+  const char* cases[] = {
+      "v 0 0 0\nv 1 0 0\nf 1 2\n",              // 2 corners
+      "v 0 0 0\nf 1 2 3\n",                      // index past the end
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 0 1 2\n",    // 0 is not an OBJ index
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nf -4 1 2\n",   // relative index before the first vertex
+      "v 0 nan 0\n",                             // NaN
+      "v 0 inf 0\n",                             // Inf
+      "v 0 0\n",                                 // missing z
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1/x 2 3\n",  // junk texture index
+      "bogus statement\n",                       // unknown keyword
+  };
+  for (const char* text : cases) {
+    try {
+      read_obj(bytes_of(text), "bad.obj");
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.category(), ErrorCategory::bad_input);
+      EXPECT_EQ(std::string(e.what()).rfind("bad.obj:", 0), 0u) << e.what();  // names file and line
+    }
+  }
+}
+
+}  // namespace
+}  // namespace lod
