@@ -45,27 +45,20 @@ bool TextReader::try_read_float(float& value) {
   return true;
 }
 
-int64_t TextReader::read_int(const char* what) {
+template <class Integer>
+Integer TextReader::read_integer(const char* what, const char* kind) {
   std::string_view t = token();
   if (t.empty()) fail(std::string("expected ") + what + ", found end of line");
   const char* s = skip_plus(t.data(), t.data() + t.size());
-  int64_t v = 0;
+  Integer v = 0;
   auto [ptr, ec] = std::from_chars(s, t.data() + t.size(), v);
   if (ec != std::errc() || ptr != t.data() + t.size())
-    fail(std::string("expected ") + what + " (an integer), found '" + std::string(t.substr(0, 40)) + "'");
+    fail(std::string("expected ") + what + " (" + kind + "), found '" + std::string(t.substr(0, 40)) + "'");
   return v;
 }
 
-uint64_t TextReader::read_uint(const char* what) {
-  std::string_view t = token();
-  if (t.empty()) fail(std::string("expected ") + what + ", found end of line");
-  const char* s = skip_plus(t.data(), t.data() + t.size());
-  uint64_t v = 0;
-  auto [ptr, ec] = std::from_chars(s, t.data() + t.size(), v);
-  if (ec != std::errc() || ptr != t.data() + t.size())
-    fail(std::string("expected ") + what + " (a non-negative integer), found '" + std::string(t.substr(0, 40)) + "'");
-  return v;
-}
+int64_t TextReader::read_int(const char* what) { return read_integer<int64_t>(what, "an integer"); }
+uint64_t TextReader::read_uint(const char* what) { return read_integer<uint64_t>(what, "a non-negative integer"); }
 
 void append_float(std::string& out, float value) {
   char buf[32];

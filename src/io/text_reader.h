@@ -93,6 +93,9 @@ class TextReader {
   [[noreturn]] void fail(const std::string& what) const { throw_bad_input_at_line(name_, line_, what); }
 
  private:
+  template <class Integer>
+  Integer read_integer(const char* what, const char* kind);
+
   const char* begin_;
   const char* p_;
   const char* end_;
