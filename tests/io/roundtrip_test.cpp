@@ -2,6 +2,8 @@
 // (bitwise) from the first read on, and no format moves a triangle corner.
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include "lodkit/error.h"
 #include "lodkit/io.h"
 #include "test_support.h"
