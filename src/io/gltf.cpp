@@ -1,0 +1,1449 @@
+// glTF 2.0 (.gltf + .bin / data: URIs, and .glb).
+//
+// tinygltf parses and serializes the document; lodkit does everything that touches bytes itself:
+// the GLB container, every bufferView / accessor / sparse range (checked before any decoding or
+// allocation), and the geometry it regenerates on write. Writing starts from the source document,
+// so materials, textures, images, nodes, cameras, skins and animations pass through; only the
+// triangle primitives' attributes and indices are replaced, and the buffer is repacked from the
+// bufferViews something still references plus the new geometry.
+//
+// tinygltf 2.7 pitfalls handled here:
+//  - it decodes images with stb_image on read and re-encodes them on write (and rewrites external
+//    URIs to their bare file name): an image loader keeps the encoded bytes untouched, and an image
+//    writer keeps external URIs verbatim and writes data: URIs back from the original bytes;
+//  - it hands an image's bufferView to the image loader without checking the view lies inside its
+//    buffer (heap over-read), and converts extras/extensions recursively (a deeply nested JSON
+//    overflows the stack): both are checked on the raw JSON before tinygltf sees it;
+//  - it looks for external files in "." as well as the base dir: file callbacks keep it in base_dir.
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "io/text_reader.h"
+#include "lodkit/error.h"
+#include "lodkit/io.h"
+
+namespace lod {
+
+// The parsed source document. Encoded images from data: URIs are kept in Image::image (as_is);
+// images in bufferViews stay in the buffers, which are kept whole.
+struct GltfSource {
+  tinygltf::Model model;
+};
+
+namespace {
+
+namespace tg = tinygltf;
+using Json = nlohmann::json;
+
+constexpr uint32_t glb_magic = 0x46546C67;       // "glTF"
+constexpr uint32_t glb_chunk_json = 0x4E4F534A;  // "JSON"
+constexpr uint32_t glb_chunk_bin = 0x004E4942;   // "BIN\0"
+// tinygltf converts extras/extensions recursively; real files nest a handful of levels.
+constexpr size_t max_json_depth = 64;
+// An accessor without a bufferView reads as zeros: cap it so a tiny file cannot ask for gigabytes.
+constexpr uint64_t max_zero_accessor_count = uint64_t(1) << 24;
+
+std::string str(uint64_t value) { return std::to_string(value); }
+
+// ---- accessor layout -----------------------------------------------------------------------------
+
+size_t component_bytes(int component_type) {
+  switch (component_type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_INT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+    default: return 0;  // DOUBLE is not glTF 2.0
+  }
+}
+
+size_t type_components(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return 1;
+    case TINYGLTF_TYPE_VEC2: return 2;
+    case TINYGLTF_TYPE_VEC3: return 3;
+    case TINYGLTF_TYPE_VEC4: return 4;
+    case TINYGLTF_TYPE_MAT2: return 4;
+    case TINYGLTF_TYPE_MAT3: return 9;
+    case TINYGLTF_TYPE_MAT4: return 16;
+    default: return 0;
+  }
+}
+
+const char* type_name(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return "SCALAR";
+    case TINYGLTF_TYPE_VEC2: return "VEC2";
+    case TINYGLTF_TYPE_VEC3: return "VEC3";
+    case TINYGLTF_TYPE_VEC4: return "VEC4";
+    case TINYGLTF_TYPE_MAT2: return "MAT2";
+    case TINYGLTF_TYPE_MAT3: return "MAT3";
+    case TINYGLTF_TYPE_MAT4: return "MAT4";
+    default: return "?";
+  }
+}
+
+// Matrix columns start on 4-byte boundaries, which pads 1- and 2-byte MAT2/MAT3 elements.
+size_t element_bytes(int component_type, int type) {
+  const size_t c = component_bytes(component_type);
+  if (type == TINYGLTF_TYPE_MAT2 && c == 1) return 8;
+  if (type == TINYGLTF_TYPE_MAT3 && c == 1) return 12;
+  if (type == TINYGLTF_TYPE_MAT3 && c == 2) return 24;
+  return c * type_components(type);
+}
+
+// ---- the raw JSON checks that must happen before tinygltf parses ---------------------------------
+
+void check_json_depth(std::span<const uint8_t> text, const std::string& name, size_t base_offset) {
+  size_t depth = 0;
+  bool in_string = false, escaped = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const uint8_t c = text[i];
+    if (in_string) {
+      if (escaped)
+        escaped = false;
+      else if (c == '\\')
+        escaped = true;
+      else if (c == '"')
+        in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > max_json_depth)
+        throw_bad_input_at_byte(name, base_offset + i,
+                                "JSON nested deeper than " + str(max_json_depth) + " levels");
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+}
+
+class JsonChecker {
+ public:
+  JsonChecker(const Json& doc, const std::string& name) : doc_(doc), name_(name) {}
+
+  void run() {
+    if (!doc_.is_object()) fail("the JSON root is not an object");
+    const Json* meshes = array("meshes");
+    for (size_t m = 0; meshes && m < meshes->size(); ++m) {
+      const Json& mesh = (*meshes)[m];
+      if (!mesh.is_object()) fail("meshes[" + str(m) + "] is not an object");
+      auto primitives = mesh.find("primitives");
+      if (primitives == mesh.end() || !primitives->is_array() || primitives->empty())
+        fail("meshes[" + str(m) + "] has no primitives");
+      // tinygltf silently drops a primitive without attributes, which would shift every index after it.
+      for (size_t p = 0; p < primitives->size(); ++p) {
+        const Json& primitive = (*primitives)[p];
+        auto attributes = primitive.is_object() ? primitive.find("attributes") : primitive.end();
+        if (!primitive.is_object() || attributes == primitive.end() || !attributes->is_object())
+          fail("meshes[" + str(m) + "].primitives[" + str(p) + "] has no attributes object");
+      }
+    }
+    // tinygltf passes &buffer.data[view.byteOffset] with view.byteLength to the image loader unchecked.
+    const Json* images = array("images");
+    for (size_t i = 0; images && i < images->size(); ++i) {
+      const Json& image = (*images)[i];
+      if (!image.is_object()) continue;  // tinygltf reports it
+      auto view_ref = image.find("bufferView");
+      if (view_ref == image.end()) continue;
+      const std::string where = "images[" + str(i) + "]";
+      const Json* views = array("bufferViews");
+      const Json& view = element(views, *view_ref, where + ".bufferView", "bufferViews");
+      const std::string view_where = "bufferViews[" + view_ref->dump() + "]";
+      const Json* buffers = array("buffers");
+      const Json& buffer = element(buffers, member(view, "buffer", view_where), view_where + ".buffer", "buffers");
+      const uint64_t offset = view.contains("byteOffset") ? unsigned_value(view["byteOffset"], view_where + ".byteOffset") : 0;
+      const uint64_t length = unsigned_value(member(view, "byteLength", view_where), view_where + ".byteLength");
+      const uint64_t buffer_length = unsigned_value(member(buffer, "byteLength", "buffers"), "buffers[].byteLength");
+      if (length == 0) fail(where + " uses the empty " + view_where);
+      if (offset > buffer_length || length > buffer_length - offset)
+        fail(view_where + " (bytes " + str(offset) + ".." + str(offset + length) + ") runs past the end of its buffer (" +
+             str(buffer_length) + " bytes)");
+    }
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const { throw_bad_input(name_, what); }
+  const Json* array(const char* key) const {
+    auto it = doc_.find(key);
+    if (it == doc_.end()) return nullptr;
+    if (!it->is_array()) fail(std::string("'") + key + "' is not an array");
+    return &*it;
+  }
+  const Json& member(const Json& object, const char* key, const std::string& where) const {
+    auto it = object.find(key);
+    if (it == object.end()) fail(where + " has no '" + key + "'");
+    return *it;
+  }
+  uint64_t unsigned_value(const Json& value, const std::string& where) const {
+    if (!value.is_number_unsigned()) fail(where + " is not a non-negative integer");
+    return value.get<uint64_t>();
+  }
+  const Json& element(const Json* list, const Json& index, const std::string& where, const char* list_name) const {
+    const uint64_t i = unsigned_value(index, where);
+    if (!list || i >= list->size()) fail(where + " refers to " + list_name + "[" + str(i) + "], which does not exist");
+    const Json& e = (*list)[i];
+    if (!e.is_object()) fail(std::string(list_name) + "[" + str(i) + "] is not an object");
+    return e;
+  }
+
+  const Json& doc_;
+  const std::string& name_;
+};
+
+// ---- GLB container -------------------------------------------------------------------------------
+
+struct GlbParts {
+  size_t json_offset = 0, json_size = 0;
+  size_t length = 0;  // declared total length (bytes after it are ignored)
+};
+
+GlbParts check_glb(std::span<const uint8_t> bytes, const std::string& name) {
+  io::BinaryReader in(bytes, name);
+  if (bytes.size() < 12) in.fail("truncated GLB header (" + str(bytes.size()) + " bytes, need 12)");
+  if (in.read<uint32_t>(false, "GLB magic") != glb_magic) throw_bad_input_at_byte(name, 0, "wrong GLB magic (expected 'glTF')");
+  const uint32_t version = in.read<uint32_t>(false, "GLB version");
+  if (version != 2) throw_bad_input_at_byte(name, 4, "unsupported GLB version " + str(version) + " (expected 2)");
+  const uint32_t length = in.read<uint32_t>(false, "GLB length");
+  if (length > bytes.size())
+    throw_bad_input_at_byte(name, 8, "GLB header declares " + str(length) + " bytes but the file has only " + str(bytes.size()) +
+                                         " (truncated file?)");
+  io::BinaryReader chunks(bytes.first(length), name, 12);
+  if (chunks.remaining() < 8) chunks.fail("truncated GLB: no JSON chunk header");
+  GlbParts parts;
+  parts.length = length;
+  const uint32_t json_size = chunks.read<uint32_t>(false, "JSON chunk length");
+  if (chunks.read<uint32_t>(false, "JSON chunk type") != glb_chunk_json)
+    throw_bad_input_at_byte(name, 16, "the first GLB chunk is not JSON");
+  if (json_size == 0 || json_size > chunks.remaining())
+    throw_bad_input_at_byte(name, 12, "JSON chunk length " + str(json_size) + " does not fit the " + str(chunks.remaining()) +
+                                          " bytes left in the GLB");
+  parts.json_offset = 20;
+  parts.json_size = json_size;
+  chunks.seek(20 + size_t(json_size));
+  if (chunks.remaining() == 0) return parts;
+  if (chunks.remaining() < 8) chunks.fail("truncated GLB chunk header");
+  const size_t bin_header = chunks.offset();
+  const uint32_t bin_size = chunks.read<uint32_t>(false, "BIN chunk length");
+  if (chunks.read<uint32_t>(false, "BIN chunk type") != glb_chunk_bin)
+    throw_bad_input_at_byte(name, bin_header + 4, "the second GLB chunk is not BIN");
+  if (bin_size > chunks.remaining())
+    throw_bad_input_at_byte(name, bin_header, "BIN chunk length " + str(bin_size) + " runs past the end of the GLB (" +
+                                                  str(chunks.remaining()) + " bytes left)");
+  return parts;
+}
+
+// ---- tinygltf callbacks --------------------------------------------------------------------------
+
+// External files resolve against base_dir only (tinygltf would also try the working directory).
+struct FileAccess {
+  std::string prefix;  // base_dir joined the way tinygltf joins paths; empty: no external files
+};
+
+bool inside_base(const std::string& path, const FileAccess& access) {
+  return !access.prefix.empty() && path.compare(0, access.prefix.size(), access.prefix) == 0;
+}
+bool file_exists(const std::string& path, void* user) {
+  std::error_code ec;
+  return inside_base(path, *static_cast<const FileAccess*>(user)) && std::filesystem::is_regular_file(path, ec);
+}
+std::string expand_path(const std::string& path, void*) { return path; }
+bool read_whole_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+  if (!inside_base(path, *static_cast<const FileAccess*>(user))) {
+    if (err) *err = "outside the glTF file's folder";
+    return false;
+  }
+  try {
+    *out = read_file_bytes(path);
+    return true;
+  } catch (const std::exception& e) {
+    if (err) *err = e.what();
+    return false;
+  }
+}
+bool refuse_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+  if (err) *err = "lodkit writes files itself";
+  return false;
+}
+
+// Keeps encoded images as they are. Only images from data: URIs need their bytes: bufferView images
+// stay in the buffers (copied on write) and external images keep their URI.
+bool keep_encoded_image(tg::Image* image, const int, std::string*, std::string*, int, int, const unsigned char* bytes,
+                        int size, void*) {
+  image->as_is = true;
+  if (image->bufferView < 0 && image->uri.empty() && bytes && size > 0) image->image.assign(bytes, bytes + size);
+  return true;
+}
+
+std::string base64(const std::vector<unsigned char>& bytes) {
+  static const char digits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  size_t i = 0;
+  for (; i + 3 <= bytes.size(); i += 3) {
+    const uint32_t v = uint32_t(bytes[i]) << 16 | uint32_t(bytes[i + 1]) << 8 | bytes[i + 2];
+    out += {digits[v >> 18], digits[(v >> 12) & 63], digits[(v >> 6) & 63], digits[v & 63]};
+  }
+  if (i + 1 == bytes.size()) {
+    const uint32_t v = uint32_t(bytes[i]) << 16;
+    out += {digits[v >> 18], digits[(v >> 12) & 63], '=', '='};
+  } else if (i + 2 == bytes.size()) {
+    const uint32_t v = uint32_t(bytes[i]) << 16 | uint32_t(bytes[i + 1]) << 8;
+    out += {digits[v >> 18], digits[(v >> 12) & 63], digits[(v >> 6) & 63], '='};
+  }
+  return out;
+}
+
+// Replaces tinygltf's writer, which re-encodes decoded pixels. External URIs: return false, so
+// tinygltf writes Image::uri verbatim. data: URI images: the original bytes, base64 again.
+bool write_image_uri(const std::string*, const std::string*, const tg::Image* image, bool, std::string* out_uri, void*) {
+  if (!image->uri.empty() || image->image.empty()) return false;
+  const std::string mime = image->mimeType.empty() ? "application/octet-stream" : image->mimeType;
+  *out_uri = "data:" + mime + ";base64," + base64(image->image);
+  return true;
+}
+
+// ---- the loaded document: validation and decoding -----------------------------------------------
+
+class Document {
+ public:
+  Document(const tg::Model& model, const std::string& name) : model_(model), name_(name) {}
+
+  [[noreturn]] void fail(const std::string& what) const { throw_bad_input(name_, what); }
+  const tg::Model& model() const { return model_; }
+  const tg::Accessor& accessor(int index) const { return model_.accessors[size_t(index)]; }
+
+  // Every byte range and every index the reader or writer follows; nothing is decoded before this.
+  void validate() const {
+    validate_extensions();
+    validate_buffer_views();
+    for (size_t a = 0; a < model_.accessors.size(); ++a) validate_accessor(a);
+    validate_references();
+  }
+
+  // Reads every element of an accessor as N components of its component type (dense data or zeros,
+  // then the sparse substitutions) and calls store(element_index, const T* components).
+  template <size_t N, class Store>
+  void read_elements(int index, Store&& store) const {
+    const tg::Accessor& acc = accessor(index);
+    auto run = [&](auto tag) {
+      using T = decltype(tag);
+      if (acc.bufferView >= 0) {
+        const tg::BufferView& view = model_.bufferViews[size_t(acc.bufferView)];
+        const uint8_t* base = model_.buffers[size_t(view.buffer)].data.data() + view.byteOffset + acc.byteOffset;
+        const size_t stride = view.byteStride ? view.byteStride : element_bytes(acc.componentType, acc.type);
+        for (size_t i = 0; i < acc.count; ++i) {
+          T raw[N];
+          std::memcpy(raw, base + i * stride, sizeof raw);
+          store(i, static_cast<const T*>(raw));
+        }
+      } else {
+        const T zeros[N] = {};
+        for (size_t i = 0; i < acc.count; ++i) store(i, static_cast<const T*>(zeros));
+      }
+      if (!acc.sparse.isSparse) return;
+      const auto& sparse = acc.sparse;
+      const uint8_t* indices = view_bytes(sparse.indices.bufferView) + sparse.indices.byteOffset;
+      const uint8_t* values = view_bytes(sparse.values.bufferView) + sparse.values.byteOffset;
+      const size_t index_bytes = component_bytes(sparse.indices.componentType);
+      for (size_t k = 0; k < size_t(sparse.count); ++k) {
+        uint32_t target = 0;
+        if (index_bytes == 1) {
+          target = indices[k];
+        } else if (index_bytes == 2) {
+          uint16_t v;
+          std::memcpy(&v, indices + 2 * k, 2);
+          target = v;
+        } else {
+          std::memcpy(&target, indices + 4 * k, 4);
+        }
+        if (target >= acc.count)
+          fail("accessors[" + str(size_t(index)) + "]: sparse index " + str(target) + " is out of range (count " +
+               str(acc.count) + ")");
+        T raw[N];
+        std::memcpy(raw, values + k * sizeof raw, sizeof raw);
+        store(target, static_cast<const T*>(raw));
+      }
+    };
+    switch (acc.componentType) {
+      case TINYGLTF_COMPONENT_TYPE_BYTE: run(int8_t{}); break;
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: run(uint8_t{}); break;
+      case TINYGLTF_COMPONENT_TYPE_SHORT: run(int16_t{}); break;
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: run(uint16_t{}); break;
+      case TINYGLTF_COMPONENT_TYPE_INT: run(int32_t{}); break;
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: run(uint32_t{}); break;
+      default: run(float{}); break;
+    }
+  }
+
+  // Out is float, float2, float3, float4 or std::array<float, 16>; its size must match the type.
+  // Integer components are normalized when the accessor says so or `normalize` is set.
+  template <class Out>
+  std::vector<Out> decode_floats(int index, bool normalize = false) const {
+    constexpr size_t n = sizeof(Out) / sizeof(float);
+    static_assert(sizeof(Out) == n * sizeof(float), "Out must be tightly packed floats");
+    const tg::Accessor& acc = accessor(index);
+    const bool normalized = acc.normalized || normalize;
+    std::vector<Out> out(acc.count);
+    read_elements<n>(index, [&](size_t i, const auto* raw) {
+      float values[n];
+      for (size_t c = 0; c < n; ++c) values[c] = to_float(raw[c], normalized);
+      std::memcpy(&out[i], values, sizeof values);
+    });
+    return out;
+  }
+
+  std::vector<uint32_t> decode_indices(int index) const {
+    std::vector<uint32_t> out(accessor(index).count);
+    read_elements<1>(index, [&](size_t i, const auto* raw) { out[i] = uint32_t(raw[0]); });
+    return out;
+  }
+
+  std::vector<ushort4> decode_joints(int index) const {
+    std::vector<ushort4> out(accessor(index).count);
+    read_elements<4>(index, [&](size_t i, const auto* raw) {
+      out[i] = {uint16_t(raw[0]), uint16_t(raw[1]), uint16_t(raw[2]), uint16_t(raw[3])};
+    });
+    return out;
+  }
+
+ private:
+  template <class T>
+  static float to_float(T v, bool normalized) {
+    if constexpr (std::is_same_v<T, float>) {
+      return v;
+    } else {
+      if (!normalized) return float(v);
+      if constexpr (std::is_same_v<T, int8_t>) return std::max(float(v) / 127.0f, -1.0f);
+      if constexpr (std::is_same_v<T, uint8_t>) return float(v) / 255.0f;
+      if constexpr (std::is_same_v<T, int16_t>) return std::max(float(v) / 32767.0f, -1.0f);
+      if constexpr (std::is_same_v<T, uint16_t>) return float(v) / 65535.0f;
+      return float(v);  // 32-bit integers are never normalized in glTF
+    }
+  }
+
+  const uint8_t* view_bytes(int view_index) const {
+    const tg::BufferView& view = model_.bufferViews[size_t(view_index)];
+    return model_.buffers[size_t(view.buffer)].data.data() + view.byteOffset;
+  }
+
+  void validate_extensions() const {
+    for (const std::string& ext : model_.extensionsRequired)
+      if (ext == "KHR_draco_mesh_compression" || ext == "EXT_meshopt_compression" || ext == "KHR_meshopt_compression")
+        fail("requires extension " + ext + " (compressed geometry), which lodkit cannot decode");
+  }
+
+  void validate_buffer_views() const {
+    for (size_t v = 0; v < model_.bufferViews.size(); ++v) {
+      const tg::BufferView& view = model_.bufferViews[v];
+      const std::string where = "bufferViews[" + str(v) + "]";
+      if (view.buffer < 0 || size_t(view.buffer) >= model_.buffers.size())
+        fail(where + " refers to buffers[" + std::to_string(view.buffer) + "], which does not exist");
+      const size_t size = model_.buffers[size_t(view.buffer)].data.size();
+      if (view.byteOffset > size || view.byteLength > size - view.byteOffset)
+        fail(where + " (bytes " + str(view.byteOffset) + ".." + str(view.byteOffset + view.byteLength) +
+             ") runs past the end of buffers[" + std::to_string(view.buffer) + "] (" + str(size) + " bytes)");
+    }
+  }
+
+  // `bytes` at `offset` must fit in bufferView `view_index`.
+  void check_view_range(int view_index, int64_t offset, uint64_t bytes, const std::string& what) const {
+    if (view_index < 0 || size_t(view_index) >= model_.bufferViews.size())
+      fail(what + " refers to bufferViews[" + std::to_string(view_index) + "], which does not exist");
+    const size_t length = model_.bufferViews[size_t(view_index)].byteLength;
+    if (offset < 0 || uint64_t(offset) > length || bytes > length - uint64_t(offset))
+      fail(what + " needs " + str(bytes) + " bytes at offset " + std::to_string(offset) + " but bufferViews[" +
+           std::to_string(view_index) + "] has " + str(length));
+  }
+
+  void validate_accessor(size_t a) const {
+    const tg::Accessor& acc = model_.accessors[a];
+    const std::string where = "accessors[" + str(a) + "]";
+    if (component_bytes(acc.componentType) == 0) fail(where + " has unsupported componentType " + std::to_string(acc.componentType));
+    if (type_components(acc.type) == 0) fail(where + " has an unknown type");
+    const size_t element = element_bytes(acc.componentType, acc.type);
+    if (acc.bufferView >= 0) {
+      if (size_t(acc.bufferView) >= model_.bufferViews.size())
+        fail(where + " refers to bufferViews[" + std::to_string(acc.bufferView) + "], which does not exist");
+      const tg::BufferView& view = model_.bufferViews[size_t(acc.bufferView)];
+      if (view.byteStride != 0 && view.byteStride < element)
+        fail(where + ": bufferViews[" + std::to_string(acc.bufferView) + "].byteStride " + str(view.byteStride) +
+             " is smaller than the element size " + str(element) + " (accessor stride overlaps its elements)");
+      const size_t stride = view.byteStride ? view.byteStride : element;
+      const size_t length = view.byteLength;
+      // offset + stride * (count - 1) + element <= length, without overflow.
+      const bool fits = acc.count == 0 || (acc.byteOffset <= length && element <= length - acc.byteOffset &&
+                                           acc.count - 1 <= (length - acc.byteOffset - element) / stride);
+      if (!fits)
+        fail(where + " declares " + str(acc.count) + " elements of " + str(element) + " bytes (stride " + str(stride) +
+             ") from offset " + str(acc.byteOffset) + ", which do not fit in bufferViews[" +
+             std::to_string(acc.bufferView) + "] (" + str(length) + " bytes)");
+    } else if (acc.count > max_zero_accessor_count) {
+      fail(where + " has no bufferView and declares " + str(acc.count) + " elements");
+    }
+    if (!acc.sparse.isSparse) return;
+    const auto& sparse = acc.sparse;
+    if (sparse.count < 1 || uint64_t(sparse.count) > acc.count)
+      fail(where + ": sparse count " + std::to_string(sparse.count) + " is not in 1.." + str(acc.count));
+    const int index_type = sparse.indices.componentType;
+    if (index_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && index_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+        index_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+      fail(where + ": sparse indices have componentType " + std::to_string(index_type) + " (expected an unsigned integer type)");
+    check_view_range(sparse.indices.bufferView, sparse.indices.byteOffset,
+                     uint64_t(sparse.count) * component_bytes(index_type), where + " sparse indices");
+    check_view_range(sparse.values.bufferView, sparse.values.byteOffset,
+                     uint64_t(sparse.count) * component_bytes(acc.componentType) * type_components(acc.type),
+                     where + " sparse values");
+  }
+
+  void check_index(int index, size_t size, const std::string& what, const char* list, bool optional = true) const {
+    if (optional && index == -1) return;
+    if (index < 0 || size_t(index) >= size)
+      fail(what + " refers to " + list + "[" + std::to_string(index) + "], which does not exist");
+  }
+
+  void validate_references() const {
+    const tg::Model& m = model_;
+    const size_t accessors = m.accessors.size();
+    for (size_t i = 0; i < m.meshes.size(); ++i) {
+      for (size_t p = 0; p < m.meshes[i].primitives.size(); ++p) {
+        const tg::Primitive& prim = m.meshes[i].primitives[p];
+        const std::string where = "meshes[" + str(i) + "].primitives[" + str(p) + "]";
+        for (const auto& [semantic, index] : prim.attributes) check_index(index, accessors, where + " " + semantic, "accessors", false);
+        check_index(prim.indices, accessors, where + " indices", "accessors");
+        for (const auto& target : prim.targets)
+          for (const auto& [semantic, index] : target) check_index(index, accessors, where + " morph target " + semantic, "accessors", false);
+        check_index(prim.material, m.materials.size(), where, "materials");
+        if (prim.mode < 0 || prim.mode > TINYGLTF_MODE_TRIANGLE_FAN) fail(where + " has unknown mode " + std::to_string(prim.mode));
+      }
+    }
+    for (size_t i = 0; i < m.nodes.size(); ++i) {
+      const tg::Node& node = m.nodes[i];
+      const std::string where = "nodes[" + str(i) + "]";
+      check_index(node.mesh, m.meshes.size(), where, "meshes");
+      check_index(node.skin, m.skins.size(), where, "skins");
+      check_index(node.camera, m.cameras.size(), where, "cameras");
+      for (int child : node.children) check_index(child, m.nodes.size(), where + " child", "nodes", false);
+    }
+    for (size_t i = 0; i < m.skins.size(); ++i) {
+      const std::string where = "skins[" + str(i) + "]";
+      check_index(m.skins[i].inverseBindMatrices, accessors, where + " inverseBindMatrices", "accessors");
+      check_index(m.skins[i].skeleton, m.nodes.size(), where + " skeleton", "nodes");
+      for (int joint : m.skins[i].joints) check_index(joint, m.nodes.size(), where + " joint", "nodes", false);
+    }
+    for (size_t i = 0; i < m.animations.size(); ++i) {
+      const tg::Animation& anim = m.animations[i];
+      for (size_t s = 0; s < anim.samplers.size(); ++s) {
+        const std::string where = "animations[" + str(i) + "].samplers[" + str(s) + "]";
+        check_index(anim.samplers[s].input, accessors, where + " input", "accessors", false);
+        check_index(anim.samplers[s].output, accessors, where + " output", "accessors", false);
+      }
+      for (size_t c = 0; c < anim.channels.size(); ++c) {
+        const std::string where = "animations[" + str(i) + "].channels[" + str(c) + "]";
+        check_index(anim.channels[c].sampler, anim.samplers.size(), where, "samplers", false);
+        check_index(anim.channels[c].target_node, m.nodes.size(), where + " target", "nodes");
+      }
+    }
+    for (size_t i = 0; i < m.scenes.size(); ++i)
+      for (int node : m.scenes[i].nodes) check_index(node, m.nodes.size(), "scenes[" + str(i) + "]", "nodes", false);
+    check_index(m.defaultScene, m.scenes.size(), "'scene'", "scenes");
+    for (size_t i = 0; i < m.images.size(); ++i)
+      check_index(m.images[i].bufferView, m.bufferViews.size(), "images[" + str(i) + "]", "bufferViews");
+  }
+
+  const tg::Model& model_;
+  const std::string& name_;
+};
+
+// ---- glTF -> lod::Scene --------------------------------------------------------------------------
+
+class SceneBuilder {
+ public:
+  explicit SceneBuilder(const Document& doc) : doc_(doc), model_(doc.model()) {}
+
+  Scene build() {
+    Scene scene;
+    for (size_t m = 0; m < model_.meshes.size(); ++m) {
+      for (size_t p = 0; p < model_.meshes[m].primitives.size(); ++p) {
+        const tg::Primitive& prim = model_.meshes[m].primitives[p];
+        // Points and lines stay in the source document and are written back unchanged.
+        if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+            prim.mode != TINYGLTF_MODE_TRIANGLE_FAN)
+          continue;
+        Primitive out;
+        out.gltf_mesh = uint32_t(m);
+        out.gltf_primitive = uint32_t(p);
+        out.material = prim.material;
+        out.mesh = decode_primitive(prim, "meshes[" + str(m) + "].primitives[" + str(p) + "]");
+        scene.primitives.push_back(std::move(out));
+      }
+    }
+    build_nodes(scene);
+    build_skins(scene);
+    build_animations(scene);
+    for (const tg::Material& material : model_.materials) scene.material_names.push_back(material.name);
+    scene.image_count = uint32_t(model_.images.size());
+    scene.texture_count = uint32_t(model_.textures.size());
+    return scene;
+  }
+
+ private:
+  const tg::Accessor& expect(int index, std::initializer_list<int> types, const std::string& what) const {
+    const tg::Accessor& acc = doc_.accessor(index);
+    if (std::find(types.begin(), types.end(), acc.type) == types.end()) {
+      std::string expected;
+      for (int t : types) expected += (expected.empty() ? "" : " or ") + std::string(type_name(t));
+      doc_.fail(what + " is " + type_name(acc.type) + ", expected " + expected);
+    }
+    return acc;
+  }
+
+  template <class T>
+  void check_finite(const std::vector<T>& values, const std::string& what) const {
+    constexpr size_t n = sizeof(T) / sizeof(float);
+    for (size_t i = 0; i < values.size(); ++i) {
+      float v[n];
+      std::memcpy(v, &values[i], sizeof v);
+      for (size_t c = 0; c < n; ++c)
+        if (!std::isfinite(v[c])) doc_.fail(what + " of vertex " + str(i) + " is not finite");
+    }
+  }
+
+  Mesh decode_primitive(const tg::Primitive& prim, const std::string& where) const {
+    auto attribute = [&](const std::string& semantic) {
+      auto it = prim.attributes.find(semantic);
+      return it == prim.attributes.end() ? -1 : it->second;
+    };
+    Mesh mesh;
+    const int position = attribute("POSITION");
+    if (position < 0) doc_.fail(where + " has no POSITION attribute");
+    const size_t vertex_count = expect(position, {TINYGLTF_TYPE_VEC3}, where + " POSITION").count;
+    if (vertex_count > std::numeric_limits<uint32_t>::max()) doc_.fail(where + " has more than 2^32 vertices");
+    mesh.positions = doc_.decode_floats<float3>(position);
+    for (size_t i = 0; i < vertex_count; ++i) {
+      const float3& p = mesh.positions[i];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        doc_.fail(where + " POSITION of vertex " + str(i) + " is not finite");
+    }
+    // Every other stream must have one entry per vertex.
+    auto stream = [&](const std::string& semantic, std::initializer_list<int> types) {
+      const int index = attribute(semantic);
+      if (index < 0) return -1;
+      const tg::Accessor& acc = expect(index, types, where + " " + semantic);
+      if (acc.count != vertex_count)
+        doc_.fail(where + " " + semantic + " has " + str(acc.count) + " entries for " + str(vertex_count) + " vertices");
+      return index;
+    };
+    if (int index = stream("NORMAL", {TINYGLTF_TYPE_VEC3}); index >= 0) {
+      mesh.normals = doc_.decode_floats<float3>(index);
+      check_finite(mesh.normals, where + " NORMAL");
+    }
+    if (int index = stream("TANGENT", {TINYGLTF_TYPE_VEC4}); index >= 0) {
+      mesh.tangents = doc_.decode_floats<float4>(index);
+      check_finite(mesh.tangents, where + " TANGENT");
+    }
+    for (size_t k = 0; k < max_uv_sets; ++k) {
+      const std::string semantic = "TEXCOORD_" + str(k);
+      if (int index = stream(semantic, {TINYGLTF_TYPE_VEC2}); index >= 0) {
+        mesh.uvs[k] = doc_.decode_floats<float2>(index);
+        check_finite(mesh.uvs[k], where + " " + semantic);
+      }
+    }
+    if (int index = stream("COLOR_0", {TINYGLTF_TYPE_VEC3, TINYGLTF_TYPE_VEC4}); index >= 0) {
+      // Integer colors are normalized by definition (the flag is required by the spec).
+      if (doc_.accessor(index).type == TINYGLTF_TYPE_VEC4) {
+        mesh.colors = doc_.decode_floats<float4>(index, true);
+      } else {
+        const std::vector<float3> rgb = doc_.decode_floats<float3>(index, true);
+        mesh.colors.resize(rgb.size());
+        for (size_t i = 0; i < rgb.size(); ++i) mesh.colors[i] = {rgb[i].x, rgb[i].y, rgb[i].z, 1.0f};
+      }
+      check_finite(mesh.colors, where + " COLOR_0");
+    }
+    if (int index = stream("JOINTS_0", {TINYGLTF_TYPE_VEC4}); index >= 0) {
+      const int type = doc_.accessor(index).componentType;
+      if (type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)
+        doc_.fail(where + " JOINTS_0 must be unsigned byte or unsigned short");
+      mesh.joints = doc_.decode_joints(index);
+    }
+    if (int index = stream("WEIGHTS_0", {TINYGLTF_TYPE_VEC4}); index >= 0) {
+      mesh.weights = doc_.decode_floats<float4>(index, true);
+      check_finite(mesh.weights, where + " WEIGHTS_0");
+    }
+
+    std::vector<uint32_t> corners;
+    if (prim.indices >= 0) {
+      const tg::Accessor& acc = expect(prim.indices, {TINYGLTF_TYPE_SCALAR}, where + " indices");
+      const int type = acc.componentType;
+      if (type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+          type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+        doc_.fail(where + " indices must be unsigned byte, short or int");
+      corners = doc_.decode_indices(prim.indices);
+      for (size_t i = 0; i < corners.size(); ++i)
+        if (corners[i] >= vertex_count)
+          doc_.fail(where + " index " + str(i) + " is " + str(corners[i]) + ", out of range for " + str(vertex_count) +
+                    " vertices");
+    } else {
+      corners.resize(vertex_count);
+      for (size_t i = 0; i < vertex_count; ++i) corners[i] = uint32_t(i);
+    }
+    mesh.indices = triangle_list(prim.mode, std::move(corners), where);
+    return mesh;
+  }
+
+  std::vector<uint32_t> triangle_list(int mode, std::vector<uint32_t> corners, const std::string& where) const {
+    if (mode == TINYGLTF_MODE_TRIANGLES) {
+      if (corners.size() % 3 != 0)
+        doc_.fail(where + " has " + str(corners.size()) + " triangle corners, not a multiple of 3");
+      return corners;
+    }
+    std::vector<uint32_t> out;
+    const size_t n = corners.size();
+    if (n < 3) return out;
+    out.reserve((n - 2) * 3);
+    for (size_t i = 0; i + 2 < n; ++i) {
+      uint32_t a, b, c;
+      if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+        // Every other triangle is flipped so that the whole strip keeps one winding.
+        a = corners[i];
+        b = corners[i + 1 + i % 2];
+        c = corners[i + 2 - i % 2];
+      } else {
+        a = corners[i + 1];
+        b = corners[i + 2];
+        c = corners[0];
+      }
+      // Strips join runs with repeated indices; those zero-area triangles are padding, not geometry.
+      if (a == b || b == c || a == c) continue;
+      out.insert(out.end(), {a, b, c});
+    }
+    return out;
+  }
+
+  void build_nodes(Scene& scene) const {
+    const size_t count = model_.nodes.size();
+    scene.nodes.resize(count);
+    for (size_t i = 0; i < count; ++i) {
+      const tg::Node& in = model_.nodes[i];
+      Node& out = scene.nodes[i];
+      const std::string where = "nodes[" + str(i) + "]";
+      out.name = in.name;
+      out.mesh = in.mesh;
+      out.skin = in.skin;
+      out.children.assign(in.children.begin(), in.children.end());
+      for (int child : in.children) {
+        if (size_t(child) == i) doc_.fail(where + " is its own child");
+        if (scene.nodes[size_t(child)].parent != -1)
+          doc_.fail("nodes[" + std::to_string(child) + "] has two parents (nodes[" +
+                    std::to_string(scene.nodes[size_t(child)].parent) + "] and " + where + ")");
+        scene.nodes[size_t(child)].parent = int32_t(i);
+      }
+      auto copy = [&](const std::vector<double>& values, size_t expected, float* dst, const char* what) {
+        if (values.empty()) return;
+        if (values.size() != expected)
+          doc_.fail(where + "." + what + " has " + str(values.size()) + " numbers, expected " + str(expected));
+        for (size_t k = 0; k < expected; ++k) dst[k] = float(values[k]);
+      };
+      if (!in.matrix.empty()) {
+        out.has_matrix = true;
+        copy(in.matrix, 16, out.matrix.data(), "matrix");
+      } else {
+        float t[3] = {0, 0, 0}, r[4] = {0, 0, 0, 1}, s[3] = {1, 1, 1};
+        copy(in.translation, 3, t, "translation");
+        copy(in.rotation, 4, r, "rotation");
+        copy(in.scale, 3, s, "scale");
+        out.translation = {t[0], t[1], t[2]};
+        out.rotation = {r[0], r[1], r[2], r[3]};
+        out.scale = {s[0], s[1], s[2]};
+      }
+    }
+    // A parent chain that never reaches a root is a cycle.
+    std::vector<uint8_t> state(count, 0);  // 0 unknown, 1 on the current walk, 2 reaches a root
+    std::vector<size_t> walk;
+    for (size_t i = 0; i < count; ++i) {
+      walk.clear();
+      int32_t n = int32_t(i);
+      while (n != -1 && state[size_t(n)] == 0) {
+        state[size_t(n)] = 1;
+        walk.push_back(size_t(n));
+        n = scene.nodes[size_t(n)].parent;
+      }
+      if (n != -1 && state[size_t(n)] == 1) doc_.fail("nodes[" + std::to_string(n) + "] is part of a node cycle");
+      for (size_t w : walk) state[w] = 2;
+    }
+    if (!model_.scenes.empty()) {
+      const size_t s = model_.defaultScene >= 0 ? size_t(model_.defaultScene) : 0;
+      scene.roots.assign(model_.scenes[s].nodes.begin(), model_.scenes[s].nodes.end());
+    } else {
+      // No scene: every parentless node is a root.
+      for (size_t i = 0; i < count; ++i)
+        if (scene.nodes[i].parent == -1) scene.roots.push_back(int32_t(i));
+    }
+  }
+
+  void build_skins(Scene& scene) const {
+    for (size_t i = 0; i < model_.skins.size(); ++i) {
+      const tg::Skin& in = model_.skins[i];
+      Skin out;
+      out.name = in.name;
+      out.joints.assign(in.joints.begin(), in.joints.end());
+      out.skeleton = in.skeleton;
+      if (in.inverseBindMatrices >= 0) {
+        const std::string where = "skins[" + str(i) + "].inverseBindMatrices";
+        const tg::Accessor& acc = expect(in.inverseBindMatrices, {TINYGLTF_TYPE_MAT4}, where);
+        if (acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) doc_.fail(where + " must be float");
+        if (acc.count < in.joints.size())
+          doc_.fail(where + " has " + str(acc.count) + " matrices for " + str(in.joints.size()) + " joints");
+        out.inverse_bind_matrices = doc_.decode_floats<std::array<float, 16>>(in.inverseBindMatrices);
+        out.inverse_bind_matrices.resize(in.joints.size());
+      } else {
+        out.inverse_bind_matrices.assign(in.joints.size(), {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1});
+      }
+      scene.skins.push_back(std::move(out));
+    }
+  }
+
+  std::vector<float> decode_flat(int index, size_t components) const {
+    std::vector<float> out;
+    auto flatten = [&](const auto& typed) {
+      out.resize(typed.size() * components);
+      if (!typed.empty()) std::memcpy(out.data(), typed.data(), out.size() * sizeof(float));
+    };
+    // Integer animation outputs are normalized by definition.
+    switch (components) {
+      case 1: flatten(doc_.decode_floats<float>(index, true)); break;
+      case 3: flatten(doc_.decode_floats<float3>(index, true)); break;
+      default: flatten(doc_.decode_floats<float4>(index, true)); break;
+    }
+    return out;
+  }
+
+  void build_animations(Scene& scene) const {
+    for (size_t a = 0; a < model_.animations.size(); ++a) {
+      const tg::Animation& in = model_.animations[a];
+      Animation out;
+      out.name = in.name;
+      for (size_t c = 0; c < in.channels.size(); ++c) {
+        const tg::AnimationChannel& channel = in.channels[c];
+        const tg::AnimationSampler& sampler = in.samplers[size_t(channel.sampler)];
+        const std::string where = "animations[" + str(a) + "].channels[" + str(c) + "]";
+        AnimationChannel ch;
+        ch.node = channel.target_node;
+        int output_type = TINYGLTF_TYPE_VEC3;
+        if (channel.target_path == "translation") {
+          ch.path = AnimationPath::translation;
+        } else if (channel.target_path == "rotation") {
+          ch.path = AnimationPath::rotation;
+          output_type = TINYGLTF_TYPE_VEC4;
+        } else if (channel.target_path == "scale") {
+          ch.path = AnimationPath::scale;
+        } else if (channel.target_path == "weights") {
+          ch.path = AnimationPath::weights;
+          output_type = TINYGLTF_TYPE_SCALAR;
+        } else {
+          continue;  // an extension's target (e.g. KHR_animation_pointer): kept in the source only
+        }
+        if (sampler.interpolation == "LINEAR")
+          ch.interpolation = Interpolation::linear;
+        else if (sampler.interpolation == "STEP")
+          ch.interpolation = Interpolation::step;
+        else if (sampler.interpolation == "CUBICSPLINE")
+          ch.interpolation = Interpolation::cubic_spline;
+        else
+          doc_.fail(where + " has unknown interpolation '" + sampler.interpolation + "'");
+        const tg::Accessor& input = expect(sampler.input, {TINYGLTF_TYPE_SCALAR}, where + " sampler input");
+        if (input.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) doc_.fail(where + " sampler input must be float");
+        const tg::Accessor& output = expect(sampler.output, {output_type}, where + " sampler output");
+        const size_t per_key = ch.interpolation == Interpolation::cubic_spline ? 3 : 1;
+        const size_t keys = input.count;
+        if (ch.path == AnimationPath::weights) {
+          if (keys == 0 || output.count % (keys * per_key) != 0)
+            doc_.fail(where + " has " + str(output.count) + " weight outputs for " + str(keys) + " keys");
+          ch.components = uint32_t(output.count / (keys * per_key));
+        } else {
+          ch.components = output_type == TINYGLTF_TYPE_VEC4 ? 4 : 3;
+          if (output.count != keys * per_key)
+            doc_.fail(where + " has " + str(output.count) + " outputs for " + str(keys) + " keys");
+        }
+        ch.times = doc_.decode_floats<float>(sampler.input);
+        ch.values = decode_flat(sampler.output, type_components(output_type));
+        out.channels.push_back(std::move(ch));
+      }
+      scene.animations.push_back(std::move(out));
+    }
+  }
+
+  const Document& doc_;
+  const tg::Model& model_;
+};
+
+// ---- writing: geometry regeneration and buffer repacking -----------------------------------------
+
+bool is_triangle_mode(int mode) {
+  return mode == TINYGLTF_MODE_TRIANGLES || mode == TINYGLTF_MODE_TRIANGLE_STRIP || mode == TINYGLTF_MODE_TRIANGLE_FAN;
+}
+
+// The semantics lodkit regenerates from a Mesh; any other attribute of a regenerated primitive is
+// kept only while the vertex count is unchanged.
+bool is_regenerated_semantic(const std::string& semantic) {
+  return semantic == "POSITION" || semantic == "NORMAL" || semantic == "TANGENT" || semantic == "TEXCOORD_0" ||
+         semantic == "TEXCOORD_1" || semantic == "TEXCOORD_2" || semantic == "TEXCOORD_3" || semantic == "COLOR_0" ||
+         semantic == "JOINTS_0" || semantic == "WEIGHTS_0";
+}
+
+struct Slot {
+  int mesh = 0, primitive = 0;  // where a Scene primitive lives in the model being written
+};
+
+class BinWriter {
+ public:
+  BinWriter(tg::Model& model, std::vector<uint8_t>& bin) : model_(model), bin_(bin) {}
+
+  void align() { bin_.resize((bin_.size() + 3) & ~size_t(3), 0); }
+
+  int add_view(const void* data, size_t bytes, int target) {
+    align();
+    tg::BufferView view;
+    view.buffer = 0;
+    view.byteOffset = bin_.size();
+    view.byteLength = bytes;
+    view.target = target;
+    const auto* p = static_cast<const uint8_t*>(data);
+    bin_.insert(bin_.end(), p, p + bytes);
+    model_.bufferViews.push_back(std::move(view));
+    return int(model_.bufferViews.size() - 1);
+  }
+
+  template <class T>
+  int add_accessor(const std::vector<T>& values, int component_type, int type, int target, bool normalized = false) {
+    tg::Accessor acc;
+    acc.bufferView = add_view(values.data(), values.size() * sizeof(T), target);
+    acc.componentType = component_type;
+    acc.type = type;
+    acc.count = values.size();
+    acc.normalized = normalized;
+    model_.accessors.push_back(std::move(acc));
+    return int(model_.accessors.size() - 1);
+  }
+
+  // Appends the Mesh's streams and indices; returns nothing, fills the primitive's references.
+  void add_geometry(const Mesh& mesh, tg::Primitive& prim) {
+    const size_t n = mesh.vertex_count();
+    const int array = TINYGLTF_TARGET_ARRAY_BUFFER;
+    const int position = add_accessor(mesh.positions, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
+    float3 lo, hi;
+    bounding_box(mesh, lo, hi);
+    model_.accessors[size_t(position)].minValues = {lo.x, lo.y, lo.z};
+    model_.accessors[size_t(position)].maxValues = {hi.x, hi.y, hi.z};
+    prim.attributes["POSITION"] = position;
+    if (!mesh.normals.empty())
+      prim.attributes["NORMAL"] = add_accessor(mesh.normals, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
+    if (!mesh.tangents.empty())
+      prim.attributes["TANGENT"] = add_accessor(mesh.tangents, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
+    for (size_t k = 0; k < max_uv_sets; ++k)
+      if (!mesh.uvs[k].empty())
+        prim.attributes["TEXCOORD_" + str(k)] =
+            add_accessor(mesh.uvs[k], TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, array);
+    if (!mesh.colors.empty())
+      prim.attributes["COLOR_0"] = add_accessor(mesh.colors, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
+    if (!mesh.joints.empty())
+      prim.attributes["JOINTS_0"] =
+          add_accessor(mesh.joints, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4, array);
+    if (!mesh.weights.empty())
+      prim.attributes["WEIGHTS_0"] = add_accessor(mesh.weights, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
+    // 16-bit indices while no index can be 65535, which readers may take for a primitive restart.
+    const int elements = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
+    if (n <= 65535) {
+      std::vector<uint16_t> small(mesh.indices.begin(), mesh.indices.end());
+      prim.indices = add_accessor(small, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_SCALAR, elements);
+    } else {
+      prim.indices = add_accessor(mesh.indices, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, elements);
+    }
+    prim.mode = TINYGLTF_MODE_TRIANGLES;
+  }
+
+ private:
+  tg::Model& model_;
+  std::vector<uint8_t>& bin_;
+};
+
+// A Mesh the writer can turn into valid accessors: streams sized, indices in range, positions finite.
+void check_writable(const Mesh& mesh, size_t primitive) {
+  const std::string where = "cannot write glTF: scene primitive " + str(primitive) + ": ";
+  const size_t n = mesh.vertex_count();
+  auto sized = [&](size_t size, const char* what) {
+    if (size != 0 && size != n) throw_usage(where + what + " has " + str(size) + " entries for " + str(n) + " vertices");
+  };
+  sized(mesh.normals.size(), "normals");
+  sized(mesh.tangents.size(), "tangents");
+  for (const auto& uv : mesh.uvs) sized(uv.size(), "uvs");
+  sized(mesh.colors.size(), "colors");
+  sized(mesh.joints.size(), "joints");
+  sized(mesh.weights.size(), "weights");
+  if (n > std::numeric_limits<uint32_t>::max()) throw_usage(where + "more than 2^32 vertices");
+  if (mesh.indices.size() % 3 != 0) throw_usage(where + "index count is not a multiple of 3");
+  for (uint32_t i : mesh.indices)
+    if (i >= n) throw_usage(where + "index " + str(i) + " out of range for " + str(n) + " vertices");
+  for (const float3& p : mesh.positions)
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) throw_usage(where + "non-finite position");
+}
+
+// Replaces the geometry of the triangle primitives listed in `slots` by scene.primitives[i].mesh,
+// drops what nothing references any more, and packs the surviving bufferViews and the new geometry
+// into one buffer (returned; buffer 0 of the model, whose `buffers` list is left empty).
+std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, const std::vector<Slot>& slots) {
+  const size_t mesh_count = model.meshes.size();
+  // Which scene primitive replaces each glTF primitive (-1: none).
+  std::vector<std::vector<int>> replaced_by(mesh_count);
+  for (size_t m = 0; m < mesh_count; ++m) replaced_by[m].assign(model.meshes[m].primitives.size(), -1);
+  for (size_t i = 0; i < slots.size(); ++i) {
+    const Slot& slot = slots[i];
+    const std::string where = "cannot write glTF: scene primitive " + str(i);
+    if (slot.mesh < 0 || size_t(slot.mesh) >= mesh_count || slot.primitive < 0 ||
+        size_t(slot.primitive) >= replaced_by[size_t(slot.mesh)].size())
+      throw_usage(where + " refers to a glTF primitive that its source does not have");
+    const tg::Primitive& prim = model.meshes[size_t(slot.mesh)].primitives[size_t(slot.primitive)];
+    if (!is_triangle_mode(prim.mode)) throw_usage(where + " refers to a points or lines primitive");
+    int& owner = replaced_by[size_t(slot.mesh)][size_t(slot.primitive)];
+    if (owner != -1) throw_usage(where + " refers to the same glTF primitive as scene primitive " + str(size_t(owner)));
+    owner = int(i);
+    const int material = scene.primitives[i].material;
+    if (material < -1 || (material >= 0 && size_t(material) >= model.materials.size()))
+      throw_usage(where + " uses material " + std::to_string(material) + ", which the document does not have");
+    check_writable(scene.primitives[i].mesh, i);
+  }
+
+  // Rebuild each mesh's primitive list. A triangle primitive that no scene primitive replaces, or
+  // whose new mesh has no triangle, is removed. Morph targets survive only where the vertex count
+  // is unchanged, for every primitive of the mesh (glTF requires equal target counts).
+  struct Pending {
+    size_t mesh, primitive, scene_primitive;
+  };
+  std::vector<Pending> pending;
+  std::vector<bool> mesh_lost_morphs(mesh_count, false), mesh_removed(mesh_count, false);
+  for (size_t m = 0; m < mesh_count; ++m) {
+    tg::Mesh& mesh = model.meshes[m];
+    bool drop_morphs = false;
+    std::vector<tg::Primitive> kept;
+    for (size_t p = 0; p < mesh.primitives.size(); ++p) {
+      tg::Primitive prim = mesh.primitives[p];
+      const int owner = replaced_by[m][p];
+      if (!is_triangle_mode(prim.mode)) {
+        kept.push_back(std::move(prim));
+        continue;
+      }
+      if (owner < 0) continue;
+      const Mesh& geometry = scene.primitives[size_t(owner)].mesh;
+      if (geometry.indices.empty()) continue;
+      auto position = prim.attributes.find("POSITION");
+      const bool same_count =
+          position != prim.attributes.end() && model.accessors[size_t(position->second)].count == geometry.vertex_count();
+      if (!same_count && !prim.targets.empty()) drop_morphs = true;
+      for (auto it = prim.attributes.begin(); it != prim.attributes.end();)
+        it = (is_regenerated_semantic(it->first) || !same_count) ? prim.attributes.erase(it) : std::next(it);
+      prim.indices = -1;
+      prim.material = scene.primitives[size_t(owner)].material;
+      prim.extensions.erase("KHR_draco_mesh_compression");  // it describes the old geometry
+      pending.push_back({m, kept.size(), size_t(owner)});
+      kept.push_back(std::move(prim));
+    }
+    if (drop_morphs) {
+      for (tg::Primitive& prim : kept) prim.targets.clear();
+      mesh.weights.clear();
+      mesh_lost_morphs[m] = true;
+    }
+    mesh_removed[m] = kept.empty();
+    mesh.primitives = std::move(kept);
+  }
+
+  // Nodes instancing a removed mesh, or one that lost its morph targets, lose their weights and the
+  // animation channels that drive them.
+  std::vector<int> mesh_remap(mesh_count, -1);
+  {
+    int next = 0;
+    for (size_t m = 0; m < mesh_count; ++m)
+      if (!mesh_removed[m]) mesh_remap[m] = next++;
+  }
+  std::vector<bool> weights_gone(model.nodes.size(), false);
+  for (size_t n = 0; n < model.nodes.size(); ++n) {
+    tg::Node& node = model.nodes[n];
+    if (node.mesh < 0) continue;
+    const size_t m = size_t(node.mesh);
+    if (mesh_removed[m] || mesh_lost_morphs[m]) {
+      node.weights.clear();
+      weights_gone[n] = true;
+    }
+    if (mesh_removed[m]) node.skin = -1;
+    node.mesh = mesh_remap[m];
+  }
+  for (tg::Animation& anim : model.animations)
+    std::erase_if(anim.channels, [&](const tg::AnimationChannel& ch) {
+      return ch.target_path == "weights" && ch.target_node >= 0 && weights_gone[size_t(ch.target_node)];
+    });
+  {
+    std::vector<tg::Mesh> meshes;
+    for (size_t m = 0; m < mesh_count; ++m)
+      if (!mesh_removed[m]) meshes.push_back(std::move(model.meshes[m]));
+    model.meshes = std::move(meshes);
+    for (Pending& p : pending) p.mesh = size_t(mesh_remap[p.mesh]);
+  }
+
+  // Keep the accessors something still references, then the bufferViews those and the images use.
+  std::vector<int> accessor_remap(model.accessors.size(), -1);
+  auto mark_accessor = [&](int index) {
+    if (index >= 0) accessor_remap[size_t(index)] = 0;
+  };
+  for (const tg::Mesh& mesh : model.meshes)
+    for (const tg::Primitive& prim : mesh.primitives) {
+      for (const auto& attribute : prim.attributes) mark_accessor(attribute.second);
+      mark_accessor(prim.indices);
+      for (const auto& target : prim.targets)
+        for (const auto& attribute : target) mark_accessor(attribute.second);
+    }
+  for (const tg::Skin& skin : model.skins) mark_accessor(skin.inverseBindMatrices);
+  for (const tg::Animation& anim : model.animations)
+    for (const tg::AnimationSampler& sampler : anim.samplers) {
+      mark_accessor(sampler.input);
+      mark_accessor(sampler.output);
+    }
+  std::vector<tg::Accessor> accessors;
+  for (size_t a = 0; a < accessor_remap.size(); ++a)
+    if (accessor_remap[a] == 0) {
+      accessor_remap[a] = int(accessors.size());
+      accessors.push_back(std::move(model.accessors[a]));
+    }
+
+  std::vector<int> view_remap(model.bufferViews.size(), -1);
+  auto mark_view = [&](int index) {
+    if (index >= 0) view_remap[size_t(index)] = 0;
+  };
+  for (const tg::Accessor& acc : accessors) {
+    mark_view(acc.bufferView);
+    if (acc.sparse.isSparse) {
+      mark_view(acc.sparse.indices.bufferView);
+      mark_view(acc.sparse.values.bufferView);
+    }
+  }
+  for (const tg::Image& image : model.images) mark_view(image.bufferView);
+
+  // Surviving bufferViews are copied byte for byte (images included) into the new buffer.
+  std::vector<uint8_t> bin;
+  std::vector<tg::BufferView> views;
+  for (size_t v = 0; v < view_remap.size(); ++v) {
+    if (view_remap[v] != 0) continue;
+    tg::BufferView view = std::move(model.bufferViews[v]);
+    const std::vector<unsigned char>& data = model.buffers[size_t(view.buffer)].data;
+    bin.resize((bin.size() + 3) & ~size_t(3), 0);
+    const size_t offset = bin.size();
+    bin.insert(bin.end(), data.begin() + ptrdiff_t(view.byteOffset), data.begin() + ptrdiff_t(view.byteOffset + view.byteLength));
+    view.buffer = 0;
+    view.byteOffset = offset;
+    view_remap[v] = int(views.size());
+    views.push_back(std::move(view));
+  }
+
+  auto remap = [](int& index, const std::vector<int>& table) {
+    if (index >= 0) index = table[size_t(index)];
+  };
+  for (tg::Accessor& acc : accessors) {
+    remap(acc.bufferView, view_remap);
+    if (acc.sparse.isSparse) {
+      remap(acc.sparse.indices.bufferView, view_remap);
+      remap(acc.sparse.values.bufferView, view_remap);
+    }
+  }
+  for (tg::Image& image : model.images) remap(image.bufferView, view_remap);
+  for (tg::Mesh& mesh : model.meshes)
+    for (tg::Primitive& prim : mesh.primitives) {
+      for (auto& attribute : prim.attributes) remap(attribute.second, accessor_remap);
+      remap(prim.indices, accessor_remap);
+      for (auto& target : prim.targets)
+        for (auto& attribute : target) remap(attribute.second, accessor_remap);
+    }
+  for (tg::Skin& skin : model.skins) remap(skin.inverseBindMatrices, accessor_remap);
+  for (tg::Animation& anim : model.animations)
+    for (tg::AnimationSampler& sampler : anim.samplers) {
+      remap(sampler.input, accessor_remap);
+      remap(sampler.output, accessor_remap);
+    }
+  model.accessors = std::move(accessors);
+  model.bufferViews = std::move(views);
+  model.buffers.clear();
+
+  BinWriter writer(model, bin);
+  for (const Pending& p : pending)
+    writer.add_geometry(scene.primitives[p.scene_primitive].mesh, model.meshes[p.mesh].primitives[p.primitive]);
+  return bin;
+}
+
+// Strings written by tinygltf must be valid UTF-8 (nlohmann::json refuses to dump anything else);
+// names from OBJ or PLY files may be Latin-1.
+std::string valid_utf8(const std::string& s) {
+  std::string out;
+  for (size_t i = 0; i < s.size();) {
+    const auto c = uint8_t(s[i]);
+    size_t len = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
+    bool ok = len != 0 && i + len <= s.size();
+    for (size_t k = 1; ok && k < len; ++k) ok = (uint8_t(s[i + k]) & 0xC0) == 0x80;
+    if (ok) {
+      out.append(s, i, len);
+      i += len;
+    } else {
+      out += "\xEF\xBF\xBD";  // U+FFFD
+      ++i;
+    }
+  }
+  return out;
+}
+
+// A minimal document for a Scene without source: meshes by gltf_mesh, materials named from
+// material_names, the Scene's nodes (or one node per mesh), one scene.
+tg::Model model_from_scene(const Scene& scene, std::vector<Slot>& slots) {
+  tg::Model model;
+  model.asset.version = "2.0";
+  model.asset.generator = "lodkit";
+  std::map<uint32_t, int> dense_mesh;  // gltf_mesh -> index in model.meshes, by first appearance
+  int max_material = -1;
+  for (const Primitive& prim : scene.primitives) {
+    auto [it, inserted] = dense_mesh.try_emplace(prim.gltf_mesh, int(model.meshes.size()));
+    if (inserted) model.meshes.emplace_back();
+    tg::Primitive out;
+    out.mode = TINYGLTF_MODE_TRIANGLES;
+    out.material = prim.material;
+    tg::Mesh& mesh = model.meshes[size_t(it->second)];
+    slots.push_back({it->second, int(mesh.primitives.size())});
+    mesh.primitives.push_back(std::move(out));
+    max_material = std::max(max_material, prim.material);
+  }
+  // Materials are created densely up to the largest index used; refuse an index that cannot be real.
+  if (size_t(max_material + 1) > scene.primitives.size() + scene.material_names.size())
+    throw_usage("cannot write glTF: material index " + std::to_string(max_material) + " is larger than the scene's " +
+                str(scene.material_names.size()) + " material names");
+  for (int m = 0; m <= max_material; ++m) {
+    tg::Material material;
+    if (size_t(m) < scene.material_names.size()) material.name = valid_utf8(scene.material_names[size_t(m)]);
+    model.materials.push_back(std::move(material));
+  }
+  tg::Scene out_scene;
+  if (!scene.nodes.empty()) {
+    for (const Node& in : scene.nodes) {
+      tg::Node node;
+      node.name = valid_utf8(in.name);
+      if (in.mesh >= 0) {
+        auto it = dense_mesh.find(uint32_t(in.mesh));
+        if (it != dense_mesh.end()) node.mesh = it->second;
+      }
+      for (int32_t child : in.children)
+        if (child >= 0 && size_t(child) < scene.nodes.size()) node.children.push_back(child);
+      if (in.has_matrix) {
+        const std::array<float, 16> identity = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+        if (in.matrix != identity) node.matrix.assign(in.matrix.begin(), in.matrix.end());
+      } else {
+        if (in.translation != float3{}) node.translation = {in.translation.x, in.translation.y, in.translation.z};
+        if (in.rotation != float4{0, 0, 0, 1}) node.rotation = {in.rotation.x, in.rotation.y, in.rotation.z, in.rotation.w};
+        if (in.scale != float3{1, 1, 1}) node.scale = {in.scale.x, in.scale.y, in.scale.z};
+      }
+      model.nodes.push_back(std::move(node));
+    }
+    for (int32_t root : scene.roots)
+      if (root >= 0 && size_t(root) < scene.nodes.size()) out_scene.nodes.push_back(root);
+    if (out_scene.nodes.empty())
+      for (size_t n = 0; n < scene.nodes.size(); ++n)
+        if (scene.nodes[n].parent < 0) out_scene.nodes.push_back(int(n));
+  } else {
+    for (size_t m = 0; m < model.meshes.size(); ++m) {
+      tg::Node node;
+      node.mesh = int(m);
+      model.nodes.push_back(std::move(node));
+      out_scene.nodes.push_back(int(m));
+    }
+  }
+  model.scenes.push_back(std::move(out_scene));
+  model.defaultScene = 0;
+  return model;
+}
+
+// RFC 3986 unreserved characters stay, everything else is percent-encoded.
+std::string uri_escape(const std::string& s) {
+  static const char hex[] = "0123456789ABCDEF";
+  std::string out;
+  for (unsigned char c : s) {
+    if (std::isalnum(c) || c == '-' || c == '.' || c == '_' || c == '~') {
+      out += char(c);
+    } else {
+      out += '%';
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    }
+  }
+  return out;
+}
+
+// tinygltf serializes everything but the buffer (the model has none); the one buffer is added here.
+std::string serialize_json(const tg::Model& model, size_t bin_size, const std::string& bin_uri, bool pretty) {
+  const bool needs_buffer = bin_size > 0 || !model.bufferViews.empty();
+  tg::TinyGLTF writer;
+  writer.SetImageWriter(&write_image_uri, nullptr);
+  std::ostringstream stream;
+  try {
+    if (!writer.WriteGltfSceneToStream(&model, stream, false, false)) throw_internal("glTF: tinygltf could not serialize the scene");
+    Json doc = Json::parse(stream.str());
+    // tinygltf writes an object with nothing to say (a bare node, an empty scene) as null.
+    for (auto& [key, value] : doc.items())
+      if (value.is_array())
+        for (Json& element : value)
+          if (element.is_null()) element = Json::object();
+    if (needs_buffer) {
+      Json buffer = {{"byteLength", bin_size}};
+      if (!bin_uri.empty()) buffer["uri"] = bin_uri;
+      doc["buffers"] = Json::array({std::move(buffer)});
+    }
+    return doc.dump(pretty ? 2 : -1) + (pretty ? "\n" : "");
+  } catch (const Json::exception& e) {
+    throw_internal(std::string("glTF: serializing the scene failed: ") + e.what());
+  }
+}
+
+void put_u32(std::vector<uint8_t>& out, uint32_t v) {
+  for (int i = 0; i < 4; ++i) out.push_back(uint8_t(v >> (8 * i)));
+}
+
+std::vector<uint8_t> make_glb(const std::string& json_text, const std::vector<uint8_t>& bin, const std::string& name) {
+  const size_t json_padded = (json_text.size() + 3) & ~size_t(3);
+  const size_t bin_padded = (bin.size() + 3) & ~size_t(3);
+  const uint64_t total = 12 + 8 + uint64_t(json_padded) + (bin.empty() ? 0 : 8 + uint64_t(bin_padded));
+  if (total > std::numeric_limits<uint32_t>::max()) throw_usage(name + ": scene does not fit the 4 GiB GLB limit");
+  std::vector<uint8_t> out;
+  out.reserve(size_t(total));
+  put_u32(out, glb_magic);
+  put_u32(out, 2);
+  put_u32(out, uint32_t(total));
+  put_u32(out, uint32_t(json_padded));
+  put_u32(out, glb_chunk_json);
+  out.insert(out.end(), json_text.begin(), json_text.end());
+  out.resize(out.size() + json_padded - json_text.size(), ' ');  // JSON chunks pad with spaces
+  if (!bin.empty()) {
+    put_u32(out, uint32_t(bin_padded));
+    put_u32(out, glb_chunk_bin);
+    out.insert(out.end(), bin.begin(), bin.end());
+    out.resize(out.size() + bin_padded - bin.size(), 0);
+  }
+  return out;
+}
+
+bool has_glb_extension(const std::string& name) {
+  if (name.size() < 4) return false;
+  std::string ext = name.substr(name.size() - 4);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext == ".glb";
+}
+
+}  // namespace
+
+Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const std::filesystem::path& base_dir,
+                const ReadOptions& options) {
+  // tinygltf takes 32-bit lengths.
+  if (bytes.size() > std::numeric_limits<uint32_t>::max()) throw_bad_input(name, "glTF files of 4 GiB or more are not supported");
+  const bool glb = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
+  if (!glb && has_glb_extension(name)) {
+    if (bytes.size() < 4) throw_bad_input_at_byte(name, 0, "truncated GLB header (" + str(bytes.size()) + " bytes, need 12)");
+    throw_bad_input_at_byte(name, 0, "wrong GLB magic (expected 'glTF')");
+  }
+  std::span<const uint8_t> json_text = bytes;
+  size_t json_offset = 0, glb_length = 0;
+  if (glb) {
+    const GlbParts parts = check_glb(bytes, name);
+    json_offset = parts.json_offset;
+    json_text = bytes.subspan(parts.json_offset, parts.json_size);
+    glb_length = parts.length;
+  }
+
+  check_json_depth(json_text, name, json_offset);
+  Json doc;
+  try {
+    doc = Json::parse(json_text.begin(), json_text.end());
+  } catch (const Json::parse_error& e) {
+    const size_t at = e.byte > 0 ? e.byte - 1 : 0;
+    std::string what = e.what();
+    if (auto colon = what.find("parse error"); colon != std::string::npos) what = what.substr(colon);
+    throw_bad_input_at_byte(name, json_offset + at, "invalid JSON: " + what);
+  }
+  JsonChecker(doc, name).run();
+  doc = Json();  // tinygltf parses the text again; keep peak memory down
+  if (options.progress) options.progress(0.25);
+
+  FileAccess access;
+  if (!base_dir.empty()) {
+    access.prefix = base_dir.string();
+    if (access.prefix.back() != '/') access.prefix += '/';
+  }
+  tg::TinyGLTF loader;
+  loader.SetImageLoader(&keep_encoded_image, nullptr);
+  loader.SetFsCallbacks({&file_exists, &expand_path, &read_whole_file, &refuse_write, &access});
+  auto source = std::make_shared<GltfSource>();
+  std::string err, warn;
+  bool ok = false;
+  try {
+    const std::string base = base_dir.string();
+    if (glb)
+      ok = loader.LoadBinaryFromMemory(&source->model, &err, &warn, bytes.data(), unsigned(glb_length), base);
+    else
+      ok = loader.LoadASCIIFromString(&source->model, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
+                                      unsigned(bytes.size()), base);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw_bad_input(name, std::string("glTF: ") + e.what());
+  }
+  if (!ok) {
+    while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
+    std::replace(err.begin(), err.end(), '\n', ';');
+    throw_bad_input(name, "glTF: " + (err.empty() ? std::string("tinygltf could not load the document") : err));
+  }
+  if (options.progress) options.progress(0.5);
+
+  const Document document(source->model, name);
+  document.validate();
+  Scene scene = SceneBuilder(document).build();
+  scene.source = std::move(source);
+  if (options.progress) options.progress(1.0);
+  return scene;
+}
+
+void write_gltf(const Scene& scene, const std::filesystem::path& path, const WriteOptions&) {
+  const bool glb = format_from_path(path) == FileFormat::glb;
+  std::vector<Slot> slots;
+  tg::Model model;
+  if (scene.source) {
+    model = scene.source->model;
+    for (const Primitive& prim : scene.primitives) slots.push_back({int(prim.gltf_mesh), int(prim.gltf_primitive)});
+  } else {
+    model = model_from_scene(scene, slots);
+  }
+  const std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots);
+  if (glb) {
+    const std::string json_text = serialize_json(model, bin.size(), "", false);
+    write_file_atomic(path, make_glb(json_text, bin, path.string()));
+    return;
+  }
+  const std::string bin_name = path.stem().string() + ".bin";
+  const std::string json_text = serialize_json(model, bin.size(), uri_escape(bin_name), true);
+  if (!bin.empty()) write_file_atomic(path.parent_path() / bin_name, bin);
+  write_file_atomic(path, json_text);
+}
+
+}  // namespace lod

@@ -1,0 +1,283 @@
+// Scene <-> Mesh: flattening a glTF scene into one world-space mesh, and wrapping a mesh as a scene.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <vector>
+
+#include "lodkit/error.h"
+#include "lodkit/io.h"
+
+namespace lod {
+
+namespace {
+
+using Matrix = std::array<double, 16>;  // column-major, like glTF
+
+constexpr Matrix identity_matrix = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+
+Matrix multiply(const Matrix& a, const Matrix& b) {
+  Matrix r{};
+  for (int col = 0; col < 4; ++col)
+    for (int row = 0; row < 4; ++row) {
+      double sum = 0;
+      for (int k = 0; k < 4; ++k) sum += a[k * 4 + row] * b[col * 4 + k];
+      r[col * 4 + row] = sum;
+    }
+  return r;
+}
+
+// T * R * S, or the node's matrix.
+Matrix local_matrix(const Node& node) {
+  Matrix m{};
+  if (node.has_matrix) {
+    for (int i = 0; i < 16; ++i) m[i] = node.matrix[i];
+    return m;
+  }
+  const double x = node.rotation.x, y = node.rotation.y, z = node.rotation.z, w = node.rotation.w;
+  const double sx = node.scale.x, sy = node.scale.y, sz = node.scale.z;
+  m[0] = (1 - 2 * (y * y + z * z)) * sx;
+  m[1] = (2 * (x * y + z * w)) * sx;
+  m[2] = (2 * (x * z - y * w)) * sx;
+  m[4] = (2 * (x * y - z * w)) * sy;
+  m[5] = (1 - 2 * (x * x + z * z)) * sy;
+  m[6] = (2 * (y * z + x * w)) * sy;
+  m[8] = (2 * (x * z + y * w)) * sz;
+  m[9] = (2 * (y * z - x * w)) * sz;
+  m[10] = (1 - 2 * (x * x + y * y)) * sz;
+  m[12] = node.translation.x;
+  m[13] = node.translation.y;
+  m[14] = node.translation.z;
+  m[15] = 1;
+  return m;
+}
+
+struct Instance {
+  size_t primitive;
+  Matrix world;
+};
+
+// Every (primitive, world matrix) pair of the default scene, in depth-first node order.
+std::vector<Instance> collect_instances(const Scene& scene) {
+  std::vector<Instance> instances;
+  if (scene.nodes.empty() || scene.roots.empty()) {
+    // No node hierarchy: every mesh once, untransformed.
+    for (size_t p = 0; p < scene.primitives.size(); ++p) instances.push_back({p, identity_matrix});
+    return instances;
+  }
+  std::map<int32_t, std::vector<size_t>> primitives_of_mesh;
+  for (size_t p = 0; p < scene.primitives.size(); ++p)
+    primitives_of_mesh[int32_t(scene.primitives[p].gltf_mesh)].push_back(p);
+
+  // Iterative walk; a node is visited once even if a malformed hierarchy reaches it twice.
+  std::vector<bool> visited(scene.nodes.size(), false);
+  std::vector<std::pair<int32_t, Matrix>> stack;
+  for (auto it = scene.roots.rbegin(); it != scene.roots.rend(); ++it) stack.push_back({*it, identity_matrix});
+  while (!stack.empty()) {
+    auto [index, parent_world] = stack.back();
+    stack.pop_back();
+    if (index < 0 || size_t(index) >= scene.nodes.size() || visited[size_t(index)]) continue;
+    visited[size_t(index)] = true;
+    const Node& node = scene.nodes[size_t(index)];
+    const Matrix world = multiply(parent_world, local_matrix(node));
+    if (node.mesh >= 0) {
+      auto found = primitives_of_mesh.find(node.mesh);
+      // glTF ignores the transform of a node with a skinned mesh: joints place it. Flattening
+      // gives the bind pose, in the mesh's own space.
+      const Matrix& placement = node.skin >= 0 ? identity_matrix : world;
+      if (found != primitives_of_mesh.end())
+        for (size_t p : found->second) instances.push_back({p, placement});
+    }
+    for (auto it = node.children.rbegin(); it != node.children.rend(); ++it) stack.push_back({*it, world});
+  }
+  return instances;
+}
+
+float3 normalized(double x, double y, double z, const float3& fallback) {
+  const double length = std::sqrt(x * x + y * y + z * z);
+  if (!(length > 0) || !std::isfinite(length)) return fallback;
+  return {float(x / length), float(y / length), float(z / length)};
+}
+
+}  // namespace
+
+// Streams: a vertex stream is kept only when every flattened primitive has it. Filling the gaps with
+// made-up values (zero UVs, arbitrary normals) would look like real data to later stages, which
+// would then preserve invented seams and measure errors against them; callers that need every
+// primitive's own streams use Scene::primitives directly.
+Mesh flatten(const Scene& scene) {
+  const std::vector<Instance> instances = collect_instances(scene);
+  Mesh out;
+  if (instances.empty()) return out;
+
+  auto all_have = [&](auto stream_of) {
+    for (const Instance& inst : instances)
+      if (stream_of(scene.primitives[inst.primitive].mesh).empty()) return false;
+    return true;
+  };
+  const bool normals = all_have([](const Mesh& m) -> const auto& { return m.normals; });
+  const bool tangents = all_have([](const Mesh& m) -> const auto& { return m.tangents; });
+  std::array<bool, max_uv_sets> uvs{};
+  for (size_t k = 0; k < max_uv_sets; ++k) uvs[k] = all_have([k](const Mesh& m) -> const auto& { return m.uvs[k]; });
+  const bool colors = all_have([](const Mesh& m) -> const auto& { return m.colors; });
+  const bool joints = all_have([](const Mesh& m) -> const auto& { return m.joints; });
+  const bool weights = all_have([](const Mesh& m) -> const auto& { return m.weights; });
+  bool any_material = false;
+  size_t vertices = 0, corners = 0;
+  for (const Instance& inst : instances) {
+    const Primitive& prim = scene.primitives[inst.primitive];
+    any_material = any_material || prim.material >= 0;
+    vertices += prim.mesh.vertex_count();
+    corners += prim.mesh.indices.size();
+  }
+  out.positions.reserve(vertices);
+  out.indices.reserve(corners);
+
+  for (const Instance& inst : instances) {
+    const Primitive& prim = scene.primitives[inst.primitive];
+    const Mesh& mesh = prim.mesh;
+    const uint32_t base = uint32_t(out.positions.size());
+    const Matrix& m = inst.world;
+    const bool identity = m == identity_matrix;
+    // Normals use the inverse transpose of the upper 3x3: its cofactor matrix divided by the determinant.
+    const double a = m[0], b = m[4], c = m[8], d = m[1], e = m[5], f = m[9], g = m[2], h = m[6], i = m[10];
+    const double det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
+    const double scale = det != 0 ? 1 / det : 1;
+    const std::array<double, 9> normal_matrix = {  // row-major: n' = N * n
+        (e * i - f * h) * scale, (f * g - d * i) * scale, (d * h - e * g) * scale,
+        (c * h - b * i) * scale, (a * i - c * g) * scale, (b * g - a * h) * scale,
+        (b * f - c * e) * scale, (c * d - a * f) * scale, (a * e - b * d) * scale};
+    const bool mirrored = det < 0;
+
+    if (identity) {
+      out.positions.insert(out.positions.end(), mesh.positions.begin(), mesh.positions.end());
+    } else {
+      for (const float3& p : mesh.positions)
+        out.positions.push_back({float(m[0] * p.x + m[4] * p.y + m[8] * p.z + m[12]),
+                                 float(m[1] * p.x + m[5] * p.y + m[9] * p.z + m[13]),
+                                 float(m[2] * p.x + m[6] * p.y + m[10] * p.z + m[14])});
+    }
+    if (normals) {
+      if (identity) {
+        out.normals.insert(out.normals.end(), mesh.normals.begin(), mesh.normals.end());
+      } else {
+        const auto& n = normal_matrix;
+        for (const float3& v : mesh.normals)
+          out.normals.push_back(normalized(n[0] * v.x + n[1] * v.y + n[2] * v.z, n[3] * v.x + n[4] * v.y + n[5] * v.z,
+                                           n[6] * v.x + n[7] * v.y + n[8] * v.z, v));
+      }
+    }
+    if (tangents) {
+      if (identity) {
+        out.tangents.insert(out.tangents.end(), mesh.tangents.begin(), mesh.tangents.end());
+      } else {
+        for (const float4& t : mesh.tangents) {
+          const float3 xyz = normalized(m[0] * t.x + m[4] * t.y + m[8] * t.z, m[1] * t.x + m[5] * t.y + m[9] * t.z,
+                                        m[2] * t.x + m[6] * t.y + m[10] * t.z, {t.x, t.y, t.z});
+          // A mirroring transform flips the bitangent, so the handedness flips with it.
+          out.tangents.push_back({xyz.x, xyz.y, xyz.z, mirrored ? -t.w : t.w});
+        }
+      }
+    }
+    for (size_t k = 0; k < max_uv_sets; ++k)
+      if (uvs[k]) out.uvs[k].insert(out.uvs[k].end(), mesh.uvs[k].begin(), mesh.uvs[k].end());
+    if (colors) out.colors.insert(out.colors.end(), mesh.colors.begin(), mesh.colors.end());
+    if (joints) out.joints.insert(out.joints.end(), mesh.joints.begin(), mesh.joints.end());
+    if (weights) out.weights.insert(out.weights.end(), mesh.weights.begin(), mesh.weights.end());
+
+    // A mirroring transform turns counter-clockwise triangles clockwise: swap two corners back.
+    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+      const uint32_t i0 = base + mesh.indices[t], i1 = base + mesh.indices[t + 1], i2 = base + mesh.indices[t + 2];
+      if (mirrored)
+        out.indices.insert(out.indices.end(), {i0, i2, i1});
+      else
+        out.indices.insert(out.indices.end(), {i0, i1, i2});
+    }
+    if (any_material) out.materials.insert(out.materials.end(), mesh.indices.size() / 3, uint32_t(prim.material + 1));
+  }
+
+  if (any_material) {
+    // Id 0 is "no material"; glTF material k is id k + 1.
+    uint32_t max_id = 0;
+    for (uint32_t id : out.materials) max_id = std::max(max_id, id);
+    out.material_names.assign(std::max<size_t>(max_id, scene.material_names.size()) + 1, std::string());
+    for (size_t k = 0; k < scene.material_names.size(); ++k) out.material_names[k + 1] = scene.material_names[k];
+  }
+  return out;
+}
+
+Scene scene_from_mesh(const Mesh& mesh) {
+  if (!mesh.materials.empty() && mesh.materials.size() != mesh.triangle_count())
+    throw_usage("scene_from_mesh: " + std::to_string(mesh.materials.size()) + " material ids for " +
+                std::to_string(mesh.triangle_count()) + " triangles");
+  for (uint32_t index : mesh.indices)
+    if (index >= mesh.vertex_count()) throw_usage("scene_from_mesh: index " + std::to_string(index) + " out of range");
+  Scene scene;
+  scene.material_names = mesh.material_names;
+  Node node;
+  node.mesh = 0;
+  scene.nodes.push_back(node);
+  scene.roots.push_back(0);
+
+  std::vector<uint32_t> ids;  // material ids in use, ascending
+  {
+    std::vector<bool> used;
+    for (uint32_t id : mesh.materials) {
+      if (id >= used.size()) used.resize(size_t(id) + 1, false);
+      used[id] = true;
+    }
+    for (size_t id = 0; id < used.size(); ++id)
+      if (used[id]) ids.push_back(uint32_t(id));
+  }
+
+  if (ids.size() <= 1) {
+    // One material (or none): the whole mesh, unreferenced vertices included, as one primitive.
+    Primitive prim;
+    prim.mesh = mesh;
+    prim.mesh.materials.clear();
+    prim.mesh.material_names.clear();
+    prim.mesh.groups.clear();
+    prim.mesh.group_names.clear();
+    if (!ids.empty())
+      prim.material = int32_t(ids[0]);
+    else
+      prim.material = mesh.material_names.empty() ? -1 : 0;
+    scene.primitives.push_back(std::move(prim));
+  } else {
+    // One primitive per material id, each with the vertices its triangles use, in their original order.
+    std::vector<uint32_t> remap(mesh.vertex_count());
+    for (uint32_t id : ids) {
+      Primitive prim;
+      prim.material = int32_t(id);
+      prim.gltf_primitive = uint32_t(scene.primitives.size());
+      std::vector<bool> used(mesh.vertex_count(), false);
+      for (size_t t = 0; t < mesh.triangle_count(); ++t)
+        if (mesh.materials[t] == id)
+          for (int k = 0; k < 3; ++k) used[mesh.indices[3 * t + k]] = true;
+      Mesh& sub = prim.mesh;
+      for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+        if (!used[v]) continue;
+        remap[v] = uint32_t(sub.positions.size());
+        sub.positions.push_back(mesh.positions[v]);
+        if (!mesh.normals.empty()) sub.normals.push_back(mesh.normals[v]);
+        if (!mesh.tangents.empty()) sub.tangents.push_back(mesh.tangents[v]);
+        for (size_t k = 0; k < max_uv_sets; ++k)
+          if (!mesh.uvs[k].empty()) sub.uvs[k].push_back(mesh.uvs[k][v]);
+        if (!mesh.colors.empty()) sub.colors.push_back(mesh.colors[v]);
+        if (!mesh.joints.empty()) sub.joints.push_back(mesh.joints[v]);
+        if (!mesh.weights.empty()) sub.weights.push_back(mesh.weights[v]);
+      }
+      for (size_t t = 0; t < mesh.triangle_count(); ++t)
+        if (mesh.materials[t] == id)
+          for (int k = 0; k < 3; ++k) sub.indices.push_back(remap[mesh.indices[3 * t + k]]);
+      scene.primitives.push_back(std::move(prim));
+    }
+  }
+  // Names must cover every material index a primitive uses.
+  for (const Primitive& prim : scene.primitives)
+    if (prim.material >= 0 && size_t(prim.material) >= scene.material_names.size())
+      scene.material_names.resize(size_t(prim.material) + 1);
+  return scene;
+}
+
+}  // namespace lod

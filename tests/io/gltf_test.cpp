@@ -1,0 +1,1011 @@
+// glTF reader and writer: exact round trips, pass-through of everything lodkit does not change
+// (checked against the values put into hand-built files), malformed input, and the Khronos validator.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/shapes.h"
+#include "lodkit/error.h"
+#include "lodkit/io.h"
+#include "test_support.h"
+
+namespace lod {
+namespace {
+
+using Json = nlohmann::json;
+using test::mesh_difference;
+using test::TempDir;
+
+constexpr int kFloat = 5126, kUByte = 5121, kUShort = 5123, kUInt = 5125;
+constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
+
+// A 2x2 RGBA PNG (76 bytes, deliberately not a multiple of 4).
+const std::vector<uint8_t> kPng = {
+    0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0x00, 0x00, 0x00, 0x0d, 0x49, 0x48, 0x44, 0x52, 0x00, 0x00, 0x00,
+    0x02, 0x00, 0x00, 0x00, 0x02, 0x08, 0x06, 0x00, 0x00, 0x00, 0x72, 0xb6, 0x0d, 0x24, 0x00, 0x00, 0x00, 0x13, 0x49,
+    0x44, 0x41, 0x54, 0x78, 0xda, 0x63, 0xf8, 0xcf, 0xc0, 0xf0, 0x1f, 0x0c, 0x81, 0x34, 0x08, 0x34, 0x00, 0x00, 0x49,
+    0x49, 0x09, 0x78, 0x9c, 0x51, 0x17, 0x92, 0x00, 0x00, 0x00, 0x00, 0x49, 0x45, 0x4e, 0x44, 0xae, 0x42, 0x60, 0x82};
+
+std::string base64(const std::vector<uint8_t>& bytes) {
+  static const char digits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    uint32_t v = uint32_t(bytes[i]) << 16;
+    if (i + 1 < bytes.size()) v |= uint32_t(bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) v |= bytes[i + 2];
+    out += digits[v >> 18];
+    out += digits[(v >> 12) & 63];
+    out += i + 1 < bytes.size() ? digits[(v >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? digits[v & 63] : '=';
+  }
+  return out;
+}
+
+std::vector<uint8_t> base64_decode(const std::string& text) {
+  std::vector<uint8_t> out;
+  uint32_t bits = 0;
+  int count = 0;
+  for (char c : text) {
+    int v = c >= 'A' && c <= 'Z' ? c - 'A' : c >= 'a' && c <= 'z' ? c - 'a' + 26 : c >= '0' && c <= '9' ? c - '0' + 52
+          : c == '+' ? 62 : c == '/' ? 63 : -1;
+    if (v < 0) continue;
+    bits = bits << 6 | uint32_t(v);
+    if ((count += 6) >= 8) {
+      count -= 8;
+      out.push_back(uint8_t(bits >> count));
+    }
+  }
+  return out;
+}
+
+void put_u32(std::vector<uint8_t>& out, uint32_t v) {
+  for (int i = 0; i < 4; ++i) out.push_back(uint8_t(v >> (8 * i)));
+}
+
+// A glTF document written by hand: binary data appended 4-byte aligned, JSON as nlohmann objects.
+struct HandBuilt {
+  Json doc = {{"asset", {{"version", "2.0"}}}};
+  std::vector<uint8_t> bin;
+
+  int view(const void* data, size_t bytes, int target = 0, int stride = 0) {
+    while (bin.size() % 4) bin.push_back(0);
+    Json v = {{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes}};
+    if (target) v["target"] = target;
+    if (stride) v["byteStride"] = stride;
+    const auto* p = static_cast<const uint8_t*>(data);
+    bin.insert(bin.end(), p, p + bytes);
+    doc["bufferViews"].push_back(v);
+    return int(doc["bufferViews"].size() - 1);
+  }
+  template <class T>
+  int accessor(const std::vector<T>& values, int component_type, const char* type, size_t components, int target = 0,
+               Json extra = Json::object()) {
+    Json a = {{"bufferView", view(values.data(), values.size() * sizeof(T), target)},
+              {"componentType", component_type},
+              {"count", values.size() / components},
+              {"type", type}};
+    a.update(extra);
+    doc["accessors"].push_back(a);
+    return int(doc["accessors"].size() - 1);
+  }
+  // POSITION with the min/max glTF requires.
+  int positions(const std::vector<float>& xyz) {
+    Json lo = Json::array(), hi = Json::array();
+    for (int c = 0; c < 3; ++c) {
+      float mn = xyz[size_t(c)], mx = xyz[size_t(c)];
+      for (size_t i = size_t(c); i < xyz.size(); i += 3) mn = std::min(mn, xyz[i]), mx = std::max(mx, xyz[i]);
+      lo.push_back(mn);
+      hi.push_back(mx);
+    }
+    return accessor(xyz, kFloat, "VEC3", 3, kArrayBuffer, {{"min", lo}, {"max", hi}});
+  }
+
+  std::vector<uint8_t> glb() const {
+    Json d = doc;
+    if (!bin.empty()) d["buffers"] = Json::array({{{"byteLength", bin.size()}}});
+    std::string text = d.dump();
+    while (text.size() % 4) text += ' ';
+    std::vector<uint8_t> padded = bin;
+    while (padded.size() % 4) padded.push_back(0);
+    std::vector<uint8_t> out;
+    put_u32(out, 0x46546C67);
+    put_u32(out, 2);
+    put_u32(out, uint32_t(12 + 8 + text.size() + (bin.empty() ? 0 : 8 + padded.size())));
+    put_u32(out, uint32_t(text.size()));
+    put_u32(out, 0x4E4F534A);
+    out.insert(out.end(), text.begin(), text.end());
+    if (!bin.empty()) {
+      put_u32(out, uint32_t(padded.size()));
+      put_u32(out, 0x004E4942);
+      out.insert(out.end(), padded.begin(), padded.end());
+    }
+    return out;
+  }
+  std::string gltf() const {  // the buffer as a data: URI
+    Json d = doc;
+    if (!bin.empty())
+      d["buffers"] = Json::array({{{"byteLength", bin.size()}, {"uri", "data:application/octet-stream;base64," + base64(bin)}}});
+    return d.dump();
+  }
+};
+
+std::span<const uint8_t> span_of(const std::string& s) { return {reinterpret_cast<const uint8_t*>(s.data()), s.size()}; }
+
+// A written file, parsed without lodkit: the JSON and the bytes of buffer 0.
+struct Written {
+  Json doc;
+  std::vector<uint8_t> bin;
+};
+
+uint32_t get_u32(const std::vector<uint8_t>& b, size_t at) {
+  return uint32_t(b[at]) | uint32_t(b[at + 1]) << 8 | uint32_t(b[at + 2]) << 16 | uint32_t(b[at + 3]) << 24;
+}
+
+std::string uri_decode(const std::string& uri) {
+  std::string out;
+  for (size_t i = 0; i < uri.size(); ++i) {
+    if (uri[i] == '%' && i + 2 < uri.size()) {
+      out += char(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      out += uri[i];
+    }
+  }
+  return out;
+}
+
+Written load_written(const std::filesystem::path& path) {
+  Written w;
+  std::vector<uint8_t> bytes = read_file_bytes(path);
+  if (path.extension() == ".glb") {
+    EXPECT_GE(bytes.size(), 20u);
+    EXPECT_EQ(get_u32(bytes, 0), 0x46546C67u);
+    EXPECT_EQ(get_u32(bytes, 4), 2u);
+    EXPECT_EQ(get_u32(bytes, 8), bytes.size());
+    const uint32_t json_size = get_u32(bytes, 12);
+    EXPECT_EQ(json_size % 4, 0u);
+    w.doc = Json::parse(bytes.begin() + 20, bytes.begin() + 20 + json_size);
+    const size_t bin_at = 20 + size_t(json_size);
+    if (bin_at < bytes.size()) {
+      EXPECT_EQ(get_u32(bytes, bin_at + 4), 0x004E4942u);
+      w.bin.assign(bytes.begin() + ptrdiff_t(bin_at + 8), bytes.begin() + ptrdiff_t(bin_at + 8 + get_u32(bytes, bin_at)));
+      EXPECT_EQ(bin_at + 8 + get_u32(bytes, bin_at), bytes.size()) << "exactly one BIN chunk";
+    }
+  } else {
+    w.doc = Json::parse(bytes.begin(), bytes.end());
+    if (w.doc.contains("buffers")) w.bin = read_file_bytes(path.parent_path() / uri_decode(w.doc["buffers"][0]["uri"]));
+  }
+  if (w.doc.contains("buffers")) {
+    EXPECT_EQ(w.doc["buffers"].size(), 1u);
+    EXPECT_LE(w.doc["buffers"][0]["byteLength"].get<size_t>(), w.bin.size());
+  }
+  return w;
+}
+
+std::vector<uint8_t> view_bytes(const Written& w, int view) {
+  const Json& v = w.doc["bufferViews"][size_t(view)];
+  const size_t offset = v.value("byteOffset", size_t(0)), length = v["byteLength"];
+  return {w.bin.begin() + ptrdiff_t(offset), w.bin.begin() + ptrdiff_t(offset + length)};
+}
+
+// Float accessor contents, read straight from the bytes.
+std::vector<float> accessor_floats(const Written& w, int index) {
+  const Json& a = w.doc["accessors"][size_t(index)];
+  EXPECT_EQ(a["componentType"], kFloat);
+  const std::string type = a["type"];
+  const size_t n = type == "SCALAR" ? 1 : type == "VEC2" ? 2 : type == "VEC3" ? 3 : type == "VEC4" ? 4 : 16;
+  const Json& v = w.doc["bufferViews"][a["bufferView"].get<size_t>()];
+  const size_t stride = v.value("byteStride", n * 4);
+  const size_t base = v.value("byteOffset", size_t(0)) + a.value("byteOffset", size_t(0));
+  std::vector<float> out(a["count"].get<size_t>() * n);
+  for (size_t i = 0; i < a["count"].get<size_t>(); ++i) std::memcpy(&out[i * n], &w.bin[base + i * stride], n * 4);
+  return out;
+}
+
+// Every stream lodkit maps, with values the glTF validator accepts (unit normals and tangents,
+// tangent w = +-1, colors in [0, 1], distinct joints, weights summing to exactly 1).
+Mesh with_all_streams(Mesh m) {
+  const size_t n = m.vertex_count();
+  m.tangents.resize(n);
+  m.uvs[1].resize(n);
+  m.colors.resize(n);
+  m.joints.resize(n);
+  m.weights.resize(n);
+  if (m.uvs[0].empty())
+    for (const float3& p : m.positions) m.uvs[0].push_back({p.x, p.y});
+  for (size_t i = 0; i < n; ++i) {
+    const float3 nrm = m.normals[i];
+    const float3 axis = std::fabs(nrm.x) < 0.9f ? float3{1, 0, 0} : float3{0, 1, 0};
+    float3 t = {nrm.y * axis.z - nrm.z * axis.y, nrm.z * axis.x - nrm.x * axis.z, nrm.x * axis.y - nrm.y * axis.x};
+    const float len = std::sqrt(t.x * t.x + t.y * t.y + t.z * t.z);
+    m.tangents[i] = {t.x / len, t.y / len, t.z / len, i % 2 ? -1.0f : 1.0f};
+    m.uvs[1][i] = {m.positions[i].z * 0.5f, float(i % 13) / 13.0f};
+    m.colors[i] = {float(i % 7) / 6.0f, float(i % 5) / 4.0f, float(i % 3) / 2.0f, i % 2 ? 0.5f : 1.0f};
+    const uint16_t j = uint16_t(i % 4);
+    m.joints[i] = {j, uint16_t((j + 1) % 4), uint16_t((j + 2) % 4), uint16_t((j + 3) % 4)};
+    m.weights[i] = i % 2 ? float4{0.5f, 0.25f, 0.125f, 0.125f} : float4{1, 0, 0, 0};
+  }
+  return m;
+}
+
+// ---- round trips ----------------------------------------------------------------------------------
+
+struct NamedShape {
+  const char* name;
+  Mesh mesh;
+};
+std::vector<NamedShape> test_shapes() {
+  return {{"torus", shapes::torus(1.0f, 0.25f, 24, 12)},
+          {"cube", shapes::cube()},
+          {"cylinder", shapes::cylinder(12)},
+          {"icosphere", shapes::icosphere(2)}};
+}
+
+TEST(GltfRoundTrip, ShapesWithAllStreamsAreBitIdentical) {
+  TempDir dir;
+  for (const NamedShape& shape : test_shapes()) {
+    for (const char* ext : {".glb", ".gltf"}) {
+      SCOPED_TRACE(std::string(shape.name) + ext);
+      const Mesh mesh = with_all_streams(shape.mesh);
+      const auto first_path = dir / (std::string(shape.name) + "-1" + ext);
+      write_mesh(mesh, first_path);
+      const Scene first = read_scene(first_path);
+      ASSERT_EQ(first.primitives.size(), 1u);
+      EXPECT_EQ(mesh_difference(mesh, first.primitives[0].mesh), "");
+      EXPECT_EQ(mesh_difference(mesh, read_mesh(first_path)), "");
+
+      const auto second_path = dir / (std::string(shape.name) + "-2" + ext);
+      write_scene(first, second_path);
+      const Scene second = read_scene(second_path);
+      ASSERT_EQ(second.primitives.size(), 1u);
+      EXPECT_EQ(mesh_difference(first.primitives[0].mesh, second.primitives[0].mesh), "");
+      EXPECT_EQ(mesh_difference(mesh, read_mesh(second_path)), "");
+    }
+  }
+}
+
+TEST(GltfRoundTrip, GltfWritesItsBinBesideItWithAnEscapedUri) {
+  TempDir dir;
+  write_mesh(shapes::cube(), dir / "my cube.gltf");
+  const Written w = load_written(dir / "my cube.gltf");
+  EXPECT_EQ(w.doc["buffers"][0]["uri"], "my%20cube.bin");
+  EXPECT_TRUE(std::filesystem::exists(dir / "my cube.bin"));
+  EXPECT_EQ(mesh_difference(shapes::cube(), read_mesh(dir / "my cube.gltf")), "");
+}
+
+TEST(GltfRoundTrip, LargeMeshUses32BitIndices) {
+  TempDir dir;
+  const Mesh grid = shapes::grid(300, 300);  // 90601 vertices
+  ASSERT_GT(grid.vertex_count(), 65535u);
+  write_mesh(grid, dir / "grid.glb");
+  const Written w = load_written(dir / "grid.glb");
+  EXPECT_EQ(w.doc["accessors"][w.doc["meshes"][0]["primitives"][0]["indices"].get<size_t>()]["componentType"], kUInt);
+  EXPECT_EQ(mesh_difference(grid, read_mesh(dir / "grid.glb")), "");
+
+  write_mesh(shapes::cube(), dir / "cube.glb");
+  const Written small = load_written(dir / "cube.glb");
+  EXPECT_EQ(small.doc["accessors"][small.doc["meshes"][0]["primitives"][0]["indices"].get<size_t>()]["componentType"],
+            kUShort);
+}
+
+TEST(GltfRoundTrip, MultiMaterialMeshBecomesOnePrimitivePerMaterial) {
+  TempDir dir;
+  Mesh mesh = shapes::cube();  // 12 triangles, 4 vertices per face
+  mesh.materials.assign(12, 0);
+  for (size_t t = 4; t < 12; ++t) mesh.materials[t] = t < 8 ? 1 : 2;
+  mesh.material_names = {"red", "green", "blue"};
+  write_mesh(mesh, dir / "colored.glb");
+  const Written w = load_written(dir / "colored.glb");
+  ASSERT_EQ(w.doc["materials"].size(), 3u);
+  EXPECT_EQ(w.doc["materials"][0]["name"], "red");
+  EXPECT_EQ(w.doc["materials"][2]["name"], "blue");
+  ASSERT_EQ(w.doc["meshes"].size(), 1u);
+  ASSERT_EQ(w.doc["nodes"].size(), 1u);
+  const Json& primitives = w.doc["meshes"][0]["primitives"];
+  ASSERT_EQ(primitives.size(), 3u);
+  for (int m = 0; m < 3; ++m) EXPECT_EQ(primitives[size_t(m)]["material"], m);
+
+  const Mesh flat = read_mesh(dir / "colored.glb");
+  // glTF material k is id k + 1; the cube's faces are in material order, so the mesh is unchanged.
+  ASSERT_EQ(flat.material_names, (std::vector<std::string>{"", "red", "green", "blue"}));
+  ASSERT_EQ(flat.materials.size(), 12u);
+  for (size_t t = 0; t < 12; ++t) EXPECT_EQ(flat.materials[t], mesh.materials[t] + 1);
+  Mesh expected = mesh;
+  expected.materials = flat.materials;
+  EXPECT_EQ(mesh_difference(expected, flat), "");
+}
+
+// ---- the hand-built scene -------------------------------------------------------------------------
+
+struct SceneInput {
+  HandBuilt file;
+  std::vector<float> ibm;          // 2 matrices
+  std::vector<float> times;        // animation input
+  std::vector<float> rotations;    // animation output
+  std::vector<float> quad, tri, skinned;  // positions
+  std::vector<uint16_t> quad_indices;
+};
+
+// 2 meshes / 3 triangle primitives, a node hierarchy with TRS, a textured material with an embedded
+// PNG, a skin with inverse bind matrices and a rotation animation.
+SceneInput hand_built_scene() {
+  SceneInput in;
+  HandBuilt& f = in.file;
+  in.quad = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+  in.quad_indices = {0, 1, 2, 0, 2, 3};
+  in.tri = {0, 0, 1, 1, 0, 1, 0, 1, 1};
+  in.skinned = {0, 0, 0, 0, 1, 0, 0.5f, 2, 0};
+  const std::vector<float> quad_uv = {0, 0, 1, 0, 1, 1, 0, 1};
+  const std::vector<float> normals = {0, 0, 1, 0, 0, 1, 0, 0, 1};
+  const std::vector<uint8_t> joints = {0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0};
+  const std::vector<float> weights = {1, 0, 0, 0, 0.5f, 0.5f, 0, 0, 1, 0, 0, 0};
+  const std::vector<uint8_t> skinned_indices = {0, 2, 1};
+  in.ibm = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1,  //
+            1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, -1, 0, 1};
+  in.times = {0, 0.5f, 1};
+  in.rotations = {0, 0, 0, 1, 0, 0, 0.6f, 0.8f, 0, 0, 1, 0};
+
+  const int quad = f.positions(in.quad);
+  const int quad_uvs = f.accessor(quad_uv, kFloat, "VEC2", 2, kArrayBuffer);
+  const int quad_idx = f.accessor(in.quad_indices, kUShort, "SCALAR", 1, kElementArrayBuffer);
+  const int tri = f.positions(in.tri);
+  const int skinned = f.positions(in.skinned);
+  const int normal = f.accessor(normals, kFloat, "VEC3", 3, kArrayBuffer);
+  const int joint = f.accessor(joints, kUByte, "VEC4", 4, kArrayBuffer);
+  const int weight = f.accessor(weights, kFloat, "VEC4", 4, kArrayBuffer);
+  const int skinned_idx = f.accessor(skinned_indices, kUByte, "SCALAR", 1, kElementArrayBuffer);
+  const int image_view = f.view(kPng.data(), kPng.size());
+  const int ibm = f.accessor(in.ibm, kFloat, "MAT4", 16);
+  const int input = f.accessor(in.times, kFloat, "SCALAR", 1, 0, {{"min", {0.0}}, {"max", {1.0}}});
+  const int output = f.accessor(in.rotations, kFloat, "VEC4", 4);
+
+  Json& d = f.doc;
+  d["scene"] = 0;
+  d["scenes"] = Json::array({{{"name", "main"}, {"nodes", {0}}}});
+  d["nodes"] = Json::array({
+      {{"name", "root"}, {"translation", {1.0, 2.0, 3.0}}, {"rotation", {0.0, 0.0, 0.6, 0.8}}, {"scale", {2.0, 2.0, 2.0}},
+       {"children", {1, 2, 3}}, {"extras", {{"tag", "kept"}}}},
+      {{"name", "static"}, {"mesh", 0}, {"translation", {0.0, 1.0, 0.0}}},
+      {{"name", "skinned"}, {"mesh", 1}, {"skin", 0}},
+      {{"name", "joint0"}, {"children", {4}}},
+      {{"name", "joint1"}, {"translation", {0.0, 1.0, 0.0}}},
+  });
+  d["meshes"] = Json::array({
+      {{"name", "two parts"},
+       {"primitives",
+        {{{"attributes", {{"POSITION", quad}, {"TEXCOORD_0", quad_uvs}}}, {"indices", quad_idx}, {"material", 0}},
+         {{"attributes", {{"POSITION", tri}}}}}}},
+      {{"name", "skinned"},
+       {"primitives",
+        {{{"attributes", {{"POSITION", skinned}, {"NORMAL", normal}, {"JOINTS_0", joint}, {"WEIGHTS_0", weight}}},
+          {"indices", skinned_idx}}}}},
+  });
+  d["materials"] = Json::array({{{"name", "painted"},
+                                 {"doubleSided", true},
+                                 {"emissiveFactor", {1.0, 0.5, 0.0}},
+                                 {"pbrMetallicRoughness",
+                                  {{"baseColorFactor", {1.0, 0.5, 0.25, 1.0}},
+                                   {"baseColorTexture", {{"index", 0}}},
+                                   {"metallicFactor", 0.25},
+                                   {"roughnessFactor", 0.75}}},
+                                 {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", 2.5}}}}},
+                                 {"extras", {{"note", "keep me"}}}}});
+  d["extensionsUsed"] = {"KHR_materials_emissive_strength"};
+  d["textures"] = Json::array({{{"sampler", 0}, {"source", 0}}});
+  d["samplers"] = Json::array({{{"magFilter", 9729}, {"minFilter", 9987}, {"wrapS", 33071}, {"wrapT", 10497}}});
+  d["images"] = Json::array({{{"bufferView", image_view}, {"mimeType", "image/png"}, {"name", "checker"}}});
+  d["skins"] = Json::array({{{"name", "rig"}, {"joints", {3, 4}}, {"skeleton", 3}, {"inverseBindMatrices", ibm}}});
+  d["animations"] = Json::array({{{"name", "turn"},
+                                  {"channels", {{{"sampler", 0}, {"target", {{"node", 3}, {"path", "rotation"}}}}}},
+                                  {"samplers", {{{"input", input}, {"output", output}, {"interpolation", "LINEAR"}}}}}});
+  return in;
+}
+
+std::vector<float> flat(const std::vector<float3>& v) {
+  std::vector<float> out;
+  for (const float3& p : v) out.insert(out.end(), {p.x, p.y, p.z});
+  return out;
+}
+
+TEST(GltfHandBuilt, ReadFillsTheNeutralScene) {
+  const SceneInput in = hand_built_scene();
+  const std::vector<uint8_t> bytes = in.file.glb();
+  const Scene scene = read_gltf(bytes, "hand.glb");
+  ASSERT_EQ(scene.primitives.size(), 3u);
+  EXPECT_EQ(scene.primitives[0].gltf_mesh, 0u);
+  EXPECT_EQ(scene.primitives[1].gltf_primitive, 1u);
+  EXPECT_EQ(scene.primitives[2].gltf_mesh, 1u);
+  EXPECT_EQ(scene.primitives[0].material, 0);
+  EXPECT_EQ(scene.primitives[1].material, -1);
+  EXPECT_EQ(flat(scene.primitives[0].mesh.positions), in.quad);
+  EXPECT_EQ(scene.primitives[0].mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
+  EXPECT_EQ(scene.primitives[0].mesh.uvs[0].size(), 4u);
+  EXPECT_EQ(flat(scene.primitives[1].mesh.positions), in.tri);
+  EXPECT_EQ(scene.primitives[1].mesh.indices, (std::vector<uint32_t>{0, 1, 2}));  // non-indexed: 0..n-1
+  const Mesh& skinned = scene.primitives[2].mesh;
+  EXPECT_EQ(skinned.indices, (std::vector<uint32_t>{0, 2, 1}));
+  ASSERT_EQ(skinned.joints.size(), 3u);
+  EXPECT_EQ(skinned.joints[1], (ushort4{0, 1, 0, 0}));
+  EXPECT_EQ(skinned.weights[1], (float4{0.5f, 0.5f, 0, 0}));
+  EXPECT_EQ(skinned.normals[2], (float3{0, 0, 1}));
+
+  ASSERT_EQ(scene.nodes.size(), 5u);
+  EXPECT_EQ(scene.roots, (std::vector<int32_t>{0}));
+  EXPECT_EQ(scene.nodes[0].name, "root");
+  EXPECT_EQ(scene.nodes[0].children, (std::vector<int32_t>{1, 2, 3}));
+  EXPECT_EQ(scene.nodes[0].translation, (float3{1, 2, 3}));
+  EXPECT_EQ(scene.nodes[0].rotation, (float4{0, 0, 0.6f, 0.8f}));
+  EXPECT_EQ(scene.nodes[0].scale, (float3{2, 2, 2}));
+  EXPECT_EQ(scene.nodes[4].parent, 3);
+  EXPECT_EQ(scene.nodes[2].skin, 0);
+  EXPECT_EQ(scene.nodes[1].mesh, 0);
+
+  ASSERT_EQ(scene.skins.size(), 1u);
+  EXPECT_EQ(scene.skins[0].joints, (std::vector<int32_t>{3, 4}));
+  EXPECT_EQ(scene.skins[0].skeleton, 3);
+  ASSERT_EQ(scene.skins[0].inverse_bind_matrices.size(), 2u);
+  for (size_t k = 0; k < 16; ++k) EXPECT_EQ(scene.skins[0].inverse_bind_matrices[1][k], in.ibm[16 + k]);
+
+  ASSERT_EQ(scene.animations.size(), 1u);
+  ASSERT_EQ(scene.animations[0].channels.size(), 1u);
+  const AnimationChannel& ch = scene.animations[0].channels[0];
+  EXPECT_EQ(scene.animations[0].name, "turn");
+  EXPECT_EQ(ch.node, 3);
+  EXPECT_EQ(ch.path, AnimationPath::rotation);
+  EXPECT_EQ(ch.interpolation, Interpolation::linear);
+  EXPECT_EQ(ch.components, 4u);
+  EXPECT_EQ(ch.times, in.times);
+  EXPECT_EQ(ch.values, in.rotations);
+
+  EXPECT_EQ(scene.material_names, (std::vector<std::string>{"painted"}));
+  EXPECT_EQ(scene.image_count, 1u);
+  EXPECT_EQ(scene.texture_count, 1u);
+  EXPECT_NE(scene.source, nullptr);
+}
+
+TEST(GltfHandBuilt, WriteKeepsEverythingLodkitDidNotChange) {
+  const SceneInput in = hand_built_scene();
+  const Json& original = in.file.doc;
+  TempDir dir;
+  test::write_bytes(dir / "hand.glb", in.file.glb());
+  const Scene scene = read_scene(dir / "hand.glb");
+  for (const char* ext : {".glb", ".gltf"}) {
+    SCOPED_TRACE(ext);
+    const auto out = dir / (std::string("out") + ext);
+    write_scene(scene, out);
+    const Written w = load_written(out);
+    const Json& d = w.doc;
+
+    // Image bytes identical, still in a bufferView.
+    ASSERT_EQ(d["images"].size(), 1u);
+    EXPECT_EQ(d["images"][0]["mimeType"], "image/png");
+    EXPECT_EQ(d["images"][0]["name"], "checker");
+    EXPECT_EQ(view_bytes(w, d["images"][0]["bufferView"]), kPng);
+    // Skin and animation data identical to the values put in.
+    EXPECT_EQ(accessor_floats(w, d["skins"][0]["inverseBindMatrices"]), in.ibm);
+    EXPECT_EQ(d["skins"][0]["joints"], original["skins"][0]["joints"]);
+    EXPECT_EQ(d["skins"][0]["skeleton"], 3);
+    const Json& sampler = d["animations"][0]["samplers"][0];
+    EXPECT_EQ(accessor_floats(w, sampler["input"]), in.times);
+    EXPECT_EQ(accessor_floats(w, sampler["output"]), in.rotations);
+    EXPECT_EQ(sampler["interpolation"], "LINEAR");
+    EXPECT_EQ(d["animations"][0]["channels"], original["animations"][0]["channels"]);
+    // Node transforms, hierarchy, names, extras; materials, textures, samplers, scenes.
+    EXPECT_EQ(d["nodes"], original["nodes"]);
+    EXPECT_EQ(d["materials"], original["materials"]);
+    EXPECT_EQ(d["textures"], original["textures"]);
+    EXPECT_EQ(d["samplers"], original["samplers"]);
+    EXPECT_EQ(d["scenes"], original["scenes"]);
+    EXPECT_EQ(d["scene"], 0);
+    EXPECT_EQ(d["extensionsUsed"], original["extensionsUsed"]);
+    // Geometry regenerated: triangle lists, float streams, POSITION bounds, targets, 4-byte alignment.
+    for (const Json& mesh : d["meshes"])
+      for (const Json& prim : mesh["primitives"]) {
+        EXPECT_EQ(prim["mode"], 4);
+        const Json& pos = d["accessors"][prim["attributes"]["POSITION"].get<size_t>()];
+        EXPECT_TRUE(pos.contains("min") && pos.contains("max"));
+        EXPECT_EQ(d["bufferViews"][pos["bufferView"].get<size_t>()]["target"], kArrayBuffer);
+        EXPECT_EQ(d["bufferViews"][d["accessors"][prim["indices"].get<size_t>()]["bufferView"].get<size_t>()]["target"],
+                  kElementArrayBuffer);
+      }
+    for (const Json& view : d["bufferViews"]) EXPECT_EQ(view.value("byteOffset", 0) % 4, 0);
+    // Nothing unreferenced survives: 3 primitives x (POSITION + indices) + uv + 3 skinned streams + ibm + 2 animation.
+    EXPECT_EQ(d["accessors"].size(), 6u + 1 + 3 + 1 + 2);
+
+    // Reading the output again gives the same scene.
+    const Scene again = read_scene(out);
+    ASSERT_EQ(again.primitives.size(), scene.primitives.size());
+    for (size_t i = 0; i < scene.primitives.size(); ++i) {
+      EXPECT_EQ(mesh_difference(scene.primitives[i].mesh, again.primitives[i].mesh), "");
+      EXPECT_EQ(again.primitives[i].material, scene.primitives[i].material);
+    }
+    EXPECT_EQ(again.skins[0].inverse_bind_matrices, scene.skins[0].inverse_bind_matrices);
+    EXPECT_EQ(again.animations[0].channels[0].values, in.rotations);
+  }
+}
+
+TEST(GltfHandBuilt, ChangedGeometryIsWrittenAndUnreferencedDataDropped) {
+  const SceneInput in = hand_built_scene();
+  Scene scene = read_gltf(in.file.glb(), "hand.glb");
+  // Drop the quad's second triangle and its unused vertex; give the lone triangle a material.
+  Mesh& quad = scene.primitives[0].mesh;
+  quad.indices.resize(3);
+  quad.positions.resize(3);
+  quad.uvs[0].resize(3);
+  scene.primitives[1].material = 0;
+  TempDir dir;
+  write_scene(scene, dir / "edited.glb");
+  const Scene again = read_scene(dir / "edited.glb");
+  ASSERT_EQ(again.primitives.size(), 3u);
+  EXPECT_EQ(mesh_difference(again.primitives[0].mesh, quad), "");
+  EXPECT_EQ(again.primitives[1].material, 0);
+  const Written w = load_written(dir / "edited.glb");
+  EXPECT_EQ(w.doc["accessors"][w.doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<size_t>()]["max"],
+            Json::array({1.0, 1.0, 0.0}));
+  EXPECT_EQ(view_bytes(w, w.doc["images"][0]["bufferView"]), kPng);
+}
+
+// ---- attribute decoding ---------------------------------------------------------------------------
+
+TEST(GltfRead, NormalizedIntegerAttributesAndVec3Colors) {
+  HandBuilt f;
+  const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+  const int uv = f.accessor(std::vector<uint16_t>{0, 65535, 32768, 0, 65535, 65535}, kUShort, "VEC2", 2, kArrayBuffer,
+                            {{"normalized", true}});
+  const int color = f.accessor(std::vector<uint8_t>{255, 0, 51, 0, 255, 0, 0, 0, 0}, kUByte, "VEC3", 3,
+                               kArrayBuffer, {{"normalized", true}});
+  const int joints = f.accessor(std::vector<uint16_t>{300, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}, kUShort, "VEC4", 4,
+                                kArrayBuffer);
+  const int weights = f.accessor(std::vector<uint8_t>{255, 0, 0, 0, 128, 127, 0, 0, 0, 0, 0, 255}, kUByte, "VEC4", 4,
+                                 kArrayBuffer, {{"normalized", true}});
+  f.doc["meshes"] = Json::array({{{"primitives",
+                                   {{{"attributes",
+                                      {{"POSITION", pos},
+                                       {"TEXCOORD_0", uv},
+                                       {"COLOR_0", color},
+                                       {"JOINTS_0", joints},
+                                       {"WEIGHTS_0", weights}}}}}}}});
+  // VEC3 u8 colors occupy 3 bytes each; the bufferView is tightly packed, which is allowed for colors.
+  const Scene scene = read_gltf(span_of(f.gltf()), "normalized.gltf");
+  const Mesh& m = scene.primitives[0].mesh;
+  EXPECT_EQ(m.uvs[0][0], (float2{0.0f, 1.0f}));
+  EXPECT_EQ(m.uvs[0][1], (float2{32768.0f / 65535.0f, 0.0f}));
+  EXPECT_EQ(m.colors[0], (float4{1.0f, 0.0f, 51.0f / 255.0f, 1.0f}));  // alpha 1 for VEC3 colors
+  EXPECT_EQ(m.colors[2], (float4{0.0f, 0.0f, 0.0f, 1.0f}));
+  EXPECT_EQ(m.joints[0], (ushort4{300, 1, 2, 3}));
+  EXPECT_EQ(m.weights[1], (float4{128.0f / 255.0f, 127.0f / 255.0f, 0, 0}));
+  EXPECT_EQ(m.weights[2], (float4{0, 0, 0, 1.0f}));
+}
+
+TEST(GltfRead, InterleavedStreamsWithByteStride) {
+  HandBuilt f;
+  // position xyz + normal xyz per vertex, 24-byte stride, one bufferView for both accessors.
+  const std::vector<float> interleaved = {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, 1, 0, 1, 0, 0, 0, 1};
+  const int view = f.view(interleaved.data(), interleaved.size() * 4, kArrayBuffer, 24);
+  f.doc["accessors"] = Json::array({{{"bufferView", view}, {"componentType", kFloat}, {"count", 3}, {"type", "VEC3"},
+                                     {"min", {0, 0, 0}}, {"max", {1, 1, 0}}},
+                                    {{"bufferView", view}, {"byteOffset", 12}, {"componentType", kFloat}, {"count", 3},
+                                     {"type", "VEC3"}}});
+  f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", 0}, {"NORMAL", 1}}}}}}}});
+  const Mesh m = read_gltf(f.glb(), "interleaved.glb").primitives[0].mesh;
+  EXPECT_EQ(flat(m.positions), (std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0}));
+  EXPECT_EQ(flat(m.normals), (std::vector<float>{0, 0, 1, 0, 0, 1, 0, 0, 1}));
+}
+
+TEST(GltfRead, SparseAccessorsAreApplied) {
+  HandBuilt f;
+  const int base = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0});
+  const std::vector<uint8_t> sparse_indices = {1, 3};
+  const std::vector<float> sparse_values = {5, 6, 7, 8, 9, 10};
+  const int idx_view = f.view(sparse_indices.data(), sparse_indices.size());
+  const int val_view = f.view(sparse_values.data(), sparse_values.size() * 4);
+  f.doc["accessors"][size_t(base)]["sparse"] = {{"count", 2},
+                                                {"indices", {{"bufferView", idx_view}, {"componentType", kUByte}}},
+                                                {"values", {{"bufferView", val_view}}}};
+  f.doc["accessors"][size_t(base)]["max"] = {8, 9, 10};
+  // A sparse accessor without a bufferView: zeros, with one element replaced.
+  const std::vector<uint16_t> one = {2};
+  const std::vector<float> uv_value = {0.5f, 0.25f};
+  const int one_view = f.view(one.data(), 2);
+  const int uv_view = f.view(uv_value.data(), 8);
+  f.doc["accessors"].push_back({{"componentType", kFloat}, {"count", 4}, {"type", "VEC2"},
+                                {"sparse",
+                                 {{"count", 1},
+                                  {"indices", {{"bufferView", one_view}, {"componentType", kUShort}}},
+                                  {"values", {{"bufferView", uv_view}}}}}});
+  const size_t uvs = f.doc["accessors"].size() - 1;
+  f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", base}, {"TEXCOORD_0", uvs}}}, {"mode", 5}}}}}});
+  const Scene scene = read_gltf(f.glb(), "sparse.glb");
+  const Mesh& m = scene.primitives[0].mesh;
+  EXPECT_EQ(flat(m.positions), (std::vector<float>{0, 0, 0, 5, 6, 7, 0, 1, 0, 8, 9, 10}));
+  EXPECT_EQ(m.uvs[0], (std::vector<float2>{{0, 0}, {0, 0}, {0.5f, 0.25f}, {0, 0}}));
+  // Mode 5 (strip of 4 vertices): triangles (0 1 2) and (1 3 2), both counter-clockwise.
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2, 1, 3, 2}));
+  // Writing makes the streams dense; reading back gives the same values.
+  TempDir dir;
+  write_scene(scene, dir / "dense.glb");
+  EXPECT_EQ(mesh_difference(read_scene(dir / "dense.glb").primitives[0].mesh, m), "");
+}
+
+TEST(GltfRead, FansAndNonIndexedStripsBecomeTriangleLists) {
+  HandBuilt f;
+  const int fan = f.positions({0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, -1, 0, 0});
+  f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", fan}}}, {"mode", 6}}}}}});
+  const Mesh m = read_gltf(f.glb(), "fan.glb").primitives[0].mesh;
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{1, 2, 0, 2, 3, 0, 3, 4, 0}));
+}
+
+TEST(GltfWrite, PointsAndLinesAreKeptUnchanged) {
+  HandBuilt f;
+  const int tri = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+  const std::vector<float> line_points = {0, 0, 5, 1, 1, 5};
+  const int line = f.positions(line_points);
+  f.doc["meshes"] = Json::array(
+      {{{"primitives", {{{"attributes", {{"POSITION", line}}}, {"mode", 1}}, {{"attributes", {{"POSITION", tri}}}}}}}});
+  f.doc["nodes"] = Json::array({{{"mesh", 0}}});
+  const Scene scene = read_gltf(f.glb(), "lines.glb");
+  ASSERT_EQ(scene.primitives.size(), 1u);  // only the triangles
+  EXPECT_EQ(scene.primitives[0].gltf_primitive, 1u);
+  TempDir dir;
+  write_scene(scene, dir / "lines-out.glb");
+  const Written w = load_written(dir / "lines-out.glb");
+  const Json& prims = w.doc["meshes"][0]["primitives"];
+  ASSERT_EQ(prims.size(), 2u);
+  EXPECT_EQ(prims[0]["mode"], 1);
+  EXPECT_EQ(accessor_floats(w, prims[0]["attributes"]["POSITION"]), line_points);
+}
+
+TEST(GltfWrite, MorphTargetsKeptWhileTheVertexCountIsUnchanged) {
+  HandBuilt f;
+  const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+  const std::vector<float> offsets = {0, 0, 1, 0, 0, 1, 0, 0, 1};
+  const int target = f.positions(offsets);
+  f.doc["meshes"] = Json::array(
+      {{{"primitives", {{{"attributes", {{"POSITION", pos}}}, {"targets", {{{"POSITION", target}}}}}}}, {"weights", {0.5}}}});
+  f.doc["nodes"] = Json::array({{{"mesh", 0}, {"weights", {0.25}}}});
+  Scene scene = read_gltf(f.glb(), "morph.glb");
+  TempDir dir;
+  write_scene(scene, dir / "same.glb");
+  {
+    const Written w = load_written(dir / "same.glb");
+    const Json& prim = w.doc["meshes"][0]["primitives"][0];
+    ASSERT_EQ(prim["targets"].size(), 1u);
+    EXPECT_EQ(accessor_floats(w, prim["targets"][0]["POSITION"]), offsets);
+    EXPECT_EQ(w.doc["meshes"][0]["weights"], Json::array({0.5}));
+  }
+  // One more vertex: the targets no longer match and are dropped, with the weights that drive them.
+  Mesh& m = scene.primitives[0].mesh;
+  m.positions.push_back({1, 1, 0});
+  m.indices.insert(m.indices.end(), {1, 3, 2});
+  write_scene(scene, dir / "grown.glb");
+  const Written w = load_written(dir / "grown.glb");
+  EXPECT_FALSE(w.doc["meshes"][0]["primitives"][0].contains("targets"));
+  EXPECT_FALSE(w.doc["meshes"][0].contains("weights"));
+  EXPECT_FALSE(w.doc["nodes"][0].contains("weights"));
+  EXPECT_EQ(w.doc["accessors"].size(), 2u);  // POSITION + indices
+}
+
+TEST(GltfRead, ExternalBinAndImagesResolveAgainstTheBaseDir) {
+  HandBuilt f;
+  const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+  f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", pos}}}}}}}});
+  f.doc["images"] = Json::array({{{"uri", "data:image/png;base64," + base64(kPng)}}, {{"uri", "textures/wood%20grain.png"}}});
+  f.doc["textures"] = Json::array({{{"source", 0}}, {{"source", 1}}});
+  f.doc["buffers"] = Json::array({{{"byteLength", f.bin.size()}, {"uri", "geometry.bin"}}});
+  TempDir dir;
+  std::filesystem::create_directory(dir / "textures");
+  test::write_bytes(dir / "textures" / "wood grain.png", kPng);
+  test::write_bytes(dir / "geometry.bin", f.bin);
+  test::write_text(dir / "external.gltf", f.doc.dump());
+
+  const Scene scene = read_scene(dir / "external.gltf");
+  EXPECT_EQ(scene.image_count, 2u);
+  EXPECT_EQ(flat(scene.primitives[0].mesh.positions), (std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0}));
+  std::filesystem::create_directory(dir / "out");
+  write_scene(scene, dir / "out" / "copy.gltf");
+  const Written w = load_written(dir / "out" / "copy.gltf");
+  const std::string data_uri = w.doc["images"][0]["uri"];
+  ASSERT_EQ(data_uri.rfind("data:image/png;base64,", 0), 0u);
+  EXPECT_EQ(base64_decode(data_uri.substr(22)), kPng);
+  EXPECT_EQ(w.doc["images"][1]["uri"], "textures/wood%20grain.png");  // kept verbatim, not re-encoded
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "textures"));
+
+  // Without a base dir only data: URIs and the GLB chunk are allowed.
+  const std::vector<uint8_t> bytes = read_file_bytes(dir / "external.gltf");
+  try {
+    read_gltf(bytes, "no-base.gltf");
+    FAIL() << "expected lod::Error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.category(), ErrorCategory::bad_input);
+    EXPECT_NE(std::string(e.what()).find("no-base.gltf"), std::string::npos) << e.what();
+  }
+}
+
+// ---- malformed input ------------------------------------------------------------------------------
+
+// A valid one-triangle GLB to break in one place.
+HandBuilt valid_triangle() {
+  HandBuilt f;
+  const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+  const int idx = f.accessor(std::vector<uint16_t>{0, 1, 2}, kUShort, "SCALAR", 1, kElementArrayBuffer);
+  f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", pos}}}, {"indices", idx}}}}}});
+  f.doc["nodes"] = Json::array({{{"mesh", 0}}});
+  f.doc["scenes"] = Json::array({{{"nodes", {0}}}});
+  return f;
+}
+
+void expect_bad_input(std::span<const uint8_t> bytes, const std::string& name, const std::string& needle) {
+  SCOPED_TRACE(name);
+  try {
+    read_gltf(bytes, name);
+    ADD_FAILURE() << "no error for " << name;
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(e.category(), ErrorCategory::bad_input) << what;
+    EXPECT_NE(what.find(name), std::string::npos) << what;
+    EXPECT_NE(what.find(needle), std::string::npos) << "expected '" << needle << "' in: " << what;
+  }
+}
+
+TEST(GltfMalformed, ValidBaseFileReads) {
+  EXPECT_EQ(read_gltf(valid_triangle().glb(), "ok.glb").primitives.size(), 1u);
+  EXPECT_EQ(read_gltf(span_of(valid_triangle().gltf()), "ok.gltf").primitives.size(), 1u);
+}
+
+TEST(GltfMalformed, GlbContainer) {
+  const std::vector<uint8_t> good = valid_triangle().glb();
+  std::vector<uint8_t> bad = good;
+  bad[3] = 'X';
+  expect_bad_input(bad, "magic.glb", "magic");
+  bad = good;
+  bad[4] = 1;
+  expect_bad_input(bad, "version.glb", "version 1");
+  bad.assign(good.begin(), good.begin() + ptrdiff_t(good.size() / 2));
+  expect_bad_input(bad, "truncated.glb", "truncated");
+  bad.assign(good.begin(), good.begin() + 7);
+  expect_bad_input(bad, "tiny.glb", "truncated GLB header");
+  bad = good;
+  bad[12] = 0xF0, bad[13] = 0xFF, bad[14] = 0xFF, bad[15] = 0x0F;  // JSON chunk length
+  expect_bad_input(bad, "chunk.glb", "JSON chunk length");
+  bad = good;
+  const size_t bin_header = 20 + get_u32(good, 12);
+  bad[bin_header + 2] = 0x10;  // BIN chunk length beyond the file
+  expect_bad_input(bad, "binchunk.glb", "BIN chunk length");
+}
+
+TEST(GltfMalformed, BadJson) {
+  const std::string text = valid_triangle().gltf();
+  expect_bad_input(span_of(text.substr(0, text.size() / 2)), "truncated.gltf", "invalid JSON");
+  expect_bad_input(span_of(std::string("\x01\x02 not json at all")), "garbage.gltf", "invalid JSON");
+  expect_bad_input(span_of(std::string("[1, 2, 3]")), "array.gltf", "root is not an object");
+  // tinygltf converts extras recursively: this nesting would overflow its stack.
+  const std::string deep = "{\"asset\":{\"version\":\"2.0\"},\"extras\":" + std::string(100000, '[') +
+                           std::string(100000, ']') + "}";
+  expect_bad_input(span_of(deep), "deep.gltf", "nested deeper");
+  HandBuilt f = valid_triangle();
+  f.doc.erase("asset");
+  expect_bad_input(span_of(f.gltf()), "noasset.gltf", "asset");
+}
+
+TEST(GltfMalformed, BufferRanges) {
+  HandBuilt f = valid_triangle();
+  f.doc["bufferViews"][0]["byteLength"] = f.bin.size() + 100;
+  expect_bad_input(f.glb(), "view.glb", "runs past the end of buffers[0]");
+
+  f = valid_triangle();
+  f.doc["bufferViews"][0]["byteStride"] = 4;  // a VEC3 float is 12 bytes
+  expect_bad_input(f.glb(), "stride.glb", "accessor stride overlaps its elements");
+
+  f = valid_triangle();
+  f.doc["accessors"][0]["count"] = 1000000000000ull;
+  expect_bad_input(f.glb(), "count.glb", "do not fit");
+
+  f = valid_triangle();
+  f.doc["accessors"][0]["byteOffset"] = 8;
+  expect_bad_input(f.glb(), "offset.glb", "do not fit");
+
+  f = valid_triangle();
+  f.doc["accessors"][0]["bufferView"] = 7;
+  expect_bad_input(f.glb(), "viewindex.glb", "bufferViews[7]");
+
+  // The GLB buffer claims more bytes than the BIN chunk has.
+  f = valid_triangle();
+  Json doc = f.doc;
+  doc["buffers"] = Json::array({{{"byteLength", f.bin.size() + 64}}});
+  std::string text = doc.dump();
+  while (text.size() % 4) text += ' ';
+  std::vector<uint8_t> rebuilt;
+  put_u32(rebuilt, 0x46546C67);
+  put_u32(rebuilt, 2);
+  const size_t bin_padded = (f.bin.size() + 3) & ~size_t(3);
+  put_u32(rebuilt, uint32_t(20 + text.size() + 8 + bin_padded));
+  put_u32(rebuilt, uint32_t(text.size()));
+  put_u32(rebuilt, 0x4E4F534A);
+  rebuilt.insert(rebuilt.end(), text.begin(), text.end());
+  put_u32(rebuilt, uint32_t(bin_padded));
+  put_u32(rebuilt, 0x004E4942);
+  rebuilt.insert(rebuilt.end(), f.bin.begin(), f.bin.end());
+  rebuilt.resize(rebuilt.size() + bin_padded - f.bin.size(), 0);
+  expect_bad_input(rebuilt, "buffer.glb", "byteLength");
+
+  // An image bufferView outside its buffer: tinygltf would read past the end before lodkit sees it.
+  f = valid_triangle();
+  const int image_view = f.view(kPng.data(), kPng.size());
+  f.doc["bufferViews"][size_t(image_view)]["byteLength"] = 100000000;
+  f.doc["images"] = Json::array({{{"bufferView", image_view}, {"mimeType", "image/png"}}});
+  expect_bad_input(f.glb(), "image.glb", "runs past the end");
+
+  f = valid_triangle();
+  f.doc["accessors"][0]["sparse"] = {{"count", 1},
+                                     {"indices", {{"bufferView", 1}, {"componentType", kUShort}, {"byteOffset", 6}}},
+                                     {"values", {{"bufferView", 0}}}};
+  expect_bad_input(f.glb(), "sparse.glb", "sparse indices");
+}
+
+TEST(GltfMalformed, Geometry) {
+  HandBuilt f = valid_triangle();
+  f.bin[f.bin.size() - 2] = 7;  // the last index (u16) becomes 7 with 3 vertices
+  expect_bad_input(f.glb(), "index.glb", "out of range");
+
+  f = valid_triangle();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(&f.bin[4], &nan, 4);  // y of vertex 0
+  expect_bad_input(f.glb(), "nan.glb", "not finite");
+
+  f = valid_triangle();
+  const float inf = std::numeric_limits<float>::infinity();
+  std::memcpy(&f.bin[24], &inf, 4);
+  expect_bad_input(f.glb(), "inf.glb", "not finite");
+
+  f = valid_triangle();
+  f.doc["meshes"][0]["primitives"][0]["attributes"] = {{"NORMAL", 0}};
+  expect_bad_input(f.glb(), "noposition.glb", "no POSITION");
+
+  f = valid_triangle();
+  f.doc["meshes"][0]["primitives"][0].erase("attributes");
+  expect_bad_input(f.glb(), "noattributes.glb", "no attributes");
+
+  f = valid_triangle();
+  f.doc["accessors"][1]["count"] = 2;  // 2 corners
+  expect_bad_input(f.glb(), "corners.glb", "not a multiple of 3");
+
+  f = valid_triangle();
+  f.doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 0;  // a VEC3
+  expect_bad_input(f.glb(), "uvtype.glb", "expected VEC2");
+
+  f = valid_triangle();
+  f.doc["meshes"][0]["primitives"][0]["indices"] = 0;  // a VEC3 float accessor as indices
+  expect_bad_input(f.glb(), "indextype.glb", "indices");
+
+  f = valid_triangle();
+  f.doc["meshes"][0]["primitives"][0]["mode"] = 9;
+  expect_bad_input(f.glb(), "mode.glb", "mode 9");
+}
+
+TEST(GltfMalformed, References) {
+  HandBuilt f = valid_triangle();
+  f.doc["nodes"] = Json::array({{{"children", {1}}}, {{"children", {0}}}});
+  expect_bad_input(f.glb(), "cycle.glb", "node cycle");
+
+  f = valid_triangle();
+  f.doc["nodes"] = Json::array({{{"children", {1}}}, {{"children", {2}}}, {{"children", {1}}}});
+  expect_bad_input(f.glb(), "loop.glb", "two parents");
+
+  f = valid_triangle();
+  f.doc["nodes"][0]["mesh"] = 3;
+  expect_bad_input(f.glb(), "mesh.glb", "meshes[3]");
+
+  f = valid_triangle();
+  f.doc["meshes"][0]["primitives"][0]["material"] = 0;
+  expect_bad_input(f.glb(), "material.glb", "materials[0]");
+
+  f = valid_triangle();
+  f.doc["skins"] = Json::array({{{"joints", {0}}, {"inverseBindMatrices", 0}}});  // a VEC3 accessor
+  expect_bad_input(f.glb(), "skin.glb", "MAT4");
+
+  f = valid_triangle();
+  f.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
+  expect_bad_input(f.glb(), "draco.glb", "KHR_draco_mesh_compression");
+}
+
+// ---- scenes without a source ------------------------------------------------------------------------
+
+TEST(GltfWrite, SceneFromMeshWritesMaterialsNodesAndPrimitives) {
+  Mesh mesh = shapes::cube();
+  mesh.materials.assign(12, 1);
+  mesh.materials[0] = mesh.materials[1] = 0;
+  mesh.material_names = {"wall", "floor"};
+  TempDir dir;
+  write_scene(scene_from_mesh(mesh), dir / "rooms.gltf");
+  const Scene scene = read_scene(dir / "rooms.gltf");
+  ASSERT_EQ(scene.primitives.size(), 2u);
+  EXPECT_EQ(scene.primitives[0].material, 0);
+  EXPECT_EQ(scene.primitives[1].material, 1);
+  EXPECT_EQ(scene.primitives[0].mesh.triangle_count(), 2u);
+  EXPECT_EQ(scene.primitives[0].mesh.vertex_count(), 4u);
+  EXPECT_EQ(scene.primitives[1].mesh.triangle_count(), 10u);
+  EXPECT_EQ(scene.material_names, (std::vector<std::string>{"wall", "floor"}));
+  EXPECT_EQ(scene.roots, (std::vector<int32_t>{0}));
+  ASSERT_EQ(scene.nodes.size(), 1u);
+  EXPECT_EQ(scene.nodes[0].mesh, 0);
+}
+
+TEST(GltfWrite, EmptyMeshWritesAValidEmptyScene) {
+  TempDir dir;
+  write_mesh(Mesh{}, dir / "empty.glb");
+  const Scene scene = read_scene(dir / "empty.glb");
+  EXPECT_TRUE(scene.primitives.empty());
+  EXPECT_TRUE(read_mesh(dir / "empty.glb").positions.empty());
+}
+
+// ---- the Khronos validator --------------------------------------------------------------------------
+
+struct ValidatorRun {
+  int status = -1;
+  std::string output;
+};
+
+std::filesystem::path validator_script() { return std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-validator/validate.mjs"; }
+
+bool validator_available() {
+  std::error_code ec;
+  return std::filesystem::exists(std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-validator/node_modules/gltf-validator", ec) &&
+         std::system("command -v node >/dev/null 2>&1") == 0;
+}
+
+ValidatorRun run_validator(const std::vector<std::filesystem::path>& files) {
+  std::string command = "node '" + validator_script().string() + "'";
+  for (const auto& f : files) command += " '" + f.string() + "'";
+  command += " 2>&1";
+  ValidatorRun run;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return run;
+  char buffer[4096];
+  size_t n;
+  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) run.output.append(buffer, n);
+  const int status = pclose(pipe);
+  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+TEST(GltfValidator, WrittenFilesHaveNoErrors) {
+  if (!validator_available())
+    GTEST_SKIP() << "gltf-validator not installed: run `npm ci --prefix tests/gltf-validator` (needs node on PATH)";
+  TempDir dir;
+  std::vector<std::filesystem::path> files;
+  for (const NamedShape& shape : test_shapes())
+    for (const char* ext : {".glb", ".gltf"}) {
+      files.push_back(dir / (std::string(shape.name) + ext));
+      write_mesh(with_all_streams(shape.mesh), files.back());
+    }
+  const SceneInput in = hand_built_scene();
+  test::write_bytes(dir / "hand.glb", in.file.glb());
+  files.push_back(dir / "hand.glb");  // the input itself, so a problem in the test's file shows up as such
+  const Scene hand = read_scene(dir / "hand.glb");
+  for (const char* ext : {".glb", ".gltf"}) {
+    files.push_back(dir / (std::string("hand-out") + ext));
+    write_scene(hand, files.back());
+  }
+  Mesh multi = with_all_streams(shapes::cylinder(12));
+  multi.materials.assign(multi.triangle_count(), 0);
+  for (size_t t = 0; t < multi.triangle_count(); ++t) multi.materials[t] = uint32_t(t % 3);
+  multi.material_names = {"side", "top", "bottom"};
+  files.push_back(dir / "multi.glb");
+  write_scene(scene_from_mesh(multi), files.back());
+  files.push_back(dir / "multi.gltf");
+  write_scene(scene_from_mesh(multi), files.back());
+
+  const ValidatorRun run = run_validator(files);
+  EXPECT_EQ(run.status, 0) << run.output;
+  for (const auto& f : files) EXPECT_NE(run.output.find(f.string() + ": 0 errors"), std::string::npos) << run.output;
+}
+
+}  // namespace
+}  // namespace lod

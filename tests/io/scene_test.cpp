@@ -1,0 +1,236 @@
+// flatten() and scene_from_mesh(): world transforms computed by hand, material ids, stream rules.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/shapes.h"
+#include "lodkit/io.h"
+#include "test_support.h"
+
+namespace lod {
+namespace {
+
+using test::mesh_difference;
+
+// One triangle in the z = 0 plane, facing +z, with a tangent along +x.
+Mesh unit_triangle() {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+  m.tangents = {{1, 0, 0, 1}, {1, 0, 0, 1}, {1, 0, 0, 1}};
+  m.indices = {0, 1, 2};
+  return m;
+}
+
+Primitive primitive(Mesh mesh, uint32_t gltf_mesh = 0, int32_t material = -1) {
+  Primitive p;
+  p.mesh = std::move(mesh);
+  p.gltf_mesh = gltf_mesh;
+  p.material = material;
+  return p;
+}
+
+void expect_near(const float3& a, const float3& b) {
+  EXPECT_NEAR(a.x, b.x, 1e-6f);
+  EXPECT_NEAR(a.y, b.y, 1e-6f);
+  EXPECT_NEAR(a.z, b.z, 1e-6f);
+}
+
+TEST(SceneFlatten, AppliesParentTimesLocal) {
+  Scene scene;
+  scene.primitives.push_back(primitive(unit_triangle()));
+  Node root, child;
+  root.translation = {1, 2, 3};
+  root.scale = {2, 2, 2};
+  root.children = {1};
+  child.parent = 0;
+  child.translation = {0, 1, 0};
+  child.mesh = 0;
+  scene.nodes = {root, child};
+  scene.roots = {0};
+  // world = T(1,2,3) * S(2) * T(0,1,0): p -> 2 * (p + (0,1,0)) + (1,2,3).
+  const Mesh m = flatten(scene);
+  ASSERT_EQ(m.positions.size(), 3u);
+  EXPECT_EQ(m.positions[0], (float3{1, 4, 3}));
+  EXPECT_EQ(m.positions[1], (float3{3, 4, 3}));
+  EXPECT_EQ(m.positions[2], (float3{1, 6, 3}));
+  EXPECT_EQ(m.normals[0], (float3{0, 0, 1}));  // uniform scale: renormalised, unchanged direction
+  EXPECT_EQ(m.tangents[0], (float4{1, 0, 0, 1}));
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2}));
+  EXPECT_TRUE(m.materials.empty());
+}
+
+TEST(SceneFlatten, MatrixNodesAndRotation) {
+  Scene scene;
+  scene.primitives.push_back(primitive(unit_triangle()));
+  Node turn;  // 90 degrees about +z: x -> y, y -> -x
+  turn.rotation = {0, 0, std::sqrt(0.5f), std::sqrt(0.5f)};
+  turn.children = {1};
+  Node moved;  // column-major matrix translating by (10, 0, 0)
+  moved.parent = 0;
+  moved.has_matrix = true;
+  moved.matrix = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 10, 0, 0, 1};
+  moved.mesh = 0;
+  scene.nodes = {turn, moved};
+  scene.roots = {0};
+  const Mesh m = flatten(scene);
+  // R * T(10,0,0) * p: vertex (1,0,0) -> (11,0,0) -> (0,11,0).
+  expect_near(m.positions[0], {0, 10, 0});
+  expect_near(m.positions[1], {0, 11, 0});
+  expect_near(m.positions[2], {-1, 10, 0});
+  expect_near(m.normals[0], {0, 0, 1});
+  expect_near({m.tangents[0].x, m.tangents[0].y, m.tangents[0].z}, {0, 1, 0});
+}
+
+TEST(SceneFlatten, NonUniformScaleUsesTheInverseTranspose) {
+  Mesh plane;  // a plane x + y = 1 through (1,0,0) and (0,1,0), normal (1,1,0)/sqrt(2)
+  plane.positions = {{1, 0, 0}, {0, 1, 0}, {1, 0, 1}};
+  const float h = std::sqrt(0.5f);
+  plane.normals = {{h, h, 0}, {h, h, 0}, {h, h, 0}};
+  plane.indices = {0, 1, 2};
+  Scene scene;
+  scene.primitives.push_back(primitive(plane));
+  Node node;
+  node.scale = {2, 1, 1};
+  node.mesh = 0;
+  scene.nodes = {node};
+  scene.roots = {0};
+  const Mesh m = flatten(scene);
+  // The scaled plane is x/2 + y = 1, whose normal is (1/2, 1, 0) -> (1, 2, 0)/sqrt(5).
+  expect_near(m.normals[0], {1 / std::sqrt(5.0f), 2 / std::sqrt(5.0f), 0});
+  EXPECT_EQ(m.positions[0], (float3{2, 0, 0}));
+}
+
+TEST(SceneFlatten, MirroringKeepsTrianglesCounterClockwise) {
+  Scene scene;
+  scene.primitives.push_back(primitive(unit_triangle()));
+  Node node;
+  node.scale = {-1, 1, 1};
+  node.mesh = 0;
+  scene.nodes = {node};
+  scene.roots = {0};
+  const Mesh m = flatten(scene);
+  EXPECT_EQ(m.positions[1], (float3{-1, 0, 0}));
+  // Mirrored in x the corners 0,1,2 run clockwise seen from +z; two are swapped back.
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 2, 1}));
+  expect_near(m.normals[0], {0, 0, 1});
+  EXPECT_EQ(m.tangents[0].w, -1.0f);  // handedness flips with the mirror
+  expect_near({m.tangents[0].x, m.tangents[0].y, m.tangents[0].z}, {-1, 0, 0});
+}
+
+TEST(SceneFlatten, MeshInstancedTwiceAppearsTwice) {
+  Scene scene;
+  scene.primitives.push_back(primitive(unit_triangle()));
+  Node a, b;
+  a.mesh = b.mesh = 0;
+  b.translation = {0, 0, 5};
+  scene.nodes = {a, b};
+  scene.roots = {0, 1};
+  const Mesh m = flatten(scene);
+  ASSERT_EQ(m.positions.size(), 6u);
+  EXPECT_EQ(m.positions[3], (float3{0, 0, 5}));
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2, 3, 4, 5}));
+}
+
+TEST(SceneFlatten, SkinnedMeshesStayInBindPose) {
+  Scene scene;
+  scene.primitives.push_back(primitive(unit_triangle()));
+  Node node;
+  node.translation = {7, 7, 7};  // glTF ignores the transform of a node with a skin
+  node.mesh = 0;
+  node.skin = 0;
+  scene.nodes = {node};
+  scene.roots = {0};
+  EXPECT_EQ(flatten(scene).positions, unit_triangle().positions);
+}
+
+TEST(SceneFlatten, NoNodesUsesEachMeshOnceUntransformed) {
+  Scene scene;
+  Mesh second = unit_triangle();
+  for (float3& p : second.positions) p.z = 4;
+  scene.primitives.push_back(primitive(unit_triangle(), 0));
+  scene.primitives.push_back(primitive(second, 1));
+  const Mesh m = flatten(scene);
+  ASSERT_EQ(m.positions.size(), 6u);
+  EXPECT_EQ(m.positions[4], (float3{1, 0, 4}));
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2, 3, 4, 5}));
+  // Identity placement copies every stream bit for bit.
+  Scene single;
+  const Mesh torus = shapes::torus();
+  single.primitives.push_back(primitive(torus));
+  EXPECT_EQ(mesh_difference(flatten(single), torus), "");
+}
+
+TEST(SceneFlatten, MaterialIdsAreGltfIndexPlusOne) {
+  Scene scene;
+  scene.primitives.push_back(primitive(unit_triangle(), 0, -1));
+  scene.primitives.push_back(primitive(unit_triangle(), 0, 1));
+  scene.material_names = {"stone", "moss"};
+  const Mesh m = flatten(scene);
+  EXPECT_EQ(m.materials, (std::vector<uint32_t>{0, 2}));
+  EXPECT_EQ(m.material_names, (std::vector<std::string>{"", "stone", "moss"}));
+}
+
+TEST(SceneFlatten, KeepsOnlyStreamsEveryPrimitiveHas) {
+  Mesh with_uvs = unit_triangle();
+  with_uvs.uvs[0] = {{0, 0}, {1, 0}, {0, 1}};
+  with_uvs.colors.assign(3, {1, 0, 0, 1});
+  Mesh without = unit_triangle();
+  without.colors.assign(3, {0, 1, 0, 1});
+  Scene scene;
+  scene.primitives.push_back(primitive(with_uvs, 0));
+  scene.primitives.push_back(primitive(without, 1));
+  const Mesh m = flatten(scene);
+  EXPECT_TRUE(m.uvs[0].empty());
+  EXPECT_EQ(m.normals.size(), 6u);
+  EXPECT_EQ(m.colors.size(), 6u);
+  EXPECT_EQ(m.colors[3], (float4{0, 1, 0, 1}));
+}
+
+TEST(SceneFromMesh, WholeMeshWhenThereIsOneMaterial) {
+  const Mesh cube = shapes::cube();
+  const Scene scene = scene_from_mesh(cube);
+  ASSERT_EQ(scene.primitives.size(), 1u);
+  EXPECT_EQ(scene.primitives[0].material, -1);
+  EXPECT_TRUE(scene.material_names.empty());
+  EXPECT_EQ(mesh_difference(scene.primitives[0].mesh, cube), "");
+  ASSERT_EQ(scene.nodes.size(), 1u);
+  EXPECT_EQ(scene.nodes[0].mesh, 0);
+  EXPECT_EQ(scene.roots, (std::vector<int32_t>{0}));
+  EXPECT_EQ(scene.source, nullptr);
+  EXPECT_EQ(mesh_difference(flatten(scene), cube), "");
+
+  Mesh named = cube;
+  named.material_names = {"only"};
+  EXPECT_EQ(scene_from_mesh(named).primitives[0].material, 0);
+}
+
+TEST(SceneFromMesh, OnePrimitivePerMaterialWithItsOwnVertices) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {2, 2, 0}};
+  m.uvs[0] = {{0, 0}, {1, 0}, {0, 1}, {1, 1}, {2, 2}};
+  m.indices = {0, 1, 2, 1, 3, 2, 3, 4, 2};
+  m.materials = {2, 0, 2};
+  m.material_names = {"a"};
+  const Scene scene = scene_from_mesh(m);
+  ASSERT_EQ(scene.primitives.size(), 2u);
+  const Primitive& first = scene.primitives[0];
+  EXPECT_EQ(first.material, 0);
+  EXPECT_EQ(first.gltf_primitive, 0u);
+  EXPECT_EQ(first.mesh.positions, (std::vector<float3>{{1, 0, 0}, {0, 1, 0}, {1, 1, 0}}));
+  EXPECT_EQ(first.mesh.indices, (std::vector<uint32_t>{0, 2, 1}));
+  EXPECT_EQ(first.mesh.uvs[0].size(), 3u);
+  const Primitive& second = scene.primitives[1];
+  EXPECT_EQ(second.material, 2);
+  EXPECT_EQ(second.gltf_primitive, 1u);
+  EXPECT_EQ(second.mesh.positions, (std::vector<float3>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {2, 2, 0}}));
+  EXPECT_EQ(second.mesh.indices, (std::vector<uint32_t>{0, 1, 2, 3, 4, 2}));
+  EXPECT_TRUE(second.mesh.materials.empty());
+  // Names cover every material index used.
+  EXPECT_EQ(scene.material_names, (std::vector<std::string>{"a", "", ""}));
+}
+
+}  // namespace
+}  // namespace lod
