@@ -11,6 +11,10 @@
 #include <random>
 #include <sstream>
 
+#include <gtest/gtest.h>
+
+#include "lodkit/error.h"
+
 extern char** environ;
 
 namespace lod::test {
@@ -118,6 +122,18 @@ std::string mesh_difference(const Mesh& a, const Mesh& b) {
   check("materials", a.materials, b.materials);
   check("groups", a.groups, b.groups);
   return d;
+}
+
+std::string expect_bad_input(const Reader& read, const std::string& input, const std::string& name) {
+  try {
+    read(bytes_of(input), name);
+  } catch (const Error& e) {
+    EXPECT_EQ(e.category(), ErrorCategory::bad_input) << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind(name + ":", 0), 0u) << e.what();
+    return e.what();
+  }
+  ADD_FAILURE() << name << " accepted: " << input.substr(0, 200);
+  return {};
 }
 
 }  // namespace lod::test

@@ -1,7 +1,10 @@
 // Shared test helpers: temporary folders, running the CLI, the corpus location.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -33,6 +36,15 @@ std::vector<std::filesystem::path> corpus_files();
 
 void write_text(const std::filesystem::path& path, const std::string& text);
 void write_bytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes);
+
+inline std::span<const uint8_t> bytes_of(const std::string& s) {
+  return {reinterpret_cast<const uint8_t*>(s.data()), s.size()};
+}
+
+// Runs `read(bytes, name)` and checks it throws a bad-input Error whose message starts with `name:`
+// (so it names the file and a line or byte offset). Returns the message, or "" after a test failure.
+using Reader = std::function<void(std::span<const uint8_t>, const std::string&)>;
+std::string expect_bad_input(const Reader& read, const std::string& input, const std::string& name);
 
 // Describes the first difference between two meshes ("" when equal, bitwise on floats).
 std::string mesh_difference(const Mesh& a, const Mesh& b);

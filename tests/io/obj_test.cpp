@@ -8,7 +8,7 @@
 namespace lod {
 namespace {
 
-std::span<const uint8_t> bytes_of(const std::string& s) { return {reinterpret_cast<const uint8_t*>(s.data()), s.size()}; }
+using test::bytes_of;
 
 Mesh obj_round_trip(const Mesh& m) {
   std::string text;
@@ -114,15 +114,7 @@ TEST(Obj, RejectsBadInput) {
       "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1/x 2 3\n",  // junk texture index
       "bogus statement\n",                       // unknown keyword
   };
-  for (const char* text : cases) {
-    try {
-      read_obj(bytes_of(text), "bad.obj");
-      ADD_FAILURE() << "accepted: " << text;
-    } catch (const Error& e) {
-      EXPECT_EQ(e.category(), ErrorCategory::bad_input);
-      EXPECT_EQ(std::string(e.what()).rfind("bad.obj:", 0), 0u) << e.what();  // names file and line
-    }
-  }
+  for (const char* text : cases) test::expect_bad_input([](auto b, const auto& n) { read_obj(b, n); }, text, "bad.obj");
 }
 
 }  // namespace
