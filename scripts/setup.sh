@@ -15,6 +15,8 @@ packages=(
   nodejs                                 # gltf-validator (Khronos) in the tests; npm ships with it
   time                                   # /usr/bin/time -v for peak memory in benchmarks
 )
+# Debian's nodejs comes without npm (NodeSource's bundles it): ask for Debian's npm only when absent.
+command -v npm >/dev/null || packages+=(npm)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
