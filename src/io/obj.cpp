@@ -134,19 +134,16 @@ Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const Rea
           }
         }
         if (p != e) in.fail("bad face corner '" + std::string(t.substr(0, 40)) + "'");
-        if (polygon.size() >= io::max_face_corners)
-          in.fail("face has more than the supported " + std::to_string(io::max_face_corners) + " vertices");
+        if (polygon.size() >= io::max_face_corners) in.fail(io::polygon_size_problem("face", polygon.size() + 1));
         polygon.push_back(c);
       }
-      if (polygon.size() < 3) in.fail("face has " + std::to_string(polygon.size()) + " vertices, at least 3 are needed");
+      if (polygon.size() < 3) in.fail(io::polygon_size_problem("face", polygon.size()));
       if (has_materials && current_material == absent) current_material = materials.id("");
       if (has_groups && current_group == absent) current_group = groups.id("");
       for (const Corner& c : polygon) any_texcoord |= c.vt != absent, any_normal |= c.vn != absent;
-      for (size_t i = 1; i + 1 < polygon.size(); ++i) {
-        corners.insert(corners.end(), {polygon[0], polygon[i], polygon[i + 1]});
-        if (has_materials) triangle_material.push_back(current_material);
-        if (has_groups) triangle_group.push_back(current_group);
-      }
+      io::append_fan(corners, polygon);
+      if (has_materials) triangle_material.resize(corners.size() / 3, current_material);
+      if (has_groups) triangle_group.resize(corners.size() / 3, current_group);
     } else if (key == "usemtl") {
       std::string_view m = in.rest_of_line();
       if (!has_materials) {

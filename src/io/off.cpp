@@ -105,10 +105,7 @@ Mesh read_off(std::span<const uint8_t> bytes, const std::string& name, const Rea
     in.skip_empty_lines('#');
     if (in.at_end()) in.fail("unexpected end of file: expected face " + std::to_string(f) + " of " + std::to_string(face_count));
     const uint64_t corners = in.read_uint("the face's vertex count");
-    if (corners < 3) in.fail("face " + std::to_string(f) + " has " + std::to_string(corners) + " vertices, at least 3 are needed");
-    if (corners > io::max_face_corners)
-      in.fail("face " + std::to_string(f) + " has " + std::to_string(corners) + " vertices, more than the supported " +
-              std::to_string(io::max_face_corners));
+    if (auto problem = io::polygon_size_problem("face " + std::to_string(f), corners); !problem.empty()) in.fail(problem);
     polygon.clear();
     for (uint64_t i = 0; i < corners; ++i) {
       int64_t index = in.read_int("a vertex index");
@@ -118,7 +115,7 @@ Mesh read_off(std::span<const uint8_t> bytes, const std::string& name, const Rea
       polygon.push_back(uint32_t(index));
     }
     // Trailing face colour values are allowed and ignored.
-    for (size_t i = 1; i + 1 < polygon.size(); ++i) mesh.indices.insert(mesh.indices.end(), {polygon[0], polygon[i], polygon[i + 1]});
+    io::append_fan(mesh.indices, polygon);
     in.next_line();
   }
   return mesh;

@@ -305,10 +305,7 @@ void read_element(Source& src, const Element& e, bool is_face, uint64_t vertex_c
           }
           continue;
         }
-        if (n < 3) src.fail("face " + std::to_string(r) + " has " + std::to_string(n) + " vertices, at least 3 are needed");
-        if (n > io::max_face_corners)
-          src.fail("face " + std::to_string(r) + " has " + std::to_string(n) + " vertices, more than the supported " +
-                   std::to_string(io::max_face_corners));
+        if (auto problem = io::polygon_size_problem("face " + std::to_string(r), n); !problem.empty()) src.fail(problem);
         polygon.clear();
         for (uint64_t i = 0; i < n; ++i) {
           const double index = src.value(p.type);
@@ -317,8 +314,7 @@ void read_element(Source& src, const Element& e, bool is_face, uint64_t vertex_c
                      std::to_string(vertex_count ? vertex_count - 1 : 0));
           polygon.push_back(uint32_t(index));
         }
-        for (size_t i = 1; i + 1 < polygon.size(); ++i)
-          mesh.indices.insert(mesh.indices.end(), {polygon[0], polygon[i], polygon[i + 1]});
+        io::append_fan(mesh.indices, polygon);
         continue;
       }
       const double v = src.value(p.type);

@@ -101,15 +101,15 @@ Mesh read_ascii(std::span<const uint8_t> bytes, const std::string& name, const R
         p.y = in.read_float("the vertex y coordinate");
         p.z = in.read_float("the vertex z coordinate");
         if (!in.at_line_end()) in.fail("a vertex line has more than 3 coordinates");
-        if (polygon.size() >= io::max_face_corners) in.fail("a facet with more than " + std::to_string(io::max_face_corners) + " vertices");
+        if (polygon.size() >= io::max_face_corners) in.fail(io::polygon_size_problem("a facet", polygon.size() + 1));
         polygon.push_back(welder.insert(p));
         in.next_line();
       }
-      if (polygon.size() < 3) in.fail("a facet has " + std::to_string(polygon.size()) + " vertices, at least 3 are needed");
+      if (polygon.size() < 3) in.fail(io::polygon_size_problem("a facet", polygon.size()));
       in.next_line();
       expect("endfacet", "after 'endloop'");
       in.next_line();
-      for (size_t i = 1; i + 1 < polygon.size(); ++i) mesh.indices.insert(mesh.indices.end(), {polygon[0], polygon[i], polygon[i + 1]});
+      io::append_fan(mesh.indices, polygon);
     }
     in.skip_empty_lines(0);
   }

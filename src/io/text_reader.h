@@ -8,6 +8,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "lodkit/error.h"
 #include "lodkit/io.h"
@@ -158,5 +159,19 @@ void append_uint(std::string& out, uint64_t value);
 
 // Largest polygon a reader accepts before triangulating; a face with a million corners is bad input.
 inline constexpr uint64_t max_face_corners = 65536;
+
+// Why a polygon (`what`, e.g. "face 7") with `corners` corners cannot be read; empty when it can.
+inline std::string polygon_size_problem(const std::string& what, uint64_t corners) {
+  if (corners < 3) return what + " has " + std::to_string(corners) + " vertices, at least 3 are needed";
+  if (corners > max_face_corners)
+    return what + " has more than the supported " + std::to_string(max_face_corners) + " vertices";
+  return {};
+}
+
+// Appends the fan triangulation (0, i, i + 1) of a polygon, as every reader triangulates.
+template <class Corner>
+void append_fan(std::vector<Corner>& triangles, const std::vector<Corner>& polygon) {
+  for (size_t i = 1; i + 1 < polygon.size(); ++i) triangles.insert(triangles.end(), {polygon[0], polygon[i], polygon[i + 1]});
+}
 
 }  // namespace lod::io
