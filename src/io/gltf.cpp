@@ -1381,6 +1381,9 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
     std::string what = e.what();
     if (auto colon = what.find("parse error"); colon != std::string::npos) what = what.substr(colon);
     throw_bad_input_at_byte(name, json_offset + at, "invalid JSON: " + what);
+  } catch (const Json::exception& e) {
+    // e.g. a number too large for a double ("1e1068"): nlohmann reports it without a position.
+    throw_bad_input(name, std::string("invalid JSON: ") + e.what());
   }
   JsonChecker(doc, name).run();
   doc = Json();  // tinygltf parses the text again; keep peak memory down

@@ -255,6 +255,7 @@ void bind_vertex_properties(Element& e, Mesh& mesh, const io::TextReader& in) {
     for (auto alternatives : names) found.push_back(find(alternatives));
     if (std::none_of(found.begin(), found.end(), [](Property* p) { return p; })) return false;
     stream.assign(e.count, {});
+    if (stream.empty()) return true;  // no records: nothing to point at
     for (size_t c = 0; c < found.size(); ++c) {
       if (!found[c]) continue;
       found[c]->target = target;

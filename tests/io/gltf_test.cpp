@@ -785,6 +785,8 @@ TEST(GltfMalformed, BadJson) {
   expect_bad_input(span_of(text.substr(0, text.size() / 2)), "truncated.gltf", "invalid JSON");
   expect_bad_input(span_of(std::string("\x01\x02 not json at all")), "garbage.gltf", "invalid JSON");
   expect_bad_input(span_of(std::string("[1, 2, 3]")), "array.gltf", "root is not an object");
+  // A number beyond double range is a JSON library error other than a parse error (found by fuzz_gltf).
+  expect_bad_input(span_of(std::string(R"({"asset":{"version":"2.0"},"extras":0.70E1068})")), "overflow.gltf", "invalid JSON");
   // tinygltf converts extras recursively: this nesting would overflow its stack.
   const std::string deep = "{\"asset\":{\"version\":\"2.0\"},\"extras\":" + std::string(100000, '[') +
                            std::string(100000, ']') + "}";

@@ -129,6 +129,12 @@ TEST(Ply, AFileWithoutFacesIsAPointSet) {
                 "1 2 3\n4 5 6\n");
   EXPECT_EQ(m.vertex_count(), 2u);
   EXPECT_EQ(m.triangle_count(), 0u);
+  // No vertices at all, with attribute streams declared (found by fuzz_ply: streams had no storage).
+  Mesh empty = read("ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                    "property float z\nproperty float nx\nproperty uchar red\nelement face 0\n"
+                    "property list uchar int vertex_indices\nend_header\n");
+  EXPECT_EQ(empty.vertex_count(), 0u);
+  EXPECT_TRUE(empty.colors.empty());
 }
 
 TEST(Ply, RejectsBadInput) {
