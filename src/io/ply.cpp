@@ -278,6 +278,8 @@ void bind_vertex_properties(Element& e, Mesh& mesh, const io::TextReader& in) {
     for (float4& c : mesh.colors) c.w = 1;
   bind(mesh.joints, 4, {{"joint0"}, {"joint1"}, {"joint2"}, {"joint3"}}, Target::joint);
   bind(mesh.weights, 4, {{"weight0"}, {"weight1"}, {"weight2"}, {"weight3"}}, Target::float_stream);
+  if (mesh.joints.empty() != mesh.weights.empty() && e.count > 0)
+    throw_bad_input_at_line(in.name(), e.line, "skin joints (joint0..3) and weights (weight0..3) must come together");
 }
 
 // Reads every record of one element from `src`: vertex values land in their streams, face corners

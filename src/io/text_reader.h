@@ -47,7 +47,7 @@ class TextReader {
     if (p_ < end_ && *p_ == '\n') ++p_;
     ++line_;
     if (options_ && options_->progress && (line_ & 0x3ffff) == 0)
-      options_->progress(double(offset()) / double(end_ - begin_ ? end_ - begin_ : 1));
+      options_->progress(double(offset()) / double(end_ > begin_ ? end_ - begin_ : 1));
   }
   // Next blank-separated token on the current line; empty at the line end.
   std::string_view token() {

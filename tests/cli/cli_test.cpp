@@ -24,6 +24,28 @@ TEST(Cli, InfoJsonMatchesTheLibrary) {
   EXPECT_EQ(j["format"], "OBJ");
 }
 
+// Several materials in a non-glTF file: info counts every triangle, and convert keeps the material ids
+// and the vertex order (a regression: both once went through a per-material scene split).
+TEST(Cli, MultiMaterialFilesKeepEveryTriangle) {
+  test::TempDir dir;
+  Mesh cube = shapes::cube();
+  for (size_t t = 0; t < cube.triangle_count(); ++t) cube.materials.push_back(uint32_t(t / 4));  // 3 materials
+  cube.material_names = {"red", "green", "blue"};
+  write_mesh(cube, dir / "cube.obj");
+  test::RunResult r = test::run_cli({"info", "--json", (dir / "cube.obj").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["stats"]["triangles"], 12);
+  EXPECT_EQ(j["stats"]["materials"], 3);
+  for (const char* out : {"cube.ply", "cube2.obj"}) {
+    r = test::run_cli({"convert", (dir / "cube.obj").string(), (dir / out).string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    Mesh back = read_mesh(dir / out);
+    EXPECT_EQ(back.materials, cube.materials) << out;
+    EXPECT_EQ(back.positions, read_mesh(dir / "cube.obj").positions) << out;
+  }
+}
+
 TEST(Cli, InfoTablePrintsAlignedRows) {
   test::TempDir dir;
   write_mesh(shapes::cube(), dir / "cube.off");

@@ -160,6 +160,7 @@ TEST(Ply, RejectsBadInput) {
       xyz + faces + "0 0 0\n1 0 0\n0 1 zero\n3 0 1 2\n",                            // junk
       xyz + faces + tri + "300 0 1 2\n",                                            // count does not fit uchar
       xyz + "element face 1\nproperty list int int vertex_indices\nend_header\n" + tri + "1000000 0 1 2\n",  // 10^6 corners
+      xyz + "property uchar joint0\nend_header\n" + tri,                         // joints without weights
       "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n",
   };
   for (const std::string& text : cases) test::expect_bad_input([](auto b, const auto& n) { read_ply(b, n); }, text, "bad.ply");

@@ -50,21 +50,33 @@ Command register_convert(CLI::App& root) {
             format_from_path(o.input);
             format_from_path(o.output);
             check_not_input(o.input, o.output, o.force);
+            // glTF to glTF goes through the scene, so everything lodkit does not change is kept; any
+            // other pair converts the (flattened) mesh, keeping its vertex order and material ids.
+            const auto is_gltf = [](const std::string& f) {
+              const FileFormat format = format_from_path(f);
+              return format == FileFormat::gltf || format == FileFormat::glb;
+            };
+            const bool as_scene = is_gltf(o.input) && is_gltf(o.output);
             auto start = std::chrono::steady_clock::now();
             Scene scene;
+            Mesh mesh;
             {
               ProgressBar bar("loading");
-              scene = read_scene(o.input, bar.read_options());
+              if (as_scene) scene = read_scene(o.input, bar.read_options());
+              else mesh = read_mesh(o.input, bar.read_options());
             }
             double load_seconds = seconds_since(start);
             size_t vertices = 0, triangles = 0;
-            for (const Primitive& p : scene.primitives) {
-              validate(p.mesh, o.input);
-              vertices += p.mesh.vertex_count();
-              triangles += p.mesh.triangle_count();
-            }
+            auto count = [&](const Mesh& m) {
+              validate(m, o.input);
+              vertices += m.vertex_count();
+              triangles += m.triangle_count();
+            };
+            if (as_scene) for (const Primitive& p : scene.primitives) count(p.mesh);
+            else count(mesh);
             start = std::chrono::steady_clock::now();
-            write_scene(scene, o.output, {.binary = !o.ascii});
+            if (as_scene) write_scene(scene, o.output, {.binary = !o.ascii});
+            else write_mesh(mesh, o.output, {.binary = !o.ascii});
             double write_seconds = seconds_since(start);
             if (o.json) {
               nlohmann::json j = {{"input", o.input}, {"output", o.output}, {"vertices", vertices},

@@ -122,9 +122,14 @@ Command register_info(CLI::App& root) {
             Scene scene;
             Mesh mesh;
             {
+              // glTF keeps its scene for the summary; the statistics are over the flattened mesh.
               ProgressBar bar("loading");
-              scene = read_scene(o.input, bar.read_options());
-              mesh = scene.source ? flatten(scene) : std::move(scene.primitives.at(0).mesh);
+              if (format == FileFormat::gltf || format == FileFormat::glb) {
+                scene = read_scene(o.input, bar.read_options());
+                mesh = flatten(scene);
+              } else {
+                mesh = read_mesh(o.input, bar.read_options());
+              }
             }
             double load_seconds = seconds_since(start);
             validate(mesh, o.input);

@@ -1,0 +1,131 @@
+// libFuzzer harness for the glTF reader (.gltf JSON and .glb, told apart by the "glTF" magic).
+// read_gltf runs with an empty base_dir, so only data: URIs and the GLB BIN chunk may supply
+// buffers: an accepted document whose buffers name an external URI is a bug (it read a file, or
+// silently dropped a buffer). Then every primitive must validate, flatten() must give a valid mesh,
+// and write_gltf (.glb in a per-process temporary folder) -> read_gltf must give back the same
+// primitives (minus those without a triangle, which the writer drops), positions bit for bit.
+// The shared oracle lives in fuzz_common.h.
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "fuzz_common.h"
+
+namespace {
+
+using namespace lod;
+using namespace lod::fuzz;
+
+// The JSON text of a .gltf, or the JSON chunk of a .glb (empty if the GLB header is unreadable).
+std::span<const uint8_t> json_text(std::span<const uint8_t> input) {
+  if (input.size() < 4 || std::memcmp(input.data(), "glTF", 4) != 0) return input;
+  if (input.size() < 20) return {};
+  uint32_t length = 0;
+  std::memcpy(&length, input.data() + 12, 4);
+  if (length > input.size() - 20) return {};
+  return input.subspan(20, length);
+}
+
+// The first buffer URI that is neither absent (GLB BIN chunk) nor a data: URI; empty if none.
+std::string external_buffer_uri(std::span<const uint8_t> input) {
+  const std::span<const uint8_t> text = json_text(input);
+  const nlohmann::json doc = nlohmann::json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
+  if (!doc.is_object() || !doc.contains("buffers") || !doc["buffers"].is_array()) return {};
+  for (const nlohmann::json& buffer : doc["buffers"]) {
+    if (!buffer.is_object() || !buffer.contains("uri") || !buffer["uri"].is_string()) continue;
+    const std::string& uri = buffer["uri"].get_ref<const std::string&>();
+    if (!uri.starts_with("data:")) return uri.empty() ? std::string("\"\"") : uri;
+  }
+  return {};
+}
+
+// A folder of our own for the round-trip file, removed when the process exits normally. Folders
+// left by processes that crashed or were killed are swept when the next one starts.
+class ScratchFolder {
+ public:
+  ScratchFolder() {
+    std::error_code ec;
+    const std::filesystem::path shm = "/dev/shm";
+    const std::filesystem::path parent = std::filesystem::is_directory(shm, ec) ? shm : std::filesystem::temp_directory_path();
+    const std::string prefix = "lodkit-fuzz-gltf-";
+    for (const auto& entry : std::filesystem::directory_iterator(parent, ec)) {
+      const std::string name = entry.path().filename().string();
+      if (name.starts_with(prefix) && !std::filesystem::exists("/proc/" + name.substr(prefix.size()), ec))
+        std::filesystem::remove_all(entry.path(), ec);
+    }
+    path_ = parent / (prefix + std::to_string(getpid()));
+    std::filesystem::create_directories(path_);
+  }
+  ~ScratchFolder() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+size_t total_vertices(const Scene& scene) {
+  size_t n = 0;
+  for (const Primitive& p : scene.primitives) n += p.mesh.vertex_count();
+  return n;
+}
+
+void check_flatten(const Scene& scene) {
+  // Instancing multiplies the vertices: flatten only scenes whose worst case stays small.
+  if (total_vertices(scene) * (scene.nodes.size() + 1) > 10 * max_round_trip_vertices) return;
+  const std::optional<Mesh> flat = run_step("gltf flatten", false, [&] { return flatten(scene); });
+  check_mesh(*flat, "gltf flatten");
+}
+
+void check_round_trip(const Scene& scene) {
+  static const ScratchFolder folder;
+  const std::string stage = "gltf round trip";
+  const std::filesystem::path file = folder.path() / "round-trip.glb";
+  run_step(stage + ": write", false, [&] {
+    write_gltf(scene, file);
+    return true;
+  });
+  const std::optional<std::vector<uint8_t>> bytes = run_step(stage + ": load", false, [&] { return read_file_bytes(file); });
+  std::error_code ec;
+  std::filesystem::remove(file, ec);
+  const std::optional<Scene> again =
+      run_step(stage + ": read back", false, [&] { return read_gltf(*bytes, "round-trip.glb", {}, checked_read_options(stage)); });
+  // The writer drops triangle primitives left without a triangle (glTF forbids empty accessors);
+  // every other primitive must come back, in order.
+  std::vector<size_t> kept;
+  for (size_t p = 0; p < scene.primitives.size(); ++p)
+    if (!scene.primitives[p].mesh.indices.empty()) kept.push_back(p);
+  if (again->primitives.size() != kept.size())
+    fail(stage, "primitive count changed from " + std::to_string(kept.size()) + " (with triangles) to " +
+                    std::to_string(again->primitives.size()));
+  for (size_t k = 0; k < kept.size(); ++k) {
+    const Primitive &before = scene.primitives[kept[k]], &after = again->primitives[k];
+    const std::string where = stage + ": primitive " + std::to_string(kept[k]);
+    check_mesh(after.mesh, where + " read back");
+    if (after.material != before.material)
+      fail(where, "material changed from " + std::to_string(before.material) + " to " + std::to_string(after.material));
+    require_same_geometry(before.mesh, after.mesh, Exactness::bits, where);
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::span<const uint8_t> input(data, size);
+  const std::string stage = "gltf read";
+  const std::optional<Scene> scene =
+      run_step(stage, true, [&] { return read_gltf(input, "fuzz.gltf", {}, checked_read_options(stage)); });
+  if (!scene) return 0;
+  if (const std::string uri = external_buffer_uri(input); !uri.empty())
+    fail(stage, "accepted a buffer with the external URI '" + uri.substr(0, 200) + "' although base_dir is empty");
+  for (size_t p = 0; p < scene->primitives.size(); ++p) check_mesh(scene->primitives[p].mesh, stage + ": primitive " + std::to_string(p));
+  check_flatten(*scene);
+  if (total_vertices(*scene) > max_round_trip_vertices) return 0;
+  check_round_trip(*scene);
+  return 0;
+}
