@@ -105,7 +105,7 @@ Mesh read_off(std::span<const uint8_t> bytes, const std::string& name, const Rea
     in.skip_empty_lines('#');
     if (in.at_end()) in.fail("unexpected end of file: expected face " + std::to_string(f) + " of " + std::to_string(face_count));
     const uint64_t corners = in.read_uint("the face's vertex count");
-    if (auto problem = io::polygon_size_problem("face " + std::to_string(f), corners); !problem.empty()) in.fail(problem);
+    if (corners < 3 || corners > io::max_face_corners) in.fail(io::polygon_size_problem("face " + std::to_string(f), corners));
     polygon.clear();
     for (uint64_t i = 0; i < corners; ++i) {
       int64_t index = in.read_int("a vertex index");

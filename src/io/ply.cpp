@@ -95,19 +95,16 @@ class BinarySource {
     const size_t n = type_size(t);
     last_ = p_;
     if (size_t(end_ - p_) < n) fail(std::string("unexpected end of file, expected a ") + type_name(t) + " value");
-    uint8_t raw[8];
-    std::memcpy(raw, p_, n);
-    if (swap_) std::reverse(raw, raw + n);
     p_ += n;
     switch (t) {
-      case Type::i8: return load<int8_t>(raw);
-      case Type::u8: return load<uint8_t>(raw);
-      case Type::i16: return load<int16_t>(raw);
-      case Type::u16: return load<uint16_t>(raw);
-      case Type::i32: return load<int32_t>(raw);
-      case Type::u32: return load<uint32_t>(raw);
-      case Type::f32: return load<float>(raw);
-      default: return load<double>(raw);
+      case Type::i8: return load<int8_t>(last_);
+      case Type::u8: return load<uint8_t>(last_);
+      case Type::i16: return load<int16_t>(last_);
+      case Type::u16: return load<uint16_t>(last_);
+      case Type::i32: return load<int32_t>(last_);
+      case Type::u32: return load<uint32_t>(last_);
+      case Type::f32: return load<float>(last_);
+      default: return load<double>(last_);
     }
   }
   void skip(uint64_t bytes) {
@@ -116,17 +113,29 @@ class BinarySource {
     p_ += bytes;
   }
   uint64_t remaining() const { return uint64_t(end_ - p_); }
+  // `bytes` bytes at the cursor, consumed; the caller has checked they exist.
+  const uint8_t* take_block(uint64_t bytes) {
+    last_ = p_;
+    p_ += bytes;
+    return last_;
+  }
+  [[noreturn]] void fail_at(const uint8_t* at, const std::string& what) const {
+    throw_bad_input_at_byte(name_, size_t(at - begin_), what);
+  }
+  template <class T>
+  double load(const uint8_t* p) const {
+    uint8_t raw[sizeof(T)];
+    std::memcpy(raw, p, sizeof(T));
+    if (swap_) std::reverse(raw, raw + sizeof(T));
+    T v;
+    std::memcpy(&v, raw, sizeof(T));
+    return double(v);
+  }
   double fraction() const { return double(p_ - begin_) / double(std::max<ptrdiff_t>(1, end_ - begin_)); }
   // Errors point at the start of the value just read (or that could not be read).
   [[noreturn]] void fail(const std::string& what) const { throw_bad_input_at_byte(name_, size_t(last_ - begin_), what); }
 
  private:
-  template <class T>
-  static double load(const uint8_t* raw) {
-    T v;
-    std::memcpy(&v, raw, sizeof v);
-    return double(v);
-  }
   static const char* type_name(Type t) {
     constexpr const char* names[] = {"char", "uchar", "short", "ushort", "int", "uint", "float", "double"};
     return names[size_t(t)];
@@ -282,6 +291,63 @@ void bind_vertex_properties(Element& e, Mesh& mesh, const io::TextReader& in) {
     throw_bad_input_at_line(in.name(), e.line, "skin joints (joint0..3) and weights (weight0..3) must come together");
 }
 
+// Binary element without lists (vertices, nearly always): every record has the same size, so the
+// block is bounds-checked once and each mapped property decoded as one typed column.
+template <class T>
+void decode_column(BinarySource& src, const uint8_t* block, uint64_t count, uint64_t record, uint64_t offset,
+                   const Property& p, const std::string& element) {
+  for (uint64_t r = 0; r < count; ++r) {
+    const uint8_t* at = block + r * record + offset;
+    const double v = src.load<T>(at);
+    if (p.target == Target::joint) {
+      if (!(v >= 0 && v <= 65535)) src.fail_at(at, element + " " + std::to_string(r) + ": joint index outside 0..65535");
+      p.ushorts[r * p.stride] = uint16_t(v);
+    } else {
+      const float f = float(v * p.scale);
+      if (!std::isfinite(f)) src.fail_at(at, element + " " + std::to_string(r) + ": property '" + p.name + "' is not a finite number");
+      p.floats[r * p.stride] = f;
+    }
+  }
+}
+
+bool has_lists(const Element& e) {
+  return std::any_of(e.properties.begin(), e.properties.end(), [](const Property& p) { return p.list; });
+}
+
+void read_fixed_element(BinarySource& src, const Element& e) {
+  const uint64_t record = e.min_record_bytes(false);
+  if (e.count > src.remaining() / record)
+    src.fail("element '" + e.name + "' needs " + std::to_string(e.count) + " records of " + std::to_string(record) +
+             " bytes, the file ends first");
+  const uint8_t* block = src.take_block(e.count * record);
+  uint64_t offset = 0;
+  for (const Property& p : e.properties) {
+    if (p.target == Target::float_stream || p.target == Target::color || p.target == Target::joint) {
+      switch (p.type) {
+        case Type::i8: decode_column<int8_t>(src, block, e.count, record, offset, p, e.name); break;
+        case Type::u8: decode_column<uint8_t>(src, block, e.count, record, offset, p, e.name); break;
+        case Type::i16: decode_column<int16_t>(src, block, e.count, record, offset, p, e.name); break;
+        case Type::u16: decode_column<uint16_t>(src, block, e.count, record, offset, p, e.name); break;
+        case Type::i32: decode_column<int32_t>(src, block, e.count, record, offset, p, e.name); break;
+        case Type::u32: decode_column<uint32_t>(src, block, e.count, record, offset, p, e.name); break;
+        case Type::f32: decode_column<float>(src, block, e.count, record, offset, p, e.name); break;
+        case Type::f64: decode_column<double>(src, block, e.count, record, offset, p, e.name); break;
+      }
+    }
+    offset += type_size(p.type);
+  }
+}
+
+// One face corner, range-checked against the vertex count.
+template <class Source>
+uint32_t read_index(Source& src, uint64_t face, uint64_t vertex_count, Type type) {
+  const double index = src.value(type);
+  if (!(index >= 0 && index < double(vertex_count)))
+    src.fail("face " + std::to_string(face) + ": vertex index " + std::to_string(int64_t(index)) + " is outside 0.." +
+             std::to_string(vertex_count ? vertex_count - 1 : 0));
+  return uint32_t(index);
+}
+
 // Reads every record of one element from `src`: vertex values land in their streams, face corners
 // are range-checked and triangulated, everything else is consumed and dropped.
 template <class Source>
@@ -308,14 +374,15 @@ void read_element(Source& src, const Element& e, bool is_face, uint64_t vertex_c
           }
           continue;
         }
-        if (auto problem = io::polygon_size_problem("face " + std::to_string(r), n); !problem.empty()) src.fail(problem);
+        if (n < 3 || n > io::max_face_corners) src.fail(io::polygon_size_problem("face " + std::to_string(r), n));
+        if (n == 3) {  // the common case, without the polygon buffer
+          // push_back, not a range insert: that one calls memmove per triangle.
+          for (int k = 0; k < 3; ++k) mesh.indices.push_back(read_index(src, r, vertex_count, p.type));
+          continue;
+        }
         polygon.clear();
         for (uint64_t i = 0; i < n; ++i) {
-          const double index = src.value(p.type);
-          if (!(index >= 0 && index < double(vertex_count)))
-            src.fail("face " + std::to_string(r) + ": vertex index " + std::to_string(int64_t(index)) + " is outside 0.." +
-                     std::to_string(vertex_count ? vertex_count - 1 : 0));
-          polygon.push_back(uint32_t(index));
+          polygon.push_back(read_index(src, r, vertex_count, p.type));
         }
         io::append_fan(mesh.indices, polygon);
         continue;
@@ -398,6 +465,7 @@ Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const Rea
     // A second vertex or face element is read but dropped, like any unknown element.
     const bool is_face = &e == face;
     if (ascii) read_element(text, e, is_face, vertex->count, mesh, options);
+    else if (!has_lists(e)) read_fixed_element(binary, e);
     else read_element(binary, e, is_face, vertex->count, mesh, options);
   }
   return mesh;
