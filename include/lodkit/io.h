@@ -23,6 +23,9 @@ const char* format_name(FileFormat format);
 struct ReadOptions {
   // Called now and then with the fraction of the input consumed, in [0, 1]. May be empty.
   std::function<void(double fraction)> progress;
+  // Worker threads a reader may use (OBJ parses pieces of a large file in parallel); 0 means one per
+  // hardware thread. The result never depends on it.
+  unsigned threads = 0;
 };
 
 struct WriteOptions {

@@ -46,7 +46,11 @@ std::vector<uint8_t> read_file_bytes(const std::filesystem::path& path) {
 
 void write_file_atomic(const std::filesystem::path& path, std::span<const uint8_t> bytes) {
   const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-  std::string tmpl = (dir / ("." + path.filename().string() + ".tmp.XXXXXX")).string();
+  // Built by appends: GCC 12 warns falsely (-Wrestrict) on "." + std::string&&.
+  std::string hidden = ".";
+  hidden += path.filename().string();
+  hidden += ".tmp.XXXXXX";
+  std::string tmpl = (dir / hidden).string();
   int fd = ::mkstemp(tmpl.data());
   if (fd < 0) throw_bad_input(path.string(), "cannot create a temporary file in " + dir.string() + ": " + errno_text());
   size_t done = 0;

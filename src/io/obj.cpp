@@ -5,9 +5,16 @@
 // Vertices: a file whose faces use positions only keeps its `v` list as the vertex list, in file
 // order. Otherwise every distinct (v, vt, vn) triple becomes one vertex, in order of first use.
 // The writer emits the same layout back, so read -> write -> read is exact.
+//
+// Indices: positive ones may point anywhere in the file (forward references are accepted, as most
+// readers do); negative ones count back from the statement. Large files are parsed in pieces on
+// several threads and joined in file order, so the mesh is the same for any thread count.
 #include <algorithm>
+#include <cstring>
+#include <exception>
 #include <limits>
 #include <string>
+#include <thread>
 #include <unordered_map>
 
 #include "io/text_reader.h"
@@ -49,37 +56,78 @@ const char* parse_index(const char* p, const char* end, int64_t& value) {
   return p;
 }
 
-// Resolves an OBJ index (1-based, or negative = relative to the `count` defined so far) to 0-based.
-uint32_t resolve(int64_t index, size_t count, io::TextReader& in, const char* what) {
-  int64_t r = index > 0 ? index - 1 : int64_t(count) + index;
-  if (index == 0 || r < 0 || r >= int64_t(count))
-    in.fail(std::string(what) + " index " + std::to_string(index) + " is out of range (" + std::to_string(count) +
-            " defined so far)");
-  return uint32_t(r);
-}
-
 struct Corner {
   uint32_t v, vt, vn;
 };
 
-}  // namespace
+enum Kind { kind_v, kind_vt, kind_vn };
+constexpr const char* kind_names[] = {"vertex", "texture coordinate", "normal"};
 
-Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options) {
-  io::TextReader in(bytes, name, &options);
-  in.set_comment('#');
-  if (bytes.empty()) in.fail("empty file, expected OBJ statements");
+// An index relative to its chunk's first v/vt/vn, resolved when the chunks are joined.
+constexpr uint32_t chunk_local = 0x80000000u;
+
+// How one chunk resolves its indices. First pass (`known` false): chunks run in parallel without
+// knowing how many v/vt/vn come before them, so positive indices are kept as they are and negative
+// ones become chunk-local. Checking pass (`known` true): the counts before the chunk and in the
+// whole file are known, every index is resolved and range-checked at its line. It re-runs a chunk
+// whose indices failed the join, so that the error names the line.
+struct Counts {
+  uint64_t n[3] = {0, 0, 0};
+};
+struct Resolve {
+  bool known = false;
+  Counts before, total;
+};
+
+// A material or group statement, at the triangle it precedes (chunk-local).
+struct Event {
+  size_t triangle;
+  bool material;
+  std::string name;
+};
+
+// What one chunk of lines holds.
+struct Chunk {
   std::vector<float3> positions;
-  std::vector<float4> position_colors;  // the "v x y z r g b" extension
+  std::vector<float4> colors;  // empty, or one per position (white where a v line had none)
   std::vector<float2> texcoords;
   std::vector<float3> normals;
-  std::vector<Corner> corners;  // 3 per triangle, resolved to 0-based pool indices
+  std::vector<Corner> corners;  // 3 per triangle
+  std::vector<Event> events;
   bool any_texcoord = false, any_normal = false;
-  NameTable materials, groups;
-  std::vector<uint32_t> triangle_material, triangle_group;
-  bool has_materials = false, has_groups = false;
-  uint32_t current_material = absent, current_group = absent;
-  std::vector<Corner> polygon;
+  bool local_refs = false;  // holds chunk_local indices
+  uint64_t lines = 0;
+  std::exception_ptr error;
+  Counts counts() const { return {{positions.size(), texcoords.size(), normals.size()}}; }
+};
 
+uint32_t resolve(int64_t index, Kind kind, uint64_t defined, const Resolve& r, Chunk& chunk, io::TextReader& in) {
+  if (index == 0) in.fail(std::string(kind_names[kind]) + " index 0 is invalid: OBJ indices start at 1");
+  if (r.known) {
+    // Positive indices may point forward, anywhere in the file; negative ones count back from here.
+    const int64_t g = index > 0 ? index - 1 : int64_t(r.before.n[kind] + defined) + index;
+    if (g < 0 || uint64_t(g) >= r.total.n[kind])
+      in.fail(std::string(kind_names[kind]) + " index " + std::to_string(index) + " is out of range (" +
+              std::to_string(r.total.n[kind]) + " in the file, " + std::to_string(r.before.n[kind] + defined) +
+              " defined so far)");
+    return uint32_t(g);
+  }
+  if (index > 0) {
+    if (uint64_t(index) > chunk_local - 1) in.fail(std::string(kind_names[kind]) + " index " + std::to_string(index) + " is too large");
+    return uint32_t(index - 1);
+  }
+  // Negative: relative to what this chunk has defined; one that reaches into an earlier chunk is
+  // left to the checking pass (flagged by an impossible value).
+  const int64_t local = int64_t(defined) + index;
+  chunk.local_refs = true;
+  return local >= 0 && local < int64_t(chunk_local - 1) ? chunk_local | uint32_t(local) : absent - 1;
+}
+
+void parse_chunk(std::span<const uint8_t> bytes, const std::string& name, uint64_t first_line, const ReadOptions* options,
+                 const Resolve& r, Chunk& chunk) {
+  io::TextReader in(bytes, name, options, first_line);
+  in.set_comment('#');
+  std::vector<Corner> polygon;
   while (!in.at_end()) {
     std::string_view key = in.token();
     if (key.empty()) {
@@ -88,14 +136,14 @@ Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const Rea
     }
     if (key == "v") {
       float x = in.read_float("x"), y = in.read_float("y"), z = in.read_float("z");
-      positions.push_back({x, y, z});
+      chunk.positions.push_back({x, y, z});
       float extra[4];
       int n = 0;
       while (n < 4 && in.try_read_float(extra[n])) ++n;
       // 4 values: a homogeneous w (ignored); 6: r g b colours; 7: r g b a.
       if (n == 3 || n == 4) {
-        if (position_colors.size() + 1 < positions.size()) position_colors.resize(positions.size() - 1, {1, 1, 1, 1});
-        position_colors.push_back({extra[0], extra[1], extra[2], n == 4 ? extra[3] : 1.0f});
+        chunk.colors.resize(chunk.positions.size() - 1, {1, 1, 1, 1});
+        chunk.colors.push_back({extra[0], extra[1], extra[2], n == 4 ? extra[3] : 1.0f});
       } else if (n > 1) {
         in.fail("a vertex has " + std::to_string(3 + n) + " values; expected x y z [w] or x y z r g b [a]");
       }
@@ -104,10 +152,10 @@ Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const Rea
       float v = 0, w;
       in.try_read_float(v);
       in.try_read_float(w);
-      texcoords.push_back({u, v});
+      chunk.texcoords.push_back({u, v});
     } else if (key == "vn") {
       float x = in.read_float("x"), y = in.read_float("y"), z = in.read_float("z");
-      normals.push_back({x, y, z});
+      chunk.normals.push_back({x, y, z});
     } else if (key == "f") {
       polygon.clear();
       for (;;) {
@@ -118,19 +166,19 @@ Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const Rea
         Corner c{absent, absent, absent};
         p = parse_index(p, e, iv);
         if (!p) in.fail("bad face corner '" + std::string(t.substr(0, 40)) + "', expected v, v/vt, v//vn or v/vt/vn");
-        c.v = resolve(iv, positions.size(), in, "vertex");
+        c.v = resolve(iv, kind_v, chunk.positions.size(), r, chunk, in);
         if (p < e && *p == '/') {
           ++p;
           if (p < e && *p != '/') {
             p = parse_index(p, e, it);
             if (!p) in.fail("bad texture index in '" + std::string(t.substr(0, 40)) + "'");
-            c.vt = resolve(it, texcoords.size(), in, "texture coordinate");
+            c.vt = resolve(it, kind_vt, chunk.texcoords.size(), r, chunk, in);
           }
           if (p < e && *p == '/') {
             ++p;
             p = parse_index(p, e, in_);
             if (!p) in.fail("bad normal index in '" + std::string(t.substr(0, 40)) + "'");
-            c.vn = resolve(in_, normals.size(), in, "normal");
+            c.vn = resolve(in_, kind_vn, chunk.normals.size(), r, chunk, in);
           }
         }
         if (p != e) in.fail("bad face corner '" + std::string(t.substr(0, 40)) + "'");
@@ -138,27 +186,10 @@ Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const Rea
         polygon.push_back(c);
       }
       if (polygon.size() < 3) in.fail(io::polygon_size_problem("face", polygon.size()));
-      if (has_materials && current_material == absent) current_material = materials.id("");
-      if (has_groups && current_group == absent) current_group = groups.id("");
-      for (const Corner& c : polygon) any_texcoord |= c.vt != absent, any_normal |= c.vn != absent;
-      io::append_fan(corners, polygon);
-      if (has_materials) triangle_material.resize(corners.size() / 3, current_material);
-      if (has_groups) triangle_group.resize(corners.size() / 3, current_group);
-    } else if (key == "usemtl") {
-      std::string_view m = in.rest_of_line();
-      if (!has_materials) {
-        // Faces before the first usemtl get the unnamed material.
-        has_materials = true;
-        if (!corners.empty()) triangle_material.assign(corners.size() / 3, materials.id(""));
-      }
-      current_material = materials.id(m);
-    } else if (key == "g" || key == "o") {
-      std::string_view g = in.rest_of_line();
-      if (!has_groups) {
-        has_groups = true;
-        if (!corners.empty()) triangle_group.assign(corners.size() / 3, groups.id(""));
-      }
-      current_group = groups.id(g);
+      for (const Corner& c : polygon) chunk.any_texcoord |= c.vt != absent, chunk.any_normal |= c.vn != absent;
+      io::append_fan(chunk.corners, polygon);
+    } else if (key == "usemtl" || key == "g" || key == "o") {
+      chunk.events.push_back({chunk.corners.size() / 3, key == "usemtl", std::string(in.rest_of_line())});
     } else if (key.starts_with('#')) {
       // comment line
     } else if (key == "vp" || key == "s" || key == "l" || key == "p" || key == "mtllib" || key == "usemap" ||
@@ -173,40 +204,112 @@ Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const Rea
     }
     in.next_line();
   }
+  chunk.lines = in.line() - first_line;
+}
+
+// Splits the file after newlines into pieces of about equal size, one per thread.
+std::vector<std::span<const uint8_t>> split_lines(std::span<const uint8_t> bytes, unsigned threads) {
+  constexpr size_t min_chunk = size_t(1) << 20;  // below this, a thread costs more than it saves
+  const size_t pieces = std::max<size_t>(1, std::min<size_t>(threads, bytes.size() / min_chunk));
+  std::vector<std::span<const uint8_t>> chunks;
+  size_t begin = 0;
+  for (size_t k = 1; k <= pieces && begin < bytes.size(); ++k) {
+    size_t end = k == pieces ? bytes.size() : std::max(begin, bytes.size() * k / pieces);
+    const auto* nl = static_cast<const uint8_t*>(std::memchr(bytes.data() + end, '\n', bytes.size() - end));
+    end = k == pieces || !nl ? bytes.size() : size_t(nl - bytes.data()) + 1;
+    chunks.push_back(bytes.subspan(begin, end - begin));
+    begin = end;
+  }
+  return chunks;
+}
+
+// Joins the parsed chunks, in file order, into one mesh (indices already global).
+Mesh join_chunks(std::vector<Chunk>& chunks, const Counts& total) {
+  std::vector<float3> positions, normals;
+  std::vector<float2> texcoords;
+  std::vector<float4> colors;
+  positions.reserve(total.n[kind_v]);
+  texcoords.reserve(total.n[kind_vt]);
+  normals.reserve(total.n[kind_vn]);
+  const bool any_color = std::any_of(chunks.begin(), chunks.end(), [](const Chunk& c) { return !c.colors.empty(); });
+  bool any_texcoord = false, any_normal = false;
+  size_t corner_count = 0;
+  for (Chunk& c : chunks) {
+    positions.insert(positions.end(), c.positions.begin(), c.positions.end());
+    texcoords.insert(texcoords.end(), c.texcoords.begin(), c.texcoords.end());
+    normals.insert(normals.end(), c.normals.begin(), c.normals.end());
+    if (any_color) {
+      c.colors.resize(c.positions.size(), {1, 1, 1, 1});
+      colors.insert(colors.end(), c.colors.begin(), c.colors.end());
+    }
+    any_texcoord |= c.any_texcoord, any_normal |= c.any_normal;
+    corner_count += c.corners.size();
+    c.positions = {}, c.texcoords = {}, c.normals = {}, c.colors = {};
+  }
+
+  // Materials and groups: ids in order of first use; faces before the first usemtl (g/o) get the
+  // unnamed one.
+  NameTable materials, groups;
+  std::vector<uint32_t> triangle_material, triangle_group;
+  bool has_materials = false, has_groups = false;
+  uint32_t current_material = absent, current_group = absent;
+  size_t triangle_base = 0;
+  for (const Chunk& c : chunks) {
+    for (const Event& e : c.events) {
+      const size_t t = triangle_base + e.triangle;
+      bool& has = e.material ? has_materials : has_groups;
+      NameTable& table = e.material ? materials : groups;
+      std::vector<uint32_t>& per_triangle = e.material ? triangle_material : triangle_group;
+      uint32_t& current = e.material ? current_material : current_group;
+      if (!has) {
+        has = true;
+        if (t > 0) per_triangle.assign(t, table.id(""));
+      }
+      per_triangle.resize(t, current);
+      current = table.id(e.name);
+    }
+    triangle_base += c.corners.size() / 3;
+  }
+  if (has_materials) triangle_material.resize(triangle_base, current_material);
+  if (has_groups) triangle_group.resize(triangle_base, current_group);
 
   Mesh mesh;
-  if (!position_colors.empty()) position_colors.resize(positions.size(), {1, 1, 1, 1});
+  mesh.indices.reserve(corner_count);
   if (!any_texcoord && !any_normal) {
     // Positions only: the v list is the vertex list.
     mesh.positions = std::move(positions);
-    mesh.colors = std::move(position_colors);
-    mesh.indices.reserve(corners.size());
-    for (const Corner& c : corners) mesh.indices.push_back(c.v);
+    mesh.colors = std::move(colors);
+    for (Chunk& c : chunks) {
+      for (const Corner& corner : c.corners) mesh.indices.push_back(corner.v);
+      c.corners = {};
+    }
   } else {
     // One vertex per distinct (v, vt, vn), found through a chain of the vertices made from each v.
     std::vector<uint32_t> first_of_position(positions.size(), absent), next_same_position;
     std::vector<Corner> vertex_corner;
-    mesh.indices.reserve(corners.size());
-    for (const Corner& c : corners) {
-      uint32_t v = first_of_position[c.v];
-      while (v != absent && (vertex_corner[v].vt != c.vt || vertex_corner[v].vn != c.vn)) v = next_same_position[v];
-      if (v == absent) {
-        v = uint32_t(vertex_corner.size());
-        vertex_corner.push_back(c);
-        next_same_position.push_back(first_of_position[c.v]);
-        first_of_position[c.v] = v;
+    for (Chunk& chunk : chunks) {
+      for (const Corner& c : chunk.corners) {
+        uint32_t v = first_of_position[c.v];
+        while (v != absent && (vertex_corner[v].vt != c.vt || vertex_corner[v].vn != c.vn)) v = next_same_position[v];
+        if (v == absent) {
+          v = uint32_t(vertex_corner.size());
+          vertex_corner.push_back(c);
+          next_same_position.push_back(first_of_position[c.v]);
+          first_of_position[c.v] = v;
+        }
+        mesh.indices.push_back(v);
       }
-      mesh.indices.push_back(v);
+      chunk.corners = {};
     }
     const size_t n = vertex_corner.size();
     mesh.positions.resize(n);
-    if (!position_colors.empty()) mesh.colors.resize(n);
+    if (any_color) mesh.colors.resize(n);
     if (any_texcoord) mesh.uvs[0].resize(n);
     if (any_normal) mesh.normals.resize(n);
     for (size_t v = 0; v < n; ++v) {
       const Corner& c = vertex_corner[v];
       mesh.positions[v] = positions[c.v];
-      if (!position_colors.empty()) mesh.colors[v] = position_colors[c.v];
+      if (any_color) mesh.colors[v] = colors[c.v];
       if (any_texcoord) mesh.uvs[0][v] = c.vt != absent ? texcoords[c.vt] : float2{};
       if (any_normal) mesh.normals[v] = c.vn != absent ? normals[c.vn] : float3{};
     }
@@ -220,6 +323,71 @@ Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const Rea
     mesh.group_names = groups.take_names();
   }
   return mesh;
+}
+
+}  // namespace
+
+Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options) {
+  if (bytes.empty()) throw_bad_input_at_line(name, 1, "empty file, expected OBJ statements");
+  // Parse chunks of lines in parallel, then join them in file order: the result does not depend on
+  // the number of threads. Only the first chunk reports progress (they advance at the same pace).
+  const unsigned threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  const auto pieces = split_lines(bytes, threads);
+  std::vector<Chunk> chunks(pieces.size());
+  auto run = [&](size_t k) {
+    try {
+      parse_chunk(pieces[k], name, 1, k == 0 ? &options : nullptr, {}, chunks[k]);
+    } catch (...) {
+      chunks[k].error = std::current_exception();
+    }
+  };
+  {
+    std::vector<std::jthread> workers;
+    for (size_t k = 1; k < pieces.size(); ++k) workers.emplace_back(run, k);
+    run(0);
+  }
+  // The first failing chunk in file order has the file's first error; parse it again knowing its
+  // first line number, so the message names the right line.
+  uint64_t line = 1;
+  Counts before, total;
+  for (size_t k = 0; k < chunks.size(); ++k) {
+    if (chunks[k].error) {
+      Chunk again;
+      parse_chunk(pieces[k], name, line, nullptr, {}, again);
+      std::rethrow_exception(chunks[k].error);  // not reached unless parsing is not repeatable
+    }
+    line += chunks[k].lines;
+    for (int i = 0; i < 3; ++i) total.n[i] += chunks[k].counts().n[i];
+  }
+  if (total.n[kind_v] > chunk_local - 1) throw_bad_input(name, "more than 2^31 vertices");
+
+  // Resolve chunk-local indices and check every index against the whole file; a chunk with a bad
+  // index is parsed again with the counts known, which throws at the offending line.
+  line = 1;
+  for (size_t k = 0; k < chunks.size(); ++k) {
+    Chunk& c = chunks[k];
+    bool bad = false;
+    for (Corner& corner : c.corners) {
+      uint32_t* parts[3] = {&corner.v, &corner.vt, &corner.vn};
+      for (int i = 0; i < 3; ++i) {
+        uint32_t& x = *parts[i];
+        if (x == absent) continue;
+        if (x == absent - 1) bad = true;                                       // reached into an earlier chunk
+        else if (x & chunk_local) x = uint32_t(before.n[i]) + (x & ~chunk_local);
+        if (x >= total.n[i]) bad = true;
+      }
+    }
+    if (bad) {
+      // The checking pass resolves relative indices that reached into earlier chunks, and throws at
+      // a line only when an index is really out of range.
+      Chunk again;
+      parse_chunk(pieces[k], name, line, nullptr, {true, before, total}, again);
+      c.corners = std::move(again.corners);
+    }
+    line += c.lines;
+    for (int i = 0; i < 3; ++i) before.n[i] += c.counts().n[i];
+  }
+  return join_chunks(chunks, total);
 }
 
 namespace {

@@ -19,9 +19,11 @@ namespace lod::io {
 // '\r' end lines.
 class TextReader {
  public:
-  TextReader(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions* options = nullptr)
+  // `first_line`: the line number of the first byte (a reader may parse a file in pieces).
+  TextReader(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions* options = nullptr,
+             uint64_t first_line = 1)
       : begin_(reinterpret_cast<const char*>(bytes.data())), p_(begin_), end_(begin_ + bytes.size()),
-        name_(name), options_(options) {}
+        name_(name), options_(options), line_(first_line) {}
 
   // Treat `c` as starting a comment that runs to the end of the line, even right after a token.
   void set_comment(char c) { comment_ = c; }
@@ -102,7 +104,7 @@ class TextReader {
   const char* end_;
   std::string name_;
   const ReadOptions* options_;
-  uint64_t line_ = 1;
+  uint64_t line_;
   char comment_ = 0;
 };
 

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "core/shapes.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
@@ -100,6 +102,52 @@ TEST(Obj, WriterSharesPositionsAcrossSeams) {
   size_t v_lines = 0;
   for (size_t i = 0; (i = text.find("\nv ", i)) != std::string::npos; ++i) ++v_lines;
   EXPECT_EQ(v_lines, 8u);  // one v per position, the seams carried by vt/vn
+}
+
+// A file of many small pieces (about 6 MB): every statement kind, relative indices that reach back
+// across the places where a parallel read splits the file, seams, groups and materials.
+std::string many_pieces(size_t pieces) {
+  std::string text = "f 1 2 3\n";  // a forward reference before any v: valid once the file defines them
+  for (size_t i = 0; i < pieces; ++i) {
+    const std::string k = std::to_string(i);
+    text += "v " + k + " 0 0\nv " + k + " 1 0 0.5 0.25 1\nv " + k + " 0 1\nvt 0." + k + " 1\nvn 0 0 1\n";
+    if (i % 97 == 0) text += "usemtl m" + std::to_string(i % 5) + "\n";
+    if (i % 89 == 0) text += "g part" + std::to_string(i % 7) + "\n";
+    // Absolute, relative, and relative reaching 3 pieces back (another chunk near a split).
+    text += "f " + std::to_string(3 * i + 1) + "/" + std::to_string(i + 1) + "/" + std::to_string(i + 1) + " -2/-1/-1 -1/-1/-1\n";
+    if (i >= 3) text += "f -12//-4 -11//-4 -1//-1 -2//-1\n";
+  }
+  return text;
+}
+
+TEST(Obj, ParallelReadIsIdenticalForEveryThreadCount) {
+  const std::string text = many_pieces(60000);
+  ASSERT_GT(text.size(), 4u << 20);
+  const Mesh one = read_obj(bytes_of(text), "pieces.obj", {.threads = 1});
+  EXPECT_EQ(one.triangle_count(), 1 + 60000 + 2 * (60000 - 3));
+  EXPECT_EQ(one.material_names.size(), 6u);  // "" for the faces before the first usemtl, then m0..m4
+  EXPECT_EQ(one.group_names.size(), 8u);
+  for (unsigned threads : {2u, 3u, 4u, 7u}) {
+    SCOPED_TRACE(threads);
+    EXPECT_EQ(test::mesh_difference(read_obj(bytes_of(text), "pieces.obj", {.threads = threads}), one), "");
+  }
+}
+
+TEST(Obj, ParallelReadReportsTheLineOfTheFirstError) {
+  std::string text = many_pieces(60000);
+  // Count lines up to an error placed late in the file (it lands in the last chunk).
+  const size_t late = text.rfind("f ", text.size() - 100);
+  const std::string before = text.substr(0, late);
+  const size_t line = size_t(std::count(before.begin(), before.end(), '\n')) + 1;
+  for (const char* bad : {"f 1 2 999999999\n", "f -1 -2 -999999\n", "f 1 2\n", "v 1 nan 2\n"}) {
+    SCOPED_TRACE(bad);
+    const std::string broken = before + bad + text.substr(late);
+    for (unsigned threads : {1u, 4u}) {
+      const std::string message = test::expect_bad_input(
+          [threads](auto b, const auto& n) { read_obj(b, n, {.threads = threads}); }, broken, "late.obj");
+      EXPECT_EQ(message.rfind("late.obj:" + std::to_string(line) + ":", 0), 0u) << message;
+    }
+  }
 }
 
 TEST(Obj, RejectsBadInput) {
