@@ -426,6 +426,8 @@ Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const Rea
   Element* vertex = nullptr;
   Element* face = nullptr;
   for (Element& e : elements) {
+    if (e.name == "vertex" && !vertex) vertex = &e;
+    if (e.name == "face" && !face) face = &e;
     const uint64_t record = e.min_record_bytes(ascii);
     if (record == 0) continue;
     if (e.count > budget / record)
@@ -433,8 +435,6 @@ Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const Rea
                               "element '" + e.name + "' declares " + std::to_string(e.count) + " records, more than the " +
                                   std::to_string(in.remaining()) + " data bytes can hold");
     budget -= e.count * record;
-    if (e.name == "vertex" && !vertex) vertex = &e;
-    if (e.name == "face" && !face) face = &e;
   }
   if (!vertex) in.fail("the header declares no 'vertex' element");
   if (vertex->count > UINT32_MAX) throw_bad_input_at_line(name, vertex->line, "more than 2^32 - 1 vertices");
@@ -492,8 +492,9 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options) 
   out += '\n';
   // One list of float components per vertex, in header order; joints are written separately.
   std::vector<std::pair<const float*, size_t>> streams;  // (component 0 of vertex 0, stride)
+  // Positions are always declared, so even an empty mesh reads back.
   auto declare = [&](const auto& stream, size_t components, std::initializer_list<const char*> names) {
-    if (stream.empty()) return;
+    if (stream.empty() && static_cast<const void*>(&stream) != &mesh.positions) return;
     size_t c = 0;
     for (const char* n : names) {
       out += "property float ";

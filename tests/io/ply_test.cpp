@@ -135,6 +135,12 @@ TEST(Ply, AFileWithoutFacesIsAPointSet) {
                     "property list uchar int vertex_indices\nend_header\n");
   EXPECT_EQ(empty.vertex_count(), 0u);
   EXPECT_TRUE(empty.colors.empty());
+  // An empty mesh written and read back (found by fuzz_ply: x, y, z were not declared).
+  for (bool binary : {true, false}) {
+    std::string out;
+    write_ply(Mesh{}, out, {.binary = binary});
+    EXPECT_EQ(read_ply(bytes_of(out), "empty.ply").vertex_count(), 0u);
+  }
 }
 
 TEST(Ply, RejectsBadInput) {
