@@ -96,6 +96,7 @@ struct Scene {
   uint32_t image_count = 0;
   uint32_t texture_count = 0;
   std::shared_ptr<const GltfSource> source;  // non-null when read from glTF
+  std::string name;                           // the file it was read from, for messages
 };
 
 // ---- files --------------------------------------------------------------------------------------

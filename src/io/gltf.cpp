@@ -1423,6 +1423,7 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
   document.validate();
   Scene scene = SceneBuilder(document).build();
   scene.source = std::move(source);
+  scene.name = name;
   if (options.progress) options.progress(1.0);
   return scene;
 }

@@ -152,10 +152,17 @@ Mesh flatten(const Scene& scene) {
     if (identity) {
       out.positions.insert(out.positions.end(), mesh.positions.begin(), mesh.positions.end());
     } else {
-      for (const float3& p : mesh.positions)
-        out.positions.push_back({float(m[0] * p.x + m[4] * p.y + m[8] * p.z + m[12]),
-                                 float(m[1] * p.x + m[5] * p.y + m[9] * p.z + m[13]),
-                                 float(m[2] * p.x + m[6] * p.y + m[10] * p.z + m[14])});
+      for (const float3& p : mesh.positions) {
+        const float3 q = {float(m[0] * p.x + m[4] * p.y + m[8] * p.z + m[12]),
+                          float(m[1] * p.x + m[5] * p.y + m[9] * p.z + m[13]),
+                          float(m[2] * p.x + m[6] * p.y + m[10] * p.z + m[14])};
+        // Finite inputs can still overflow float under a large node scale.
+        if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z))
+          throw_bad_input(scene.name.empty() ? std::string("scene") : scene.name,
+                          "node transforms take a position of mesh primitive " + std::to_string(inst.primitive) +
+                              " beyond the float range");
+        out.positions.push_back(q);
+      }
     }
     if (normals) {
       if (identity) {

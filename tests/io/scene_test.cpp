@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/shapes.h"
+#include "lodkit/error.h"
 #include "lodkit/io.h"
 #include "test_support.h"
 
@@ -60,6 +61,27 @@ TEST(SceneFlatten, AppliesParentTimesLocal) {
   EXPECT_EQ(m.tangents[0], (float4{1, 0, 0, 1}));
   EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2}));
   EXPECT_TRUE(m.materials.empty());
+}
+
+// Found by fuzz_gltf: finite positions under a large node scale overflow float.
+TEST(SceneFlatten, OverflowingTransformIsBadInput) {
+  Scene scene;
+  scene.name = "huge.gltf";
+  Mesh big = unit_triangle();
+  big.positions[1].x = 3e38f;
+  scene.primitives.push_back(primitive(big));
+  Node node;
+  node.scale = {5121, 1, 1};
+  node.mesh = 0;
+  scene.nodes = {node};
+  scene.roots = {0};
+  try {
+    flatten(scene);
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.category(), ErrorCategory::bad_input);
+    EXPECT_EQ(std::string(e.what()).rfind("huge.gltf:", 0), 0u) << e.what();
+  }
 }
 
 TEST(SceneFlatten, MatrixNodesAndRotation) {
