@@ -78,8 +78,9 @@ size_t total_vertices(const Scene& scene) {
 void check_flatten(const Scene& scene) {
   // Instancing multiplies the vertices: flatten only scenes whose worst case stays small.
   if (total_vertices(scene) * (scene.nodes.size() + 1) > 10 * max_round_trip_vertices) return;
-  const std::optional<Mesh> flat = run_step("gltf flatten", false, [&] { return flatten(scene); });
-  check_mesh(*flat, "gltf flatten");
+  // flatten may refuse a scene whose node transforms overflow float, but only as bad input.
+  const std::optional<Mesh> flat = run_step("gltf flatten", true, [&] { return flatten(scene); });
+  if (flat) check_mesh(*flat, "gltf flatten");
 }
 
 void check_round_trip(const Scene& scene) {

@@ -500,7 +500,9 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options) 
       out += "property float ";
       out += n;
       out += '\n';
-      streams.emplace_back(reinterpret_cast<const float*>(stream.data()) + c++, components);
+      // No pointer arithmetic on an empty stream's null data (there are no vertices to write then).
+      if (!stream.empty()) streams.emplace_back(reinterpret_cast<const float*>(stream.data()) + c, components);
+      ++c;
     }
   };
   declare(mesh.positions, 3, {"x", "y", "z"});
