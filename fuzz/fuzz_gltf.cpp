@@ -91,7 +91,10 @@ void check_round_trip(const Scene& scene) {
     write_gltf(scene, file);
     return true;
   });
-  const std::optional<std::vector<uint8_t>> bytes = run_step(stage + ": load", false, [&] { return read_file_bytes(file); });
+  const std::optional<std::vector<uint8_t>> bytes = run_step(stage + ": load", false, [&] {
+    const FileBytes f = read_file_bytes(file);
+    return std::vector<uint8_t>(f.begin(), f.end());
+  });
   std::error_code ec;
   std::filesystem::remove(file, ec);
   const std::optional<Scene> again =

@@ -134,8 +134,33 @@ void write_stl(const Mesh& mesh, std::string& out, const WriteOptions& options =
 // glTF: `path` decides .gltf (JSON + a .bin beside it) or .glb; every file is written atomically.
 void write_gltf(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options = {});
 
-// Reads a whole file into memory; bad_input naming the path if it is missing, a directory or unreadable.
-std::vector<uint8_t> read_file_bytes(const std::filesystem::path& path);
+// A whole file's bytes, read-only: memory-mapped (no copy, no zero-fill: multi-gigabyte scans load
+// at page-cache speed), or read into memory when the file cannot be mapped. Move-only.
+class FileBytes {
+ public:
+  FileBytes() = default;
+  ~FileBytes();
+  FileBytes(FileBytes&& other) noexcept;
+  FileBytes& operator=(FileBytes&& other) noexcept;
+  FileBytes(const FileBytes&) = delete;
+  FileBytes& operator=(const FileBytes&) = delete;
+
+  const uint8_t* data() const { return data_; }
+  size_t size() const { return size_; }
+  const uint8_t* begin() const { return data_; }
+  const uint8_t* end() const { return data_ + size_; }
+  operator std::span<const uint8_t>() const { return {data_, size_}; }
+
+ private:
+  friend FileBytes read_file_bytes(const std::filesystem::path& path);
+  const uint8_t* data_ = nullptr;
+  size_t size_ = 0;
+  bool mapped_ = false;
+  std::vector<uint8_t> copy_;  // when not mapped
+};
+
+// Reads a whole file; bad_input naming the path if it is missing, a directory or unreadable.
+FileBytes read_file_bytes(const std::filesystem::path& path);
 // Atomic write: a temporary file in the same folder, then rename over `path`.
 void write_file_atomic(const std::filesystem::path& path, std::span<const uint8_t> bytes);
 void write_file_atomic(const std::filesystem::path& path, const std::string& bytes);

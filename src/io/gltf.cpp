@@ -268,7 +268,8 @@ bool read_whole_file(std::vector<unsigned char>* out, std::string* err, const st
     return false;
   }
   try {
-    *out = read_file_bytes(path);
+    const FileBytes bytes = read_file_bytes(path);
+    out->assign(bytes.begin(), bytes.end());
     return true;
   } catch (const std::exception& e) {
     if (err) *err = e.what();

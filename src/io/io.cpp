@@ -33,7 +33,7 @@ const char* format_name(FileFormat format) {
 
 Scene read_scene(const std::filesystem::path& path, const ReadOptions& options) {
   FileFormat format = format_from_path(path);
-  std::vector<uint8_t> bytes = read_file_bytes(path);
+  const FileBytes bytes = read_file_bytes(path);
   if (format == FileFormat::gltf || format == FileFormat::glb) {
     std::filesystem::path base = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
     return read_gltf(bytes, path.string(), base, options);
@@ -51,7 +51,7 @@ Scene read_scene(const std::filesystem::path& path, const ReadOptions& options) 
 Mesh read_mesh(const std::filesystem::path& path, const ReadOptions& options) {
   FileFormat format = format_from_path(path);
   if (format == FileFormat::gltf || format == FileFormat::glb) return flatten(read_scene(path, options));
-  std::vector<uint8_t> bytes = read_file_bytes(path);
+  const FileBytes bytes = read_file_bytes(path);
   switch (format) {
     case FileFormat::obj: return read_obj(bytes, path.string(), options);
     case FileFormat::ply: return read_ply(bytes, path.string(), options);

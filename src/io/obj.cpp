@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cstring>
 #include <exception>
+#include <functional>
 #include <limits>
 #include <string>
 #include <thread>
@@ -207,6 +208,13 @@ void parse_chunk(std::span<const uint8_t> bytes, const std::string& name, uint64
   chunk.lines = in.line() - first_line;
 }
 
+// Runs fn(0) .. fn(n - 1) at once, fn(0) on the calling thread. fn must not throw.
+void in_parallel(size_t n, const std::function<void(size_t)>& fn) {
+  std::vector<std::jthread> workers;
+  for (size_t k = 1; k < n; ++k) workers.emplace_back(fn, k);
+  if (n > 0) fn(0);
+}
+
 // Splits the file after newlines into pieces of about equal size, one per thread.
 std::vector<std::span<const uint8_t>> split_lines(std::span<const uint8_t> bytes, unsigned threads) {
   constexpr size_t min_chunk = size_t(1) << 20;  // below this, a thread costs more than it saves
@@ -274,19 +282,23 @@ Mesh join_chunks(std::vector<Chunk>& chunks, const Counts& total) {
   if (has_groups) triangle_group.resize(triangle_base, current_group);
 
   Mesh mesh;
-  mesh.indices.reserve(corner_count);
   if (!any_texcoord && !any_normal) {
     // Positions only: the v list is the vertex list.
     mesh.positions = std::move(positions);
     mesh.colors = std::move(colors);
-    for (Chunk& c : chunks) {
-      for (const Corner& corner : c.corners) mesh.indices.push_back(corner.v);
-      c.corners = {};
-    }
+    mesh.indices.resize(corner_count);
+    std::vector<size_t> offset(chunks.size() + 1, 0);
+    for (size_t k = 0; k < chunks.size(); ++k) offset[k + 1] = offset[k] + chunks[k].corners.size();
+    in_parallel(chunks.size(), [&](size_t k) {
+      uint32_t* out = mesh.indices.data() + offset[k];
+      for (const Corner& corner : chunks[k].corners) *out++ = corner.v;
+      chunks[k].corners = {};
+    });
   } else {
     // One vertex per distinct (v, vt, vn), found through a chain of the vertices made from each v.
     std::vector<uint32_t> first_of_position(positions.size(), absent), next_same_position;
     std::vector<Corner> vertex_corner;
+    mesh.indices.reserve(corner_count);
     for (Chunk& chunk : chunks) {
       for (const Corner& c : chunk.corners) {
         uint32_t v = first_of_position[c.v];
@@ -334,58 +346,51 @@ Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const Rea
   const unsigned threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
   const auto pieces = split_lines(bytes, threads);
   std::vector<Chunk> chunks(pieces.size());
-  auto run = [&](size_t k) {
+  in_parallel(chunks.size(), [&](size_t k) {
     try {
       parse_chunk(pieces[k], name, 1, k == 0 ? &options : nullptr, {}, chunks[k]);
     } catch (...) {
       chunks[k].error = std::current_exception();
     }
-  };
-  {
-    std::vector<std::jthread> workers;
-    for (size_t k = 1; k < pieces.size(); ++k) workers.emplace_back(run, k);
-    run(0);
-  }
+  });
   // The first failing chunk in file order has the file's first error; parse it again knowing its
   // first line number, so the message names the right line.
-  uint64_t line = 1;
-  Counts before, total;
+  std::vector<uint64_t> first_line(chunks.size() + 1, 1);
+  std::vector<Counts> before(chunks.size() + 1);
   for (size_t k = 0; k < chunks.size(); ++k) {
     if (chunks[k].error) {
       Chunk again;
-      parse_chunk(pieces[k], name, line, nullptr, {}, again);
+      parse_chunk(pieces[k], name, first_line[k], nullptr, {}, again);
       std::rethrow_exception(chunks[k].error);  // not reached unless parsing is not repeatable
     }
-    line += chunks[k].lines;
-    for (int i = 0; i < 3; ++i) total.n[i] += chunks[k].counts().n[i];
+    first_line[k + 1] = first_line[k] + chunks[k].lines;
+    for (int i = 0; i < 3; ++i) before[k + 1].n[i] = before[k].n[i] + chunks[k].counts().n[i];
   }
+  const Counts total = before.back();
   if (total.n[kind_v] > chunk_local - 1) throw_bad_input(name, "more than 2^31 vertices");
 
-  // Resolve chunk-local indices and check every index against the whole file; a chunk with a bad
-  // index is parsed again with the counts known, which throws at the offending line.
-  line = 1;
-  for (size_t k = 0; k < chunks.size(); ++k) {
-    Chunk& c = chunks[k];
-    bool bad = false;
-    for (Corner& corner : c.corners) {
+  // Resolve chunk-local indices and check every index against the whole file (in parallel); a chunk
+  // with a bad index is parsed again with the counts known, which throws at the offending line.
+  std::vector<char> bad(chunks.size(), 0);
+  in_parallel(chunks.size(), [&](size_t k) {
+    for (Corner& corner : chunks[k].corners) {
       uint32_t* parts[3] = {&corner.v, &corner.vt, &corner.vn};
       for (int i = 0; i < 3; ++i) {
         uint32_t& x = *parts[i];
         if (x == absent) continue;
-        if (x == absent - 1) bad = true;                                       // reached into an earlier chunk
-        else if (x & chunk_local) x = uint32_t(before.n[i]) + (x & ~chunk_local);
-        if (x >= total.n[i]) bad = true;
+        if (x == absent - 1) bad[k] = 1;  // reached into an earlier chunk
+        else if (x & chunk_local) x = uint32_t(before[k].n[i]) + (x & ~chunk_local);
+        if (x >= total.n[i]) bad[k] = 1;
       }
     }
-    if (bad) {
-      // The checking pass resolves relative indices that reached into earlier chunks, and throws at
-      // a line only when an index is really out of range.
-      Chunk again;
-      parse_chunk(pieces[k], name, line, nullptr, {true, before, total}, again);
-      c.corners = std::move(again.corners);
-    }
-    line += c.lines;
-    for (int i = 0; i < 3; ++i) before.n[i] += c.counts().n[i];
+  });
+  for (size_t k = 0; k < chunks.size(); ++k) {
+    if (!bad[k]) continue;
+    // The checking pass resolves relative indices that reached into earlier chunks, and throws at a
+    // line only when an index is really out of range.
+    Chunk again;
+    parse_chunk(pieces[k], name, first_line[k], nullptr, {true, before[k], total}, again);
+    chunks[k].corners = std::move(again.corners);
   }
   return join_chunks(chunks, total);
 }

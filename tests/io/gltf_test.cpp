@@ -144,7 +144,7 @@ struct Written {
   std::vector<uint8_t> bin;
 };
 
-uint32_t get_u32(const std::vector<uint8_t>& b, size_t at) {
+uint32_t get_u32(std::span<const uint8_t> b, size_t at) {
   return uint32_t(b[at]) | uint32_t(b[at + 1]) << 8 | uint32_t(b[at + 2]) << 16 | uint32_t(b[at + 3]) << 24;
 }
 
@@ -163,7 +163,7 @@ std::string uri_decode(const std::string& uri) {
 
 Written load_written(const std::filesystem::path& path) {
   Written w;
-  std::vector<uint8_t> bytes = read_file_bytes(path);
+  const FileBytes bytes = read_file_bytes(path);
   if (path.extension() == ".glb") {
     EXPECT_GE(bytes.size(), 20u);
     EXPECT_EQ(get_u32(bytes, 0), 0x46546C67u);
@@ -180,7 +180,10 @@ Written load_written(const std::filesystem::path& path) {
     }
   } else {
     w.doc = Json::parse(bytes.begin(), bytes.end());
-    if (w.doc.contains("buffers")) w.bin = read_file_bytes(path.parent_path() / uri_decode(w.doc["buffers"][0]["uri"]));
+    if (w.doc.contains("buffers")) {
+      const FileBytes bin = read_file_bytes(path.parent_path() / uri_decode(w.doc["buffers"][0]["uri"]));
+      w.bin.assign(bin.begin(), bin.end());
+    }
   }
   if (w.doc.contains("buffers")) {
     EXPECT_EQ(w.doc["buffers"].size(), 1u);
@@ -718,7 +721,7 @@ TEST(GltfRead, ExternalBinAndImagesResolveAgainstTheBaseDir) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "textures"));
 
   // Without a base dir only data: URIs and the GLB chunk are allowed.
-  const std::vector<uint8_t> bytes = read_file_bytes(dir / "external.gltf");
+  const FileBytes bytes = read_file_bytes(dir / "external.gltf");
   try {
     read_gltf(bytes, "no-base.gltf");
     FAIL() << "expected lod::Error";
