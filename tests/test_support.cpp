@@ -31,11 +31,14 @@ TempDir::~TempDir() {
   std::filesystem::remove_all(path, ec);
 }
 
-RunResult run_cli(const std::vector<std::string>& args) {
+RunResult run_cli(const std::vector<std::string>& args, uint64_t address_space_limit) {
+  std::vector<std::string> argv_s;
+  // prlimit (util-linux) caps the child's address space: an allocation for a declared count fails.
+  if (address_space_limit) argv_s = {"/usr/bin/prlimit", "--as=" + std::to_string(address_space_limit)};
+  argv_s.push_back(LODKIT_CLI);
+  argv_s.insert(argv_s.end(), args.begin(), args.end());
   TempDir tmp;
   std::string out_path = (tmp.path / "out").string(), err_path = (tmp.path / "err").string();
-  std::vector<std::string> argv_s = {LODKIT_CLI};
-  argv_s.insert(argv_s.end(), args.begin(), args.end());
   std::vector<char*> argv;
   for (auto& a : argv_s) argv.push_back(a.data());
   argv.push_back(nullptr);

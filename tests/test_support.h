@@ -27,8 +27,9 @@ struct RunResult {
   int signal = 0;       // the signal that ended it, 0 when it exited
   std::string out, err;
 };
-// Runs the built `lodkit` CLI with arguments (no shell), capturing stdout and stderr.
-RunResult run_cli(const std::vector<std::string>& args);
+// Runs the built `lodkit` CLI with arguments (no shell), capturing stdout and stderr; with a non-zero
+// `address_space_limit` (bytes), under that cap.
+RunResult run_cli(const std::vector<std::string>& args, uint64_t address_space_limit = 0);
 
 // data/corpus, or an empty path when the corpus is absent (call GTEST_SKIP then).
 std::filesystem::path corpus_dir();

@@ -226,6 +226,27 @@ TEST(Malformed, EveryCaseExitsWithCode2AndAMessage) {
   }
 }
 
+// Declared counts far beyond the file fail before anything is reserved for them: under a 256 MiB
+// address-space cap (a 4e9-element reservation would need tens of GB) the error is still bad input.
+TEST(Malformed, HugeDeclaredCountsFailWithoutAllocating) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer reserves terabytes of shadow memory; run in the release preset";
+#else
+  if (!std::filesystem::exists("/usr/bin/prlimit")) GTEST_SKIP() << "prlimit (util-linux) not installed";
+  test::TempDir dir;
+  size_t checked = 0;
+  for (const Case& c : malformed_cases()) {
+    if (c.name.find("4e9") == std::string::npos && c.name.find("huge") == std::string::npos) continue;
+    SCOPED_TRACE(c.name);
+    test::write_bytes(dir / c.name, c.bytes);
+    test::RunResult r = test::run_cli({"info", (dir / c.name).string()}, uint64_t(256) << 20);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    ++checked;
+  }
+  EXPECT_GE(checked, 4u);
+#endif
+}
+
 TEST(Malformed, ADirectoryOrAMissingFileIsBadInput) {
   test::TempDir dir;
   std::filesystem::create_directory(dir / "looks-like.obj");
