@@ -208,6 +208,10 @@ void parse_chunk(std::span<const uint8_t> bytes, const std::string& name, uint64
   chunk.lines = in.line() - first_line;
 }
 
+// Pieces of a file parsed on separate threads are at least this large: below, a thread costs more
+// than it saves.
+constexpr size_t min_chunk = size_t(1) << 20;
+
 // Runs fn(0) .. fn(n - 1) at once, fn(0) on the calling thread. fn must not throw.
 void in_parallel(size_t n, const std::function<void(size_t)>& fn) {
   std::vector<std::jthread> workers;
@@ -217,7 +221,6 @@ void in_parallel(size_t n, const std::function<void(size_t)>& fn) {
 
 // Splits the file after newlines into pieces of about equal size, one per thread.
 std::vector<std::span<const uint8_t>> split_lines(std::span<const uint8_t> bytes, unsigned threads) {
-  constexpr size_t min_chunk = size_t(1) << 20;  // below this, a thread costs more than it saves
   const size_t pieces = std::max<size_t>(1, std::min<size_t>(threads, bytes.size() / min_chunk));
   std::vector<std::span<const uint8_t>> chunks;
   size_t begin = 0;
@@ -343,7 +346,10 @@ Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const Rea
   if (bytes.empty()) throw_bad_input_at_line(name, 1, "empty file, expected OBJ statements");
   // Parse chunks of lines in parallel, then join them in file order: the result does not depend on
   // the number of threads. Only the first chunk reports progress (they advance at the same pace).
-  const unsigned threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  // (hardware_concurrency reads /sys: skip it for files too small to split anyway.)
+  const unsigned threads = options.threads            ? options.threads
+                           : bytes.size() < min_chunk ? 1u
+                                                      : std::max(1u, std::thread::hardware_concurrency());
   const auto pieces = split_lines(bytes, threads);
   std::vector<Chunk> chunks(pieces.size());
   in_parallel(chunks.size(), [&](size_t k) {
