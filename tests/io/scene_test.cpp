@@ -33,6 +33,18 @@ Primitive primitive(Mesh mesh, uint32_t gltf_mesh = 0, int32_t material = -1) {
   return p;
 }
 
+// A scene of one mesh under one root node with the given scale.
+Scene scaled_scene(Mesh mesh, float3 scale) {
+  Scene scene;
+  scene.primitives.push_back(primitive(std::move(mesh)));
+  Node node;
+  node.scale = scale;
+  node.mesh = 0;
+  scene.nodes = {node};
+  scene.roots = {0};
+  return scene;
+}
+
 void expect_near(const float3& a, const float3& b) {
   EXPECT_NEAR(a.x, b.x, 1e-6f);
   EXPECT_NEAR(a.y, b.y, 1e-6f);
@@ -65,16 +77,10 @@ TEST(SceneFlatten, AppliesParentTimesLocal) {
 
 // Found by fuzz_gltf: finite positions under a large node scale overflow float.
 TEST(SceneFlatten, OverflowingTransformIsBadInput) {
-  Scene scene;
-  scene.name = "huge.gltf";
   Mesh big = unit_triangle();
   big.positions[1].x = 3e38f;
-  scene.primitives.push_back(primitive(big));
-  Node node;
-  node.scale = {5121, 1, 1};
-  node.mesh = 0;
-  scene.nodes = {node};
-  scene.roots = {0};
+  Scene scene = scaled_scene(big, {5121, 1, 1});
+  scene.name = "huge.gltf";
   try {
     flatten(scene);
     ADD_FAILURE() << "accepted";
@@ -112,13 +118,7 @@ TEST(SceneFlatten, NonUniformScaleUsesTheInverseTranspose) {
   const float h = std::sqrt(0.5f);
   plane.normals = {{h, h, 0}, {h, h, 0}, {h, h, 0}};
   plane.indices = {0, 1, 2};
-  Scene scene;
-  scene.primitives.push_back(primitive(plane));
-  Node node;
-  node.scale = {2, 1, 1};
-  node.mesh = 0;
-  scene.nodes = {node};
-  scene.roots = {0};
+  Scene scene = scaled_scene(plane, {2, 1, 1});
   const Mesh m = flatten(scene);
   // The scaled plane is x/2 + y = 1, whose normal is (1/2, 1, 0) -> (1, 2, 0)/sqrt(5).
   expect_near(m.normals[0], {1 / std::sqrt(5.0f), 2 / std::sqrt(5.0f), 0});
@@ -126,13 +126,7 @@ TEST(SceneFlatten, NonUniformScaleUsesTheInverseTranspose) {
 }
 
 TEST(SceneFlatten, MirroringKeepsTrianglesCounterClockwise) {
-  Scene scene;
-  scene.primitives.push_back(primitive(unit_triangle()));
-  Node node;
-  node.scale = {-1, 1, 1};
-  node.mesh = 0;
-  scene.nodes = {node};
-  scene.roots = {0};
+  Scene scene = scaled_scene(unit_triangle(), {-1, 1, 1});
   const Mesh m = flatten(scene);
   EXPECT_EQ(m.positions[1], (float3{-1, 0, 0}));
   // Mirrored in x the corners 0,1,2 run clockwise seen from +z; two are swapped back.
