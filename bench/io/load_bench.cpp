@@ -50,30 +50,43 @@ Loaded load_assimp(const std::string& file) {
   return loaded;
 }
 
+// Each output is skipped when it exists and is newer than the source, and written on its own: a writer
+// that throws (a format still in progress) costs that file only, not the other one.
 int make_inputs(const std::filesystem::path& source, const std::filesystem::path& out_dir) {
-  const std::filesystem::path ply = out_dir / "big.ply", obj = out_dir / "big.obj";
+  const std::filesystem::path outputs[] = {out_dir / "big.ply", out_dir / "big.obj"};
   auto fresh = [&](const std::filesystem::path& p) {
     return std::filesystem::exists(p) && std::filesystem::last_write_time(p) >= std::filesystem::last_write_time(source);
   };
-  if (fresh(ply) && fresh(obj)) {
-    fmt::print("inputs up to date: {} ({} MB), {} ({} MB)\n", ply.string(), std::filesystem::file_size(ply) >> 20,
-               obj.string(), std::filesystem::file_size(obj) >> 20);
-    return 0;
+  std::vector<std::filesystem::path> stale;
+  for (const auto& p : outputs) {
+    if (fresh(p))
+      fmt::print("up to date: {} ({} MB)\n", p.string(), std::filesystem::file_size(p) >> 20);
+    else
+      stale.push_back(p);
   }
+  if (stale.empty()) return 0;
+
   lod::Mesh mesh = lod::read_mesh(source);
   const size_t original = mesh.triangle_count();
   int levels = 0;
   while (mesh.triangle_count() < 3'000'000) mesh = lod::subdivide_midpoint(mesh), ++levels;
-  std::filesystem::create_directories(out_dir);
-  lod::write_mesh(mesh, ply, {.binary = true});
-  lod::write_mesh(mesh, obj, {.binary = false});
   fmt::print("{}: {} triangles, subdivided {} times -> {} triangles, {} vertices\n", source.string(), original, levels,
              mesh.triangle_count(), mesh.vertex_count());
-  fmt::print("wrote {} ({} MB), {} ({} MB)\n", ply.string(), std::filesystem::file_size(ply) >> 20, obj.string(),
-             std::filesystem::file_size(obj) >> 20);
-  return 0;
+  std::filesystem::create_directories(out_dir);
+  int status = 0;
+  for (const auto& p : stale) {
+    try {
+      lod::write_mesh(mesh, p, {.binary = true});  // binary little-endian for PLY; OBJ is text regardless
+      fmt::print("wrote {} ({} MB)\n", p.string(), std::filesystem::file_size(p) >> 20);
+    } catch (const std::exception& e) {
+      fmt::print(stderr, "lodkit_bench_io: writing {} failed: {}\n", p.string(), e.what());
+      status = 2;
+    }
+  }
+  return status;
 }
 
+// A timed load is open + parse + build the in-memory result + free it, for both loaders alike.
 int load(const std::string& loader, const std::string& file, int runs, bool json) {
   auto once = [&] { return loader == "lodkit" ? load_lodkit(file) : load_assimp(file); };
   const Loaded loaded = once();  // warm-up: the file is in the page cache for every timed run
