@@ -55,7 +55,7 @@ Loaded load_assimp(const std::string& file) {
 int make_inputs(const std::filesystem::path& source, const std::filesystem::path& out_dir) {
   const std::filesystem::path outputs[] = {out_dir / "big.ply", out_dir / "big.obj"};
   auto fresh = [&](const std::filesystem::path& p) {
-    return std::filesystem::exists(p) && std::filesystem::last_write_time(p) >= std::filesystem::last_write_time(source);
+    return std::filesystem::is_regular_file(p) && std::filesystem::last_write_time(p) >= std::filesystem::last_write_time(source);
   };
   std::vector<std::filesystem::path> stale;
   for (const auto& p : outputs) {
