@@ -182,7 +182,6 @@ class AsciiSource {
     if (double(i) < lo || double(i) > type_max(t)) fail("integer " + std::to_string(i) + " does not fit the property's type");
     return double(i);
   }
-  void skip(uint64_t) {}  // never used: ASCII records are always read value by value
   uint64_t remaining() const { return in_.remaining(); }
   double fraction() const { return double(in_.offset()) / double(std::max<size_t>(1, in_.offset() + in_.remaining())); }
   [[noreturn]] void fail(const std::string& what) const { in_.fail(what); }
@@ -471,18 +470,6 @@ Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const Rea
   return mesh;
 }
 
-namespace {
-
-template <class T>
-void put_binary(std::string& out, T v) {
-  char raw[sizeof(T)];
-  std::memcpy(raw, &v, sizeof(T));
-  if constexpr (std::endian::native == std::endian::big) std::reverse(raw, raw + sizeof(T));
-  out.append(raw, sizeof(T));
-}
-
-}  // namespace
-
 void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options) {
   const bool binary = options.binary;
   out += "ply\nformat ";
@@ -528,7 +515,7 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options) 
     for (size_t s = 0; s < streams.size(); ++s) {
       const float f = streams[s].first[v * streams[s].second];
       if (binary) {
-        put_binary(out, f);
+        io::append_binary(out, f);
       } else {
         if (s) out += ' ';
         io::append_float(out, f);
@@ -538,7 +525,7 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options) 
       const ushort4& j = mesh.joints[v];
       for (uint16_t value : j) {
         if (binary) {
-          put_binary(out, value);
+          io::append_binary(out, value);
         } else {
           out += ' ';
           io::append_uint(out, value);
@@ -551,8 +538,8 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options) 
     const uint32_t* c = &mesh.indices[3 * t];
     if (binary) {
       out += char(3);
-      put_binary(out, c[0]), put_binary(out, c[1]), put_binary(out, c[2]);
-      if (materials) put_binary(out, mesh.materials[t]);
+      io::append_binary(out, c[0]), io::append_binary(out, c[1]), io::append_binary(out, c[2]);
+      if (materials) io::append_binary(out, mesh.materials[t]);
     } else {
       out += "3 ";
       io::append_uint(out, c[0]), out += ' ', io::append_uint(out, c[1]), out += ' ', io::append_uint(out, c[2]);

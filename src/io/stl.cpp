@@ -126,12 +126,6 @@ float3 facet_normal(const float3& a, const float3& b, const float3& c) {
   return {float(nx / length), float(ny / length), float(nz / length)};
 }
 
-template <class T>
-void put_binary(std::string& out, T v) {
-  char raw[sizeof(T)];
-  std::memcpy(raw, &v, sizeof(T));
-  out.append(raw, sizeof(T));
-}
 
 }  // namespace
 
@@ -152,13 +146,13 @@ void write_stl(const Mesh& mesh, std::string& out, const WriteOptions& options) 
     header.resize(80, ' ');
     out += header;
     out.reserve(out.size() + 4 + triangles * triangle_bytes);
-    put_binary(out, uint32_t(triangles));
+    io::append_binary(out, uint32_t(triangles));
     for (size_t t = 0; t < triangles; ++t) {
       const float3 &a = mesh.positions[mesh.indices[3 * t]], &b = mesh.positions[mesh.indices[3 * t + 1]],
                    &c = mesh.positions[mesh.indices[3 * t + 2]];
       const float3 n = facet_normal(a, b, c);
-      for (const float3& p : {n, a, b, c}) put_binary(out, p.x), put_binary(out, p.y), put_binary(out, p.z);
-      put_binary(out, uint16_t(0));
+      for (const float3& p : {n, a, b, c}) io::append_binary(out, p.x), io::append_binary(out, p.y), io::append_binary(out, p.z);
+      io::append_binary(out, uint16_t(0));
     }
     return;
   }

@@ -2,6 +2,8 @@
 // source and the line (text) or byte offset (binary), so no reader repeats that bookkeeping.
 #pragma once
 
+#include <algorithm>
+#include <bit>
 #include <charconv>
 #include <cstdint>
 #include <cstring>
@@ -158,6 +160,14 @@ bool parse_float(std::string_view token, float& value);
 // Appends the shortest decimal text that reads back as exactly `value`.
 void append_float(std::string& out, float value);
 void append_uint(std::string& out, uint64_t value);
+// Appends the little-endian bytes of `value` (the binary writers' byte order).
+template <class T>
+void append_binary(std::string& out, T value) {
+  char raw[sizeof(T)];
+  std::memcpy(raw, &value, sizeof(T));
+  if constexpr (std::endian::native == std::endian::big) std::reverse(raw, raw + sizeof(T));
+  out.append(raw, sizeof(T));
+}
 
 // Largest polygon a reader accepts before triangulating; a face with a million corners is bad input.
 inline constexpr uint64_t max_face_corners = 65536;
