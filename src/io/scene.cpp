@@ -265,14 +265,7 @@ Scene scene_from_mesh(const Mesh& mesh) {
       for (size_t v = 0; v < mesh.vertex_count(); ++v) {
         if (!used[v]) continue;
         remap[v] = uint32_t(sub.positions.size());
-        sub.positions.push_back(mesh.positions[v]);
-        if (!mesh.normals.empty()) sub.normals.push_back(mesh.normals[v]);
-        if (!mesh.tangents.empty()) sub.tangents.push_back(mesh.tangents[v]);
-        for (size_t k = 0; k < max_uv_sets; ++k)
-          if (!mesh.uvs[k].empty()) sub.uvs[k].push_back(mesh.uvs[k][v]);
-        if (!mesh.colors.empty()) sub.colors.push_back(mesh.colors[v]);
-        if (!mesh.joints.empty()) sub.joints.push_back(mesh.joints[v]);
-        if (!mesh.weights.empty()) sub.weights.push_back(mesh.weights[v]);
+        append_vertex(sub, mesh, uint32_t(v));
       }
       for (size_t t = 0; t < mesh.triangle_count(); ++t)
         if (mesh.materials[t] == id)
