@@ -22,14 +22,13 @@ struct ConvertOptions {
   bool json = false;
 };
 
-// Refuses to write over the input (it would be lost if anything went wrong) unless --force.
+}  // namespace
+
 void check_not_input(const std::string& input, const std::string& output, bool force) {
   std::error_code ec;
   if (!force && std::filesystem::exists(output, ec) && std::filesystem::equivalent(input, output, ec))
     throw_usage(output + ": refusing to overwrite the input file (use --force)");
 }
-
-}  // namespace
 
 Command register_convert(CLI::App& root) {
   auto options = std::make_shared<ConvertOptions>();

@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <string>
 
 namespace lod::cli {
 
@@ -14,5 +15,9 @@ struct Command {
 
 Command register_info(CLI::App& root);
 Command register_convert(CLI::App& root);
+Command register_simplify(CLI::App& root);
+
+// Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
+void check_not_input(const std::string& input, const std::string& output, bool force);
 
 }  // namespace lod::cli

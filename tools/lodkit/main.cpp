@@ -10,7 +10,8 @@ int main(int argc, char** argv) {
   CLI::App app{"lodkit: level of detail for 3D meshes", "lodkit"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "lodkit 0.1.0");
-  const lod::cli::Command commands[] = {lod::cli::register_info(app), lod::cli::register_convert(app)};
+  const lod::cli::Command commands[] = {lod::cli::register_info(app), lod::cli::register_convert(app),
+                                        lod::cli::register_simplify(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -1,0 +1,140 @@
+// lodkit: the edge-collapse simplifier (Garland–Heckbert quadrics and its family of metrics).
+//
+//   lod::SimplifyResult r = lod::simplify(mesh, {.target_ratio = 0.1f});
+//
+// Topology is that of position ids (lod::position_ids): vertices that share a position but differ in
+// attributes (a UV seam, a hard normal, a material border) are "wedges" of one position and move
+// together; seams only collapse along themselves. Every collapse is recorded, so the result can be
+// replayed from the input or undone back to it (progressive meshes are built from this record).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "lodkit/mesh.h"
+
+namespace lod {
+
+// The cost of contracting a pair, pluggable; all share one engine and one set of safety checks.
+enum class Metric : uint8_t {
+  edge_length,  // squared edge length, midpoint placement ("SEM"): fastest, loses thin parts first
+  qem,          // Garland–Heckbert quadrics, area-weighted face planes (the default)
+  constrained_qem,  // qem plus planes perpendicular to the face through each border edge
+  memoryless,       // Lindstrom–Turk: quadrics rebuilt from the current faces, volume and border kept
+  constrained_memoryless,  // memoryless plus the border planes of constrained_qem
+};
+const char* metric_name(Metric metric);  // "edge", "qem", "cqem", "memoryless", "cmemoryless"
+
+struct SimplifyOptions {
+  // Stop at whichever is reached first. A target of 0 triangles with no error limit simplifies as far
+  // as the safety checks allow.
+  float target_ratio = 1.0f;         // fraction of the input triangles to keep, in [0, 1]
+  uint64_t target_triangles = 0;     // used instead of target_ratio when non-zero
+  float max_error = -1.0f;           // object-space distance; < 0 means no limit
+  float max_relative_error = -1.0f;  // fraction of the bounding-box diagonal; < 0 means no limit
+
+  Metric metric = Metric::qem;
+  // Subset placement: the result uses only input vertices (LODs can share one vertex buffer).
+  bool keep_vertices = false;
+
+  // Attribute quadrics (Hoppe 1999). Weights are relative to positions scaled so that the bounding
+  // box's largest extent is 1; normals are unit, UVs and colours are taken as they are. 0 ignores the
+  // attribute (it is then interpolated along with the collapse, never optimised).
+  float normal_weight = 0.0f;
+  float uv_weight = 0.0f;     // applies to every UV set
+  float color_weight = 0.0f;  // RGBA
+
+  // Constrained metrics: border-plane weight, times the border edge's squared length.
+  float border_weight = 1.0f;
+
+  // Safety. A collapse is rejected if any face around it would turn by more than the angle whose
+  // cosine is min_normal_dot, would become degenerate, or (when max_aspect_ratio > 0) would have a
+  // longest-edge / shortest-altitude ratio above it.
+  float min_normal_dot = 0.2f;
+  float max_aspect_ratio = 0.0f;
+  bool lock_border = false;                // border positions never move
+  std::vector<uint8_t> locked;             // per input vertex: non-zero means its position never moves
+  std::vector<float> importance;           // per input vertex: multiplies the cost of moving it (>= 0)
+
+  // Aggregation (Garland–Heckbert "virtual pairs"): positions closer than this object-space distance
+  // that share no edge may also be contracted, which merges separate parts. 0 disables.
+  float aggregate_distance = 0.0f;
+  // Drop connected components whose bounding-box diagonal is below the error bound reached.
+  bool prune = false;
+
+  // Record every collapse in SimplifyResult::record (needed for replay, undo and progressive meshes).
+  bool record = true;
+
+  unsigned threads = 0;  // 0: one per hardware thread. The result never depends on it.
+  std::function<void(double fraction)> progress;  // fraction of the planned collapses done
+};
+
+// One contraction of position `removed` into position `kept`. Face and wedge details live in the
+// SimplifyRecord arrays, in the ranges given here. Indices refer to the input mesh.
+struct Collapse {
+  uint32_t kept = 0, removed = 0;  // position ids (lod::position_ids of the input)
+  float3 old_position, new_position;
+  float error = 0;                   // object-space error of this collapse (sqrt of the quadric cost)
+  uint32_t faces_begin = 0;          // into SimplifyRecord::removed_faces
+  uint32_t removed_face_count = 0;
+  uint32_t relinks_begin = 0;        // into SimplifyRecord::relinks
+  uint32_t relink_count = 0;
+  uint32_t wedges_begin = 0;         // into SimplifyRecord::wedges
+  uint32_t wedge_count = 0;
+};
+
+// A triangle corner that pointed at a wedge of `removed` and now points at one of `kept`.
+struct Relink {
+  uint32_t triangle = 0;
+  uint32_t corner = 0;  // 0..2
+  uint32_t from = 0, to = 0;  // input vertex indices
+};
+
+// A wedge of `kept` whose attributes were recomputed. Values are packed per SimplifyRecord::stride
+// (normals 3, then each UV set 2, then colour 4, for the attributes the mesh has).
+struct WedgeChange {
+  uint32_t vertex = 0;        // input vertex index
+  uint32_t values_begin = 0;  // into SimplifyRecord::old_values / new_values
+};
+
+struct SimplifyRecord {
+  std::vector<Collapse> collapses;  // in the order they were applied
+  std::vector<uint32_t> removed_faces;
+  std::vector<Relink> relinks;
+  std::vector<WedgeChange> wedges;
+  std::vector<float> old_values, new_values;
+  uint32_t stride = 0;  // floats per wedge change
+};
+
+struct SimplifyResult {
+  Mesh mesh;  // compacted: only live triangles and the vertices they use, in order of first use
+  std::vector<uint32_t> vertex_origin;  // per output vertex: the input vertex it continues
+  std::vector<uint32_t> triangle_origin;  // per output triangle: its input triangle
+
+  float error = 0;           // largest collapse error, object space (a distance)
+  float relative_error = 0;  // error / bounding-box diagonal of the input
+  float diagonal = 0;        // bounding-box diagonal of the input
+
+  SimplifyRecord record;
+
+  uint64_t input_triangles = 0, output_triangles = 0;
+  uint64_t input_vertices = 0, output_vertices = 0;
+  uint64_t collapses = 0;
+  uint64_t rejected_topology = 0, rejected_flip = 0, rejected_seam = 0, rejected_shape = 0;
+  uint64_t pruned_triangles = 0;
+  uint32_t passes = 0;
+  double seconds_setup = 0, seconds_collapse = 0, seconds_total = 0;
+};
+
+// Simplifies `mesh` (which must pass lod::validate). Throws lod::Error (usage) on invalid options.
+SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options = {});
+
+// Applies the first `count` collapses of `record` to `mesh` (the input of the simplify call that made
+// it) and returns the compacted result, identical to SimplifyResult::mesh when count is all of them.
+Mesh replay(const Mesh& mesh, const SimplifyRecord& record, size_t count);
+// Applies all collapses, then undoes them as vertex splits in reverse order: gives back `mesh`
+// exactly (bit for bit, including triangle order and winding). For tests and progressive meshes.
+Mesh replay_and_undo(const Mesh& mesh, const SimplifyRecord& record);
+
+}  // namespace lod

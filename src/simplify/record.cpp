@@ -1,0 +1,193 @@
+// Output compaction, and replay / undo of a collapse record.
+#include "simplify/record.h"
+
+#include <algorithm>
+
+#include "lodkit/error.h"
+
+namespace lod {
+namespace collapse {
+
+AttributeLayout attribute_layout(const Mesh& mesh) {
+  AttributeLayout layout;
+  if (!mesh.normals.empty()) layout.normal = int(layout.stride), layout.stride += 3;
+  layout.uv_sets = uint32_t(mesh.uv_set_count());
+  for (uint32_t k = 0; k < layout.uv_sets; ++k) layout.uv[k] = int(layout.stride), layout.stride += 2;
+  if (!mesh.colors.empty()) layout.color = int(layout.stride), layout.stride += 4;
+  return layout;
+}
+
+std::vector<float> gather_attributes(const Mesh& mesh, const AttributeLayout& layout) {
+  std::vector<float> values(mesh.vertex_count() * layout.stride);
+  for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+    float* out = values.data() + v * layout.stride;
+    if (layout.normal >= 0) {
+      const float3& n = mesh.normals[v];
+      out[layout.normal] = n.x, out[layout.normal + 1] = n.y, out[layout.normal + 2] = n.z;
+    }
+    for (uint32_t k = 0; k < layout.uv_sets; ++k) {
+      const float2& t = mesh.uvs[k][v];
+      out[layout.uv[k]] = t.x, out[layout.uv[k] + 1] = t.y;
+    }
+    if (layout.color >= 0) {
+      const float4& c = mesh.colors[v];
+      out[layout.color] = c.x, out[layout.color + 1] = c.y, out[layout.color + 2] = c.z, out[layout.color + 3] = c.w;
+    }
+  }
+  return values;
+}
+
+namespace {
+
+// Appends input vertex v with its current position and attributes.
+void append_current(Mesh& out, const Mesh& input, const Snapshot& s, uint32_t v) {
+  append_vertex(out, input, v);
+  const uint32_t p = s.position_of[v];
+  if (s.moves[p]) out.positions.back() = s.position[p];
+  const AttributeLayout& layout = *s.layout;
+  if (!layout.stride) return;
+  const float* a = s.attributes.data() + size_t(v) * layout.stride;
+  if (layout.normal >= 0) out.normals.back() = {a[layout.normal], a[layout.normal + 1], a[layout.normal + 2]};
+  for (uint32_t k = 0; k < layout.uv_sets; ++k) out.uvs[k].back() = {a[layout.uv[k]], a[layout.uv[k] + 1]};
+  if (layout.color >= 0)
+    out.colors.back() = {a[layout.color], a[layout.color + 1], a[layout.color + 2], a[layout.color + 3]};
+}
+
+Mesh empty_like(const Mesh& input) {
+  Mesh out;
+  out.material_names = input.material_names;
+  out.group_names = input.group_names;
+  return out;
+}
+
+void append_triangle(Mesh& out, const Mesh& input, uint32_t t, const uint32_t* corners) {
+  out.indices.insert(out.indices.end(), corners, corners + 3);
+  if (!input.materials.empty()) out.materials.push_back(input.materials[t]);
+  if (!input.groups.empty()) out.groups.push_back(input.groups[t]);
+}
+
+}  // namespace
+
+Mesh compact(const Mesh& input, const Snapshot& s, std::vector<uint32_t>* vertex_origin,
+             std::vector<uint32_t>* triangle_origin) {
+  Mesh out = empty_like(input);
+  std::vector<uint32_t> remap(input.vertex_count(), ~0u);
+  if (vertex_origin) vertex_origin->clear();
+  if (triangle_origin) triangle_origin->clear();
+  const size_t triangles = s.corners.size() / 3;
+  for (size_t t = 0; t < triangles; ++t) {
+    if (!s.alive[t]) continue;
+    uint32_t corners[3];
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t v = s.corners[3 * t + k];
+      if (remap[v] == ~0u) {
+        remap[v] = uint32_t(out.positions.size());
+        append_current(out, input, s, v);
+        if (vertex_origin) vertex_origin->push_back(v);
+      }
+      corners[k] = remap[v];
+    }
+    append_triangle(out, input, uint32_t(t), corners);
+    if (triangle_origin) triangle_origin->push_back(uint32_t(t));
+  }
+  return out;
+}
+
+Mesh materialize(const Mesh& input, const Snapshot& s) {
+  Mesh out = empty_like(input);
+  for (uint32_t v = 0; v < input.vertex_count(); ++v) append_current(out, input, s, v);
+  const size_t triangles = s.corners.size() / 3;
+  for (size_t t = 0; t < triangles; ++t)
+    if (s.alive[t]) append_triangle(out, input, uint32_t(t), &s.corners[3 * t]);
+  return out;
+}
+
+namespace {
+
+// The working state of a replay: what Snapshot views.
+struct Replay {
+  std::vector<uint32_t> position_of, moves, corners;
+  std::vector<float3> position;
+  std::vector<uint8_t> alive;
+  AttributeLayout layout;
+  std::vector<float> attributes;
+
+  explicit Replay(const Mesh& mesh) {
+    const PositionIds ids = position_ids(mesh);
+    position_of = ids.id;
+    position.resize(ids.count);
+    for (size_t v = mesh.vertex_count(); v-- > 0;) position[ids.id[v]] = mesh.positions[v];
+    moves.assign(ids.count, 0);
+    corners = mesh.indices;
+    alive.assign(mesh.triangle_count(), 1);
+    layout = attribute_layout(mesh);
+    attributes = gather_attributes(mesh, layout);
+  }
+  Snapshot snapshot() const { return {position_of, position, moves, corners, alive, &layout, attributes}; }
+
+  void check(const SimplifyRecord& record, const Collapse& c) const {
+    const auto bad = [] { throw_usage("replay: the collapse record does not belong to this mesh"); };
+    if (c.kept >= position.size() || c.removed >= position.size()) bad();
+    if (size_t(c.faces_begin) + c.removed_face_count > record.removed_faces.size()) bad();
+    if (size_t(c.relinks_begin) + c.relink_count > record.relinks.size()) bad();
+    if (size_t(c.wedges_begin) + c.wedge_count > record.wedges.size()) bad();
+    if (record.stride != layout.stride) bad();
+    for (uint32_t i = 0; i < c.removed_face_count; ++i)
+      if (record.removed_faces[c.faces_begin + i] >= alive.size()) bad();
+    for (uint32_t i = 0; i < c.relink_count; ++i) {
+      const Relink& r = record.relinks[c.relinks_begin + i];
+      if (r.triangle >= alive.size() || r.corner > 2 || r.from >= position_of.size() || r.to >= position_of.size()) bad();
+    }
+    for (uint32_t i = 0; i < c.wedge_count; ++i) {
+      const WedgeChange& w = record.wedges[c.wedges_begin + i];
+      if (w.vertex >= position_of.size() || size_t(w.values_begin) + layout.stride > record.new_values.size()) bad();
+    }
+  }
+
+  void apply(const SimplifyRecord& record, const Collapse& c) {
+    check(record, c);
+    for (uint32_t i = 0; i < c.removed_face_count; ++i) alive[record.removed_faces[c.faces_begin + i]] = 0;
+    for (uint32_t i = 0; i < c.relink_count; ++i) {
+      const Relink& r = record.relinks[c.relinks_begin + i];
+      corners[3 * r.triangle + r.corner] = r.to;
+    }
+    if (!(c.new_position == c.old_position)) position[c.kept] = c.new_position, ++moves[c.kept];
+    set_values(record, c, record.new_values);
+  }
+
+  void undo(const SimplifyRecord& record, const Collapse& c) {
+    set_values(record, c, record.old_values);
+    if (!(c.new_position == c.old_position)) position[c.kept] = c.old_position, --moves[c.kept];
+    for (uint32_t i = c.relink_count; i-- > 0;) {
+      const Relink& r = record.relinks[c.relinks_begin + i];
+      corners[3 * r.triangle + r.corner] = r.from;
+    }
+    for (uint32_t i = 0; i < c.removed_face_count; ++i) alive[record.removed_faces[c.faces_begin + i]] = 1;
+  }
+
+  void set_values(const SimplifyRecord& record, const Collapse& c, const std::vector<float>& values) {
+    for (uint32_t i = 0; i < c.wedge_count; ++i) {
+      const WedgeChange& w = record.wedges[c.wedges_begin + i];
+      std::copy_n(values.begin() + w.values_begin, layout.stride, attributes.begin() + size_t(w.vertex) * layout.stride);
+    }
+  }
+};
+
+}  // namespace
+}  // namespace collapse
+
+Mesh replay(const Mesh& mesh, const SimplifyRecord& record, size_t count) {
+  if (count > record.collapses.size()) throw_usage("replay: asked for more collapses than the record holds");
+  collapse::Replay state(mesh);
+  for (size_t i = 0; i < count; ++i) state.apply(record, record.collapses[i]);
+  return collapse::compact(mesh, state.snapshot(), nullptr, nullptr);
+}
+
+Mesh replay_and_undo(const Mesh& mesh, const SimplifyRecord& record) {
+  collapse::Replay state(mesh);
+  for (const Collapse& c : record.collapses) state.apply(record, c);
+  for (size_t i = record.collapses.size(); i-- > 0;) state.undo(record, record.collapses[i]);
+  return collapse::materialize(mesh, state.snapshot());
+}
+
+}  // namespace lod

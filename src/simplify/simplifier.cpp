@@ -1,0 +1,683 @@
+// The collapse engine: passes of independent edge collapses, cheapest first.
+//
+// Each pass rebuilds the position -> triangles table, lets the metric refresh (memoryless rebuilds
+// its quadrics), evaluates every edge in parallel (each position keeps its cheapest edge to a
+// higher position), then applies the cheapest candidates in cost order. A collapse locks every
+// position around it for the rest of the pass, so the candidates applied later were evaluated on
+// exactly the neighbourhood they change: the result is the same on any number of threads, and no
+// adjacency is updated (or allocated) per collapse.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "core/parallel.h"
+#include "lodkit/error.h"
+#include "simplify/edge_length.h"
+#include "simplify/quadric_metric.h"
+#include "simplify/record.h"
+
+namespace lod {
+
+const char* metric_name(Metric metric) {
+  switch (metric) {
+    case Metric::edge_length: return "edge";
+    case Metric::qem: return "qem";
+    case Metric::constrained_qem: return "cqem";
+    case Metric::memoryless: return "memoryless";
+    case Metric::constrained_memoryless: return "cmemoryless";
+  }
+  return "?";
+}
+
+namespace collapse {
+namespace {
+
+using clock = std::chrono::steady_clock;
+constexpr uint32_t none = ~0u;
+
+double seconds(clock::time_point a, clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+// Per-thread scratch for evaluating one edge; reused so evaluation allocates nothing in steady state.
+struct Scratch {
+  std::vector<uint32_t> removed_faces, neighbours_u, neighbours_v, kept_wedges, candidates;
+  std::vector<WedgePair> pairs[2];
+};
+
+// What the engine decided for one edge.
+struct Decision {
+  uint32_t kept = none, removed = none;
+  bool fixed = false;
+  Placement placement;
+  int direction = 0;  // index of the pairs in Scratch
+};
+
+enum class Reject { none, topology, seam, flip, shape };
+
+template <class MetricT>
+class Engine {
+ public:
+  Engine(State& state, MetricT& metric, SimplifyResult& result) : s_(state), metric_(metric), result_(result) {}
+
+  void run(uint64_t target_triangles, double cost_limit) {
+    const uint64_t start_triangles = s_.live_triangles;
+    metric_first_ = true;
+    while (s_.live_triangles > target_triangles) {
+      build_star();
+      classify();
+      if (metric_first_) metric_.initialize(s_), metric_first_ = false;
+      else metric_.begin_pass(s_);
+      ++result_.passes;
+
+      evaluate_all();
+      std::vector<uint32_t> order;
+      for (uint32_t u = 0; u < s_.position_count; ++u)
+        if (best_[u].other != none && best_[u].cost <= cost_limit) order.push_back(u);
+      if (order.empty()) break;
+
+      // This pass applies at most a tenth of the live positions' worth of collapses (finer passes
+      // track the greedy order more closely), and never more than are still needed.
+      const uint64_t needed = (s_.live_triangles - target_triangles + 1) / 2;
+      const uint64_t live_positions = std::max<uint64_t>(1, s_.live_triangles / 2);
+      const size_t goal = size_t(std::clamp<uint64_t>(std::min(needed, live_positions / 10), 1, order.size()));
+      const size_t considered = std::min(order.size(), goal * 2);
+      const auto cheaper = [&](uint32_t a, uint32_t b) {
+        return best_[a].cost < best_[b].cost || (best_[a].cost == best_[b].cost && a < b);
+      };
+      if (considered < order.size()) std::nth_element(order.begin(), order.begin() + considered, order.end(), cheaper);
+      order.resize(considered);
+      std::sort(order.begin(), order.end(), cheaper);
+
+      size_t applied = 0, deferred = 0;
+      Scratch& scratch = scratch_[0];
+      for (const uint32_t u : order) {
+        if (s_.live_triangles <= target_triangles) break;
+        const uint32_t v = best_[u].other;
+        if ((s_.flags[u] | s_.flags[v]) & flag_pass_locked) continue;
+        Decision decision;
+        const Reject reject = evaluate(u, v, scratch, decision, true);
+        if (reject != Reject::none) {
+          // Ranked but not allowed: u waits for the next pass with its cheapest allowed edge.
+          rejected_[int(reject)].fetch_add(1, std::memory_order_relaxed);
+          best_[u] = best_checked(u, scratch);
+          ++deferred;
+          continue;
+        }
+        apply(decision, scratch);
+        ++applied;
+      }
+      if (applied == 0 && deferred == 0) break;
+      if (s_.options.progress && start_triangles > target_triangles)
+        s_.options.progress(double(start_triangles - s_.live_triangles) / double(start_triangles - target_triangles));
+    }
+  }
+
+ private:
+  struct Best {
+    float cost = std::numeric_limits<float>::infinity();
+    uint32_t other = none;
+  };
+
+  void build_star() {
+    const size_t triangles = s_.corners.size() / 3;
+    s_.first.assign(s_.position_count + 1, 0);
+    for (size_t t = 0; t < triangles; ++t)
+      if (s_.alive[t])
+        for (uint32_t k = 0; k < 3; ++k) ++s_.first[s_.corner_position(uint32_t(t), k) + 1];
+    for (uint32_t p = 0; p < s_.position_count; ++p) s_.first[p + 1] += s_.first[p];
+    s_.star.resize(s_.first[s_.position_count]);
+    std::vector<uint32_t> fill(s_.first.begin(), s_.first.end() - 1);
+    for (size_t t = 0; t < triangles; ++t)
+      if (s_.alive[t])
+        for (uint32_t k = 0; k < 3; ++k) s_.star[fill[s_.corner_position(uint32_t(t), k)]++] = uint32_t(t);
+  }
+
+  // Border and non-manifold flags from each position's star; clears the pass locks.
+  void classify() {
+    core::parallel_for(s_.position_count, s_.threads, [&](size_t u) {
+      uint8_t& f = s_.flags[u];
+      // Only stars a collapse touched (all of them locked it) can have changed.
+      f = uint8_t((f & ~(flag_dirty | flag_pass_locked)) | ((f & flag_pass_locked) || first_pass_ ? flag_dirty : 0));
+      if ((f & flag_dead) || !(f & flag_dirty)) return;
+      f &= uint8_t(~(flag_border | flag_complex | flag_seam));
+      const auto star = s_.triangles_of(uint32_t(u));
+      if (star.empty()) return;
+      thread_local std::vector<uint32_t> next, prev;
+      next.clear(), prev.clear();
+      bool complex = false, seam = false;
+      uint32_t wedge = none, material = none;
+      for (const uint32_t t : star) {
+        uint32_t k = 0;
+        while (s_.corner_position(t, k) != u) ++k;
+        const uint32_t w = s_.corners[3 * t + k], m = s_.material(t);
+        seam |= wedge != none && (w != wedge || m != material);
+        wedge = w, material = m;
+        const uint32_t n = s_.corner_position(t, (k + 1) % 3), p = s_.corner_position(t, (k + 2) % 3);
+        complex |= n == u || p == u || n == p;  // degenerate triangle (also listed twice here)
+        next.push_back(n), prev.push_back(p);
+      }
+      // A manifold star: each neighbour is `next` at most once and `prev` at most once, and the
+      // triangles form one fan, open (border) or closed.
+      uint32_t starts = 0, start = 0;
+      bool border = false;
+      for (size_t i = 0; i < star.size() && !complex; ++i) {
+        uint32_t as_next = 0, as_prev = 0, n_as_prev = 0;
+        for (size_t j = 0; j < star.size(); ++j) {
+          as_next += next[j] == next[i];
+          as_prev += prev[j] == prev[i];
+          n_as_prev += prev[j] == next[i];
+        }
+        complex |= as_next > 1 || as_prev > 1;
+        if (n_as_prev == 0) border = true;  // edge u-next[i] has one triangle
+        // Triangle i starts a fan if no triangle continues into it (its prev is nobody's next).
+        uint32_t p_as_next = 0;
+        for (size_t j = 0; j < star.size(); ++j) p_as_next += next[j] == prev[i];
+        if (p_as_next == 0) ++starts, start = uint32_t(i);
+      }
+      if (!complex) {
+        if (starts > 1) complex = true;
+        else {
+          // Walk the fan from its start (or anywhere if closed); it must visit every triangle.
+          size_t visited = 1, i = start;
+          for (; visited <= star.size(); ++visited) {
+            size_t j = 0;
+            while (j < star.size() && prev[j] != next[i]) ++j;
+            if (j == star.size() || j == start) break;
+            i = j;
+          }
+          complex = visited != star.size();
+        }
+      }
+      if (complex) f |= flag_complex;
+      if (border) f |= flag_border;
+      if (seam) f |= flag_seam;
+      if (border && s_.options.lock_border) f |= flag_locked;
+    });
+    first_pass_ = false;
+  }
+
+  void evaluate_all() {
+    best_.resize(s_.position_count);
+    scratch_.resize(std::max<size_t>(scratch_.size(), 1));
+    core::parallel_for(s_.position_count, s_.threads, [&](size_t i) {
+      const uint32_t u = uint32_t(i);
+      // An edge's cost and checks depend on the stars of its two ends: keep u's best edge unless
+      // u or a neighbour changed.
+      bool dirty = s_.flags[u] & flag_dirty;
+      for (const uint32_t t : s_.triangles_of(u))
+        for (uint32_t k = 0; k < 3 && !dirty; ++k) dirty = s_.flags[s_.corner_position(t, k)] & flag_dirty;
+      if (!dirty) return;
+      best_[u] = Best{};
+      if (s_.flags[u] & (flag_dead | flag_complex)) return;
+      thread_local Scratch scratch;
+      // Each edge is evaluated from its lower position.
+      for (const uint32_t t : s_.triangles_of(u))
+        for (uint32_t k = 0; k < 3; ++k) {
+          const uint32_t v = s_.corner_position(t, k);
+          if (v <= u || (s_.flags[v] & (flag_dead | flag_complex))) continue;
+          bool seen = false;  // the neighbour also appears in an earlier triangle
+          for (const uint32_t t2 : s_.triangles_of(u)) {
+            if (t2 == t) break;
+            seen |= s_.corner_position(t2, 0) == v || s_.corner_position(t2, 1) == v || s_.corner_position(t2, 2) == v;
+          }
+          if (seen) continue;
+          Decision decision;
+          if (evaluate(u, v, scratch, decision, false) != Reject::none) continue;
+          const float cost = float(decision.placement.cost);
+          if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
+        }
+    });
+  }
+
+  // The distinct positions around x, except `skip`.
+  void neighbours(uint32_t x, uint32_t skip, std::vector<uint32_t>& out) const {
+    out.clear();
+    for (const uint32_t t : s_.triangles_of(x))
+      for (uint32_t k = 0; k < 3; ++k) {
+        const uint32_t p = s_.corner_position(t, k);
+        if (p != x && p != skip && std::find(out.begin(), out.end(), p) == out.end()) out.push_back(p);
+      }
+  }
+
+  // Wedge pairs for collapsing `removed` into `kept`: every (wedge, material) of removed must meet
+  // one of kept's in a removed face, consistently, and distinct wedges must stay distinct. This is
+  // what keeps seams and material borders: they can only collapse along themselves.
+  bool map_wedges(uint32_t kept, uint32_t removed, const std::vector<uint32_t>& faces,
+                  std::vector<WedgePair>& pairs) const {
+    pairs.clear();
+    for (const uint32_t t : faces) {
+      uint32_t from = none, to = none;
+      for (uint32_t k = 0; k < 3; ++k) {
+        const uint32_t p = s_.corner_position(t, k);
+        if (p == removed) from = s_.corners[3 * t + k];
+        if (p == kept) to = s_.corners[3 * t + k];
+      }
+      const uint32_t m = s_.material(t);
+      bool known = false;
+      for (const WedgePair& pair : pairs) {
+        if (pair.from == from && pair.material == m) {
+          if (pair.to != to) return false;
+          known = true;
+        } else if ((pair.from == from) != (pair.to == to)) {
+          return false;  // two wedges would merge, or one would split
+        }
+      }
+      if (!known) pairs.push_back({from, to, m});
+    }
+    for (const uint32_t t : s_.triangles_of(removed)) {
+      uint32_t k = 0;
+      while (s_.corner_position(t, k) != removed) ++k;
+      const uint32_t w = s_.corners[3 * t + k], m = s_.material(t);
+      bool found = false;
+      for (const WedgePair& pair : pairs) found |= pair.from == w && pair.material == m;
+      if (!found) return false;
+    }
+    return true;
+  }
+
+  void wedges_of(uint32_t x, std::vector<uint32_t>& out) const {
+    out.clear();
+    for (const uint32_t t : s_.triangles_of(x))
+      for (uint32_t k = 0; k < 3; ++k)
+        if (s_.corner_position(t, k) == x && std::find(out.begin(), out.end(), s_.corners[3 * t + k]) == out.end())
+          out.push_back(s_.corners[3 * t + k]);
+  }
+
+  // Would any surviving face around the edge flip, degenerate or get too thin with `kept` and
+  // `removed` both at p?
+  Reject check_faces(uint32_t kept, uint32_t removed, const vec3d& p) const {
+    const double min_dot = s_.options.min_normal_dot, max_aspect = s_.options.max_aspect_ratio;
+    for (const uint32_t x : {kept, removed})
+      for (const uint32_t t : s_.triangles_of(x)) {
+        vec3d before[3], after[3];
+        bool shared = false;
+        for (uint32_t k = 0; k < 3; ++k) {
+          const uint32_t c = s_.corner_position(t, k);
+          shared |= c == (x == kept ? removed : kept);
+          before[k] = s_.normalized(c);
+          after[k] = c == x ? p : before[k];
+        }
+        if (shared) continue;  // removed by the collapse
+        const vec3d n0 = cross(before[1] - before[0], before[2] - before[0]);
+        const vec3d n1 = cross(after[1] - after[0], after[2] - after[0]);
+        const double l0 = length(n0), l1 = length(n1);
+        const double longest = std::max({length_squared(after[1] - after[0]), length_squared(after[2] - after[1]),
+                                         length_squared(after[0] - after[2])});
+        if (!(l1 > 1e-12 * longest)) return Reject::shape;  // degenerate
+        if (l0 > 0 && dot(n0, n1) < min_dot * l0 * l1) return Reject::flip;
+        // Aspect ratio: longest edge over its altitude, L / (2 area / L) = L^2 / |n|.
+        if (max_aspect > 0 && longest / l1 > max_aspect) return Reject::shape;
+      }
+    return Reject::none;
+  }
+
+ public:
+  // Decides the collapse of edge (u, v): direction, placement, cost. `count` tallies rejections.
+  // With `checked` false only what the cost depends on is done (used to rank every edge each pass);
+  // the link condition, wedge consistency and face checks then run only for the collapses about to
+  // be applied, in cost order.
+  Reject evaluate(uint32_t u, uint32_t v, Scratch& scratch, Decision& decision, bool checked) {
+    const uint8_t fu = s_.flags[u], fv = s_.flags[v];
+    if ((fu | fv) & (flag_complex | flag_dead)) return Reject::topology;
+    if ((fu & flag_locked) && (fv & flag_locked)) return Reject::topology;
+
+    auto& faces = scratch.removed_faces;
+    faces.clear();
+    for (const uint32_t t : s_.triangles_of(u))
+      if (s_.corner_position(t, 0) == v || s_.corner_position(t, 1) == v || s_.corner_position(t, 2) == v)
+        faces.push_back(t);
+    if (faces.empty() || faces.size() > 2) return Reject::topology;
+    // An interior edge between two border positions would pinch the surface.
+    if ((fu & flag_border) && (fv & flag_border) && faces.size() != 1) return Reject::topology;
+    if (checked) {
+      const Reject link = link_condition(u, v, scratch);
+      if (link != Reject::none) return link;
+    }
+    return place(u, v, scratch, decision, checked);
+  }
+
+  Reject link_condition(uint32_t u, uint32_t v, Scratch& scratch) const {
+    const auto& faces = scratch.removed_faces;
+    // Link condition: the positions next to both u and v are exactly the opposite corners.
+    uint32_t opposite[2] = {none, none};
+    for (size_t i = 0; i < faces.size(); ++i)
+      for (uint32_t k = 0; k < 3; ++k) {
+        const uint32_t c = s_.corner_position(faces[i], k);
+        if (c != u && c != v) opposite[i] = c;
+      }
+    if (faces.size() == 2 && opposite[0] == opposite[1]) return Reject::topology;
+    neighbours(u, v, scratch.neighbours_u);
+    neighbours(v, u, scratch.neighbours_v);
+    size_t common = 0;
+    for (const uint32_t a : scratch.neighbours_u)
+      if (std::find(scratch.neighbours_v.begin(), scratch.neighbours_v.end(), a) != scratch.neighbours_v.end()) {
+        if (a != opposite[0] && a != opposite[1]) return Reject::topology;
+        ++common;
+      }
+    if (common != faces.size()) return Reject::topology;
+    if (faces.size() == 2) {
+      // The edge between the opposite corners is in both links when triangles (u, a, b) and
+      // (v, a, b) both exist (a tetrahedron): the collapse would make them one doubled face.
+      bool in_link[2] = {false, false};
+      for (int i = 0; i < 2; ++i)
+        for (const uint32_t t : s_.triangles_of(i == 0 ? u : v)) {
+          uint32_t hits = 0;
+          for (uint32_t k = 0; k < 3; ++k) {
+            const uint32_t c = s_.corner_position(t, k);
+            hits += c == opposite[0] || c == opposite[1];
+          }
+          in_link[i] |= hits == 2;
+        }
+      if (in_link[0] && in_link[1]) return Reject::topology;
+    } else if (is_border_edge(s_, u, opposite[0]) && is_border_edge(s_, v, opposite[0])) {
+      return Reject::topology;  // a lone triangle would vanish
+    }
+
+    return Reject::none;
+  }
+
+  Reject place(uint32_t u, uint32_t v, Scratch& scratch, Decision& decision, bool checked) {
+    const uint8_t fu = s_.flags[u], fv = s_.flags[v];
+    const auto& faces = scratch.removed_faces;
+    // Directions allowed by locks and wedges. Without seams, attributes or checks, wedges do not
+    // matter: each side has one wedge.
+    const bool wedges = checked || channel_floats_ || ((fu | fv) & flag_seam);
+    bool can[2];  // can[0]: keep u, remove v
+    can[0] = !(fv & flag_locked) && (!wedges || map_wedges(u, v, faces, scratch.pairs[0]));
+    can[1] = !(fu & flag_locked) && (!wedges || map_wedges(v, u, faces, scratch.pairs[1]));
+    if (!can[0] && !can[1]) return Reject::seam;
+
+    const bool fixed = s_.options.keep_vertices || ((fu | fv) & flag_locked);
+    decision = {};
+    for (int d = 0; d < 2; ++d) {
+      if (!can[d]) continue;
+      const uint32_t kept = d == 0 ? u : v, removed = d == 0 ? v : u;
+      if (!fixed && decision.kept != none) break;  // free placement: one direction is enough
+      if (!fixed && d == 0 && can[1] && ((fu | fv) & flag_seam)) {
+        // Both directions work: keep the position with more wedges (seam ends stay put), else u.
+        wedges_of(u, scratch.kept_wedges);
+        const size_t wu = scratch.kept_wedges.size();
+        wedges_of(v, scratch.kept_wedges);
+        if (scratch.kept_wedges.size() > wu) continue;
+      }
+      if (channel_floats_) wedges_of(kept, scratch.kept_wedges);
+      else scratch.kept_wedges.clear();
+      EdgeQuery query{kept, removed, fixed, scratch.pairs[d], scratch.kept_wedges, faces};
+      const Placement placement = metric_.place(s_, query);
+      if (decision.kept == none || placement.cost < decision.placement.cost)
+        decision = {kept, removed, fixed, placement, d};
+    }
+    if (decision.kept == none) return Reject::seam;
+    if (checked) return check_faces(decision.kept, decision.removed, decision.placement.position);
+    return Reject::none;
+  }
+
+  // u's cheapest edge (to a higher position) that passes every check now, or none.
+  Best best_checked(uint32_t u, Scratch& scratch) {
+    Best best;
+    Decision decision;
+    neighbours(u, none, scratch.candidates);
+    for (const uint32_t v : scratch.candidates) {
+      // Stars of positions locked in this pass are stale until the next rebuild.
+      if (v <= u || (s_.flags[v] & (flag_dead | flag_complex | flag_pass_locked))) continue;
+      if (evaluate(u, v, scratch, decision, true) != Reject::none) continue;
+      const float cost = float(decision.placement.cost);
+      if (cost < best.cost || (cost == best.cost && v < best.other)) best = {cost, v};
+    }
+    return best;
+  }
+
+ private:
+  void apply(const Decision& d, Scratch& scratch) {
+    // Recompute the wedge pairs and kept wedges of the chosen direction (evaluate left them there).
+    const auto& pairs = scratch.pairs[d.direction];
+    wedges_of(d.kept, scratch.kept_wedges);
+    const EdgeQuery query{d.kept, d.removed, d.fixed, pairs, scratch.kept_wedges, scratch.removed_faces};
+    metric_.collapsed(s_, query, d.placement.position);
+
+    const vec3d old_kept = s_.normalized(d.kept);
+    Collapse c;
+    c.kept = d.kept, c.removed = d.removed;
+    c.old_position = s_.position[d.kept];
+    c.new_position = d.fixed ? c.old_position : s_.object(d.placement.position);
+    c.error = float(std::sqrt(std::max(0.0, d.placement.cost)) / s_.scale);
+    max_cost_ = std::max(max_cost_, d.placement.cost);
+    SimplifyRecord& record = result_.record;
+    const bool keep_record = s_.options.record;
+    c.faces_begin = uint32_t(record.removed_faces.size());
+    c.relinks_begin = uint32_t(record.relinks.size());
+    c.wedges_begin = uint32_t(record.wedges.size());
+
+    for (const uint32_t t : s_.triangles_of(d.removed)) {
+      uint32_t k = 0;
+      while (s_.corner_position(t, k) != d.removed) ++k;
+      if (std::find(scratch.removed_faces.begin(), scratch.removed_faces.end(), t) != scratch.removed_faces.end()) {
+        s_.alive[t] = 0;
+        --s_.live_triangles;
+        if (keep_record) record.removed_faces.push_back(t);
+        continue;
+      }
+      uint32_t& corner = s_.corners[3 * t + k];
+      const uint32_t m = s_.material(t);
+      for (const WedgePair& pair : pairs)
+        if (pair.from == corner && pair.material == m) {
+          if (keep_record) record.relinks.push_back({t, k, corner, pair.to});
+          corner = pair.to;
+          break;
+        }
+    }
+    if (!d.fixed && !(c.new_position == c.old_position)) {
+      s_.position[d.kept] = c.new_position;
+      ++s_.moves[d.kept];
+    }
+    s_.flags[d.removed] |= flag_dead;
+    if (s_.layout.stride) update_attributes(d, pairs, scratch.kept_wedges, old_kept, keep_record);
+
+    // Lock the neighbourhood for the rest of the pass.
+    for (const uint32_t x : {d.kept, d.removed})
+      for (const uint32_t t : s_.triangles_of(x))
+        for (uint32_t k = 0; k < 3; ++k) s_.flags[s_.corner_position(t, k)] |= flag_pass_locked;
+
+    c.removed_face_count = uint32_t(record.removed_faces.size()) - c.faces_begin;
+    c.relink_count = uint32_t(record.relinks.size()) - c.relinks_begin;
+    c.wedge_count = uint32_t(record.wedges.size()) - c.wedges_begin;
+    if (keep_record) record.collapses.push_back(c);
+    ++result_.collapses;
+  }
+
+  // New attribute values at the kept wedges: optimised channels from the attribute quadrics, the
+  // others interpolated along the edge with the wedge they merged with.
+  void update_attributes(const Decision& d, std::span<const WedgePair> pairs, std::span<const uint32_t> kept_wedges,
+                         const vec3d& from, bool keep_record) {
+    const AttributeLayout& layout = s_.layout;
+    const vec3d to = s_.normalized(d.removed), p = d.fixed ? from : d.placement.position;
+    const vec3d edge = to - from;
+    const double len2 = length_squared(edge);
+    const double t = len2 > 0 ? std::clamp(dot(p - from, edge) / len2, 0.0, 1.0) : 0.0;
+    thread_local std::vector<float> values, optimal;
+    for (const uint32_t w : kept_wedges) {
+      float* current = s_.attributes.data() + size_t(w) * layout.stride;
+      values.assign(current, current + layout.stride);
+      uint32_t partner = none;
+      for (const WedgePair& pair : pairs)
+        if (pair.to == w) { partner = pair.from; break; }
+      if (partner != none) {
+        const float* other = s_.attributes.data() + size_t(partner) * layout.stride;
+        for (uint32_t i = 0; i < layout.stride; ++i) values[i] = float((1 - t) * values[i] + t * other[i]);
+      }
+      optimal.assign(channel_floats_, 0.0f);
+      if (channel_floats_) {
+        uint32_t f = 0;
+        for (const Channel& c : channels_)
+          for (uint32_t i = 0; i < c.size; ++i) optimal[f++] = values[c.offset + i];
+        metric_.attributes_at(s_, w, p, optimal.data());
+        f = 0;
+        for (const Channel& c : channels_) {
+          for (uint32_t i = 0; i < c.size; ++i, ++f) {
+            float value = optimal[f];
+            if (c.kind == Channel::uv && partner != none) {
+              // Keep UVs inside the chart: between the two merged wedges' values.
+              const float lo = std::min(current[c.offset + i], s_.attributes[size_t(partner) * layout.stride + c.offset + i]);
+              const float hi = std::max(current[c.offset + i], s_.attributes[size_t(partner) * layout.stride + c.offset + i]);
+              value = std::clamp(value, lo, hi);
+            }
+            if (c.kind == Channel::color) value = std::clamp(value, 0.0f, 1.0f);
+            values[c.offset + i] = value;
+          }
+        }
+      }
+      if (layout.normal >= 0) {
+        float* n = values.data() + layout.normal;
+        const double l = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
+        if (l > 0) n[0] = float(n[0] / l), n[1] = float(n[1] / l), n[2] = float(n[2] / l);
+        else std::copy_n(current + layout.normal, 3, n);
+      }
+      if (std::equal(values.begin(), values.end(), current)) continue;
+      if (keep_record) {
+        SimplifyRecord& record = result_.record;
+        record.wedges.push_back({w, uint32_t(record.old_values.size())});
+        record.old_values.insert(record.old_values.end(), current, current + layout.stride);
+        record.new_values.insert(record.new_values.end(), values.begin(), values.end());
+      }
+      std::copy(values.begin(), values.end(), current);
+    }
+  }
+
+ public:
+  std::vector<Channel> channels_;
+  uint32_t channel_floats_ = 0;
+  double max_cost_ = 0;
+  std::atomic<uint64_t> rejected_[5] = {};  // by Reject: ranked collapses found not allowed
+
+ private:
+  State& s_;
+  MetricT& metric_;
+  SimplifyResult& result_;
+  std::vector<Best> best_;
+  std::vector<Scratch> scratch_;
+  bool metric_first_ = true;
+  bool first_pass_ = true;
+};
+
+template <class MetricT>
+void run(State& state, MetricT& metric, const std::vector<Channel>& channels, uint64_t target, double cost_limit,
+         SimplifyResult& result) {
+  Engine<MetricT> engine(state, metric, result);
+  engine.channels_ = channels;
+  for (const Channel& c : channels) engine.channel_floats_ += c.size;
+  engine.run(target, cost_limit);
+  result.error = float(std::sqrt(engine.max_cost_) / state.scale);
+  result.rejected_topology = engine.rejected_[int(Reject::topology)];
+  result.rejected_seam = engine.rejected_[int(Reject::seam)];
+  result.rejected_flip = engine.rejected_[int(Reject::flip)];
+  result.rejected_shape = engine.rejected_[int(Reject::shape)];
+}
+
+void check_options(const Mesh& mesh, const SimplifyOptions& o) {
+  if (!(o.target_ratio >= 0 && o.target_ratio <= 1)) throw_usage("simplify: target_ratio must be in [0, 1]");
+  if (!o.locked.empty() && o.locked.size() != mesh.vertex_count())
+    throw_usage("simplify: `locked` must have one entry per vertex");
+  if (!o.importance.empty() && o.importance.size() != mesh.vertex_count())
+    throw_usage("simplify: `importance` must have one entry per vertex");
+  for (const float w : o.importance)
+    if (!(w >= 0) || !std::isfinite(w)) throw_usage("simplify: importance weights must be finite and >= 0");
+  if (!(o.min_normal_dot >= -1 && o.min_normal_dot <= 1)) throw_usage("simplify: min_normal_dot must be in [-1, 1]");
+  for (const float w : {o.normal_weight, o.uv_weight, o.color_weight, o.border_weight, o.max_aspect_ratio})
+    if (!(w >= 0) || !std::isfinite(w)) throw_usage("simplify: weights and max_aspect_ratio must be finite and >= 0");
+  if (!(o.aggregate_distance >= 0)) throw_usage("simplify: aggregate_distance must be >= 0");
+  if (o.aggregate_distance > 0) throw_usage("simplify: aggregation (virtual pairs) is not available yet");
+}
+
+}  // namespace
+}  // namespace collapse
+
+SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
+  using namespace collapse;
+  const auto start = clock::now();
+  check_options(mesh, options);
+  SimplifyResult result;
+  State state(mesh, options);
+  state.threads = core::thread_count(options.threads);
+
+  const PositionIds ids = position_ids(mesh);
+  state.position_count = ids.count;
+  state.position_of = ids.id;
+  state.position.resize(ids.count);
+  for (size_t v = mesh.vertex_count(); v-- > 0;) state.position[ids.id[v]] = mesh.positions[v];
+  state.moves.assign(ids.count, 0);
+  state.flags.assign(ids.count, 0);
+  for (size_t v = 0; v < options.locked.size(); ++v)
+    if (options.locked[v]) state.flags[ids.id[v]] |= flag_locked;
+  if (!options.importance.empty()) {
+    state.importance.assign(ids.count, 0.0f);
+    for (size_t v = 0; v < mesh.vertex_count(); ++v)
+      state.importance[ids.id[v]] = std::max(state.importance[ids.id[v]], options.importance[v]);
+  }
+  state.corners = mesh.indices;
+  state.alive.assign(mesh.triangle_count(), 1);
+  state.live_triangles = mesh.triangle_count();
+  state.layout = attribute_layout(mesh);
+  state.attributes = gather_attributes(mesh, state.layout);
+
+  float3 lo, hi;
+  bounding_box(mesh, lo, hi);
+  state.center = {0.5 * (double(lo.x) + hi.x), 0.5 * (double(lo.y) + hi.y), 0.5 * (double(lo.z) + hi.z)};
+  const double extent = std::max({double(hi.x) - lo.x, double(hi.y) - lo.y, double(hi.z) - lo.z});
+  state.scale = extent > 0 ? 1.0 / extent : 1.0;
+  const vec3d diagonal{double(hi.x) - lo.x, double(hi.y) - lo.y, double(hi.z) - lo.z};
+  result.diagonal = float(length(diagonal));
+
+  const uint64_t triangles = mesh.triangle_count();
+  const uint64_t target = options.target_triangles
+                              ? std::min<uint64_t>(options.target_triangles, triangles)
+                              : uint64_t(std::llround(double(options.target_ratio) * double(triangles)));
+  double limit = std::numeric_limits<double>::infinity();
+  if (options.max_error >= 0) limit = std::min(limit, double(options.max_error) * state.scale);
+  if (options.max_relative_error >= 0)
+    limit = std::min(limit, double(options.max_relative_error) * result.diagonal * state.scale);
+  const double cost_limit = limit * limit;
+
+  std::vector<Channel> channels;
+  if (options.normal_weight > 0 && state.layout.normal >= 0)
+    channels.push_back({uint32_t(state.layout.normal), 3, options.normal_weight, Channel::normal});
+  if (options.uv_weight > 0)
+    for (uint32_t k = 0; k < state.layout.uv_sets; ++k)
+      channels.push_back({uint32_t(state.layout.uv[k]), 2, options.uv_weight, Channel::uv});
+  if (options.color_weight > 0 && state.layout.color >= 0)
+    channels.push_back({uint32_t(state.layout.color), 4, options.color_weight, Channel::color});
+
+  result.record.stride = state.layout.stride;
+  const auto engine_start = clock::now();
+  result.seconds_setup = seconds(start, engine_start);
+  switch (options.metric) {
+    case Metric::edge_length: {
+      EdgeLengthMetric metric;
+      run(state, metric, {}, target, cost_limit, result);
+      break;
+    }
+    default: {
+      const bool constrained = options.metric == Metric::constrained_qem || options.metric == Metric::constrained_memoryless;
+      const bool memoryless = options.metric == Metric::memoryless || options.metric == Metric::constrained_memoryless;
+      QuadricMetric metric(constrained, memoryless, channels);
+      run(state, metric, channels, target, cost_limit, result);
+      break;
+    }
+  }
+  const auto engine_end = clock::now();
+  result.seconds_collapse = seconds(engine_start, engine_end);
+
+  const Snapshot snapshot{state.position_of, state.position, state.moves, state.corners,
+                          state.alive, &state.layout, state.attributes};
+  result.mesh = compact(mesh, snapshot, &result.vertex_origin, &result.triangle_origin);
+  result.relative_error = result.diagonal > 0 ? result.error / result.diagonal : 0;
+  result.input_triangles = triangles;
+  result.input_vertices = mesh.vertex_count();
+  result.output_triangles = result.mesh.triangle_count();
+  result.output_vertices = result.mesh.vertex_count();
+  result.seconds_total = seconds(start, clock::now());
+  return result;
+}
+
+}  // namespace lod

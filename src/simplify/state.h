@@ -1,0 +1,102 @@
+// Internal: the working mesh of the collapse engine, shared by the engine and the cost metrics.
+//
+// Topology lives on position ids; triangle corners hold wedges (input vertex indices). Each pass
+// rebuilds a compact position -> triangles table (CSR) from the live triangles, so nothing is
+// allocated per collapse: within a pass every collapse locks the positions around it, which keeps
+// the table, positions and costs of all other candidates exact until the next rebuild.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/quadric.h"
+#include "lodkit/mesh.h"
+#include "lodkit/simplify.h"
+
+namespace lod::collapse {
+
+using core::vec3d;
+
+// Per-position flags.
+enum : uint8_t {
+  flag_border = 1,      // on an edge with a single triangle
+  flag_complex = 2,     // non-manifold, inconsistently wound, or on a degenerate triangle: never collapses
+  flag_locked = 4,      // never moves (user lock, or lock_border on a border)
+  flag_pass_locked = 8, // touched by a collapse in this pass
+  flag_dead = 16,       // removed by a collapse
+  flag_dirty = 32,      // its star changed in the last pass (or this is the first): re-evaluate
+  flag_seam = 64,       // its corners use more than one wedge or material
+};
+
+// Attribute layout of a wedge: normals (3), each UV set (2), colour (4), for the streams present.
+struct AttributeLayout {
+  uint32_t stride = 0;
+  int normal = -1;                      // offset, -1 if absent
+  int uv[max_uv_sets] = {-1, -1, -1, -1};
+  uint32_t uv_sets = 0;
+  int color = -1;
+};
+
+struct State {
+  const Mesh& mesh;
+  const SimplifyOptions& options;
+  unsigned threads = 1;
+
+  uint32_t position_count = 0;
+  std::vector<uint32_t> position_of;  // per wedge
+  std::vector<float3> position;       // per position, object space
+  std::vector<uint32_t> moves;        // per position: collapses that moved it (0: input positions)
+  std::vector<uint8_t> flags;         // per position
+  std::vector<float> importance;      // per position (largest of its wedges'); empty: all 1
+  std::vector<uint32_t> corners;      // 3 wedges per triangle
+  std::vector<uint8_t> alive;         // per triangle
+  uint64_t live_triangles = 0;
+
+  AttributeLayout layout;
+  std::vector<float> attributes;  // layout.stride per wedge, working values
+
+  // Normalised frame for the metrics: q = (p - center) * scale, so the largest extent is ~1.
+  vec3d center;
+  double scale = 1;
+
+  // Position -> live triangles, rebuilt each pass.
+  std::vector<uint32_t> first;  // position_count + 1
+  std::vector<uint32_t> star;   // triangle ids
+
+  State(const Mesh& m, const SimplifyOptions& o) : mesh(m), options(o) {}
+
+  std::span<const uint32_t> triangles_of(uint32_t p) const {
+    return {star.data() + first[p], star.data() + first[p + 1]};
+  }
+  uint32_t corner_position(uint32_t triangle, uint32_t k) const { return position_of[corners[3 * triangle + k]]; }
+  uint32_t material(uint32_t triangle) const { return mesh.materials.empty() ? 0 : mesh.materials[triangle]; }
+  vec3d normalized(uint32_t p) const {
+    const float3& v = position[p];
+    return vec3d{(double(v.x) - center.x) * scale, (double(v.y) - center.y) * scale, (double(v.z) - center.z) * scale};
+  }
+  float3 object(const vec3d& q) const {
+    return {float(q.x / scale + center.x), float(q.y / scale + center.y), float(q.z / scale + center.z)};
+  }
+  // Corner k of `triangle` in the normalised frame, with position `moved` standing at `to`.
+  vec3d corner_at(uint32_t triangle, uint32_t k, uint32_t moved, const vec3d& to) const {
+    const uint32_t p = corner_position(triangle, k);
+    return p == moved ? to : normalized(p);
+  }
+};
+
+// Number of live triangles around u that also hold position v.
+inline uint32_t shared_triangles(const State& state, uint32_t u, uint32_t v) {
+  uint32_t count = 0;
+  for (const uint32_t t : state.triangles_of(u))
+    count += state.corner_position(t, 0) == v || state.corner_position(t, 1) == v || state.corner_position(t, 2) == v;
+  return count;
+}
+inline bool is_border_edge(const State& state, uint32_t u, uint32_t v) { return shared_triangles(state, u, v) == 1; }
+
+// Which wedge of the kept position each wedge (and material) of the removed position continues as.
+struct WedgePair {
+  uint32_t from, to, material;
+};
+
+}  // namespace lod::collapse

@@ -1,0 +1,180 @@
+// lodkit simplify IN -o OUT: one simplification to a target ratio, triangle count or error.
+// A glTF written from a glTF keeps everything else (nodes, skins, animations, materials); each
+// primitive is simplified on its own, and a skinned one keeps its survivors' joints and weights.
+#include <fmt/format.h>
+
+#include <chrono>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "lodkit/error.h"
+#include "lodkit/io.h"
+#include "lodkit/simplify.h"
+#include "progress.h"
+
+namespace lod::cli {
+
+namespace {
+
+struct SimplifyCommand {
+  std::string input, output;
+  float ratio = -1, error = -1, aggregate = 0;
+  uint64_t triangles = 0;
+  std::string metric = "qem", attributes;
+  bool keep_vertices = false, lock_border = false, prune = false, json = false, force = false;
+  unsigned threads = 0;
+};
+
+Metric parse_metric(const std::string& name) {
+  for (const Metric m : {Metric::edge_length, Metric::qem, Metric::constrained_qem, Metric::memoryless,
+                         Metric::constrained_memoryless})
+    if (name == metric_name(m)) return m;
+  throw_usage("--metric must be one of edge, qem, cqem, memoryless, cmemoryless (got '" + name + "')");
+}
+
+// "normal=1,uv=0.5,color=1"
+void parse_attributes(const std::string& text, SimplifyOptions& options) {
+  size_t begin = 0;
+  while (begin < text.size()) {
+    size_t end = text.find(',', begin);
+    if (end == std::string::npos) end = text.size();
+    const std::string item = text.substr(begin, end - begin);
+    const size_t eq = item.find('=');
+    const std::string name = item.substr(0, eq);
+    float weight = 1.0f;
+    if (eq != std::string::npos) {
+      try {
+        size_t used = 0;
+        weight = std::stof(item.substr(eq + 1), &used);
+        if (used != item.size() - eq - 1 || !(weight >= 0)) throw std::invalid_argument(item);
+      } catch (const std::exception&) {
+        throw_usage("--attributes: '" + item + "' needs a weight >= 0, like normal=1");
+      }
+    }
+    if (name == "normal") options.normal_weight = weight;
+    else if (name == "uv") options.uv_weight = weight;
+    else if (name == "color") options.color_weight = weight;
+    else throw_usage("--attributes: unknown attribute '" + name + "' (normal, uv or color)");
+    begin = end + 1;
+  }
+}
+
+bool is_gltf(const std::string& path) {
+  const FileFormat format = format_from_path(path);
+  return format == FileFormat::gltf || format == FileFormat::glb;
+}
+
+}  // namespace
+
+Command register_simplify(CLI::App& root) {
+  auto o = std::make_shared<SimplifyCommand>();
+  CLI::App* app = root.add_subcommand("simplify", "Simplify a mesh by edge collapses (quadric error metrics)");
+  app->add_option("input", o->input, "Input mesh file")->required();
+  app->add_option("-o,--output", o->output, "Output mesh file; the format follows the extension")->required();
+  app->add_option("--ratio", o->ratio, "Fraction of the triangles to keep, in [0, 1]");
+  app->add_option("--triangles", o->triangles, "Number of triangles to keep");
+  app->add_option("--error", o->error, "Stop before the error exceeds this fraction of the bounding-box diagonal");
+  app->add_option("--metric", o->metric, "edge, qem (default), cqem, memoryless or cmemoryless");
+  app->add_option("--attributes", o->attributes, "Attribute weights, e.g. normal=1,uv=1,color=1");
+  app->add_flag("--keep-vertices", o->keep_vertices, "Use only input vertices (LODs can share one vertex buffer)");
+  app->add_flag("--lock-border", o->lock_border, "Never move border vertices");
+  app->add_option("--aggregate", o->aggregate, "Also merge positions closer than this distance (object space)");
+  app->add_flag("--prune", o->prune, "Drop components smaller than the error reached");
+  app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
+  app->add_flag("--force", o->force, "Allow writing over the input file");
+  app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
+  return {app, [o] {
+            if (o->ratio < 0 && o->triangles == 0 && o->error < 0)
+              throw_usage("simplify needs a target: --ratio R, --triangles N or --error E");
+            if (o->ratio > 1) throw_usage("--ratio must be in [0, 1]");
+            check_not_input(o->input, o->output, o->force);
+            SimplifyOptions options{
+                .target_ratio = o->ratio >= 0 ? o->ratio : 0.0f,
+                .target_triangles = o->triangles,
+                .max_relative_error = o->error,
+                .metric = parse_metric(o->metric),
+                .keep_vertices = o->keep_vertices,
+                .lock_border = o->lock_border,
+                .aggregate_distance = o->aggregate,
+                .prune = o->prune,
+                .record = false,
+                .threads = o->threads,
+            };
+            if (!o->attributes.empty()) parse_attributes(o->attributes, options);
+            if (o->ratio < 0 && o->triangles == 0) options.target_ratio = 0;  // error only
+
+            const bool as_scene = is_gltf(o->input) && is_gltf(o->output);
+            auto start = std::chrono::steady_clock::now();
+            Scene scene;
+            std::vector<Mesh*> meshes;
+            Mesh mesh;
+            {
+              ProgressBar bar("loading");
+              if (as_scene) scene = read_scene(o->input, bar.read_options());
+              else mesh = read_mesh(o->input, bar.read_options());
+            }
+            if (as_scene) for (Primitive& p : scene.primitives) meshes.push_back(&p.mesh);
+            else meshes.push_back(&mesh);
+            const double load_seconds = seconds_since(start);
+
+            uint64_t total = 0;
+            for (Mesh* m : meshes) validate(*m, o->input), total += m->triangle_count();
+            uint64_t in_triangles = 0, out_triangles = 0, in_vertices = 0, out_vertices = 0;
+            float error = 0, relative_error = 0;
+            uint64_t passes = 0, collapses = 0, rejected[4] = {};
+            start = std::chrono::steady_clock::now();
+            {
+              ProgressBar bar("simplifying");
+              uint64_t done = 0;
+              for (Mesh* m : meshes) {
+                SimplifyOptions each = options;
+                // A triangle budget is shared in proportion to each primitive's size.
+                if (o->triangles)
+                  each.target_triangles =
+                      std::max<uint64_t>(1, uint64_t(double(o->triangles) * double(m->triangle_count()) / double(total)));
+                const uint64_t size = m->triangle_count();
+                each.progress = [&, size](double f) { bar.update((double(done) + f * double(size)) / double(total)); };
+                SimplifyResult r = simplify(*m, each);
+                done += size;
+                in_triangles += r.input_triangles, out_triangles += r.output_triangles;
+                in_vertices += r.input_vertices, out_vertices += r.output_vertices;
+                error = std::max(error, r.error);
+                passes += r.passes, collapses += r.collapses;
+                rejected[0] += r.rejected_topology, rejected[1] += r.rejected_seam;
+                rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape;
+                relative_error = std::max(relative_error, r.relative_error);
+                *m = std::move(r.mesh);
+              }
+            }
+            const double simplify_seconds = seconds_since(start);
+            start = std::chrono::steady_clock::now();
+            if (as_scene) write_scene(scene, o->output);
+            else write_mesh(mesh, o->output);
+            const double write_seconds = seconds_since(start);
+
+            if (o->json) {
+              nlohmann::json j = {{"input", o->input}, {"output", o->output}, {"metric", o->metric},
+                                  {"input_triangles", in_triangles}, {"output_triangles", out_triangles},
+                                  {"input_vertices", in_vertices}, {"output_vertices", out_vertices},
+                                  {"error", error}, {"relative_error", relative_error},
+                                  {"passes", passes}, {"collapses", collapses},
+                                  {"rejected", {{"topology", rejected[0]}, {"seam", rejected[1]},
+                                                {"flip", rejected[2]}, {"shape", rejected[3]}}},
+                                  {"load_seconds", load_seconds}, {"simplify_seconds", simplify_seconds},
+                                  {"write_seconds", write_seconds}};
+              fmt::print("{}\n", j.dump(2));
+            } else {
+              fmt::print("{:<10}{:>12}{:>12}{:>14}{:>10}  {}\n", "step", "triangles", "vertices", "error", "time", "");
+              fmt::print("{:<10}{:>12}{:>12}{:>14}{:>9.3f}s  {}\n", "read", in_triangles, in_vertices, "", load_seconds,
+                         o->input);
+              fmt::print("{:<10}{:>12}{:>12}{:>13.4f}%{:>9.3f}s  {} ({} = {:.6g})\n", "simplify", out_triangles,
+                         out_vertices, 100.0 * relative_error, simplify_seconds, o->metric, "error", error);
+              fmt::print("{:<10}{:>12}{:>12}{:>14}{:>9.3f}s  {}\n", "write", out_triangles, out_vertices, "",
+                         write_seconds, o->output);
+            }
+            return 0;
+          }};
+}
+
+}  // namespace lod::cli
