@@ -81,7 +81,7 @@ class Engine {
       // track the greedy order more closely), and never more than are still needed.
       const uint64_t needed = (s_.live_triangles - target_triangles + 1) / 2;
       const uint64_t live_positions = std::max<uint64_t>(1, s_.live_triangles / 2);
-      const size_t goal = size_t(std::clamp<uint64_t>(std::min(needed, live_positions / 10), 1, order.size()));
+      const size_t goal = size_t(std::clamp<uint64_t>(std::min(needed, live_positions / 3), 1, order.size()));
       const size_t considered = std::min(order.size(), goal * 2);
       const auto cheaper = [&](uint32_t a, uint32_t b) {
         return best_[a].cost < best_[b].cost || (best_[a].cost == best_[b].cost && a < b);
@@ -136,15 +136,16 @@ class Engine {
 
   // Border and non-manifold flags from each position's star; clears the pass locks.
   void classify() {
-    core::parallel_for(s_.position_count, s_.threads, [&](size_t u) {
+    core::parallel_blocks(s_.position_count, 4096, s_.threads, [&](size_t, size_t begin, size_t end) {
+     std::vector<uint32_t> next, prev;  // per block: thread_local costs a TLS lookup per use here
+     for (size_t u = begin; u < end; ++u) {
       uint8_t& f = s_.flags[u];
       // Only stars a collapse touched (all of them locked it) can have changed.
       f = uint8_t((f & ~(flag_dirty | flag_pass_locked)) | ((f & flag_pass_locked) || first_pass_ ? flag_dirty : 0));
-      if ((f & flag_dead) || !(f & flag_dirty)) return;
+      if ((f & flag_dead) || !(f & flag_dirty)) continue;
       f &= uint8_t(~(flag_border | flag_complex | flag_seam));
       const auto star = s_.triangles_of(uint32_t(u));
-      if (star.empty()) return;
-      thread_local std::vector<uint32_t> next, prev;
+      if (star.empty()) continue;
       next.clear(), prev.clear();
       bool complex = false, seam = false;
       uint32_t wedge = none, material = none;
@@ -194,6 +195,7 @@ class Engine {
       if (border) f |= flag_border;
       if (seam) f |= flag_seam;
       if (border && s_.options.lock_border) f |= flag_locked;
+     }
     });
     first_pass_ = false;
   }
@@ -201,17 +203,18 @@ class Engine {
   void evaluate_all() {
     best_.resize(s_.position_count);
     scratch_.resize(std::max<size_t>(scratch_.size(), 1));
-    core::parallel_for(s_.position_count, s_.threads, [&](size_t i) {
+    core::parallel_blocks(s_.position_count, 4096, s_.threads, [&](size_t, size_t begin, size_t end) {
+     Scratch scratch;
+     for (size_t i = begin; i < end; ++i) {
       const uint32_t u = uint32_t(i);
       // An edge's cost and checks depend on the stars of its two ends: keep u's best edge unless
       // u or a neighbour changed.
       bool dirty = s_.flags[u] & flag_dirty;
       for (const uint32_t t : s_.triangles_of(u))
         for (uint32_t k = 0; k < 3 && !dirty; ++k) dirty = s_.flags[s_.corner_position(t, k)] & flag_dirty;
-      if (!dirty) return;
+      if (!dirty) continue;
       best_[u] = Best{};
-      if (s_.flags[u] & (flag_dead | flag_complex)) return;
-      thread_local Scratch scratch;
+      if (s_.flags[u] & (flag_dead | flag_complex)) continue;
       // Each edge is evaluated from its lower position.
       for (const uint32_t t : s_.triangles_of(u))
         for (uint32_t k = 0; k < 3; ++k) {
@@ -228,6 +231,7 @@ class Engine {
           const float cost = float(decision.placement.cost);
           if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
         }
+     }
     });
   }
 
