@@ -59,8 +59,10 @@ struct SimplifyOptions {
 
   // Aggregation (Garland–Heckbert "virtual pairs"): positions closer than this object-space distance
   // that share no edge may also be contracted, which merges separate parts. 0 disables.
+  // Not available yet: a non-zero value throws lod::Error (usage).
   float aggregate_distance = 0.0f;
-  // Drop connected components whose bounding-box diagonal is below the error bound reached.
+  // Drop connected components whose bounding-box diagonal is below the error reached. Done after
+  // the collapses: the record (and replay) describe the mesh before pruning.
   bool prune = false;
 
   // Record every collapse in SimplifyResult::record (needed for replay, undo and progressive meshes).

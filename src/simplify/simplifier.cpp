@@ -14,6 +14,7 @@
 #include <numeric>
 
 #include "core/parallel.h"
+#include "core/union_find.h"
 #include "lodkit/error.h"
 #include "simplify/edge_length.h"
 #include "simplify/quadric_metric.h"
@@ -579,6 +580,35 @@ void run(State& state, MetricT& metric, const std::vector<Channel>& channels, ui
   result.rejected_shape = engine.rejected_[int(Reject::shape)];
 }
 
+// Drops the live triangles of every connected component whose bounding-box diagonal is below `size`.
+uint64_t prune_components(State& state, double size) {
+  const size_t triangles = state.corners.size() / 3;
+  core::UnionFind sets(state.position_count);
+  for (size_t t = 0; t < triangles; ++t)
+    if (state.alive[t]) {
+      sets.unite(state.corner_position(uint32_t(t), 0), state.corner_position(uint32_t(t), 1));
+      sets.unite(state.corner_position(uint32_t(t), 0), state.corner_position(uint32_t(t), 2));
+    }
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  std::vector<float3> lo(state.position_count, {inf, inf, inf}), hi(state.position_count, {-inf, -inf, -inf});
+  for (size_t t = 0; t < triangles; ++t)
+    if (state.alive[t])
+      for (uint32_t k = 0; k < 3; ++k) {
+        const uint32_t p = state.corner_position(uint32_t(t), k), root = sets.find(p);
+        const float3& x = state.position[p];
+        lo[root] = {std::min(lo[root].x, x.x), std::min(lo[root].y, x.y), std::min(lo[root].z, x.z)};
+        hi[root] = {std::max(hi[root].x, x.x), std::max(hi[root].y, x.y), std::max(hi[root].z, x.z)};
+      }
+  uint64_t pruned = 0;
+  for (size_t t = 0; t < triangles; ++t) {
+    if (!state.alive[t]) continue;
+    const uint32_t root = sets.find(state.corner_position(uint32_t(t), 0));
+    const vec3d d{double(hi[root].x) - lo[root].x, double(hi[root].y) - lo[root].y, double(hi[root].z) - lo[root].z};
+    if (length(d) < size) state.alive[t] = 0, --state.live_triangles, ++pruned;
+  }
+  return pruned;
+}
+
 void check_options(const Mesh& mesh, const SimplifyOptions& o) {
   if (!(o.target_ratio >= 0 && o.target_ratio <= 1)) throw_usage("simplify: target_ratio must be in [0, 1]");
   if (!o.locked.empty() && o.locked.size() != mesh.vertex_count())
@@ -672,6 +702,8 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   const auto engine_end = clock::now();
   result.seconds_collapse = seconds(engine_start, engine_end);
 
+  // Pruning comes after the record: replaying the record gives the mesh before pruning.
+  if (options.prune) result.pruned_triangles = prune_components(state, result.error);
   const Snapshot snapshot{state.position_of, state.position, state.moves, state.corners,
                           state.alive, &state.layout, state.attributes};
   result.mesh = compact(mesh, snapshot, &result.vertex_origin, &result.triangle_origin);
