@@ -107,12 +107,12 @@ class QuadricMetric {
     }
   }
 
-  // Lindstrom–Turk: keep the volume enclosed by the star (one plane, the volume gradient) and, on a
-  // border edge, the border's area vector (|c x p - e|^2, see below).
+  // Lindstrom–Turk: keep the volume enclosed by the star (one plane, the volume gradient) and, when
+  // either end is on a border, the border's area vector (|c x p - e|^2, see below).
   void add_preservation_terms(const State& state, const EdgeQuery& edge, QuadricD& q) const {
     vec3d gradient, sources_minus_targets, old_area_vector;
     double h = 0, star_area = 0;
-    const bool border = (state.flags[edge.kept] & flag_border) && (state.flags[edge.removed] & flag_border);
+    const bool border = (state.flags[edge.kept] | state.flags[edge.removed]) & flag_border;
     for (const uint32_t x : {edge.kept, edge.removed}) {
       const vec3d px = state.normalized(x);
       for (const uint32_t t : state.triangles_of(x)) {
@@ -128,14 +128,17 @@ class QuadricMetric {
           star_area += 0.5 * length(n);
         }
         if (!border) continue;
-        // Directed border edges x->next and prev->x; the edge between kept and removed counted once.
-        if (next != edge.removed && is_border_edge(state, x, next) && !(x == edge.removed && next == edge.kept)) {
+        // Directed border edges: each x->next once from its source's star; prev->x only when prev
+        // is outside the edge (otherwise it was met as x->next). Edges inside the edge vanish.
+        const bool next_inside = next == edge.kept || next == edge.removed;
+        const bool prev_inside = prev == edge.kept || prev == edge.removed;
+        if (is_border_edge(state, x, next)) {
           old_area_vector = old_area_vector + cross(px, pn);
-          if (next != edge.kept) sources_minus_targets = sources_minus_targets - pn;
+          if (!next_inside) sources_minus_targets = sources_minus_targets - pn;
         }
-        if (prev != edge.removed && is_border_edge(state, x, prev) && !(x == edge.removed && prev == edge.kept)) {
+        if (!prev_inside && is_border_edge(state, x, prev)) {
           old_area_vector = old_area_vector + cross(pp, px);
-          if (prev != edge.kept) sources_minus_targets = sources_minus_targets + pp;
+          sources_minus_targets = sources_minus_targets + pp;
         }
       }
     }
