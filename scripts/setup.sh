@@ -12,6 +12,8 @@ packages=(
   libeigen3-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libassimp-dev                          # bench/io: the peer loader
+  libmeshoptimizer-dev libcgal-dev libopenmesh-dev   # bench/peers: the simplifiers we measure against
+  gnuplot-nox                            # bench plots (rate-distortion)
   nodejs                                 # gltf-validator (Khronos) in the tests; npm ships with it
   time                                   # /usr/bin/time -v for peak memory in benchmarks
 )
