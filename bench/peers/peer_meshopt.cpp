@@ -1,0 +1,38 @@
+// meshoptimizer 0.18 (Debian libmeshoptimizer-dev): meshopt_simplify on positions only, to the same
+// triangle target, with no error limit (target_error = FLT_MAX) and no options.
+//
+//   peer_meshopt IN OUT TARGET_TRIANGLES RUNS [--json]
+//
+// meshopt_simplify reads the input buffers without changing them, so nothing is rebuilt between runs;
+// the timed call is meshopt_simplify alone (it writes an index buffer over the original vertices, which
+// is meshoptimizer's normal output; compacting the vertices for OUT is untimed).
+#include <meshoptimizer.h>
+
+#include <cfloat>
+
+#include "harness.h"
+
+int main(int argc, char** argv) {
+  return bench::run_main("peer_meshopt", "peer_meshopt IN OUT TARGET_TRIANGLES RUNS [--json]", [&] {
+    const bench::Args args = bench::parse_args(argc, argv, {});
+    const lod::Mesh input = bench::load_positions(args.input);
+    struct State {
+      std::vector<uint32_t> destination;
+      size_t index_count = 0;
+      float result_error = 0;
+    };
+    const double rss = bench::peak_rss_mib();
+    std::vector<double> seconds;
+    State s = bench::timed_runs(
+        args.runs, seconds, [&] { return State{std::vector<uint32_t>(input.indices.size()), 0, 0.0f}; },
+        [&](State& state) {
+          state.index_count = meshopt_simplify(state.destination.data(), input.indices.data(), input.indices.size(),
+                                               &input.positions[0].x, input.vertex_count(), sizeof(lod::float3),
+                                               size_t(args.target_triangles) * 3, FLT_MAX, 0, &state.result_error);
+        });
+    s.destination.resize(s.index_count);
+    const lod::Mesh result = bench::compact(input.positions, s.destination);
+    bench::finish("meshopt", args, input, result, seconds, rss, {{"result_error_relative", s.result_error}});
+    return 0;
+  });
+}
