@@ -9,6 +9,10 @@
 #include <thread>
 #include <vector>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 namespace lod::core {
 
 inline unsigned thread_count(unsigned requested) {
@@ -19,6 +23,7 @@ inline unsigned thread_count(unsigned requested) {
 
 // Calls fn(block, begin, end) for every block of `block_size` items of [0, count), on up to
 // `threads` threads. Blocks are claimed dynamically; fn must only write block-owned outputs.
+// Runs inline (no task overhead) when one thread or one block is enough.
 template <class Fn>
 void parallel_blocks(size_t count, size_t block_size, unsigned threads, Fn&& fn) {
   const size_t blocks = (count + block_size - 1) / block_size;
@@ -27,14 +32,14 @@ void parallel_blocks(size_t count, size_t block_size, unsigned threads, Fn&& fn)
     for (size_t b = 0; b < blocks; ++b) fn(b, b * block_size, std::min(count, (b + 1) * block_size));
     return;
   }
-  std::atomic<size_t> next{0};
-  auto work = [&] {
-    for (size_t b; (b = next.fetch_add(1, std::memory_order_relaxed)) < blocks;)
-      fn(b, b * block_size, std::min(count, (b + 1) * block_size));
-  };
-  std::vector<std::jthread> pool;
-  for (size_t k = 1; k < workers; ++k) pool.emplace_back(work);
-  work();
+  // oneTBB's persistent workers: callers run many short parallel steps (the simplifier several per
+  // pass), where starting threads each time would cost more than the work.
+  tbb::task_arena arena{static_cast<int>(workers)};
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t b = range.begin(); b < range.end(); ++b) fn(b, b * block_size, std::min(count, (b + 1) * block_size));
+    });
+  });
 }
 
 // parallel_blocks for independent per-item work: fn(i) for every i in [0, count).

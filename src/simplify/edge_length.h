@@ -21,6 +21,7 @@ class EdgeLengthMetric {
   }
   void collapsed(State&, const EdgeQuery&, const vec3d&) {}
   void attributes_at(const State&, uint32_t, const vec3d&, float*) const {}
+  bool reads_neighbourhood() const { return false; }
 };
 
 }  // namespace lod::collapse

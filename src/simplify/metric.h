@@ -6,6 +6,9 @@
 //   void collapsed(State&, const EdgeQuery&, const vec3d& position)   merge per-vertex data
 //   void attributes_at(const State&, uint32_t wedge, const vec3d& position, float* out) const
 //       optimal values of the optimised attribute channels (metrics without attributes: none)
+//   bool reads_neighbourhood() const
+//       true if an edge's cost depends on more than its two ends' data (memoryless quadrics are
+//       rebuilt from the faces around them): a collapse then changes the costs two rings away
 //
 // Costs are mean squared distances in the normalised frame (largest extent ~1), so a cost's square
 // root divided by State::scale is an object-space distance.

@@ -61,6 +61,8 @@ class QuadricMetric {
     attributes_.optimal_values(wedge, position, out);
   }
 
+  bool reads_neighbourhood() const { return memoryless_; }
+
   // The stored quadric of a position (for tests: memoryless quadrics equal a rebuild from scratch).
   const Quadric& quadric(uint32_t position) const { return quadric_[position]; }
 

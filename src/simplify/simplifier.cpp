@@ -64,21 +64,24 @@ class Engine {
 
   void run(uint64_t target_triangles, double cost_limit) {
     const uint64_t start_triangles = s_.live_triangles;
-    metric_first_ = true;
+    for (uint32_t t = 0; t < s_.alive.size(); ++t)
+      if (s_.alive[t]) s_.live.push_back(t);
+    bool first = true;
     while (s_.live_triangles > target_triangles) {
       build_star();
+      roll_flags(first);
       classify();
-      if (metric_first_) metric_.initialize(s_), metric_first_ = false;
+      if (first) metric_.initialize(s_);
       else metric_.begin_pass(s_);
       ++result_.passes;
-
-      evaluate_all();
+      evaluate_all(first);
+      first = false;
       std::vector<uint32_t> order;
       for (uint32_t u = 0; u < s_.position_count; ++u)
         if (best_[u].other != none && best_[u].cost <= cost_limit) order.push_back(u);
       if (order.empty()) break;
 
-      // This pass applies at most a tenth of the live positions' worth of collapses (finer passes
+      // This pass applies at most a third of the live positions' worth of collapses (finer passes
       // track the greedy order more closely), and never more than are still needed.
       const uint64_t needed = (s_.live_triangles - target_triangles + 1) / 2;
       const uint64_t live_positions = std::max<uint64_t>(1, s_.live_triangles / 2);
@@ -91,25 +94,48 @@ class Engine {
       order.resize(considered);
       std::sort(order.begin(), order.end(), cheaper);
 
+      // Full checks run in parallel on chunks of the candidates still free, then the chunk is
+      // applied in cost order. A candidate is applied only if none of its positions was locked by
+      // an earlier collapse, and then everything its checks read (its two stars and their corners)
+      // is as the pass found it: the verdicts equal those of checking in sequence, on any number
+      // of threads.
       size_t applied = 0, deferred = 0;
-      Scratch& scratch = scratch_[0];
-      for (const uint32_t u : order) {
-        if (s_.live_triangles <= target_triangles) break;
-        const uint32_t v = best_[u].other;
-        if ((s_.flags[u] | s_.flags[v]) & flag_pass_locked) continue;
-        Decision decision;
-        const Reject reject = evaluate(u, v, scratch, decision, true);
-        if (reject != Reject::none) {
-          // Ranked but not allowed: u waits for the next pass with its cheapest allowed edge.
-          rejected_[int(reject)].fetch_add(1, std::memory_order_relaxed);
-          best_[u] = best_checked(u, scratch);
-          ++deferred;
-          continue;
+      const size_t chunk = std::max<size_t>(256, 64 * s_.threads);
+      std::vector<uint32_t> batch;
+      for (size_t next = 0; next < order.size() && s_.live_triangles > target_triangles;) {
+        batch.clear();
+        for (; next < order.size() && batch.size() < chunk; ++next)
+          if (!((s_.flags[order[next]] | s_.flags[best_[order[next]].other]) & flag_pass_locked))
+            batch.push_back(order[next]);
+        decisions_.resize(batch.size());
+        verdicts_.resize(batch.size());
+        fallback_.resize(batch.size());
+        core::parallel_blocks(batch.size(), 32, s_.threads, [&](size_t, size_t begin, size_t end) {
+          Scratch& scratch = block_scratch();
+          for (size_t i = begin; i < end; ++i) {
+            const uint32_t u = batch[i];
+            verdicts_[i] = evaluate(u, best_[u].other, scratch, decisions_[i], true);
+            // Ranked but not allowed: u waits for the next pass with its cheapest allowed edge.
+            if (verdicts_[i] != Reject::none) fallback_[i] = best_checked(u, scratch);
+          }
+        });
+        for (size_t i = 0; i < batch.size(); ++i) {
+          if (s_.live_triangles <= target_triangles) break;
+          const uint32_t u = batch[i], v = best_[u].other;
+          if ((s_.flags[u] | s_.flags[v]) & flag_pass_locked) continue;
+          if (verdicts_[i] != Reject::none) {
+            rejected_[int(verdicts_[i])] += 1;
+            best_[u] = fallback_[i];
+            mark_[u] |= mark_fallback;
+            ++deferred;
+            continue;
+          }
+          apply(decisions_[i], scratch_);
+          ++applied;
         }
-        apply(decision, scratch);
-        ++applied;
       }
       if (applied == 0 && deferred == 0) break;
+      std::erase_if(s_.live, [&](uint32_t t) { return !s_.alive[t]; });
       if (s_.options.progress && start_triangles > target_triangles)
         s_.options.progress(double(start_triangles - s_.live_triangles) / double(start_triangles - target_triangles));
     }
@@ -122,29 +148,44 @@ class Engine {
   };
 
   void build_star() {
-    const size_t triangles = s_.corners.size() / 3;
     s_.first.assign(s_.position_count + 1, 0);
-    for (size_t t = 0; t < triangles; ++t)
-      if (s_.alive[t])
-        for (uint32_t k = 0; k < 3; ++k) ++s_.first[s_.corner_position(uint32_t(t), k) + 1];
+    for (const uint32_t t : s_.live)
+      for (uint32_t k = 0; k < 3; ++k) ++s_.first[s_.corner_position(t, k) + 1];
     for (uint32_t p = 0; p < s_.position_count; ++p) s_.first[p + 1] += s_.first[p];
     s_.star.resize(s_.first[s_.position_count]);
-    std::vector<uint32_t> fill(s_.first.begin(), s_.first.end() - 1);
-    for (size_t t = 0; t < triangles; ++t)
-      if (s_.alive[t])
-        for (uint32_t k = 0; k < 3; ++k) s_.star[fill[s_.corner_position(uint32_t(t), k)]++] = uint32_t(t);
+    s_.wings.resize(s_.star.size());
+    fill_.assign(s_.first.begin(), s_.first.end() - 1);
+    for (const uint32_t t : s_.live) {
+      const uint32_t* c = &s_.corner_pos[3 * size_t(t)];
+      for (uint32_t k = 0; k < 3; ++k) {
+        const uint32_t slot = fill_[c[k]]++;
+        s_.star[slot] = t;
+        s_.wings[slot] = {c[(k + 1) % 3], c[(k + 2) % 3]};
+      }
+    }
   }
 
-  // Border and non-manifold flags from each position's star; clears the pass locks.
+  // A position whose star a collapse touched (it was locked) needs its edges ranked again; the pass
+  // locks are lifted. On the first pass everything is new.
+  void roll_flags(bool first) {
+    for (uint8_t& f : s_.flags) {
+      const bool touched = first || (f & flag_pass_locked);
+      f = uint8_t((f & ~(flag_dirty | flag_pass_locked)) | (touched ? flag_dirty : 0));
+      if (first) f |= flag_changed;
+    }
+  }
+
+  // Border, seam and non-manifold flags of the positions whose star gained or lost triangles. The
+  // other locked positions only saw a corner renamed (removed -> kept), which the link condition
+  // keeps manifold and which moves a border edge along with it.
   void classify() {
     core::parallel_blocks(s_.position_count, 4096, s_.threads, [&](size_t, size_t begin, size_t end) {
      std::vector<uint32_t> next, prev;  // per block: thread_local costs a TLS lookup per use here
      for (size_t u = begin; u < end; ++u) {
       uint8_t& f = s_.flags[u];
-      // Only stars a collapse touched (all of them locked it) can have changed.
-      f = uint8_t((f & ~(flag_dirty | flag_pass_locked)) | ((f & flag_pass_locked) || first_pass_ ? flag_dirty : 0));
-      if ((f & flag_dead) || !(f & flag_dirty)) continue;
-      f &= uint8_t(~(flag_border | flag_complex | flag_seam));
+      if (!(f & flag_changed)) continue;
+      f &= uint8_t(~(flag_border | flag_complex | flag_seam | flag_changed));
+      if (f & flag_dead) continue;
       const auto star = s_.triangles_of(uint32_t(u));
       if (star.empty()) continue;
       next.clear(), prev.clear();
@@ -198,52 +239,77 @@ class Engine {
       if (border && s_.options.lock_border) f |= flag_locked;
      }
     });
-    first_pass_ = false;
   }
 
-  void evaluate_all() {
+  // Each live position's cheapest edge to a higher position, by cost alone (no checks).
+  void evaluate_all(bool first) {
     best_.resize(s_.position_count);
-    scratch_.resize(std::max<size_t>(scratch_.size(), 1));
+    mark_.resize(s_.position_count);
+    const bool wide = first || metric_.reads_neighbourhood();
     core::parallel_blocks(s_.position_count, 4096, s_.threads, [&](size_t, size_t begin, size_t end) {
-     Scratch scratch;
+     Scratch& scratch = block_scratch();
      for (size_t i = begin; i < end; ++i) {
       const uint32_t u = uint32_t(i);
-      // An edge's cost and checks depend on the stars of its two ends: keep u's best edge unless
-      // u or a neighbour changed.
-      bool dirty = s_.flags[u] & flag_dirty;
-      for (const uint32_t t : s_.triangles_of(u))
-        for (uint32_t k = 0; k < 3 && !dirty; ++k) dirty = s_.flags[s_.corner_position(t, k)] & flag_dirty;
-      if (!dirty) continue;
-      best_[u] = Best{};
-      if (s_.flags[u] & (flag_dead | flag_complex)) continue;
-      // Each edge is evaluated from its lower position.
-      for (const uint32_t t : s_.triangles_of(u))
-        for (uint32_t k = 0; k < 3; ++k) {
-          const uint32_t v = s_.corner_position(t, k);
-          if (v <= u || (s_.flags[v] & (flag_dead | flag_complex))) continue;
-          bool seen = false;  // the neighbour also appears in an earlier triangle
-          for (const uint32_t t2 : s_.triangles_of(u)) {
-            if (t2 == t) break;
-            seen |= s_.corner_position(t2, 0) == v || s_.corner_position(t2, 1) == v || s_.corner_position(t2, 2) == v;
-          }
-          if (seen) continue;
-          Decision decision;
-          if (evaluate(u, v, scratch, decision, false) != Reject::none) continue;
-          const float cost = float(decision.placement.cost);
-          if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
-        }
+      bool full = false, partial = false;
+      if (wide) {
+        // Memoryless costs read the faces around both ends: a collapse changes the costs of every
+        // edge with an end in its locked ring.
+        full = s_.flags[u] & flag_dirty;
+        for (const Wing& w : s_.wings_of(u)) full = full || ((s_.flags[w.next] | s_.flags[w.prev]) & flag_dirty);
+      } else {
+        // Other costs read only the edge's two ends, so a collapse changes only the edges at its
+        // kept position (see mark_changed_edges).
+        full = mark_[u] & mark_full;
+        partial = mark_[u] & mark_partial;
+      }
+      if (!full && !partial) continue;
+      if (full) best_[u] = Best{}, mark_[u] &= uint8_t(~mark_fallback);
+      if (s_.flags[u] & (flag_dead | flag_complex)) {
+        best_[u] = Best{};
+        continue;
+      }
+      neighbours(u, none, scratch.candidates);
+      for (const uint32_t v : scratch.candidates) {
+        if (v <= u || (s_.flags[v] & (flag_dead | flag_complex))) continue;
+        if (!full && !(mark_[v] & mark_kept)) continue;
+        Decision decision;
+        if (evaluate(u, v, scratch, decision, false) != Reject::none) continue;
+        const float cost = float(decision.placement.cost);
+        if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
+      }
      }
     });
+    for (uint8_t& m : mark_) m &= mark_fallback;
+  }
+
+  // After a collapse, the edges that changed are those at the kept position (its quadric and place
+  // moved, and it took over the removed position's edges). A neighbour whose best edge was one of
+  // them, or whose best is a fallback chosen under checks, ranks all its edges again; any other
+  // only needs to weigh its edge to the kept position against its unchanged best.
+  void mark_changed_edges(const Decision& d) {
+    mark_[d.kept] |= mark_full | mark_kept;
+    for (const uint32_t x : {d.kept, d.removed})
+      for (const Wing& w : s_.wings_of(x))
+        for (const uint32_t p : {w.next, w.prev}) {
+          const uint32_t other = best_[p].other;
+          if (p == d.kept || p == d.removed) continue;
+          const bool stale = other == d.kept || other == d.removed || (mark_[p] & mark_fallback);
+          mark_[p] |= stale ? mark_full : mark_partial;
+        }
   }
 
   // The distinct positions around x, except `skip`.
   void neighbours(uint32_t x, uint32_t skip, std::vector<uint32_t>& out) const {
     out.clear();
-    for (const uint32_t t : s_.triangles_of(x))
-      for (uint32_t k = 0; k < 3; ++k) {
-        const uint32_t p = s_.corner_position(t, k);
-        if (p != x && p != skip && std::find(out.begin(), out.end(), p) == out.end()) out.push_back(p);
-      }
+    const auto wings = s_.wings_of(x);
+    // In a manifold fan every neighbour follows the centre in exactly one triangle, and only a
+    // border fan's last neighbour does not: `next` needs no de-duplication there.
+    const bool simple = !(s_.flags[x] & (flag_complex | flag_border));
+    for (const Wing& w : wings)
+      if (w.next != skip && (simple || std::find(out.begin(), out.end(), w.next) == out.end())) out.push_back(w.next);
+    if (simple) return;
+    for (const Wing& w : wings)
+      if (w.prev != skip && std::find(out.begin(), out.end(), w.prev) == out.end()) out.push_back(w.prev);
   }
 
   // Wedge pairs for collapsing `removed` into `kept`: every (wedge, material) of removed must meet
@@ -294,17 +360,14 @@ class Engine {
   // `removed` both at p?
   Reject check_faces(uint32_t kept, uint32_t removed, const vec3d& p) const {
     const double min_dot = s_.options.min_normal_dot, max_aspect = s_.options.max_aspect_ratio;
-    for (const uint32_t x : {kept, removed})
-      for (const uint32_t t : s_.triangles_of(x)) {
-        vec3d before[3], after[3];
-        bool shared = false;
-        for (uint32_t k = 0; k < 3; ++k) {
-          const uint32_t c = s_.corner_position(t, k);
-          shared |= c == (x == kept ? removed : kept);
-          before[k] = s_.normalized(c);
-          after[k] = c == x ? p : before[k];
-        }
-        if (shared) continue;  // removed by the collapse
+    for (const uint32_t x : {kept, removed}) {
+      const uint32_t other = x == kept ? removed : kept;
+      const vec3d px = s_.normalized(x);
+      for (const Wing& w : s_.wings_of(x)) {
+        if (w.next == other || w.prev == other) continue;  // removed by the collapse
+        // The triangle as (x, next, prev), its own winding.
+        const vec3d before[3] = {px, s_.normalized(w.next), s_.normalized(w.prev)};
+        const vec3d after[3] = {p, before[1], before[2]};
         const vec3d n0 = cross(before[1] - before[0], before[2] - before[0]);
         const vec3d n1 = cross(after[1] - after[0], after[2] - after[0]);
         const double l0 = length(n0), l1 = length(n1);
@@ -315,6 +378,7 @@ class Engine {
         // Aspect ratio: longest edge over its altitude, L / (2 area / L) = L^2 / |n|.
         if (max_aspect > 0 && longest / l1 > max_aspect) return Reject::shape;
       }
+    }
     return Reject::none;
   }
 
@@ -330,9 +394,9 @@ class Engine {
 
     auto& faces = scratch.removed_faces;
     faces.clear();
-    for (const uint32_t t : s_.triangles_of(u))
-      if (s_.corner_position(t, 0) == v || s_.corner_position(t, 1) == v || s_.corner_position(t, 2) == v)
-        faces.push_back(t);
+    const auto wings = s_.wings_of(u);
+    for (size_t i = 0; i < wings.size(); ++i)
+      if (wings[i].next == v || wings[i].prev == v) faces.push_back(s_.star[s_.first[u] + i]);
     if (faces.empty() || faces.size() > 2) return Reject::topology;
     // An interior edge between two border positions would pinch the surface.
     if ((fu & flag_border) && (fv & flag_border) && faces.size() != 1) return Reject::topology;
@@ -367,12 +431,8 @@ class Engine {
       // (v, a, b) both exist (a tetrahedron): the collapse would make them one doubled face.
       bool in_link[2] = {false, false};
       for (int i = 0; i < 2; ++i)
-        for (const uint32_t t : s_.triangles_of(i == 0 ? u : v)) {
-          uint32_t hits = 0;
-          for (uint32_t k = 0; k < 3; ++k) {
-            const uint32_t c = s_.corner_position(t, k);
-            hits += c == opposite[0] || c == opposite[1];
-          }
+        for (const Wing& w : s_.wings_of(i == 0 ? u : v)) {
+          const uint32_t hits = (w.next == opposite[0] || w.next == opposite[1]) + (w.prev == opposite[0] || w.prev == opposite[1]);
           in_link[i] |= hits == 2;
         }
       if (in_link[0] && in_link[1]) return Reject::topology;
@@ -436,15 +496,22 @@ class Engine {
 
  private:
   void apply(const Decision& d, Scratch& scratch) {
-    // Recompute the wedge pairs and kept wedges of the chosen direction (evaluate left them there).
-    const auto& pairs = scratch.pairs[d.direction];
+    // The removed faces, wedge pairs and kept wedges, as the (parallel) checks found them.
+    auto& faces = scratch.removed_faces;
+    faces.clear();
+    for (const uint32_t t : s_.triangles_of(d.kept))
+      if (s_.corner_position(t, 0) == d.removed || s_.corner_position(t, 1) == d.removed ||
+          s_.corner_position(t, 2) == d.removed)
+        faces.push_back(t);
+    auto& pairs = scratch.pairs[0];
+    map_wedges(d.kept, d.removed, faces, pairs);
     wedges_of(d.kept, scratch.kept_wedges);
     const EdgeQuery query{d.kept, d.removed, d.fixed, pairs, scratch.kept_wedges, scratch.removed_faces};
     metric_.collapsed(s_, query, d.placement.position);
 
     const vec3d old_kept = s_.normalized(d.kept);
     Collapse c;
-    c.kept = d.kept, c.removed = d.removed;
+    c.kept = s_.external[d.kept], c.removed = s_.external[d.removed];
     c.old_position = s_.position[d.kept];
     c.new_position = d.fixed ? c.old_position : s_.object(d.placement.position);
     c.error = float(std::sqrt(std::max(0.0, d.placement.cost)) / s_.scale);
@@ -459,6 +526,7 @@ class Engine {
       uint32_t k = 0;
       while (s_.corner_position(t, k) != d.removed) ++k;
       if (std::find(scratch.removed_faces.begin(), scratch.removed_faces.end(), t) != scratch.removed_faces.end()) {
+        for (uint32_t j = 0; j < 3; ++j) s_.flags[s_.corner_position(t, j)] |= flag_changed;
         s_.alive[t] = 0;
         --s_.live_triangles;
         if (keep_record) record.removed_faces.push_back(t);
@@ -470,6 +538,7 @@ class Engine {
         if (pair.from == corner && pair.material == m) {
           if (keep_record) record.relinks.push_back({t, k, corner, pair.to});
           corner = pair.to;
+          s_.corner_pos[3 * t + k] = d.kept;
           break;
         }
     }
@@ -480,10 +549,12 @@ class Engine {
     s_.flags[d.removed] |= flag_dead;
     if (s_.layout.stride) update_attributes(d, pairs, scratch.kept_wedges, old_kept, keep_record);
 
+    mark_changed_edges(d);
     // Lock the neighbourhood for the rest of the pass.
-    for (const uint32_t x : {d.kept, d.removed})
-      for (const uint32_t t : s_.triangles_of(x))
-        for (uint32_t k = 0; k < 3; ++k) s_.flags[s_.corner_position(t, k)] |= flag_pass_locked;
+    for (const uint32_t x : {d.kept, d.removed}) {
+      s_.flags[x] |= flag_pass_locked;
+      for (const Wing& w : s_.wings_of(x)) s_.flags[w.next] |= flag_pass_locked, s_.flags[w.prev] |= flag_pass_locked;
+    }
 
     c.removed_face_count = uint32_t(record.removed_faces.size()) - c.faces_begin;
     c.relink_count = uint32_t(record.relinks.size()) - c.relinks_begin;
@@ -554,16 +625,27 @@ class Engine {
   std::vector<Channel> channels_;
   uint32_t channel_floats_ = 0;
   double max_cost_ = 0;
-  std::atomic<uint64_t> rejected_[5] = {};  // by Reject: ranked collapses found not allowed
+  uint64_t rejected_[5] = {};
 
  private:
   State& s_;
   MetricT& metric_;
   SimplifyResult& result_;
   std::vector<Best> best_;
-  std::vector<Scratch> scratch_;
-  bool metric_first_ = true;
-  bool first_pass_ = true;
+  // Per position: which of its edges to rank again next pass (mark_changed_edges).
+  enum : uint8_t { mark_full = 1, mark_partial = 2, mark_kept = 4, mark_fallback = 8 };
+  std::vector<uint8_t> mark_;
+  Scratch scratch_;  // the sequential part's
+
+  // Scratch for the worker running a parallel block; allocated once per thread.
+  static Scratch& block_scratch() {
+    thread_local Scratch scratch;
+    return scratch;
+  }
+  std::vector<uint32_t> fill_;
+  std::vector<Decision> decisions_;  // per candidate of the pass
+  std::vector<Reject> verdicts_;
+  std::vector<Best> fallback_;
 };
 
 template <class MetricT>
@@ -609,6 +691,32 @@ uint64_t prune_components(State& state, double size) {
   return pruned;
 }
 
+// Internal position ids in Morton order of the positions (ties by public id): the engine's random
+// accesses (positions, quadrics, flags of neighbours) then mostly hit the cache.
+std::vector<uint32_t> spatial_order(const Mesh& mesh, const PositionIds& ids, const State& state) {
+  std::vector<uint64_t> key(ids.count);
+  const auto spread = [](uint64_t x) {  // 21 bits -> every third bit of 63
+    x &= 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffull;
+    x = (x | x << 16) & 0x1f0000ff0000ffull;
+    x = (x | x << 8) & 0x100f00f00f00f00full;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+  };
+  for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+    const vec3d q = state.normalized_input(mesh.positions[v]);  // each axis within [-0.5, 0.5]
+    const auto cell = [](double x) { return uint64_t(std::clamp((x + 0.5) * 2097151.0, 0.0, 2097151.0)); };
+    key[ids.id[v]] = spread(cell(q.x)) | spread(cell(q.y)) << 1 | spread(cell(q.z)) << 2;
+  }
+  std::vector<uint32_t> order(ids.count);
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key[a] < key[b] || (key[a] == key[b] && a < b); });
+  std::vector<uint32_t> internal(ids.count);
+  for (uint32_t i = 0; i < ids.count; ++i) internal[order[i]] = i;
+  return internal;
+}
+
 void check_options(const Mesh& mesh, const SimplifyOptions& o) {
   if (!(o.target_ratio >= 0 && o.target_ratio <= 1)) throw_usage("simplify: target_ratio must be in [0, 1]");
   if (!o.locked.empty() && o.locked.size() != mesh.vertex_count())
@@ -635,26 +743,6 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   State state(mesh, options);
   state.threads = core::thread_count(options.threads);
 
-  const PositionIds ids = position_ids(mesh);
-  state.position_count = ids.count;
-  state.position_of = ids.id;
-  state.position.resize(ids.count);
-  for (size_t v = mesh.vertex_count(); v-- > 0;) state.position[ids.id[v]] = mesh.positions[v];
-  state.moves.assign(ids.count, 0);
-  state.flags.assign(ids.count, 0);
-  for (size_t v = 0; v < options.locked.size(); ++v)
-    if (options.locked[v]) state.flags[ids.id[v]] |= flag_locked;
-  if (!options.importance.empty()) {
-    state.importance.assign(ids.count, 0.0f);
-    for (size_t v = 0; v < mesh.vertex_count(); ++v)
-      state.importance[ids.id[v]] = std::max(state.importance[ids.id[v]], options.importance[v]);
-  }
-  state.corners = mesh.indices;
-  state.alive.assign(mesh.triangle_count(), 1);
-  state.live_triangles = mesh.triangle_count();
-  state.layout = attribute_layout(mesh);
-  state.attributes = gather_attributes(mesh, state.layout);
-
   float3 lo, hi;
   bounding_box(mesh, lo, hi);
   state.center = {0.5 * (double(lo.x) + hi.x), 0.5 * (double(lo.y) + hi.y), 0.5 * (double(lo.z) + hi.z)};
@@ -662,6 +750,34 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   state.scale = extent > 0 ? 1.0 / extent : 1.0;
   const vec3d diagonal{double(hi.x) - lo.x, double(hi.y) - lo.y, double(hi.z) - lo.z};
   result.diagonal = float(length(diagonal));
+
+  const PositionIds ids = position_ids(mesh);
+  state.position_count = ids.count;
+  const std::vector<uint32_t> internal = spatial_order(mesh, ids, state);
+  state.external.resize(ids.count);
+  for (uint32_t p = 0; p < ids.count; ++p) state.external[internal[p]] = p;
+  state.position_of.resize(mesh.vertex_count());
+  for (size_t v = 0; v < mesh.vertex_count(); ++v) state.position_of[v] = internal[ids.id[v]];
+  state.position.resize(ids.count);
+  for (size_t v = mesh.vertex_count(); v-- > 0;) state.position[state.position_of[v]] = mesh.positions[v];
+  state.moves.assign(ids.count, 0);
+  state.flags.assign(ids.count, 0);
+  for (size_t v = 0; v < options.locked.size(); ++v)
+    if (options.locked[v]) state.flags[state.position_of[v]] |= flag_locked;
+  if (!options.importance.empty()) {
+    state.importance.assign(ids.count, 0.0f);
+    for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+      float& w = state.importance[state.position_of[v]];
+      w = std::max(w, options.importance[v]);
+    }
+  }
+  state.corners = mesh.indices;
+  state.corner_pos.resize(state.corners.size());
+  for (size_t i = 0; i < state.corners.size(); ++i) state.corner_pos[i] = state.position_of[state.corners[i]];
+  state.alive.assign(mesh.triangle_count(), 1);
+  state.live_triangles = mesh.triangle_count();
+  state.layout = attribute_layout(mesh);
+  state.attributes = gather_attributes(mesh, state.layout);
 
   const uint64_t triangles = mesh.triangle_count();
   const uint64_t target = options.target_triangles

@@ -27,6 +27,7 @@ enum : uint8_t {
   flag_dead = 16,       // removed by a collapse
   flag_dirty = 32,      // its star changed in the last pass (or this is the first): re-evaluate
   flag_seam = 64,       // its corners use more than one wedge or material
+  flag_changed = 128,   // its star lost or gained triangles in this pass: classify again
 };
 
 // Attribute layout of a wedge: normals (3), each UV set (2), colour (4), for the streams present.
@@ -38,18 +39,27 @@ struct AttributeLayout {
   int color = -1;
 };
 
+// The other two corners of a star triangle, in winding order after the star's centre.
+struct Wing {
+  uint32_t next, prev;
+};
+
 struct State {
   const Mesh& mesh;
   const SimplifyOptions& options;
   unsigned threads = 1;
 
+  // Positions are numbered internally in spatial (Morton) order, so neighbours sit close in memory
+  // whatever the input's vertex order; the record speaks the public ids (lod::position_ids).
   uint32_t position_count = 0;
-  std::vector<uint32_t> position_of;  // per wedge
+  std::vector<uint32_t> position_of;  // per wedge: internal position id
+  std::vector<uint32_t> external;     // per internal position: public position id
   std::vector<float3> position;       // per position, object space
   std::vector<uint32_t> moves;        // per position: collapses that moved it (0: input positions)
   std::vector<uint8_t> flags;         // per position
   std::vector<float> importance;      // per position (largest of its wedges'); empty: all 1
   std::vector<uint32_t> corners;      // 3 wedges per triangle
+  std::vector<uint32_t> corner_pos;   // 3 positions per triangle: position_of[corners], kept in step
   std::vector<uint8_t> alive;         // per triangle
   uint64_t live_triangles = 0;
 
@@ -60,19 +70,22 @@ struct State {
   vec3d center;
   double scale = 1;
 
-  // Position -> live triangles, rebuilt each pass.
+  // Position -> live triangles, rebuilt each pass from the live triangle list (increasing ids).
+  std::vector<uint32_t> live;   // live triangle ids, compacted each pass
   std::vector<uint32_t> first;  // position_count + 1
   std::vector<uint32_t> star;   // triangle ids
+  std::vector<Wing> wings;      // parallel to star: the hot loops read neighbours without a lookup
 
   State(const Mesh& m, const SimplifyOptions& o) : mesh(m), options(o) {}
 
   std::span<const uint32_t> triangles_of(uint32_t p) const {
     return {star.data() + first[p], star.data() + first[p + 1]};
   }
-  uint32_t corner_position(uint32_t triangle, uint32_t k) const { return position_of[corners[3 * triangle + k]]; }
+  std::span<const Wing> wings_of(uint32_t p) const { return {wings.data() + first[p], wings.data() + first[p + 1]}; }
+  uint32_t corner_position(uint32_t triangle, uint32_t k) const { return corner_pos[3 * triangle + k]; }
   uint32_t material(uint32_t triangle) const { return mesh.materials.empty() ? 0 : mesh.materials[triangle]; }
-  vec3d normalized(uint32_t p) const {
-    const float3& v = position[p];
+  vec3d normalized(uint32_t p) const { return normalized_input(position[p]); }
+  vec3d normalized_input(const float3& v) const {
     return vec3d{(double(v.x) - center.x) * scale, (double(v.y) - center.y) * scale, (double(v.z) - center.z) * scale};
   }
   float3 object(const vec3d& q) const {
@@ -88,8 +101,7 @@ struct State {
 // Number of live triangles around u that also hold position v.
 inline uint32_t shared_triangles(const State& state, uint32_t u, uint32_t v) {
   uint32_t count = 0;
-  for (const uint32_t t : state.triangles_of(u))
-    count += state.corner_position(t, 0) == v || state.corner_position(t, 1) == v || state.corner_position(t, 2) == v;
+  for (const Wing& w : state.wings_of(u)) count += w.next == v || w.prev == v;
   return count;
 }
 inline bool is_border_edge(const State& state, uint32_t u, uint32_t v) { return shared_triangles(state, u, v) == 1; }
