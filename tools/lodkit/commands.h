@@ -16,6 +16,7 @@ struct Command {
 Command register_info(CLI::App& root);
 Command register_convert(CLI::App& root);
 Command register_simplify(CLI::App& root);
+Command register_compare(CLI::App& root);
 
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);

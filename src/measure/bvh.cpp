@@ -1,0 +1,324 @@
+#include "measure/bvh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include "core/parallel.h"
+#include "lodkit/error.h"
+
+namespace lod::measure {
+
+namespace {
+
+constexpr float inf = std::numeric_limits<float>::infinity();
+constexpr int bin_count = 16;
+constexpr uint32_t max_binned_depth = 64;  // deeper than this, split at the median: depth stays bounded
+constexpr uint32_t max_depth = 128;        // traversal stack: 3 entries per level plus one
+// Pruning compares a box's float distance with a triangle's float distance; both round. Boxes are
+// grown by a few ulps of the scene's extent and the comparison has a relative slack, so a box that
+// holds the closest triangle is never skipped (the result must equal a brute-force scan).
+constexpr float prune_slack = 1.0f + 1.0f / (1 << 18);
+
+struct Box {
+  float lo[3] = {inf, inf, inf}, hi[3] = {-inf, -inf, -inf};
+  void grow(const Box& b) {
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], b.lo[k]), hi[k] = std::max(hi[k], b.hi[k]);
+  }
+  void grow(const float* p) {
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  }
+  // Half the surface area, which is all SAH needs (ratios).
+  float half_area() const {
+    const float x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2];
+    return x < 0 ? 0 : x * y + y * z + z * x;
+  }
+};
+
+struct BinaryNode {
+  Box box;
+  uint32_t left = 0;          // inner: children at left and left + 1
+  uint32_t begin = 0, count = 0;  // leaf: range of the triangle order (count > 0)
+};
+
+struct Bin {
+  Box box;
+  uint32_t count = 0;
+};
+
+// Binned SAH over triangle centroids, building a binary tree whose leaves are ranges of `order`.
+std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::vector<vec3f>& centroids,
+                                     std::vector<uint32_t>& order, int max_leaf) {
+  std::vector<BinaryNode> nodes;
+  nodes.reserve(2 * order.size() / 2 + 1);
+  nodes.emplace_back();
+  struct Task {
+    uint32_t node, begin, end, depth;
+  };
+  std::vector<Task> tasks{{0, 0, uint32_t(order.size()), 0}};
+  while (!tasks.empty()) {
+    const Task task = tasks.back();
+    tasks.pop_back();
+    const uint32_t n = task.end - task.begin;
+    Box box, centroid_box;
+    for (uint32_t i = task.begin; i < task.end; ++i) {
+      box.grow(boxes[order[i]]);
+      centroid_box.grow(&centroids[order[i]].x);
+    }
+    nodes[task.node].box = box;
+    auto make_leaf = [&] {
+      nodes[task.node].begin = task.begin;
+      nodes[task.node].count = n;
+    };
+    if (n <= 2) {
+      make_leaf();
+      continue;
+    }
+
+    // All three axes binned in one pass.
+    Bin bins[3][bin_count];
+    float scale[3];
+    for (int a = 0; a < 3; ++a) {
+      const float extent = centroid_box.hi[a] - centroid_box.lo[a];
+      scale[a] = extent > 0 ? float(bin_count) / extent : 0.0f;
+    }
+    auto bin_of = [&](int a, const vec3f& c) {
+      const float t = ((&c.x)[a] - centroid_box.lo[a]) * scale[a];
+      return std::min(bin_count - 1, std::max(0, int(t)));
+    };
+    for (uint32_t i = task.begin; i < task.end; ++i) {
+      const uint32_t t = order[i];
+      for (int a = 0; a < 3; ++a) {
+        if (scale[a] == 0) continue;
+        Bin& b = bins[a][bin_of(a, centroids[t])];
+        b.box.grow(boxes[t]);
+        ++b.count;
+      }
+    }
+    float best_cost = inf;
+    int best_axis = -1, best_split = 0;  // left side: bins [0, best_split)
+    for (int a = 0; a < 3; ++a) {
+      if (scale[a] == 0) continue;
+      float right_area[bin_count];
+      uint32_t right_count[bin_count];
+      Box acc;
+      uint32_t count = 0;
+      for (int k = bin_count - 1; k > 0; --k) {
+        acc.grow(bins[a][k].box);
+        count += bins[a][k].count;
+        right_area[k] = acc.half_area(), right_count[k] = count;
+      }
+      acc = Box{};
+      count = 0;
+      for (int k = 1; k < bin_count; ++k) {
+        acc.grow(bins[a][k - 1].box);
+        count += bins[a][k - 1].count;
+        if (count == 0 || right_count[k] == 0) continue;
+        const float cost = acc.half_area() * float(count) + right_area[k] * float(right_count[k]);
+        if (cost < best_cost) best_cost = cost, best_axis = a, best_split = k;
+      }
+    }
+    // SAH with traversal cost 1 and triangle cost 1, relative to this node's area.
+    const float area = box.half_area();
+    const float split_cost = 1.0f + (area > 0 ? best_cost / area : float(n));
+    if (n <= uint32_t(max_leaf) && (best_axis < 0 || float(n) <= split_cost)) {
+      make_leaf();
+      continue;
+    }
+    uint32_t mid;
+    if (best_axis < 0 || task.depth >= max_binned_depth) {
+      // Coincident centroids (or a pathological chain of thin splits): halve the range.
+      mid = task.begin + n / 2;
+    } else {
+      auto* first = order.data() + task.begin;
+      auto* cut = std::partition(first, order.data() + task.end,
+                                 [&](uint32_t t) { return bin_of(best_axis, centroids[t]) < best_split; });
+      mid = uint32_t(cut - order.data());
+    }
+    const uint32_t left = uint32_t(nodes.size());
+    nodes[task.node].left = left;
+    nodes.emplace_back();
+    nodes.emplace_back();
+    // Right pushed first so the left subtree is built (and numbered) first.
+    tasks.push_back({left + 1, mid, task.end, task.depth + 1});
+    tasks.push_back({left, task.begin, mid, task.depth + 1});
+  }
+  return nodes;
+}
+
+}  // namespace
+
+TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
+  const size_t triangles = mesh.triangle_count();
+  if (triangles == 0) throw_internal("TriangleBvh: no triangles");
+  if (triangles >= (size_t(1) << 27)) throw_bad_input("mesh", "more than 2^27 triangles to measure");
+
+  std::vector<Box> boxes(triangles);
+  std::vector<vec3f> centroids(triangles);
+  core::parallel_for(triangles, threads, [&](size_t t) {
+    Box b;
+    for (int k = 0; k < 3; ++k) b.grow(&mesh.positions[mesh.indices[3 * t + k]].x);
+    boxes[t] = b;
+    centroids[t] = {(b.lo[0] + b.hi[0]) * 0.5f, (b.lo[1] + b.hi[1]) * 0.5f, (b.lo[2] + b.hi[2]) * 0.5f};
+  });
+  std::vector<uint32_t> order(triangles);
+  for (uint32_t t = 0; t < triangles; ++t) order[t] = t;
+  const std::vector<BinaryNode> binary = build_binary(boxes, centroids, order, max_leaf);
+
+  original_ = order;
+  slot_.resize(triangles);
+  corners_.resize(3 * triangles);
+  for (uint32_t s = 0; s < triangles; ++s) {
+    slot_[order[s]] = s;
+    for (int k = 0; k < 3; ++k) corners_[3 * s + k] = mesh.positions[mesh.indices[3 * size_t(order[s]) + k]];
+  }
+
+  // Growth of every box: a few ulps of the largest coordinate.
+  float magnitude = 0;
+  for (const float3& p : mesh.positions)
+    magnitude = std::max({magnitude, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+  const float grow = magnitude * 1e-6f + std::numeric_limits<float>::min();
+
+  // Collapse: each 4-wide node takes a binary node's children and opens the largest inner ones until
+  // it has four.
+  auto is_leaf = [&](uint32_t b) { return binary[b].count > 0; };
+  nodes_.emplace_back();
+  struct Job {
+    uint32_t binary, node, depth;
+  };
+  std::vector<Job> jobs;
+  auto fill = [&](uint32_t node, const uint32_t* children, int count, uint32_t depth) {
+    for (int lane = 0; lane < 4; ++lane) {
+      Node& n = nodes_[node];
+      if (lane >= count) {
+        n.min_x[lane] = n.min_y[lane] = n.min_z[lane] = inf;
+        n.max_x[lane] = n.max_y[lane] = n.max_z[lane] = -inf;
+        n.child[lane] = empty_child;
+        continue;
+      }
+      const BinaryNode& b = binary[children[lane]];
+      n.min_x[lane] = b.box.lo[0] - grow, n.min_y[lane] = b.box.lo[1] - grow, n.min_z[lane] = b.box.lo[2] - grow;
+      n.max_x[lane] = b.box.hi[0] + grow, n.max_y[lane] = b.box.hi[1] + grow, n.max_z[lane] = b.box.hi[2] + grow;
+      if (b.count > 0) {
+        n.child[lane] = leaf_bit | b.begin << 4 | (b.count - 1);
+      } else {
+        const uint32_t index = uint32_t(nodes_.size());
+        nodes_[node].child[lane] = index;  // `n` may dangle after the push below
+        nodes_.emplace_back();
+        jobs.push_back({children[lane], index, depth + 1});
+      }
+    }
+  };
+  if (is_leaf(0)) {
+    const uint32_t root_child = 0;
+    fill(0, &root_child, 1, 1);
+    depth_ = 1;
+  } else {
+    jobs.push_back({0, 0, 1});
+  }
+  while (!jobs.empty()) {
+    const Job job = jobs.back();
+    jobs.pop_back();
+    depth_ = std::max(depth_, job.depth);
+    uint32_t children[4] = {binary[job.binary].left, binary[job.binary].left + 1};
+    int count = 2;
+    while (count < 4) {
+      int open = -1;
+      float largest = -1;
+      for (int k = 0; k < count; ++k)
+        if (!is_leaf(children[k]) && binary[children[k]].box.half_area() > largest)
+          largest = binary[children[k]].box.half_area(), open = k;
+      if (open < 0) break;
+      const uint32_t left = binary[children[open]].left;
+      for (int k = count; k > open + 1; --k) children[k] = children[k - 1];
+      children[open] = left;
+      children[open + 1] = left + 1;
+      ++count;
+    }
+    fill(job.node, children, count, job.depth);
+  }
+  if (depth_ > max_depth) throw_internal("TriangleBvh: tree deeper than the traversal stack");
+}
+
+ClosestHit TriangleBvh::to_triangle(const vec3f& p, uint32_t triangle) const {
+  const vec3f* c = &corners_[3 * size_t(slot_[triangle])];
+  const TrianglePoint tp = closest_on_triangle(p, c[0], c[1], c[2]);
+  ClosestHit hit;
+  hit.distance_squared = tp.distance_squared;
+  hit.triangle = triangle;
+  hit.point = tp.point;
+  hit.v = tp.v, hit.w = tp.w;
+  return hit;
+}
+
+ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint) const {
+  ClosestHit best = to_triangle(p, hint < original_.size() ? hint : 0);
+  float limit = best.distance_squared * prune_slack;
+  uint32_t stack[3 * max_depth + 4];
+  float stack_distance[3 * max_depth + 4];
+  int top = 0;
+  stack[top] = 0, stack_distance[top] = 0, ++top;
+#if defined(__SSE2__)
+  const __m128 px = _mm_set1_ps(p.x), py = _mm_set1_ps(p.y), pz = _mm_set1_ps(p.z), zero = _mm_setzero_ps();
+#endif
+  while (top > 0) {
+    --top;
+    if (stack_distance[top] > limit) continue;
+    const uint32_t ref = stack[top];
+    if (ref & leaf_bit) {
+      const uint32_t first = (ref & ~leaf_bit) >> 4, count = (ref & 15) + 1;
+      for (uint32_t s = first; s < first + count; ++s) {
+        const vec3f* c = &corners_[3 * size_t(s)];
+        const TrianglePoint tp = closest_on_triangle(p, c[0], c[1], c[2]);
+        if (tp.distance_squared > best.distance_squared) continue;
+        const uint32_t triangle = original_[s];
+        if (tp.distance_squared == best.distance_squared && triangle >= best.triangle) continue;
+        best.distance_squared = tp.distance_squared;
+        best.triangle = triangle;
+        best.point = tp.point;
+        best.v = tp.v, best.w = tp.w;
+        limit = best.distance_squared * prune_slack;
+      }
+      continue;
+    }
+    const Node& n = nodes_[ref];
+    alignas(16) float d[4];
+#if defined(__SSE2__)
+    const __m128 dx = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(n.min_x), px), _mm_sub_ps(px, _mm_load_ps(n.max_x))), zero);
+    const __m128 dy = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(n.min_y), py), _mm_sub_ps(py, _mm_load_ps(n.max_y))), zero);
+    const __m128 dz = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(n.min_z), pz), _mm_sub_ps(pz, _mm_load_ps(n.max_z))), zero);
+    const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+    const int mask = _mm_movemask_ps(_mm_cmple_ps(d2, _mm_set1_ps(limit)));
+    if (!mask) continue;
+    _mm_store_ps(d, d2);
+#else
+    int mask = 0;
+    for (int k = 0; k < 4; ++k) {
+      const float dx = std::max({n.min_x[k] - p.x, p.x - n.max_x[k], 0.0f});
+      const float dy = std::max({n.min_y[k] - p.y, p.y - n.max_y[k], 0.0f});
+      const float dz = std::max({n.min_z[k] - p.z, p.z - n.max_z[k], 0.0f});
+      d[k] = dx * dx + dy * dy + dz * dz;
+      if (d[k] <= limit) mask |= 1 << k;
+    }
+    if (!mask) continue;
+#endif
+    // Push the hits farthest first, so the nearest is popped next.
+    uint32_t refs[4];
+    float dist[4];
+    int hits = 0;
+    for (int k = 0; k < 4; ++k) {
+      if (!(mask >> k & 1) || n.child[k] == empty_child) continue;
+      int j = hits++;
+      for (; j > 0 && dist[j - 1] < d[k]; --j) refs[j] = refs[j - 1], dist[j] = dist[j - 1];
+      refs[j] = n.child[k], dist[j] = d[k];
+    }
+    for (int k = 0; k < hits; ++k) stack[top] = refs[k], stack_distance[top] = dist[k], ++top;
+  }
+  return best;
+}
+
+}  // namespace lod::measure

@@ -1,0 +1,57 @@
+// Internal: a 4-wide bounding volume hierarchy over a mesh's triangles for exact closest-point
+// queries. Built with binned SAH (binary), then collapsed to 4-wide nodes whose child boxes are
+// structure-of-arrays floats, so one SSE pass measures the point's distance to all four.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "lodkit/mesh.h"
+#include "measure/triangle_distance.h"
+
+namespace lod::measure {
+
+struct ClosestHit {
+  float distance_squared = std::numeric_limits<float>::infinity();
+  uint32_t triangle = UINT32_MAX;  // triangle index in the mesh
+  vec3f point;
+  float v = 0, w = 0;  // barycentric weights of the triangle's corners 1 and 2
+};
+
+class TriangleBvh {
+ public:
+  // Builds over every triangle of `mesh` (at least one; at most 2^27). Positions are copied, so the
+  // mesh may go away. The layout depends only on the mesh, never on `threads`.
+  explicit TriangleBvh(const Mesh& mesh, unsigned threads = 0);
+
+  // The exact closest point over all triangles; ties go to the lowest triangle index, so the answer
+  // equals a brute-force scan's. `hint` is a triangle whose distance starts the search (the previous
+  // query's answer is a good one); it changes only the speed.
+  ClosestHit closest(const vec3f& p, uint32_t hint = 0) const;
+  // The exact closest point on one triangle (mesh index).
+  ClosestHit to_triangle(const vec3f& p, uint32_t triangle) const;
+
+  uint32_t triangle_count() const { return uint32_t(original_.size()); }
+  size_t node_count() const { return nodes_.size(); }
+  uint32_t depth() const { return depth_; }
+
+ private:
+  struct alignas(64) Node {
+    // Child boxes, one lane per child; an empty lane has min = +inf, max = -inf.
+    float min_x[4], min_y[4], min_z[4], max_x[4], max_y[4], max_z[4];
+    // Inner child: node index. Leaf: leaf_bit | first << 4 | (count - 1), first into corners_/3.
+    uint32_t child[4];
+  };
+  static constexpr uint32_t leaf_bit = 0x80000000u;
+  static constexpr uint32_t empty_child = 0xFFFFFFFFu;
+  static constexpr int max_leaf = 8;
+
+  std::vector<Node> nodes_;        // nodes_[0] is the root
+  std::vector<vec3f> corners_;     // 3 per triangle, in leaf order
+  std::vector<uint32_t> original_;  // leaf order -> mesh triangle
+  std::vector<uint32_t> slot_;      // mesh triangle -> leaf order
+  uint32_t depth_ = 0;              // of the 4-wide tree
+};
+
+}  // namespace lod::measure

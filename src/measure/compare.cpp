@@ -1,0 +1,463 @@
+// lod::compare: Metro-style sampling of both surfaces, exact closest points through a BVH, optional
+// certified refinement of the maximum. Every sample stream (vertices, edge points, area points) is
+// indexed, cut into fixed blocks and reduced in block order, so the result is the same on any number
+// of threads; a sample's random position depends only on the seed and its index.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+
+#include "core/parallel.h"
+#include "lodkit/error.h"
+#include "lodkit/measure.h"
+#include "measure/bvh.h"
+#include "measure/refine.h"
+
+namespace lod {
+
+namespace {
+
+using measure::ClosestHit;
+using measure::TriangleBvh;
+using measure::vec3f;
+
+constexpr size_t block_size = 1024;       // samples per block
+constexpr size_t blocks_per_slice = 256;  // progress is reported between slices
+
+uint64_t splitmix64(uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+// One mesh, ready to be sampled.
+struct Surface {
+  const Mesh* mesh = nullptr;
+  PositionIds ids;
+  std::vector<uint32_t> position_vertex;    // per position id: its first vertex
+  std::vector<uint32_t> position_triangle;  // per position id: first triangle using it, or UINT32_MAX
+  std::vector<double> area_before;          // per triangle + 1: total area of the triangles before it
+  double area = 0;
+  // Unique edges (position ids lo < hi) with a triangle holding them, in (lo, hi) order.
+  struct Edge {
+    uint32_t lo, hi, triangle;
+  };
+  std::vector<Edge> edges;
+
+  explicit Surface(const Mesh& m) : mesh(&m), ids(position_ids(m)) {
+    position_vertex.assign(ids.count, UINT32_MAX);
+    position_triangle.assign(ids.count, UINT32_MAX);
+    for (uint32_t v = 0; v < m.vertex_count(); ++v)
+      if (position_vertex[ids.id[v]] == UINT32_MAX) position_vertex[ids.id[v]] = v;
+    const size_t triangles = m.triangle_count();
+    for (size_t t = 0; t < triangles; ++t)
+      for (int k = 0; k < 3; ++k) {
+        uint32_t& first = position_triangle[ids.id[m.indices[3 * t + k]]];
+        if (first == UINT32_MAX) first = uint32_t(t);
+      }
+    area_before.resize(triangles + 1);
+    double sum = 0;
+    for (size_t t = 0; t < triangles; ++t) {
+      area_before[t] = sum;
+      sum += triangle_area(t);
+    }
+    area_before[triangles] = area = sum;
+  }
+
+  vec3f corner(size_t t, int k) const { return mesh->positions[mesh->indices[3 * t + k]]; }
+  vec3f position(uint32_t id) const { return mesh->positions[position_vertex[id]]; }
+
+  double triangle_area(size_t t) const {
+    const float3 &a = mesh->positions[mesh->indices[3 * t]], &b = mesh->positions[mesh->indices[3 * t + 1]],
+                 &c = mesh->positions[mesh->indices[3 * t + 2]];
+    const double ux = double(b.x) - a.x, uy = double(b.y) - a.y, uz = double(b.z) - a.z;
+    const double vx = double(c.x) - a.x, vy = double(c.y) - a.y, vz = double(c.z) - a.z;
+    const double cx = uy * vz - uz * vy, cy = uz * vx - ux * vz, cz = ux * vy - uy * vx;
+    return 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
+  }
+
+  // Unique edges by a counting sort on the smaller position id (linear time, no hashing).
+  void find_edges() {
+    const Mesh& m = *mesh;
+    std::vector<uint32_t> start(size_t(ids.count) + 1, 0);
+    const size_t triangles = m.triangle_count();
+    auto edge = [&](size_t t, int k, uint32_t& lo, uint32_t& hi) {
+      const uint32_t p = ids.id[m.indices[3 * t + k]], q = ids.id[m.indices[3 * t + (k + 1) % 3]];
+      lo = std::min(p, q), hi = std::max(p, q);
+      return p != q;
+    };
+    uint32_t lo, hi;
+    for (size_t t = 0; t < triangles; ++t)
+      for (int k = 0; k < 3; ++k)
+        if (edge(t, k, lo, hi)) ++start[lo + 1];
+    for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
+    std::vector<std::pair<uint32_t, uint32_t>> bucket(start.back());  // (hi, triangle)
+    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+    for (size_t t = 0; t < triangles; ++t)
+      for (int k = 0; k < 3; ++k)
+        if (edge(t, k, lo, hi)) bucket[fill[lo]++] = {hi, uint32_t(t)};
+    edges.clear();
+    for (uint32_t p = 0; p < ids.count; ++p) {
+      auto first = bucket.begin() + start[p], last = bucket.begin() + start[p + 1];
+      std::sort(first, last);  // a handful of entries; equal hi keep the lowest triangle first
+      for (auto it = first; it != last; ++it)
+        if (it == first || it->first != (it - 1)->first) edges.push_back({p, it->first, it->second});
+    }
+  }
+};
+
+// Per-block sums; merged in block order.
+struct Accumulator {
+  double sum = 0, sum_squares = 0;
+  float max = -1;
+  MaxLocation where;
+  double normal_sum = 0, normal_max = 0, uv_sum = 0, uv_max = 0, color_sum = 0, color_max = 0;
+  uint64_t normal_count = 0, uv_count = 0, color_count = 0;
+
+  void take(float d, const MaxLocation& at) {
+    if (d > max) max = d, where = at;
+  }
+  void merge(const Accumulator& o) {
+    sum += o.sum, sum_squares += o.sum_squares;
+    if (o.max > max) max = o.max, where = o.where;
+    normal_sum += o.normal_sum, uv_sum += o.uv_sum, color_sum += o.color_sum;
+    normal_max = std::max(normal_max, o.normal_max), uv_max = std::max(uv_max, o.uv_max);
+    color_max = std::max(color_max, o.color_max);
+    normal_count += o.normal_count, uv_count += o.uv_count, color_count += o.color_count;
+  }
+};
+
+struct Progress {
+  const std::function<void(double)>* callback = nullptr;
+  uint64_t total = 1, done = 0;
+  void add(uint64_t n) {
+    done += n;
+    if (callback && *callback) (*callback)(std::min(1.0, double(done) / double(std::max<uint64_t>(total, 1))));
+  }
+};
+
+// fn(first, end, accumulator, hint) over fixed blocks of [0, count), a slice of blocks at a time;
+// the accumulators are merged into `total` in block order.
+template <class Fn>
+void run_stream(uint64_t count, unsigned threads, Progress& progress, Accumulator& total, Fn&& fn) {
+  const uint64_t slice = block_size * blocks_per_slice;
+  for (uint64_t slice_begin = 0; slice_begin < count; slice_begin += slice) {
+    const uint64_t n = std::min(slice, count - slice_begin);
+    std::vector<Accumulator> acc((n + block_size - 1) / block_size);
+    core::parallel_blocks(n, block_size, threads, [&](size_t b, size_t begin, size_t end) {
+      uint32_t hint = 0;
+      fn(slice_begin + begin, slice_begin + end, acc[b], hint);
+    });
+    for (const Accumulator& a : acc) total.merge(a);
+    progress.add(n);
+  }
+}
+
+// Records the largest distance seen in each position's region, as float bits (non-negative floats
+// order like their bits), with an atomic max: the result does not depend on the order.
+void raise(std::vector<uint32_t>& field, uint32_t position, float d) {
+  uint32_t bits;
+  std::memcpy(&bits, &d, 4);
+  std::atomic_ref<uint32_t> slot(field[position]);
+  uint32_t current = slot.load(std::memory_order_relaxed);
+  while (current < bits && !slot.compare_exchange_weak(current, bits, std::memory_order_relaxed)) {
+  }
+}
+
+template <class T>
+T interpolate(const std::vector<T>& stream, const uint32_t* corners, float w0, float w1, float w2);
+template <>
+float3 interpolate(const std::vector<float3>& s, const uint32_t* c, float w0, float w1, float w2) {
+  return {s[c[0]].x * w0 + s[c[1]].x * w1 + s[c[2]].x * w2, s[c[0]].y * w0 + s[c[1]].y * w1 + s[c[2]].y * w2,
+          s[c[0]].z * w0 + s[c[1]].z * w1 + s[c[2]].z * w2};
+}
+template <>
+float2 interpolate(const std::vector<float2>& s, const uint32_t* c, float w0, float w1, float w2) {
+  return {s[c[0]].x * w0 + s[c[1]].x * w1 + s[c[2]].x * w2, s[c[0]].y * w0 + s[c[1]].y * w1 + s[c[2]].y * w2};
+}
+template <>
+float4 interpolate(const std::vector<float4>& s, const uint32_t* c, float w0, float w1, float w2) {
+  return {s[c[0]].x * w0 + s[c[1]].x * w1 + s[c[2]].x * w2, s[c[0]].y * w0 + s[c[1]].y * w1 + s[c[2]].y * w2,
+          s[c[0]].z * w0 + s[c[1]].z * w1 + s[c[2]].z * w2, s[c[0]].w * w0 + s[c[1]].w * w1 + s[c[2]].w * w2};
+}
+
+struct Direction {
+  OneSidedDeviation result;
+  std::vector<float> position_distance;     // per position id of `from`
+  std::vector<uint32_t> position_closest;   // per position id: closest triangle of `to`
+  std::vector<uint32_t> field;              // per position id: vertex_error bits (when asked)
+};
+
+struct Plan {
+  uint64_t area_samples = 0;
+  std::vector<uint64_t> edge_start;  // per edge + 1: index of its first sample
+  std::vector<uint64_t> area_start;  // per triangle + 1
+  double phase = 0;                  // systematic sampling offset in [0, 1)
+};
+
+Plan plan_samples(Surface& from, uint64_t samples, bool edge_samples, uint64_t stream_seed) {
+  Plan plan;
+  plan.area_samples = from.area > 0 ? samples : 0;
+  const size_t triangles = from.mesh->triangle_count();
+  plan.phase = double(splitmix64(stream_seed ^ 0x5bd1e995ull) >> 11) * 0x1p-53;
+  plan.area_start.resize(triangles + 1);
+  for (size_t t = 0; t <= triangles; ++t)
+    plan.area_start[t] =
+        plan.area_samples ? uint64_t(std::floor(double(samples) * from.area_before[t] / from.area + plan.phase)) : 0;
+  const uint64_t base = plan.area_start[0];
+  for (uint64_t& s : plan.area_start) s -= base;
+  plan.area_samples = plan.area_start.back();
+
+  plan.edge_start.assign(1, 0);
+  if (!edge_samples || samples == 0) return plan;
+  from.find_edges();
+  double total_length = 0;
+  for (const Surface::Edge& e : from.edges) total_length += distance(from.position(e.lo), from.position(e.hi));
+  // As far apart as the area samples, and at most half as many.
+  const double spacing = std::max(std::sqrt(from.area / double(samples)), total_length / (0.5 * double(samples)));
+  plan.edge_start.resize(from.edges.size() + 1);
+  uint64_t sum = 0;
+  for (size_t i = 0; i < from.edges.size(); ++i) {
+    plan.edge_start[i] = sum;
+    const double length = distance(from.position(from.edges[i].lo), from.position(from.edges[i].hi));
+    if (spacing > 0) sum += uint64_t(length / spacing);
+  }
+  plan.edge_start.back() = sum;
+  return plan;
+}
+
+Direction measure_direction(const Surface& from, const Surface& to, const TriangleBvh& bvh, const Plan& plan,
+                            uint64_t stream_seed, bool want_field, const CompareOptions& options,
+                            Progress& progress) {
+  Direction out;
+  OneSidedDeviation& r = out.result;
+  const Mesh& fm = *from.mesh;
+  const Mesh& tm = *to.mesh;
+  const uint32_t positions = from.ids.count;
+  out.position_distance.resize(positions);
+  out.position_closest.resize(positions);
+  if (want_field) out.field.assign(positions, 0);
+  Accumulator total;
+
+  // Vertices: every position (a vertex used by no triangle is measured for the field but is not a sample).
+  run_stream(positions, options.threads, progress, total, [&](uint64_t begin, uint64_t end, Accumulator& acc, uint32_t& hint) {
+    for (uint64_t p = begin; p < end; ++p) {
+      const vec3f q = from.position(uint32_t(p));
+      const ClosestHit h = bvh.closest(q, hint);
+      hint = h.triangle;
+      const float d = std::sqrt(h.distance_squared);
+      out.position_distance[p] = d;
+      out.position_closest[p] = h.triangle;
+      if (want_field) std::memcpy(&out.field[p], &d, 4);
+      if (from.position_triangle[p] != UINT32_MAX) acc.take(d, {q, h.point, from.position_triangle[p], h.triangle});
+    }
+  });
+  for (uint32_t p = 0; p < positions; ++p) r.vertex_samples += from.position_triangle[p] != UINT32_MAX;
+
+  // Edge points, evenly spaced; each belongs to the nearer end.
+  const uint64_t edge_samples = plan.edge_start.back();
+  run_stream(edge_samples, options.threads, progress, total, [&](uint64_t begin, uint64_t end, Accumulator& acc, uint32_t& hint) {
+    size_t e = size_t(std::upper_bound(plan.edge_start.begin(), plan.edge_start.end(), begin) - plan.edge_start.begin()) - 1;
+    for (uint64_t j = begin; j < end; ++j) {
+      while (plan.edge_start[e + 1] <= j) ++e;
+      const Surface::Edge& edge = from.edges[e];
+      const uint64_t n = plan.edge_start[e + 1] - plan.edge_start[e];
+      const float t = float(double(j - plan.edge_start[e] + 1) / double(n + 1));
+      const vec3f a = from.position(edge.lo), b = from.position(edge.hi);
+      const vec3f q = a + (b - a) * t;
+      const ClosestHit h = bvh.closest(q, hint);
+      hint = h.triangle;
+      const float d = std::sqrt(h.distance_squared);
+      acc.take(d, {q, h.point, edge.triangle, h.triangle});
+      if (want_field) raise(out.field, t <= 0.5f ? edge.lo : edge.hi, d);
+    }
+  });
+  r.edge_samples = edge_samples;
+
+  // Area points: triangle t owns samples [area_start[t], area_start[t+1]).
+  const bool normals = options.attributes && !fm.normals.empty() && !tm.normals.empty();
+  const bool uvs = options.attributes && !fm.uvs[0].empty() && !tm.uvs[0].empty();
+  const bool colors = options.attributes && !fm.colors.empty() && !tm.colors.empty();
+  run_stream(plan.area_samples, options.threads, progress, total, [&](uint64_t begin, uint64_t end, Accumulator& acc, uint32_t& hint) {
+    size_t t = size_t(std::upper_bound(plan.area_start.begin(), plan.area_start.end(), begin) - plan.area_start.begin()) - 1;
+    for (uint64_t j = begin; j < end; ++j) {
+      while (plan.area_start[t + 1] <= j) ++t;
+      // Uniform in the triangle: s = sqrt(r1) picks the distance from corner 0 with density ~ s.
+      const uint64_t bits = splitmix64(stream_seed + j);
+      const float r1 = float(bits >> 40) * 0x1p-24f, r2 = float((bits >> 16) & 0xFFFFFF) * 0x1p-24f;
+      const float s = std::sqrt(r1);
+      const float w0 = 1 - s, w1 = s * (1 - r2), w2 = s * r2;
+      const vec3f c0 = from.corner(t, 0), c1 = from.corner(t, 1), c2 = from.corner(t, 2);
+      const vec3f q = c0 * w0 + c1 * w1 + c2 * w2;
+      const ClosestHit h = bvh.closest(q, hint);
+      hint = h.triangle;
+      const float d = std::sqrt(h.distance_squared);
+      acc.sum += d;
+      acc.sum_squares += double(d) * d;
+      acc.take(d, {q, h.point, uint32_t(t), h.triangle});
+      if (want_field) {
+        // The nearest corner's region.
+        const float l0 = length_squared(q - c0), l1 = length_squared(q - c1), l2 = length_squared(q - c2);
+        const int k = l0 <= l1 && l0 <= l2 ? 0 : (l1 <= l2 ? 1 : 2);
+        raise(out.field, from.ids.id[fm.indices[3 * t + k]], d);
+      }
+      if (!(normals || uvs || colors)) continue;
+      const uint32_t* fc = &fm.indices[3 * t];
+      const uint32_t* tc = &tm.indices[3 * size_t(h.triangle)];
+      const float u0 = 1 - h.v - h.w;
+      if (normals) {
+        const vec3f na = interpolate(fm.normals, fc, w0, w1, w2), nb = interpolate(tm.normals, tc, u0, h.v, h.w);
+        const double la = length_squared(na), lb = length_squared(nb);
+        if (la > 0 && lb > 0) {
+          const double cx = double(na.y) * nb.z - double(na.z) * nb.y, cy = double(na.z) * nb.x - double(na.x) * nb.z,
+                       cz = double(na.x) * nb.y - double(na.y) * nb.x;
+          // atan2 keeps small angles accurate, where acos of a dot product near 1 does not.
+          const double angle =
+              std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), double(dot(na, nb))) * (180.0 / std::numbers::pi);
+          acc.normal_sum += angle, acc.normal_max = std::max(acc.normal_max, angle), ++acc.normal_count;
+        }
+      }
+      if (uvs) {
+        const float2 ua = interpolate(fm.uvs[0], fc, w0, w1, w2), ub = interpolate(tm.uvs[0], tc, u0, h.v, h.w);
+        const double du = double(ua.x) - ub.x, dv = double(ua.y) - ub.y;
+        const double diff = std::sqrt(du * du + dv * dv);
+        acc.uv_sum += diff, acc.uv_max = std::max(acc.uv_max, diff), ++acc.uv_count;
+      }
+      if (colors) {
+        const float4 ca = interpolate(fm.colors, fc, w0, w1, w2), cb = interpolate(tm.colors, tc, u0, h.v, h.w);
+        const double dr = double(ca.x) - cb.x, dg = double(ca.y) - cb.y, db = double(ca.z) - cb.z,
+                     da = double(ca.w) - cb.w;
+        const double diff = std::sqrt(dr * dr + dg * dg + db * db + da * da);
+        acc.color_sum += diff, acc.color_max = std::max(acc.color_max, diff), ++acc.color_count;
+      }
+    }
+  });
+  r.area_samples = plan.area_samples;
+  r.area = from.area;
+
+  r.max = std::max(0.0f, total.max);
+  r.max_location = total.where;
+  r.max_bound = r.max;
+  if (r.area_samples) {
+    r.mean = total.sum / double(r.area_samples);
+    r.rms = std::sqrt(total.sum_squares / double(r.area_samples));
+  } else {
+    // No area (every triangle degenerate): the surface is its vertices and edges.
+    r.mean = r.rms = r.max;
+  }
+  AttributeDeviation& at = r.attributes;
+  at.normals = normals, at.uvs = uvs, at.colors = colors;
+  if (total.normal_count) at.max_normal_angle = total.normal_max, at.mean_normal_angle = total.normal_sum / double(total.normal_count);
+  if (total.uv_count) at.max_uv = total.uv_max, at.mean_uv = total.uv_sum / double(total.uv_count);
+  if (total.color_count) at.max_color = total.color_max, at.mean_color = total.color_sum / double(total.color_count);
+  return out;
+}
+
+void refine_direction(Direction& dir, const Surface& from, const TriangleBvh& to, const CompareOptions& options,
+                      float tolerance, uint64_t budget, Progress& progress) {
+  measure::RefineInput in;
+  in.from = from.mesh;
+  in.position_id = &from.ids.id;
+  in.position_distance = &dir.position_distance;
+  in.position_closest = &dir.position_closest;
+  in.to = &to;
+  in.tolerance = tolerance;
+  in.budget = budget;
+  in.threads = options.threads;
+  const Mesh& fm = *from.mesh;
+  const bool field = !dir.field.empty();
+  const measure::RefineResult rr = measure::refine_max(
+      in, float(dir.result.max), dir.result.max_location, [&](uint32_t t, const vec3f& q, float d) {
+        if (!field) return;
+        const float l0 = length_squared(q - from.corner(t, 0)), l1 = length_squared(q - from.corner(t, 1)),
+                    l2 = length_squared(q - from.corner(t, 2));
+        const int k = l0 <= l1 && l0 <= l2 ? 0 : (l1 <= l2 ? 1 : 2);
+        raise(dir.field, from.ids.id[fm.indices[3 * size_t(t) + k]], d);
+      });
+  OneSidedDeviation& r = dir.result;
+  r.refined = true;
+  r.refine_samples = rr.queries;
+  r.max = rr.max;
+  r.max_location = rr.location;
+  r.max_bound = std::max<double>(rr.bound, r.max);
+  progress.add(rr.queries);
+}
+
+}  // namespace
+
+Deviation compare(const Mesh& a, const Mesh& b, const CompareOptions& options) {
+  validate(a, "mesh a");
+  validate(b, "mesh b");
+  if (a.triangle_count() == 0) throw_bad_input("mesh a", "has no triangles to measure");
+  if (b.triangle_count() == 0) throw_bad_input("mesh b", "has no triangles to measure");
+  if (!(options.refine_tolerance >= 0)) throw_usage("compare: refine_tolerance must be >= 0");
+
+  const auto start = std::chrono::steady_clock::now();
+  Deviation dev;
+  float3 lo, hi;
+  bounding_box(a, lo, hi);
+  const double dx = double(hi.x) - lo.x, dy = double(hi.y) - lo.y, dz = double(hi.z) - lo.z;
+  dev.diagonal = std::sqrt(dx * dx + dy * dy + dz * dz);
+
+  const uint64_t samples =
+      options.samples ? options.samples
+                      : std::clamp<uint64_t>(10 * std::max(a.triangle_count(), b.triangle_count()), 10'000, 2'000'000);
+  const TriangleBvh bvh_a(a, options.threads), bvh_b(b, options.threads);
+  const auto built = std::chrono::steady_clock::now();
+  dev.build_seconds = std::chrono::duration<double>(built - start).count();
+
+  Surface sa(a), sb(b);
+  const uint64_t seed_ab = splitmix64(options.seed ^ 0xA5A5A5A5ull), seed_ba = splitmix64(options.seed ^ 0x5A5A5A5Aull);
+  const Plan plan_a = plan_samples(sa, samples, options.edge_samples, seed_ab);
+  const Plan plan_b = plan_samples(sb, samples, options.edge_samples, seed_ba);
+  const uint64_t budget = options.refine_budget ? options.refine_budget : samples;
+  Progress progress{&options.progress};
+  progress.total = sa.ids.count + plan_a.edge_start.back() + plan_a.area_samples + sb.ids.count +
+                   plan_b.edge_start.back() + plan_b.area_samples + (options.refine ? 2 * budget : 0);
+
+  Direction ab = measure_direction(sa, sb, bvh_b, plan_a, seed_ab, true, options, progress);
+  Direction ba = measure_direction(sb, sa, bvh_a, plan_b, seed_ba, false, options, progress);
+  dev.queries = sa.ids.count + plan_a.edge_start.back() + plan_a.area_samples + sb.ids.count +
+                plan_b.edge_start.back() + plan_b.area_samples;
+  if (options.refine) {
+    const float tolerance = float(options.refine_tolerance * dev.diagonal);
+    refine_direction(ab, sa, bvh_b, options, tolerance, budget, progress);
+    refine_direction(ba, sb, bvh_a, options, tolerance, budget, progress);
+    dev.queries += ab.result.refine_samples + ba.result.refine_samples;
+  }
+
+  const double scale = dev.diagonal > 0 ? 1.0 / dev.diagonal : 0.0;
+  for (OneSidedDeviation* r : {&ab.result, &ba.result}) {
+    r->relative_max = r->max * scale, r->relative_mean = r->mean * scale, r->relative_rms = r->rms * scale;
+    r->relative_max_bound = r->max_bound * scale;
+  }
+  dev.a_to_b = ab.result;
+  dev.b_to_a = ba.result;
+  dev.hausdorff = std::max(dev.a_to_b.max, dev.b_to_a.max);
+  dev.hausdorff_bound = std::max(dev.a_to_b.max_bound, dev.b_to_a.max_bound);
+  const double area = sa.area + sb.area;
+  if (area > 0) {
+    dev.mean = (sa.area * dev.a_to_b.mean + sb.area * dev.b_to_a.mean) / area;
+    dev.rms = std::sqrt((sa.area * dev.a_to_b.rms * dev.a_to_b.rms + sb.area * dev.b_to_a.rms * dev.b_to_a.rms) / area);
+  } else {
+    dev.mean = std::max(dev.a_to_b.mean, dev.b_to_a.mean);
+    dev.rms = std::max(dev.a_to_b.rms, dev.b_to_a.rms);
+  }
+  dev.relative_hausdorff = dev.hausdorff * scale, dev.relative_mean = dev.mean * scale, dev.relative_rms = dev.rms * scale;
+  dev.relative_hausdorff_bound = dev.hausdorff_bound * scale;
+
+  dev.vertex_distance.resize(a.vertex_count());
+  dev.vertex_error.resize(a.vertex_count());
+  for (size_t v = 0; v < a.vertex_count(); ++v) {
+    const uint32_t p = sa.ids.id[v];
+    dev.vertex_distance[v] = ab.position_distance[p];
+    std::memcpy(&dev.vertex_error[v], &ab.field[p], 4);
+  }
+  dev.query_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - built).count();
+  return dev;
+}
+
+}  // namespace lod

@@ -1,0 +1,146 @@
+#include "measure/refine.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/parallel.h"
+
+namespace lod::measure {
+
+namespace {
+
+struct Patch {
+  vec3f corner[3];
+  float distance[3];
+  uint32_t closest[3];
+  uint32_t triangle;  // of `from`
+  float bound;
+};
+
+struct Split {
+  Patch child[4];
+  vec3f point[3];  // the new corners (edge midpoints 01, 12, 20)
+  ClosestHit hit[3];
+};
+
+constexpr size_t max_batch = 8192;
+
+}  // namespace
+
+float patch_bound(const vec3f corners[3], const float distances[3], const uint32_t closest[3], const TriangleBvh& to) {
+  const float e01 = distance(corners[0], corners[1]), e12 = distance(corners[1], corners[2]),
+              e20 = distance(corners[2], corners[0]);
+  float bound = std::min({distances[0] + std::max(e01, e20), distances[1] + std::max(e01, e12),
+                          distances[2] + std::max(e12, e20)});
+  for (int i = 0; i < 3; ++i) {
+    if ((i > 0 && closest[i] == closest[0]) || (i == 2 && closest[2] == closest[1])) continue;
+    float worst = distances[i];
+    for (int j = 0; j < 3 && worst < bound; ++j)
+      if (j != i) worst = std::max(worst, std::sqrt(to.to_triangle(corners[j], closest[i]).distance_squared));
+    bound = std::min(bound, worst);
+  }
+  return bound;
+}
+
+RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& location,
+                        const std::function<void(uint32_t, const vec3f&, float)>& on_sample) {
+  const Mesh& from = *input.from;
+  const std::vector<uint32_t>& pid = *input.position_id;
+  const TriangleBvh& to = *input.to;
+  RefineResult result;
+  result.max = max;
+  result.location = location;
+
+  // Every triangle's bound from its corners; those that may hold more than the max become patches.
+  const size_t triangles = from.triangle_count();
+  constexpr size_t block = 2048;
+  const size_t blocks = (triangles + block - 1) / block;
+  std::vector<std::vector<Patch>> open_per_block(blocks);
+  std::vector<float> settled_per_block(blocks, 0.0f);
+  core::parallel_blocks(triangles, block, input.threads, [&](size_t b, size_t begin, size_t end) {
+    for (size_t t = begin; t < end; ++t) {
+      Patch p;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = from.indices[3 * t + k];
+        p.corner[k] = from.positions[v];
+        p.distance[k] = (*input.position_distance)[pid[v]];
+        p.closest[k] = (*input.position_closest)[pid[v]];
+      }
+      p.triangle = uint32_t(t);
+      p.bound = patch_bound(p.corner, p.distance, p.closest, to);
+      if (p.bound > max + input.tolerance) open_per_block[b].push_back(p);
+      else settled_per_block[b] = std::max(settled_per_block[b], p.bound);
+    }
+  });
+  std::vector<Patch> open;
+  float settled = 0;  // the largest bound of the patches set aside
+  for (size_t b = 0; b < blocks; ++b) {
+    open.insert(open.end(), open_per_block[b].begin(), open_per_block[b].end());
+    settled = std::max(settled, settled_per_block[b]);
+  }
+  open_per_block.clear();
+
+  std::vector<Split> splits;
+  std::vector<Patch> next;
+  while (!open.empty() && result.queries + 3 <= input.budget) {
+    // The worst first; equal bounds keep their order, so the rounds repeat exactly.
+    std::stable_sort(open.begin(), open.end(), [](const Patch& x, const Patch& y) { return x.bound > y.bound; });
+    const size_t batch = std::min({open.size(), size_t((input.budget - result.queries) / 3), max_batch});
+    splits.resize(batch);
+    core::parallel_for(
+        batch, input.threads,
+        [&](size_t i) {
+          const Patch& p = open[i];
+          Split& s = splits[i];
+          for (int e = 0; e < 3; ++e) {
+            s.point[e] = midpoint(p.corner[e], p.corner[(e + 1) % 3]);
+            s.hit[e] = to.closest(s.point[e], p.closest[e]);
+          }
+          const vec3f m[3] = {s.point[0], s.point[1], s.point[2]};
+          const float md[3] = {std::sqrt(s.hit[0].distance_squared), std::sqrt(s.hit[1].distance_squared),
+                               std::sqrt(s.hit[2].distance_squared)};
+          const uint32_t mc[3] = {s.hit[0].triangle, s.hit[1].triangle, s.hit[2].triangle};
+          // Corners of the four children: (c0, m01, m20), (m01, c1, m12), (m20, m12, c2), (m01, m12, m20).
+          auto set = [&](Patch& child, int k, const vec3f& c, float d, uint32_t closest) {
+            child.corner[k] = c, child.distance[k] = d, child.closest[k] = closest;
+          };
+          for (int c = 0; c < 3; ++c) {
+            Patch& child = s.child[c];
+            set(child, c, p.corner[c], p.distance[c], p.closest[c]);
+            set(child, (c + 1) % 3, m[c], md[c], mc[c]);
+            set(child, (c + 2) % 3, m[(c + 2) % 3], md[(c + 2) % 3], mc[(c + 2) % 3]);
+          }
+          for (int k = 0; k < 3; ++k) set(s.child[3], k, m[k], md[k], mc[k]);
+          for (Patch& child : s.child) {
+            child.triangle = p.triangle;
+            child.bound = patch_bound(child.corner, child.distance, child.closest, to);
+          }
+        },
+        64);
+    result.queries += 3 * batch;
+    for (size_t i = 0; i < batch; ++i)
+      for (int e = 0; e < 3; ++e) {
+        const ClosestHit& h = splits[i].hit[e];
+        const float d = std::sqrt(h.distance_squared);
+        if (on_sample) on_sample(open[i].triangle, splits[i].point[e], d);
+        if (d > result.max) {
+          result.max = d;
+          result.location = {splits[i].point[e], h.point, open[i].triangle, h.triangle};
+        }
+      }
+    next.clear();
+    auto keep = [&](const Patch& p) {
+      if (p.bound > result.max + input.tolerance) next.push_back(p);
+      else settled = std::max(settled, p.bound);
+    };
+    for (size_t i = 0; i < batch; ++i)
+      for (const Patch& child : splits[i].child) keep(child);
+    for (size_t i = batch; i < open.size(); ++i) keep(open[i]);
+    open.swap(next);
+  }
+  result.bound = std::max(result.max, settled);
+  for (const Patch& p : open) result.bound = std::max(result.bound, p.bound);
+  return result;
+}
+
+}  // namespace lod::measure

@@ -1,0 +1,46 @@
+// Internal: refinement of a one-sided Hausdorff distance with a certified upper bound.
+//
+// f(q) = distance from q to the other surface. Over a triangular patch with corners c_i:
+//  - f is 1-Lipschitz, so f <= f(c_i) + max_j |c_i - c_j| for any corner i;
+//  - f(q) <= dist(q, T) for any one triangle T of the other surface, and dist(., T) is convex, so
+//    over the patch it is at most its largest corner value. T = each corner's closest triangle.
+// The smaller of these bounds each patch. Patches whose bound exceeds the largest distance found
+// are split 1 -> 4 (three new corner queries each), the worst first, in rounds.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "lodkit/measure.h"
+#include "measure/bvh.h"
+
+namespace lod::measure {
+
+struct RefineInput {
+  const Mesh* from = nullptr;
+  const std::vector<uint32_t>* position_id = nullptr;        // per vertex of `from`
+  const std::vector<float>* position_distance = nullptr;     // per position id: distance to `to`
+  const std::vector<uint32_t>* position_closest = nullptr;   // per position id: closest triangle of `to`
+  const TriangleBvh* to = nullptr;
+  float tolerance = 0;  // object space: stop when the bound is within this of the largest distance
+  uint64_t budget = 0;  // queries
+  unsigned threads = 0;
+};
+
+struct RefineResult {
+  float max = 0;  // the largest distance found (at least the input's)
+  MaxLocation location;
+  float bound = 0;  // upper bound on the one-sided Hausdorff distance
+  uint64_t queries = 0;
+};
+
+// `max`/`location`: the largest sampled distance so far. on_sample(triangle, point, distance) is
+// called for every new sample, in a fixed order, from the calling thread.
+RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& location,
+                        const std::function<void(uint32_t, const vec3f&, float)>& on_sample);
+
+// The bound of one patch (exposed for tests).
+float patch_bound(const vec3f corners[3], const float distances[3], const uint32_t closest[3], const TriangleBvh& to);
+
+}  // namespace lod::measure
