@@ -2,60 +2,159 @@
 # Peer benchmarks. Heavy, so not part of CI; one command away:
 #
 #   scripts/bench.sh io [RUNS=5]
+#   scripts/bench.sh simplify [--quick] [RUNS=3]
+#   scripts/bench.sh measure [PAIRS=20]
 #
 # io: loads a binary PLY and an OBJ of >= 3M triangles (bunny00.off subdivided 1->4) with lodkit and
 # with Assimp, each loader in its own process under /usr/bin/time -v; prints a markdown table of
 # median load times, their ratio and peak memory, and writes bench/results/io.json.
+#
+# simplify: every corpus mesh of >= 2000 triangles at 10% and 1%, plus armadillo subdivided to 832k and
+# 3.3M triangles, through lodkit (all threads and one), meshoptimizer, CGAL (Garland-Heckbert and
+# Lindstrom-Turk) and OpenMesh, each in its own process; distances of every result to its input;
+# lodkit's five metrics side by side. Prints the tables and the issue 3 targets, writes
+# bench/results/simplify.json and the rate-distortion plot bench/results/simplify-rd.{png,svg}.
+# --quick: two small meshes, one run each (a smoke test of the whole chain).
+#
+# measure: `lodkit compare` against CGAL's distance (cgal_distance) on PAIRS (mesh, simplified) pairs:
+# values and time at the same sample count; writes bench/results/measure.json.
+#
+# The build is the release preset (build/release); LODKIT_BENCH_BUILD=DIR uses another configured
+# build directory instead.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
-usage() { echo "usage: scripts/bench.sh io [RUNS=5]" >&2; exit 2; }
-[ $# -ge 1 ] && [ $# -le 2 ] && [ "$1" = io ] || usage
-runs=${2:-5}
-[[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+usage() {
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | measure [PAIRS=20]" >&2
+  exit 2
+}
+[ $# -ge 1 ] || usage
+area=$1
+shift
 
-[ -f build/release/build.ninja ] || cmake --preset release >/dev/null
-bench=build/release/bench/lodkit_bench_io
-grep -q '^build bench/lodkit_bench_io:' build/release/build.ninja ||
-  { echo "bench: no lodkit_bench_io target (is libassimp-dev installed? run scripts/setup.sh)" >&2; exit 1; }
-# Only the bench and what it links: a broken test elsewhere should not stop a benchmark run.
-log=$(mktemp)
-cmake --build --preset release --target lodkit_bench_io >"$log" 2>&1 || { cat "$log" >&2; rm -f "$log"; exit 1; }
-rm -f "$log"
-[ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
-data=build/bench-data
-# A failed writer costs its own file only; its row below is then marked failed.
-"$bench" make-inputs data/corpus/bunny00.off "$data" || echo "bench: make-inputs failed for some input (see above)" >&2
-
-echo
-machine="$(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
-echo "machine: $machine, $(date -u +%Y-%m-%dT%H:%MZ), load average $(cut -d' ' -f1-3 /proc/loadavg)"
-echo "runs per loader: $runs timed (after one untimed warm-up load), median reported"
-echo
-
-mkdir -p bench/results
-results=()
-# One process per (loader, file): returns the JSON line with peak_mib added, or nothing on failure.
-measure() {
-  local loader=$1 file=$2 log json peak
-  log=$(mktemp)
-  if json=$(/usr/bin/time -v "$bench" load "$loader" "$file" "$runs" --json 2>"$log"); then
-    peak=$(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); print $2}' "$log")
-    rm -f "$log"
-    python3 -c 'import json,sys; d=json.loads(sys.argv[1]); d["peak_mib"]=round(int(sys.argv[2])/1024,1); print(json.dumps(d))' "$json" "$peak"
+build=${LODKIT_BENCH_BUILD:-build/release}
+configure() {
+  if [ -z "${LODKIT_BENCH_BUILD:-}" ]; then
+    [ -f build/release/build.ninja ] || cmake --preset release >/dev/null
   else
-    echo "bench: $loader failed on $file: $(grep -v '^\s' "$log" | head -n 3)" >&2
-    rm -f "$log"
+    [ -f "$build/build.ninja" ] || { echo "bench: $build is not a configured build directory" >&2; exit 1; }
   fi
 }
-files=("$data/big.ply" "$data/big.obj")
-for file in "${files[@]}"; do
-  for loader in lodkit assimp; do
-    line=$(measure "$loader" "$file")
-    [ -n "$line" ] && results+=("$line")
+# Builds only the named targets and what they link: a broken test elsewhere should not stop a
+# benchmark run. Targets missing from the build (a peer's package is not installed) are skipped.
+build_targets() {
+  local available=() t log
+  for t in "$@"; do
+    if grep -q "^build bench/$t:\|^build $t:" "$build/build.ninja"; then available+=("$t"); fi
   done
-done
+  [ ${#available[@]} -gt 0 ] || return 0
+  log=$(mktemp)
+  cmake --build "$build" --target "${available[@]}" >"$log" 2>&1 || { cat "$log" >&2; rm -f "$log"; exit 1; }
+  rm -f "$log"
+}
+machine_line() {
+  machine="$(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
+  echo "machine: $machine, $(date -u +%Y-%m-%dT%H:%MZ), load average $(cut -d' ' -f1-3 /proc/loadavg)"
+}
 
-# Exits non-zero when a ratio is missing (a failed row) or the loaders disagree on triangles.
-printf '%s\n' "${results[@]}" | python3 bench/io/report.py bench/results/io.json "$machine" "$runs" "${files[@]}"
+# ---- io ------------------------------------------------------------------------------------------
+area_io() {
+  [ $# -le 1 ] || usage
+  local runs=${1:-5}
+  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  configure
+  local bench=$build/bench/lodkit_bench_io
+  grep -q '^build bench/lodkit_bench_io:' "$build/build.ninja" ||
+    { echo "bench: no lodkit_bench_io target (is libassimp-dev installed? run scripts/setup.sh)" >&2; exit 1; }
+  build_targets lodkit_bench_io
+  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
+  local data=build/bench-data
+  # A failed writer costs its own file only; its row below is then marked failed.
+  "$bench" make-inputs data/corpus/bunny00.off "$data" || echo "bench: make-inputs failed for some input (see above)" >&2
+
+  echo
+  machine_line
+  echo "runs per loader: $runs timed (after one untimed warm-up load), median reported"
+  echo
+
+  mkdir -p bench/results
+  local results=() files=("$data/big.ply" "$data/big.obj") file loader line
+  # One process per (loader, file): returns the JSON line with peak_mib added, or nothing on failure.
+  measure() {
+    local loader=$1 file=$2 log json peak
+    log=$(mktemp)
+    if json=$(/usr/bin/time -v "$bench" load "$loader" "$file" "$runs" --json 2>"$log"); then
+      peak=$(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); print $2}' "$log")
+      rm -f "$log"
+      python3 -c 'import json,sys; d=json.loads(sys.argv[1]); d["peak_mib"]=round(int(sys.argv[2])/1024,1); print(json.dumps(d))' "$json" "$peak"
+    else
+      echo "bench: $loader failed on $file: $(grep -v '^\s' "$log" | head -n 3)" >&2
+      rm -f "$log"
+    fi
+  }
+  for file in "${files[@]}"; do
+    for loader in lodkit assimp; do
+      line=$(measure "$loader" "$file")
+      [ -n "$line" ] && results+=("$line")
+    done
+  done
+
+  # Exits non-zero when a ratio is missing (a failed row) or the loaders disagree on triangles.
+  printf '%s\n' "${results[@]}" | python3 bench/io/report.py bench/results/io.json "$machine" "$runs" "${files[@]}"
+}
+
+# ---- simplify ------------------------------------------------------------------------------------
+area_simplify() {
+  local quick="" runs=""
+  for a in "$@"; do
+    case $a in
+      --quick) quick=--quick ;;
+      *) [[ $a =~ ^[1-9][0-9]*$ ]] && [ -z "$runs" ] || usage; runs=$a ;;
+    esac
+  done
+  [ -n "$runs" ] || { [ -n "$quick" ] && runs=1 || runs=3; }
+  local started=$SECONDS
+  configure
+  # CGAL compiles slowly: the peers are built here, by name, never by a plain build.
+  build_targets lodkit_cli lodkit_bench_simplify peer_meshopt peer_cgal peer_openmesh cgal_distance
+  [ -x "$build/bench/lodkit_bench_simplify" ] || { echo "bench: lodkit_bench_simplify was not built" >&2; exit 1; }
+  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
+  echo "bench: built in $((SECONDS - started)) s" >&2
+
+  echo
+  machine_line
+  echo "runs per tool: $runs timed (the input structure is rebuilt untimed before each), median reported${quick:+; quick mode}"
+  echo
+
+  mkdir -p bench/results
+  python3 bench/simplify/run.py "$build/bench" "$build/lodkit" build/bench-data/simplify bench/results/simplify.jsonl \
+    --runs "$runs" $quick
+  python3 bench/simplify/report.py bench/results/simplify.jsonl bench/results/simplify.json "$machine" "$runs"
+  echo
+  echo "whole run: $((SECONDS - started)) s"
+}
+
+# ---- measure -------------------------------------------------------------------------------------
+area_measure() {
+  [ $# -le 1 ] || usage
+  local pairs=${1:-20}
+  [[ $pairs =~ ^[1-9][0-9]*$ ]] || usage
+  configure
+  build_targets lodkit_cli lodkit_bench_simplify cgal_distance
+  [ -x "$build/bench/cgal_distance" ] || { echo "bench: cgal_distance was not built (libcgal-dev missing?)" >&2; exit 1; }
+  "$build/lodkit" compare --help >/dev/null 2>&1 || { echo "bench: this lodkit has no 'compare' subcommand yet" >&2; exit 1; }
+  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
+  echo
+  machine_line
+  echo
+  mkdir -p bench/results
+  python3 bench/simplify/measure.py "$build/bench" "$build/lodkit" build/bench-data/measure bench/results/measure.json "$pairs" "$machine"
+}
+
+case $area in
+  io) area_io "$@" ;;
+  simplify) area_simplify "$@" ;;
+  measure) area_measure "$@" ;;
+  *) usage ;;
+esac

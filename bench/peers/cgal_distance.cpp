@@ -11,8 +11,9 @@
 // max_distance_to_triangle_mesh does), single-threaded.
 //   hausdorff  max over every sample (faces and vertices) of the distance;
 //   mean, rms  over the area-uniform face samples only (vertices would over-weight small triangles).
-// The symmetric values are the larger of the two directions. Everything is also divided by A's
-// bounding-box diagonal. Zero-area triangles are skipped (they have no surface to sample or hit).
+// Symmetric: Hausdorff is the larger direction; mean and RMS are over both surfaces together, each
+// direction weighted by its surface's area (as lod::compare defines them). Everything is also
+// divided by A's bounding-box diagonal. Zero-area triangles are skipped (they have no surface to sample or hit).
 // "seconds" covers sampling, tree building and queries, not loading.
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -41,7 +42,7 @@ struct Soup {
   std::vector<std::array<size_t, 3>> faces;  // non-degenerate only
   std::vector<Triangle> triangles;           // the same faces, for the tree
   std::vector<char> referenced;
-  double diagonal = 0;
+  double diagonal = 0, area = 0;
 };
 
 Soup make_soup(const lod::Mesh& mesh) {
@@ -54,6 +55,7 @@ Soup make_soup(const lod::Mesh& mesh) {
     if (CGAL::collinear(s.points[f[0]], s.points[f[1]], s.points[f[2]])) continue;
     s.faces.push_back(f);
     s.triangles.emplace_back(s.points[f[0]], s.points[f[1]], s.points[f[2]]);
+    s.area += std::sqrt(s.triangles.back().squared_area());
     for (const size_t v : f) s.referenced[v] = 1;
   }
   lod::float3 lo, hi;
@@ -134,7 +136,9 @@ int main(int argc, char** argv) {
     const Direction ba = one_way(mesh_b, mesh_a, samples, seed + 1, vertices);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double diag = mesh_a.diagonal > 0 ? mesh_a.diagonal : 1.0;
-    const double hausdorff = std::max(ab.hausdorff, ba.hausdorff), rms = std::max(ab.rms, ba.rms), mean = std::max(ab.mean, ba.mean);
+    const double hausdorff = std::max(ab.hausdorff, ba.hausdorff);
+    const double wa = mesh_a.area / (mesh_a.area + mesh_b.area), wb = 1.0 - wa;
+    const double rms = std::sqrt(wa * ab.rms * ab.rms + wb * ba.rms * ba.rms), mean = wa * ab.mean + wb * ba.mean;
     const Point& worst = ab.hausdorff >= ba.hausdorff ? ab.worst : ba.worst;
     nlohmann::json j = {{"tool", "cgal_distance"},
                         {"a", files[0]},
@@ -148,8 +152,10 @@ int main(int argc, char** argv) {
                         {"hausdorff_relative", hausdorff / diag},
                         {"rms_relative", rms / diag},
                         {"mean_relative", mean / diag},
-                        {"a_to_b", {{"hausdorff", ab.hausdorff}, {"mean", ab.mean}, {"rms", ab.rms}}},
-                        {"b_to_a", {{"hausdorff", ba.hausdorff}, {"mean", ba.mean}, {"rms", ba.rms}}},
+                        {"a_to_b", {{"hausdorff", ab.hausdorff}, {"mean", ab.mean}, {"rms", ab.rms}, {"area", mesh_a.area},
+                                    {"samples", ab.face_samples + ab.vertex_samples}}},
+                        {"b_to_a", {{"hausdorff", ba.hausdorff}, {"mean", ba.mean}, {"rms", ba.rms}, {"area", mesh_b.area},
+                                    {"samples", ba.face_samples + ba.vertex_samples}}},
                         {"worst", {worst.x(), worst.y(), worst.z()}},
                         {"seconds", seconds}};
     if (json) {

@@ -204,38 +204,24 @@ class CgalDistance:
 
 
 class LodkitCompare:
+    """`lodkit compare A B --json` at its default sample count (10 area samples per triangle of the
+    larger mesh, 10k to 2M, plus every vertex and edge samples, on each surface)."""
     def __init__(self, cli):
         self.cli = cli
 
     def describe(self):
-        return "lodkit compare"
+        return "lodkit compare (default samples: 10 per triangle of the larger mesh, plus vertices and edges)"
 
     def measure(self, input_path, output_path, triangles_in):
-        samples = samples_for(triangles_in)
-        p = subprocess.run([self.cli, "compare", input_path, output_path, "--samples", str(samples), "--json"],
+        p = subprocess.run([self.cli, "compare", input_path, output_path, "--json"],
                            capture_output=True, text=True, timeout=PROCESS_TIMEOUT)
         if p.returncode != 0:
             return {"failed": (p.stderr.strip().splitlines() or ["failed"])[0], "tool": "lodkit compare"}
         j = json.loads(p.stdout)
-        return {"tool": "lodkit compare", "samples": samples, **compare_fields(j)}
-
-
-def compare_fields(j):
-    """The symmetric relative Hausdorff / RMS / mean from `lodkit compare --json`, whatever its nesting."""
-    found = {}
-    def walk(node, path):
-        if isinstance(node, dict):
-            for k, v in node.items():
-                walk(v, path + [k])
-        elif isinstance(node, (int, float)) and not isinstance(node, bool):
-            found[".".join(path)] = node
-    walk(j, [])
-    def pick(quantity):
-        keys = [k for k in found if quantity in k.lower() and "relative" in k.lower()]
-        symmetric = [k for k in keys if "symmetric" in k.lower()] or [k for k in keys if "." not in k] or keys
-        return found[sorted(symmetric, key=len)[0]] if symmetric else None
-    return {"hausdorff_relative": pick("hausdorff"), "rms_relative": pick("rms"), "mean_relative": pick("mean"),
-            "seconds": found.get("seconds")}
+        s = j["symmetric"]
+        return {"tool": "lodkit compare", "samples": j["a_to_b"]["samples"]["total"] + j["b_to_a"]["samples"]["total"],
+                "hausdorff_relative": s["relative_hausdorff"], "rms_relative": s["relative_rms"],
+                "mean_relative": s["relative_mean"], "seconds": j.get("compare_seconds")}
 
 
 def samples_for(triangles_in):
