@@ -100,7 +100,9 @@ class Engine {
       // is as the pass found it: the verdicts equal those of checking in sequence, on any number
       // of threads.
       size_t applied = 0, deferred = 0;
-      const size_t chunk = std::max<size_t>(256, 64 * s_.threads);
+      // Chunks: big enough to keep the workers busy, small enough that few of a chunk's candidates
+      // get locked by earlier ones in it (their checks are wasted).
+      const size_t chunk = std::clamp<size_t>(order.size() / 64, 256, 4096);
       std::vector<uint32_t> batch;
       for (size_t next = 0; next < order.size() && s_.live_triangles > target_triangles;) {
         batch.clear();
@@ -318,6 +320,18 @@ class Engine {
   bool map_wedges(uint32_t kept, uint32_t removed, const std::vector<uint32_t>& faces,
                   std::vector<WedgePair>& pairs) const {
     pairs.clear();
+    if (!((s_.flags[kept] | s_.flags[removed]) & flag_seam)) {
+      // One wedge and material at each end: they pair up, as any removed face shows.
+      const uint32_t t = faces[0];
+      uint32_t from = none, to = none;
+      for (uint32_t k = 0; k < 3; ++k) {
+        const uint32_t p = s_.corner_position(t, k);
+        if (p == removed) from = s_.corners[3 * t + k];
+        if (p == kept) to = s_.corners[3 * t + k];
+      }
+      pairs.push_back({from, to, s_.material(t)});
+      return true;
+    }
     for (const uint32_t t : faces) {
       uint32_t from = none, to = none;
       for (uint32_t k = 0; k < 3; ++k) {
@@ -449,18 +463,21 @@ class Engine {
     // Directions allowed by locks and wedges. Without seams, attributes or checks, wedges do not
     // matter: each side has one wedge.
     const bool wedges = checked || channel_floats_ || ((fu | fv) & flag_seam);
-    bool can[2];  // can[0]: keep u, remove v
+    // can[d]: direction d (0: keep u, remove v) is allowed; the second is worked out only if needed.
+    const bool fixed = s_.options.keep_vertices || ((fu | fv) & flag_locked);
+    const bool seam = (fu | fv) & flag_seam;
+    bool can[2];
     can[0] = !(fv & flag_locked) && (!wedges || map_wedges(u, v, faces, scratch.pairs[0]));
-    can[1] = !(fu & flag_locked) && (!wedges || map_wedges(v, u, faces, scratch.pairs[1]));
+    const bool need_second = !can[0] || fixed || seam;
+    can[1] = need_second && !(fu & flag_locked) && (!wedges || map_wedges(v, u, faces, scratch.pairs[1]));
     if (!can[0] && !can[1]) return Reject::seam;
 
-    const bool fixed = s_.options.keep_vertices || ((fu | fv) & flag_locked);
     decision = {};
     for (int d = 0; d < 2; ++d) {
       if (!can[d]) continue;
       const uint32_t kept = d == 0 ? u : v, removed = d == 0 ? v : u;
       if (!fixed && decision.kept != none) break;  // free placement: one direction is enough
-      if (!fixed && d == 0 && can[1] && ((fu | fv) & flag_seam)) {
+      if (!fixed && d == 0 && can[1] && seam) {
         // Both directions work: keep the position with more wedges (seam ends stay put), else u.
         wedges_of(u, scratch.kept_wedges);
         const size_t wu = scratch.kept_wedges.size();
