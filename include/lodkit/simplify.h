@@ -58,9 +58,11 @@ struct SimplifyOptions {
   std::vector<float> importance;           // per input vertex: multiplies the cost of moving it (>= 0)
 
   // Aggregation (Garland–Heckbert "virtual pairs"): positions closer than this object-space distance
-  // that share no edge may also be contracted, which merges separate parts. 0 disables.
-  // Not available yet: a non-zero value throws lod::Error (usage).
+  // that share no edge may also be contracted, which merges separate parts (foliage, debris). The
+  // parts then meet at one non-manifold position, which later edge collapses leave in place. Pairs
+  // are found with a uniform grid, up to `aggregate_neighbours` nearest per position. 0 disables.
   float aggregate_distance = 0.0f;
+  uint32_t aggregate_neighbours = 8;
   // Drop connected components whose bounding-box diagonal is below the error reached. Done after
   // the collapses: the record (and replay) describe the mesh before pruning.
   bool prune = false;
@@ -84,6 +86,8 @@ struct Collapse {
   uint32_t relink_count = 0;
   uint32_t wedges_begin = 0;         // into SimplifyRecord::wedges
   uint32_t wedge_count = 0;
+  uint32_t moved_begin = 0;          // into SimplifyRecord::moved_wedges
+  uint32_t moved_count = 0;          // non-zero only for virtual pairs (no shared faces)
 };
 
 // A triangle corner that pointed at a wedge of `removed` and now points at one of `kept`.
@@ -105,6 +109,8 @@ struct SimplifyRecord {
   std::vector<uint32_t> removed_faces;
   std::vector<Relink> relinks;
   std::vector<WedgeChange> wedges;
+  // Virtual pairs keep every corner's wedge: the wedges (input vertices) of `removed` move to `kept`.
+  std::vector<uint32_t> moved_wedges;
   std::vector<float> old_values, new_values;
   uint32_t stride = 0;  // floats per wedge change
 };

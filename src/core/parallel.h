@@ -10,6 +10,7 @@
 #include <vector>
 
 #include <tbb/blocked_range.h>
+#include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -27,7 +28,9 @@ inline unsigned thread_count(unsigned requested) {
 template <class Fn>
 void parallel_blocks(size_t count, size_t block_size, unsigned threads, Fn&& fn) {
   const size_t blocks = (count + block_size - 1) / block_size;
-  const size_t workers = std::min<size_t>(thread_count(threads), blocks);
+  // More workers than cores only adds switching (and oneTBB warns): the result is the same anyway.
+  const size_t cores = size_t(std::max(1, tbb::info::default_concurrency()));
+  const size_t workers = std::min({size_t(thread_count(threads)), blocks, cores});
   if (workers <= 1) {
     for (size_t b = 0; b < blocks; ++b) fn(b, b * block_size, std::min(count, (b + 1) * block_size));
     return;

@@ -142,6 +142,9 @@ struct Replay {
       const WedgeChange& w = record.wedges[c.wedges_begin + i];
       if (w.vertex >= position_of.size() || size_t(w.values_begin) + layout.stride > record.new_values.size()) bad();
     }
+    if (size_t(c.moved_begin) + c.moved_count > record.moved_wedges.size()) bad();
+    for (uint32_t i = 0; i < c.moved_count; ++i)
+      if (record.moved_wedges[c.moved_begin + i] >= position_of.size()) bad();
   }
 
   void apply(const SimplifyRecord& record, const Collapse& c) {
@@ -151,13 +154,16 @@ struct Replay {
       const Relink& r = record.relinks[c.relinks_begin + i];
       corners[3 * r.triangle + r.corner] = r.to;
     }
-    if (!(c.new_position == c.old_position)) position[c.kept] = c.new_position, ++moves[c.kept];
+    for (uint32_t i = 0; i < c.moved_count; ++i) position_of[record.moved_wedges[c.moved_begin + i]] = c.kept;
+    // Wedges moved in from a virtual pair sit at kept's position even when it stays put.
+    if (!(c.new_position == c.old_position) || c.moved_count) position[c.kept] = c.new_position, ++moves[c.kept];
     set_values(record, c, record.new_values);
   }
 
   void undo(const SimplifyRecord& record, const Collapse& c) {
     set_values(record, c, record.old_values);
-    if (!(c.new_position == c.old_position)) position[c.kept] = c.old_position, --moves[c.kept];
+    if (!(c.new_position == c.old_position) || c.moved_count) position[c.kept] = c.old_position, --moves[c.kept];
+    for (uint32_t i = 0; i < c.moved_count; ++i) position_of[record.moved_wedges[c.moved_begin + i]] = c.removed;
     for (uint32_t i = c.relink_count; i-- > 0;) {
       const Relink& r = record.relinks[c.relinks_begin + i];
       corners[3 * r.triangle + r.corner] = r.from;

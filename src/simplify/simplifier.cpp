@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <tuple>
 
 #include "core/parallel.h"
 #include "core/union_find.h"
@@ -43,7 +44,7 @@ double seconds(clock::time_point a, clock::time_point b) { return std::chrono::d
 
 // Per-thread scratch for evaluating one edge; reused so evaluation allocates nothing in steady state.
 struct Scratch {
-  std::vector<uint32_t> removed_faces, neighbours_u, neighbours_v, kept_wedges, candidates;
+  std::vector<uint32_t> removed_faces, neighbours_u, neighbours_v, kept_wedges, candidates, extra;
   std::vector<WedgePair> pairs[2];
 };
 
@@ -55,7 +56,7 @@ struct Decision {
   int direction = 0;  // index of the pairs in Scratch
 };
 
-enum class Reject { none, topology, seam, flip, shape };
+enum class Reject { ok, topology, seam, flip, shape };
 
 template <class MetricT>
 class Engine {
@@ -71,6 +72,10 @@ class Engine {
       build_star();
       roll_flags(first);
       classify();
+      if (aggregate_) {
+        if (first) find_virtual_pairs();
+        update_virtual_pairs();
+      }
       if (first) metric_.initialize(s_);
       else metric_.begin_pass(s_);
       ++result_.passes;
@@ -118,14 +123,14 @@ class Engine {
             const uint32_t u = batch[i];
             verdicts_[i] = evaluate(u, best_[u].other, scratch, decisions_[i], true);
             // Ranked but not allowed: u waits for the next pass with its cheapest allowed edge.
-            if (verdicts_[i] != Reject::none) fallback_[i] = best_checked(u, scratch);
+            if (verdicts_[i] != Reject::ok) fallback_[i] = best_checked(u, scratch);
           }
         });
         for (size_t i = 0; i < batch.size(); ++i) {
           if (s_.live_triangles <= target_triangles) break;
           const uint32_t u = batch[i], v = best_[u].other;
           if ((s_.flags[u] | s_.flags[v]) & flag_pass_locked) continue;
-          if (verdicts_[i] != Reject::none) {
+          if (verdicts_[i] != Reject::ok) {
             rejected_[int(verdicts_[i])] += 1;
             best_[u] = fallback_[i];
             mark_[u] |= mark_fallback;
@@ -252,8 +257,10 @@ class Engine {
      Scratch& scratch = block_scratch();
      for (size_t i = begin; i < end; ++i) {
       const uint32_t u = uint32_t(i);
-      bool full = false, partial = false;
-      if (wide) {
+      bool full = aggregate_, partial = false;
+      if (aggregate_) {
+        // Virtual pairs follow merged positions around: rank everything again (an opt-in mode).
+      } else if (wide) {
         // Memoryless costs read the faces around both ends: a collapse changes the costs of every
         // edge with an end in its locked ring.
         full = s_.flags[u] & flag_dirty;
@@ -266,7 +273,8 @@ class Engine {
       }
       if (!full && !partial) continue;
       if (full) best_[u] = Best{}, mark_[u] &= uint8_t(~mark_fallback);
-      if (s_.flags[u] & (flag_dead | flag_complex)) {
+      // Non-manifold positions never collapse an edge, but may still join a virtual pair.
+      if ((s_.flags[u] & flag_dead) || ((s_.flags[u] & flag_complex) && !aggregate_)) {
         best_[u] = Best{};
         continue;
       }
@@ -275,13 +283,105 @@ class Engine {
         if (v <= u || (s_.flags[v] & (flag_dead | flag_complex))) continue;
         if (!full && !(mark_[v] & mark_kept)) continue;
         Decision decision;
-        if (evaluate(u, v, scratch, decision, false) != Reject::none) continue;
+        if (evaluate(u, v, scratch, decision, false) != Reject::ok) continue;
         const float cost = float(decision.placement.cost);
         if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
       }
+      if (aggregate_)
+        for (uint32_t j = virtual_first_[u]; j < virtual_first_[u + 1]; ++j) {
+          const uint32_t v = virtual_partner_[j];
+          Decision decision;
+          if (evaluate(u, v, scratch, decision, false) != Reject::ok) continue;
+          const float cost = float(decision.placement.cost);
+          if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
+        }
      }
     });
     for (uint8_t& m : mark_) m &= mark_fallback;
+  }
+
+  // Virtual pairs: for each live position, up to aggregate_neighbours nearest positions within the
+  // aggregation distance that are not its neighbours, found in a uniform grid of that cell size (a
+  // sorted cell list, so the result does not depend on hashing or threads).
+  void find_virtual_pairs() {
+    const double tau = double(s_.options.aggregate_distance) * s_.scale;
+    const uint32_t k_nearest = std::max<uint32_t>(1, s_.options.aggregate_neighbours);
+    merged_into_.resize(s_.position_count);
+    std::iota(merged_into_.begin(), merged_into_.end(), 0u);
+    struct Entry {
+      int64_t x, y, z;
+      uint32_t p;
+      bool operator<(const Entry& o) const { return std::tie(x, y, z, p) < std::tie(o.x, o.y, o.z, o.p); }
+    };
+    const auto cell = [&](double c) { return int64_t(std::floor(std::clamp(c / tau, -1e15, 1e15))); };
+    std::vector<Entry> grid;
+    for (uint32_t p = 0; p < s_.position_count; ++p) {
+      if (s_.first[p] == s_.first[p + 1]) continue;  // unused
+      const vec3d q = s_.normalized(p);
+      grid.push_back({cell(q.x), cell(q.y), cell(q.z), p});
+    }
+    std::sort(grid.begin(), grid.end());
+    // A crowded cell (tau much larger than the spacing) is scanned only this far: pairs are then
+    // found among the first positions of the cell, which keeps the search linear.
+    constexpr size_t max_scan = 256;
+    const size_t block = 1024;
+    std::vector<std::vector<std::pair<uint32_t, uint32_t>>> found((grid.size() + block - 1) / block);
+    core::parallel_blocks(grid.size(), block, s_.threads, [&](size_t b, size_t begin, size_t end) {
+      std::vector<std::pair<double, uint32_t>> near;
+      std::vector<uint32_t> ring;
+      for (size_t i = begin; i < end; ++i) {
+        const Entry& e = grid[i];
+        const vec3d q = s_.normalized(e.p);
+        near.clear();
+        for (int64_t dx = -1; dx <= 1; ++dx)
+          for (int64_t dy = -1; dy <= 1; ++dy)
+            for (int64_t dz = -1; dz <= 1; ++dz) {
+              const Entry key{e.x + dx, e.y + dy, e.z + dz, 0};
+              auto it = std::lower_bound(grid.begin(), grid.end(), key);
+              for (size_t n = 0; it != grid.end() && it->x == key.x && it->y == key.y && it->z == key.z && n < max_scan;
+                   ++it, ++n) {
+                if (it->p == e.p) continue;
+                const double d2 = length_squared(s_.normalized(it->p) - q);
+                if (d2 <= tau * tau) near.push_back({d2, it->p});
+              }
+            }
+        std::sort(near.begin(), near.end());
+        neighbours(e.p, none, ring);
+        uint32_t kept = 0;
+        for (const auto& [d2, other] : near) {
+          if (kept == k_nearest) break;
+          if (std::find(ring.begin(), ring.end(), other) != ring.end()) continue;  // an edge already
+          found[b].push_back({std::min(e.p, other), std::max(e.p, other)});
+          ++kept;
+        }
+      }
+    });
+    for (const auto& f : found) virtual_pairs_.insert(virtual_pairs_.end(), f.begin(), f.end());
+    std::sort(virtual_pairs_.begin(), virtual_pairs_.end());
+    virtual_pairs_.erase(std::unique(virtual_pairs_.begin(), virtual_pairs_.end()), virtual_pairs_.end());
+  }
+
+  uint32_t representative(uint32_t p) const {
+    while (merged_into_[p] != p) p = merged_into_[p];
+    return p;
+  }
+
+  // The virtual pairs between current positions, without self pairs and pairs that became edges.
+  void update_virtual_pairs() {
+    for (auto& [a, b] : virtual_pairs_) {
+      const uint32_t ra = representative(a), rb = representative(b);
+      a = std::min(ra, rb), b = std::max(ra, rb);
+    }
+    std::sort(virtual_pairs_.begin(), virtual_pairs_.end());
+    virtual_pairs_.erase(std::unique(virtual_pairs_.begin(), virtual_pairs_.end()), virtual_pairs_.end());
+    std::erase_if(virtual_pairs_, [&](const std::pair<uint32_t, uint32_t>& pair) {
+      return pair.first == pair.second || shared_triangles(s_, pair.first, pair.second) > 0;
+    });
+    virtual_first_.assign(s_.position_count + 1, 0);
+    for (const auto& pair : virtual_pairs_) ++virtual_first_[pair.first + 1];
+    for (uint32_t p = 0; p < s_.position_count; ++p) virtual_first_[p + 1] += virtual_first_[p];
+    virtual_partner_.resize(virtual_pairs_.size());
+    for (size_t i = 0; i < virtual_pairs_.size(); ++i) virtual_partner_[i] = virtual_pairs_[i].second;  // sorted
   }
 
   // After a collapse, the edges that changed are those at the kept position (its quadric and place
@@ -393,7 +493,7 @@ class Engine {
         if (max_aspect > 0 && longest / l1 > max_aspect) return Reject::shape;
       }
     }
-    return Reject::none;
+    return Reject::ok;
   }
 
  public:
@@ -403,22 +503,65 @@ class Engine {
   // be applied, in cost order.
   Reject evaluate(uint32_t u, uint32_t v, Scratch& scratch, Decision& decision, bool checked) {
     const uint8_t fu = s_.flags[u], fv = s_.flags[v];
-    if ((fu | fv) & (flag_complex | flag_dead)) return Reject::topology;
+    if ((fu | fv) & flag_dead) return Reject::topology;
     if ((fu & flag_locked) && (fv & flag_locked)) return Reject::topology;
+    if (!aggregate_ && ((fu | fv) & flag_complex)) return Reject::topology;
 
     auto& faces = scratch.removed_faces;
     faces.clear();
     const auto wings = s_.wings_of(u);
     for (size_t i = 0; i < wings.size(); ++i)
       if (wings[i].next == v || wings[i].prev == v) faces.push_back(s_.star[s_.first[u] + i]);
-    if (faces.empty() || faces.size() > 2) return Reject::topology;
+    // No shared face: a virtual pair (only ranked when aggregating).
+    if (faces.empty()) return aggregate_ ? evaluate_virtual(u, v, scratch, decision, checked) : Reject::topology;
+    if ((fu | fv) & flag_complex) return Reject::topology;
+    if (faces.size() > 2) return Reject::topology;
     // An interior edge between two border positions would pinch the surface.
     if ((fu & flag_border) && (fv & flag_border) && faces.size() != 1) return Reject::topology;
     if (checked) {
       const Reject link = link_condition(u, v, scratch);
-      if (link != Reject::none) return link;
+      if (link != Reject::ok) return link;
     }
     return place(u, v, scratch, decision, checked);
+  }
+
+  // A virtual pair joins two parts at one position. No face disappears and no corner changes wedge;
+  // the removed position's wedges move to the kept one. Refused when u and v have a common
+  // neighbour: a face would be doubled or an edge get a third face.
+  Reject evaluate_virtual(uint32_t u, uint32_t v, Scratch& scratch, Decision& decision, bool checked) {
+    const uint8_t fu = s_.flags[u], fv = s_.flags[v];
+    if (checked) {
+      neighbours(u, none, scratch.neighbours_u);
+      neighbours(v, none, scratch.neighbours_v);
+      for (const uint32_t a : scratch.neighbours_u)
+        if (std::find(scratch.neighbours_v.begin(), scratch.neighbours_v.end(), a) != scratch.neighbours_v.end())
+          return Reject::topology;
+    }
+    const bool fixed = s_.options.keep_vertices || ((fu | fv) & flag_locked);
+    scratch.pairs[0].clear(), scratch.pairs[1].clear();
+    decision = {};
+    for (int d = 0; d < 2; ++d) {
+      const uint32_t kept = d == 0 ? u : v, removed = d == 0 ? v : u;
+      if (s_.flags[removed] & flag_locked) continue;
+      if (!fixed && decision.kept != none) break;
+      virtual_wedges(kept, removed, scratch);
+      const EdgeQuery query{kept, removed, fixed, scratch.pairs[d], scratch.kept_wedges, scratch.removed_faces};
+      const Placement placement = metric_.place(s_, query);
+      if (decision.kept == none || placement.cost < decision.placement.cost)
+        decision = {kept, removed, fixed, placement, d};
+    }
+    if (decision.kept == none) return Reject::seam;
+    if (checked) return check_faces(decision.kept, decision.removed, decision.placement.position);
+    return Reject::ok;
+  }
+
+  // The wedges at the kept position after a virtual pair: its own and the removed position's.
+  void virtual_wedges(uint32_t kept, uint32_t removed, Scratch& scratch) const {
+    scratch.kept_wedges.clear();
+    if (!channel_floats_) return;
+    wedges_of(kept, scratch.kept_wedges);
+    wedges_of(removed, scratch.extra);
+    scratch.kept_wedges.insert(scratch.kept_wedges.end(), scratch.extra.begin(), scratch.extra.end());
   }
 
   Reject link_condition(uint32_t u, uint32_t v, Scratch& scratch) const {
@@ -454,7 +597,7 @@ class Engine {
       return Reject::topology;  // a lone triangle would vanish
     }
 
-    return Reject::none;
+    return Reject::ok;
   }
 
   Reject place(uint32_t u, uint32_t v, Scratch& scratch, Decision& decision, bool checked) {
@@ -493,7 +636,7 @@ class Engine {
     }
     if (decision.kept == none) return Reject::seam;
     if (checked) return check_faces(decision.kept, decision.removed, decision.placement.position);
-    return Reject::none;
+    return Reject::ok;
   }
 
   // u's cheapest edge (to a higher position) that passes every check now, or none.
@@ -504,7 +647,7 @@ class Engine {
     for (const uint32_t v : scratch.candidates) {
       // Stars of positions locked in this pass are stale until the next rebuild.
       if (v <= u || (s_.flags[v] & (flag_dead | flag_complex | flag_pass_locked))) continue;
-      if (evaluate(u, v, scratch, decision, true) != Reject::none) continue;
+      if (evaluate(u, v, scratch, decision, true) != Reject::ok) continue;
       const float cost = float(decision.placement.cost);
       if (cost < best.cost || (cost == best.cost && v < best.other)) best = {cost, v};
     }
@@ -521,8 +664,14 @@ class Engine {
           s_.corner_position(t, 2) == d.removed)
         faces.push_back(t);
     auto& pairs = scratch.pairs[0];
-    map_wedges(d.kept, d.removed, faces, pairs);
-    wedges_of(d.kept, scratch.kept_wedges);
+    const bool virtual_pair = faces.empty();
+    if (virtual_pair) {
+      pairs.clear();
+      virtual_wedges(d.kept, d.removed, scratch);
+    } else {
+      map_wedges(d.kept, d.removed, faces, pairs);
+      wedges_of(d.kept, scratch.kept_wedges);
+    }
     const EdgeQuery query{d.kept, d.removed, d.fixed, pairs, scratch.kept_wedges, scratch.removed_faces};
     metric_.collapsed(s_, query, d.placement.position);
 
@@ -538,6 +687,16 @@ class Engine {
     c.faces_begin = uint32_t(record.removed_faces.size());
     c.relinks_begin = uint32_t(record.relinks.size());
     c.wedges_begin = uint32_t(record.wedges.size());
+    c.moved_begin = uint32_t(record.moved_wedges.size());
+    if (virtual_pair) {
+      wedges_of(d.removed, scratch.extra);
+      for (const uint32_t w : scratch.extra) {
+        s_.position_of[w] = d.kept;
+        if (keep_record) record.moved_wedges.push_back(w);
+      }
+      c.moved_count = uint32_t(record.moved_wedges.size()) - c.moved_begin;
+      merged_into_[d.removed] = d.kept;
+    }
 
     for (const uint32_t t : s_.triangles_of(d.removed)) {
       uint32_t k = 0;
@@ -549,17 +708,22 @@ class Engine {
         if (keep_record) record.removed_faces.push_back(t);
         continue;
       }
+      s_.corner_pos[3 * t + k] = d.kept;
       uint32_t& corner = s_.corners[3 * t + k];
       const uint32_t m = s_.material(t);
       for (const WedgePair& pair : pairs)
         if (pair.from == corner && pair.material == m) {
           if (keep_record) record.relinks.push_back({t, k, corner, pair.to});
           corner = pair.to;
-          s_.corner_pos[3 * t + k] = d.kept;
           break;
         }
     }
-    if (!d.fixed && !(c.new_position == c.old_position)) {
+    if (virtual_pair) {
+      // The moved wedges sit at kept's position from now on, even if it stays put (see Replay).
+      s_.flags[d.kept] |= flag_changed;
+      s_.position[d.kept] = c.new_position;
+      ++s_.moves[d.kept];
+    } else if (!d.fixed && !(c.new_position == c.old_position)) {
       s_.position[d.kept] = c.new_position;
       ++s_.moves[d.kept];
     }
@@ -641,6 +805,7 @@ class Engine {
  public:
   std::vector<Channel> channels_;
   uint32_t channel_floats_ = 0;
+  bool aggregate_ = false;  // rank virtual pairs too
   double max_cost_ = 0;
   uint64_t rejected_[5] = {};
 
@@ -652,6 +817,11 @@ class Engine {
   // Per position: which of its edges to rank again next pass (mark_changed_edges).
   enum : uint8_t { mark_full = 1, mark_partial = 2, mark_kept = 4, mark_fallback = 8 };
   std::vector<uint8_t> mark_;
+
+  // Aggregation: virtual pairs, as found at the start, and per pass the pairs between the positions
+  // they have become (merged_into_), at the lower position (CSR, like the star).
+  std::vector<std::pair<uint32_t, uint32_t>> virtual_pairs_;
+  std::vector<uint32_t> merged_into_, virtual_first_, virtual_partner_;
   Scratch scratch_;  // the sequential part's
 
   // Scratch for the worker running a parallel block; allocated once per thread.
@@ -670,6 +840,7 @@ void run(State& state, MetricT& metric, const std::vector<Channel>& channels, ui
          SimplifyResult& result) {
   Engine<MetricT> engine(state, metric, result);
   engine.channels_ = channels;
+  engine.aggregate_ = state.options.aggregate_distance > 0;
   for (const Channel& c : channels) engine.channel_floats_ += c.size;
   engine.run(target, cost_limit);
   result.error = float(std::sqrt(engine.max_cost_) / state.scale);
@@ -746,7 +917,6 @@ void check_options(const Mesh& mesh, const SimplifyOptions& o) {
   for (const float w : {o.normal_weight, o.uv_weight, o.color_weight, o.border_weight, o.max_aspect_ratio})
     if (!(w >= 0) || !std::isfinite(w)) throw_usage("simplify: weights and max_aspect_ratio must be finite and >= 0");
   if (!(o.aggregate_distance >= 0)) throw_usage("simplify: aggregate_distance must be >= 0");
-  if (o.aggregate_distance > 0) throw_usage("simplify: aggregation (virtual pairs) is not available yet");
 }
 
 }  // namespace

@@ -262,7 +262,7 @@ TEST(SimplifyCore, BadOptionsAreUsageErrors) {
   };
   EXPECT_EQ(category({.target_ratio = 2.0f}), ErrorCategory::usage);
   EXPECT_EQ(category({.locked = std::vector<uint8_t>(3, 1)}), ErrorCategory::usage);
-  EXPECT_EQ(category({.aggregate_distance = 0.1f}), ErrorCategory::usage);
+  EXPECT_EQ(category({.aggregate_distance = -0.1f}), ErrorCategory::usage);
 }
 
 }  // namespace
