@@ -167,6 +167,14 @@ void raise(std::vector<uint32_t>& field, uint32_t position, float d) {
   }
 }
 
+// A sample's region: the corner of its triangle nearest to it (the first on ties), as a position id.
+uint32_t nearest_corner_position(const Surface& s, size_t triangle, const vec3f& q) {
+  const float l0 = length_squared(q - s.corner(triangle, 0)), l1 = length_squared(q - s.corner(triangle, 1)),
+              l2 = length_squared(q - s.corner(triangle, 2));
+  const int k = l0 <= l1 && l0 <= l2 ? 0 : (l1 <= l2 ? 1 : 2);
+  return s.ids.id[s.mesh->indices[3 * triangle + k]];
+}
+
 template <class T>
 T interpolate(const std::vector<T>& stream, const uint32_t* corners, float w0, float w1, float w2);
 template <>
@@ -189,6 +197,7 @@ struct Direction {
   std::vector<float> position_distance;     // per position id of `from`
   std::vector<uint32_t> position_closest;   // per position id: closest triangle of `to`
   std::vector<uint32_t> field;              // per position id: vertex_error bits (when asked)
+  std::vector<uint32_t> triangle_closest;   // per triangle: closest triangle of its first area sample (refine)
 };
 
 struct Plan {
@@ -240,6 +249,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
   out.position_distance.resize(positions);
   out.position_closest.resize(positions);
   if (want_field) out.field.assign(positions, 0);
+  if (options.refine) out.triangle_closest.assign(fm.triangle_count(), UINT32_MAX);
   Accumulator total;
 
   // Vertices: every position (a vertex used by no triangle is measured for the field but is not a sample).
@@ -272,7 +282,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       hint = h.triangle;
       const float d = std::sqrt(h.distance_squared);
       acc.take(d, {q, h.point, edge.triangle, h.triangle});
-      if (want_field) raise(out.field, t <= 0.5f ? edge.lo : edge.hi, d);
+      if (want_field) raise(out.field, nearest_corner_position(from, edge.triangle, q), d);
     }
   });
   r.edge_samples = edge_samples;
@@ -298,12 +308,8 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       acc.sum += d;
       acc.sum_squares += double(d) * d;
       acc.take(d, {q, h.point, uint32_t(t), h.triangle});
-      if (want_field) {
-        // The nearest corner's region.
-        const float l0 = length_squared(q - c0), l1 = length_squared(q - c1), l2 = length_squared(q - c2);
-        const int k = l0 <= l1 && l0 <= l2 ? 0 : (l1 <= l2 ? 1 : 2);
-        raise(out.field, from.ids.id[fm.indices[3 * t + k]], d);
-      }
+      if (options.refine && j == plan.area_start[t]) out.triangle_closest[t] = h.triangle;
+      if (want_field) raise(out.field, nearest_corner_position(from, t, q), d);
       if (!(normals || uvs || colors)) continue;
       const uint32_t* fc = &fm.indices[3 * t];
       const uint32_t* tc = &tm.indices[3 * size_t(h.triangle)];
@@ -363,19 +369,15 @@ void refine_direction(Direction& dir, const Surface& from, const TriangleBvh& to
   in.position_id = &from.ids.id;
   in.position_distance = &dir.position_distance;
   in.position_closest = &dir.position_closest;
+  in.triangle_closest = &dir.triangle_closest;
   in.to = &to;
   in.tolerance = tolerance;
   in.budget = budget;
   in.threads = options.threads;
-  const Mesh& fm = *from.mesh;
   const bool field = !dir.field.empty();
   const measure::RefineResult rr = measure::refine_max(
       in, float(dir.result.max), dir.result.max_location, [&](uint32_t t, const vec3f& q, float d) {
-        if (!field) return;
-        const float l0 = length_squared(q - from.corner(t, 0)), l1 = length_squared(q - from.corner(t, 1)),
-                    l2 = length_squared(q - from.corner(t, 2));
-        const int k = l0 <= l1 && l0 <= l2 ? 0 : (l1 <= l2 ? 1 : 2);
-        raise(dir.field, from.ids.id[fm.indices[3 * size_t(t) + k]], d);
+        if (field) raise(dir.field, nearest_corner_position(from, t, q), d);
       });
   OneSidedDeviation& r = dir.result;
   r.refined = true;

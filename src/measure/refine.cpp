@@ -14,6 +14,7 @@ struct Patch {
   float distance[3];
   uint32_t closest[3];
   uint32_t triangle;  // of `from`
+  uint32_t extra;     // candidate triangle of `to` inherited from the parent (see patch_bound)
   float bound;
 };
 
@@ -27,18 +28,24 @@ constexpr size_t max_batch = 8192;
 
 }  // namespace
 
-float patch_bound(const vec3f corners[3], const float distances[3], const uint32_t closest[3], const TriangleBvh& to) {
+float patch_bound(const vec3f corners[3], const float distances[3], const uint32_t closest[3], uint32_t extra,
+                  const TriangleBvh& to, uint32_t* best) {
   const float e01 = distance(corners[0], corners[1]), e12 = distance(corners[1], corners[2]),
               e20 = distance(corners[2], corners[0]);
   float bound = std::min({distances[0] + std::max(e01, e20), distances[1] + std::max(e01, e12),
                           distances[2] + std::max(e12, e20)});
-  for (int i = 0; i < 3; ++i) {
-    if ((i > 0 && closest[i] == closest[0]) || (i == 2 && closest[2] == closest[1])) continue;
-    float worst = distances[i];
+  uint32_t chosen = closest[0];
+  const uint32_t candidates[4] = {closest[0], closest[1], closest[2], extra};
+  for (int i = 0; i < 4; ++i) {
+    const uint32_t t = candidates[i];
+    if (t == UINT32_MAX || (i > 0 && t == candidates[0]) || (i > 1 && t == candidates[1]) || (i > 2 && t == candidates[2]))
+      continue;
+    float worst = i < 3 ? distances[i] : 0.0f;  // a corner's distance to its own closest triangle is known
     for (int j = 0; j < 3 && worst < bound; ++j)
-      if (j != i) worst = std::max(worst, std::sqrt(to.to_triangle(corners[j], closest[i]).distance_squared));
-    bound = std::min(bound, worst);
+      if (j != i) worst = std::max(worst, std::sqrt(to.to_triangle(corners[j], t).distance_squared));
+    if (worst < bound) bound = worst, chosen = t;
   }
+  if (best) *best = chosen;
   return bound;
 }
 
@@ -67,7 +74,8 @@ RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& 
         p.closest[k] = (*input.position_closest)[pid[v]];
       }
       p.triangle = uint32_t(t);
-      p.bound = patch_bound(p.corner, p.distance, p.closest, to);
+      const uint32_t inner = input.triangle_closest ? (*input.triangle_closest)[t] : UINT32_MAX;
+      p.bound = patch_bound(p.corner, p.distance, p.closest, inner, to, &p.extra);
       if (p.bound > max + input.tolerance) open_per_block[b].push_back(p);
       else settled_per_block[b] = std::max(settled_per_block[b], p.bound);
     }
@@ -113,7 +121,7 @@ RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& 
           for (int k = 0; k < 3; ++k) set(s.child[3], k, m[k], md[k], mc[k]);
           for (Patch& child : s.child) {
             child.triangle = p.triangle;
-            child.bound = patch_bound(child.corner, child.distance, child.closest, to);
+            child.bound = patch_bound(child.corner, child.distance, child.closest, p.extra, to, &child.extra);
           }
         },
         64);

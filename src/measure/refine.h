@@ -22,6 +22,10 @@ struct RefineInput {
   const std::vector<uint32_t>* position_id = nullptr;        // per vertex of `from`
   const std::vector<float>* position_distance = nullptr;     // per position id: distance to `to`
   const std::vector<uint32_t>* position_closest = nullptr;   // per position id: closest triangle of `to`
+  // Per triangle of `from`: the closest triangle of `to` to a point inside it (an area sample), or
+  // UINT32_MAX. Corners often tie between the triangles around them; an inner point's answer is the
+  // one triangle that may cover the whole patch. May be null.
+  const std::vector<uint32_t>* triangle_closest = nullptr;
   const TriangleBvh* to = nullptr;
   float tolerance = 0;  // object space: stop when the bound is within this of the largest distance
   uint64_t budget = 0;  // queries
@@ -40,7 +44,9 @@ struct RefineResult {
 RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& location,
                         const std::function<void(uint32_t, const vec3f&, float)>& on_sample);
 
-// The bound of one patch (exposed for tests).
-float patch_bound(const vec3f corners[3], const float distances[3], const uint32_t closest[3], const TriangleBvh& to);
+// The bound of one patch. Candidate triangles for the convexity bound: each corner's closest and
+// `extra` (UINT32_MAX for none); `best` receives the candidate that gave the smallest bound.
+float patch_bound(const vec3f corners[3], const float distances[3], const uint32_t closest[3], uint32_t extra,
+                  const TriangleBvh& to, uint32_t* best = nullptr);
 
 }  // namespace lod::measure

@@ -1,0 +1,142 @@
+// The closest point on a triangle, region by region by hand, and the BVH against a brute-force scan.
+#include "measure/bvh.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/shapes.h"
+#include "measure/triangle_distance.h"
+
+namespace lod::measure {
+namespace {
+
+// Triangle a = origin, b = +x, c = +y: every Voronoi region has a point whose answer is obvious.
+TEST(MeasureTriangle, EveryRegionByHand) {
+  const vec3f a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};
+  struct Case {
+    vec3f p, expected;
+    float distance_squared, v, w;
+    const char* region;
+  };
+  const Case cases[] = {
+      {{-1, -1, 1}, {0, 0, 0}, 3.0f, 0, 0, "vertex a"},
+      {{2, -1, 0}, {1, 0, 0}, 2.0f, 1, 0, "vertex b"},
+      {{-0.5f, 2, 0}, {0, 1, 0}, 1.25f, 0, 1, "vertex c"},
+      {{0.5f, -1, 0}, {0.5f, 0, 0}, 1.0f, 0.5f, 0, "edge ab"},
+      {{-1, 0.5f, 0}, {0, 0.5f, 0}, 1.0f, 0, 0.5f, "edge ac"},
+      {{1, 1, 0}, {0.5f, 0.5f, 0}, 0.5f, 0.5f, 0.5f, "edge bc"},
+      {{0.25f, 0.25f, 2}, {0.25f, 0.25f, 0}, 4.0f, 0.25f, 0.25f, "face, above"},
+      {{0.25f, 0.5f, -3}, {0.25f, 0.5f, 0}, 9.0f, 0.25f, 0.5f, "face, below"},
+  };
+  for (const Case& k : cases) {
+    const TrianglePoint r = closest_on_triangle(k.p, a, b, c);
+    EXPECT_FLOAT_EQ(r.point.x, k.expected.x) << k.region;
+    EXPECT_FLOAT_EQ(r.point.y, k.expected.y) << k.region;
+    EXPECT_FLOAT_EQ(r.point.z, k.expected.z) << k.region;
+    EXPECT_FLOAT_EQ(r.distance_squared, k.distance_squared) << k.region;
+    EXPECT_FLOAT_EQ(r.v, k.v) << k.region;
+    EXPECT_FLOAT_EQ(r.w, k.w) << k.region;
+  }
+}
+
+TEST(MeasureTriangle, DegenerateTrianglesGiveFiniteAnswers) {
+  // All corners equal: the corner.
+  const vec3f p{1, 2, 2}, o{0, 0, 0};
+  TrianglePoint r = closest_on_triangle(p, o, o, o);
+  EXPECT_EQ(r.point, o);
+  EXPECT_FLOAT_EQ(r.distance_squared, 9.0f);
+  // Collinear corners: the closest point of the segment they span.
+  r = closest_on_triangle({1.5f, 1, 0}, {0, 0, 0}, {1, 0, 0}, {2, 0, 0});
+  EXPECT_FLOAT_EQ(r.point.x, 1.5f);
+  EXPECT_FLOAT_EQ(r.point.y, 0.0f);
+  EXPECT_FLOAT_EQ(r.distance_squared, 1.0f);
+  r = closest_on_triangle({3, 0, 1}, {0, 0, 0}, {2, 0, 0}, {1, 0, 0});
+  EXPECT_FLOAT_EQ(r.point.x, 2.0f);
+  EXPECT_FLOAT_EQ(r.distance_squared, 2.0f);
+}
+
+// The lowest-index triangle among the closest ones, by scanning them all.
+ClosestHit brute_force(const Mesh& m, const vec3f& p) {
+  ClosestHit best;
+  for (uint32_t t = 0; t < m.triangle_count(); ++t) {
+    const TrianglePoint r = closest_on_triangle(p, m.positions[m.indices[3 * t]], m.positions[m.indices[3 * t + 1]],
+                                                m.positions[m.indices[3 * t + 2]]);
+    if (r.distance_squared < best.distance_squared) {
+      best.distance_squared = r.distance_squared;
+      best.triangle = t;
+      best.point = r.point;
+      best.v = r.v, best.w = r.w;
+    }
+  }
+  return best;
+}
+
+void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed) {
+  const TriangleBvh bvh(m);
+  float3 lo, hi;
+  bounding_box(m, lo, hi);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(-0.25f, 1.25f), jitter(-0.01f, 0.01f);
+  std::uniform_int_distribution<uint32_t> vertex(0, uint32_t(m.vertex_count() - 1)),
+      triangle(0, uint32_t(m.triangle_count() - 1));
+  for (uint32_t i = 0; i < points; ++i) {
+    vec3f p;
+    if (i % 2) {  // anywhere around the mesh
+      p = {lo.x + (hi.x - lo.x) * unit(rng), lo.y + (hi.y - lo.y) * unit(rng), lo.z + (hi.z - lo.z) * unit(rng)};
+    } else {  // close to the surface, where many triangles are nearly as close
+      const float3 v = m.positions[vertex(rng)];
+      p = {v.x + jitter(rng), v.y + jitter(rng), v.z + jitter(rng)};
+    }
+    const ClosestHit expected = brute_force(m, p);
+    // Any hint: the answer may not depend on where the search starts.
+    const ClosestHit got = bvh.closest(p, i % 3 ? triangle(rng) : 0);
+    ASSERT_EQ(got.distance_squared, expected.distance_squared) << "point " << i;
+    ASSERT_EQ(got.triangle, expected.triangle) << "point " << i;
+    ASSERT_EQ(got.point, expected.point) << "point " << i;
+  }
+}
+
+TEST(MeasureBvh, MatchesBruteForceOnATorus) {
+  expect_matches_brute_force(shapes::torus(1.0f, 0.3f, 48, 24), 3000, 7);
+}
+
+TEST(MeasureBvh, MatchesBruteForceWithTiesAndDegenerateTriangles) {
+  // A flat grid twice over (every closest point is tied between two triangles: the lower index must
+  // win), plus a zero-area triangle and a triangle far away.
+  Mesh m = shapes::grid(24, 24);
+  const size_t n = m.indices.size();
+  for (size_t i = 0; i < n; ++i) m.indices.push_back(m.indices[i]);
+  m.indices.insert(m.indices.end(), {0, 1, 1});
+  m.positions.push_back({5, 5, 5});
+  m.positions.push_back({6, 5, 5});
+  m.positions.push_back({5, 6, 5});
+  m.normals.resize(m.positions.size());
+  m.uvs[0].resize(m.positions.size());
+  const uint32_t v = uint32_t(m.positions.size());
+  m.indices.insert(m.indices.end(), {v - 3, v - 2, v - 1});
+  expect_matches_brute_force(m, 2000, 11);
+}
+
+TEST(MeasureBvh, SingleTriangleAndSmallMeshes) {
+  Mesh one;
+  one.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  one.indices = {0, 1, 2};
+  const TriangleBvh bvh(one);
+  const ClosestHit h = bvh.closest({0.25f, 0.25f, 1});
+  EXPECT_EQ(h.triangle, 0u);
+  EXPECT_FLOAT_EQ(h.distance_squared, 1.0f);
+  expect_matches_brute_force(shapes::icosphere(0), 500, 3);
+  expect_matches_brute_force(shapes::cube(), 500, 5);
+}
+
+TEST(MeasureBvh, LargeMeshStaysShallowAndExact) {
+  const Mesh sphere = shapes::icosphere(5);  // 20480 triangles
+  const TriangleBvh bvh(sphere);
+  EXPECT_LE(bvh.depth(), 16u);
+  EXPECT_GE(bvh.node_count(), sphere.triangle_count() / (4 * 8));
+  expect_matches_brute_force(sphere, 300, 13);
+}
+
+}  // namespace
+}  // namespace lod::measure
