@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <numbers>
+#include <optional>
 
 #include "core/parallel.h"
 #include "lodkit/error.h"
@@ -407,7 +408,12 @@ Deviation compare(const Mesh& a, const Mesh& b, const CompareOptions& options) {
   const uint64_t samples =
       options.samples ? options.samples
                       : std::clamp<uint64_t>(10 * std::max(a.triangle_count(), b.triangle_count()), 10'000, 2'000'000);
-  const TriangleBvh bvh_a(a, options.threads), bvh_b(b, options.threads);
+  // The two trees are built side by side (each build is mostly serial).
+  std::optional<TriangleBvh> trees[2];
+  core::parallel_blocks(2, 1, options.threads, [&](size_t k, size_t, size_t) {
+    trees[k].emplace(k ? b : a, options.threads);
+  });
+  const TriangleBvh &bvh_a = *trees[0], &bvh_b = *trees[1];
   const auto built = std::chrono::steady_clock::now();
   dev.build_seconds = std::chrono::duration<double>(built - start).count();
 
