@@ -1,5 +1,5 @@
 // Internal: double-precision 3-vectors and the Garland–Heckbert quadric (A, b, c) with its weight.
-// Quadrics are stored as 11 floats (compact arrays for large meshes) and evaluated in double.
+// Quadrics can be stored as 11 floats (Quadric) or doubles (QuadricD) and are evaluated in double.
 #pragma once
 
 #include <cmath>
@@ -21,7 +21,7 @@ inline double length(const vec3d& a) { return std::sqrt(dot(a, a)); }
 
 // Q(p) = p^T A p + 2 b^T p + c, a sum of weighted squared distances to planes; `w` sums the weights
 // so that Q(p) / w is a mean squared distance.
-// Stored as float (11 values per vertex); summed and solved as double (QuadricD).
+// Summed and solved as double.
 template <class T>
 struct BasicQuadric {
   T a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0;

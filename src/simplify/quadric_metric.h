@@ -64,7 +64,7 @@ class QuadricMetric {
   bool reads_neighbourhood() const { return memoryless_; }
 
   // The stored quadric of a position (for tests: memoryless quadrics equal a rebuild from scratch).
-  const Quadric& quadric(uint32_t position) const { return quadric_[position]; }
+  const QuadricD& quadric(uint32_t position) const { return quadric_[position]; }
 
  private:
   // Every live position's quadric (and its wedges' attribute quadrics) from its current faces.
@@ -86,7 +86,7 @@ class QuadricMetric {
         q += face;
         if (constrained_) add_border_planes(state, uint32_t(u), t, p, unit, importance, q);
       }
-      quadric_[u] = Quadric(q);
+      quadric_[u] = q;
       if (!attributes_.empty()) attributes_.rebuild_position(state, uint32_t(u));
     });
   }
@@ -166,7 +166,9 @@ class QuadricMetric {
   }
 
   bool constrained_, memoryless_;
-  std::vector<Quadric> quadric_;  // per position
+  // Per position, in double: float sums of plane quadrics lose ~1e-7 of |p|^2, which on flat regions
+  // is noise far above the true (zero) costs and scrambles the collapse order there.
+  std::vector<QuadricD> quadric_;
   AttributeQuadrics attributes_;
 };
 

@@ -111,9 +111,10 @@ class Engine {
       std::vector<uint32_t> batch;
       for (size_t next = 0; next < order.size() && s_.live_triangles > target_triangles;) {
         batch.clear();
-        for (; next < order.size() && batch.size() < chunk; ++next)
-          if (!((s_.flags[order[next]] | s_.flags[best_[order[next]].other]) & flag_pass_locked))
-            batch.push_back(order[next]);
+        for (; next < order.size() && batch.size() < chunk; ++next) {
+          const uint32_t u = order[next], v = best_[u].other;  // none: u died in this pass
+          if (v != none && !((s_.flags[u] | s_.flags[v]) & flag_pass_locked)) batch.push_back(u);
+        }
         decisions_.resize(batch.size());
         verdicts_.resize(batch.size());
         fallback_.resize(batch.size());
@@ -129,7 +130,7 @@ class Engine {
         for (size_t i = 0; i < batch.size(); ++i) {
           if (s_.live_triangles <= target_triangles) break;
           const uint32_t u = batch[i], v = best_[u].other;
-          if ((s_.flags[u] | s_.flags[v]) & flag_pass_locked) continue;
+          if (v == none || ((s_.flags[u] | s_.flags[v]) & flag_pass_locked)) continue;  // none: u died
           if (verdicts_[i] != Reject::ok) {
             rejected_[int(verdicts_[i])] += 1;
             best_[u] = fallback_[i];
@@ -728,6 +729,7 @@ class Engine {
       ++s_.moves[d.kept];
     }
     s_.flags[d.removed] |= flag_dead;
+    best_[d.removed] = Best{};  // a dead position ranks nothing
     if (s_.layout.stride) update_attributes(d, pairs, scratch.kept_wedges, old_kept, keep_record);
 
     mark_changed_edges(d);

@@ -86,24 +86,27 @@ TEST(SimplifyHelpers, PointTriangleDistanceByHand) {
 TEST(SimplifyBehaviour, ShortestEdgeLosesTheThinPartQemKeepsIt) {
   Mesh mesh = shapes::icosphere(3);
   mesh.normals.clear();
-  append(mesh, [] {
+  Mesh handle;
+  append(handle, [] {
     Mesh ring = shapes::torus(0.6f, 0.04f, 48, 8);
     ring.normals.clear(), ring.uvs[0].clear(), ring.tangents.clear();
     return ring;
   }(), {1.8, 0, 0});
+  append(mesh, handle, {0, 0, 0});
   // The torus duplicates its seam vertices; simplification works on positions, so that is fine.
+  // Distances from the handle's surface to the result: how much of the thin part survived.
   std::map<Metric, double> error;
   for (const Metric metric : {Metric::edge_length, Metric::qem, Metric::constrained_qem, Metric::memoryless}) {
-    const SimplifyResult r = simplify(mesh, {.target_ratio = 0.35f, .metric = metric});
-    ASSERT_LE(r.output_triangles, uint64_t(0.36 * double(mesh.triangle_count())));
-    error[metric] = hausdorff(mesh, r.mesh);
+    const SimplifyResult r = simplify(mesh, {.target_ratio = 0.6f, .metric = metric});
+    ASSERT_LE(r.output_triangles, uint64_t(0.61 * double(mesh.triangle_count())));
+    error[metric] = one_sided_hausdorff(handle, r.mesh);
   }
   for (const auto& [metric, e] : error) RecordProperty(metric_name(metric), std::to_string(e));
-  // The handle's tube radius is 0.04: losing it costs about that much; the QEM family stays well below.
+  // The handle's tube radius is 0.04: losing it costs about that much; the QEM family keeps it.
   EXPECT_GT(error[Metric::edge_length], 0.03);
   for (const Metric metric : {Metric::qem, Metric::constrained_qem, Metric::memoryless}) {
     SCOPED_TRACE(metric_name(metric));
-    EXPECT_LT(error[metric] * 2.5, error[Metric::edge_length]);
+    EXPECT_LT(error[metric] * 4, error[Metric::edge_length]);
   }
 }
 
