@@ -99,10 +99,11 @@ struct Deviation {
 
   // Per vertex of a: its distance to b.
   std::vector<float> vertex_distance;
-  // Per vertex of a: the largest distance to b measured in the vertex's region, i.e. at the vertex
-  // and at every sample of its triangles (and edges) that lies nearer to it than to the other
-  // corners. Its maximum is a_to_b.max, held by the vertex nearest the maximum's location in its
-  // triangle. Vertices used by no triangle hold their own distance.
+  // Per vertex of a: the largest distance to b measured in the vertex's region: at the vertex, and at
+  // every sample (area, edge, refinement) of a triangle around it that lies nearer to it than to
+  // that triangle's other corners. Its maximum is a_to_b.max, held by the corner of the maximum's
+  // triangle nearest to it. Vertices sharing a position share the value; vertices used by no
+  // triangle hold their own distance.
   std::vector<float> vertex_error;
 
   // Timing, not part of the result (it varies between runs).

@@ -66,6 +66,39 @@ TEST(CliCompare, JsonIsTheLibraryResultAndTheHeatmapReadsBack) {
   EXPECT_NE(g.out.find("Hausdorff%"), std::string::npos);
 }
 
+// The acceptance case: the bunny against itself simplified to 1%, heat maps in PLY and glTF.
+TEST(CliCompare, BunnyHeatmapIsHottestAtTheMaximum) {
+  const auto corpus = test::corpus_dir();
+  if (corpus.empty()) GTEST_SKIP() << "corpus absent (scripts/fetch-corpus.sh)";
+  test::TempDir dir;
+  const std::string bunny = (corpus / "bunny00.off").string();
+  ASSERT_EQ(test::run_cli({"simplify", bunny, "-o", (dir / "lod.ply").string(), "--ratio", "0.01"}).exit_code, 0);
+  const test::RunResult r = test::run_cli({"compare", bunny, (dir / "lod.ply").string(), "--samples", "200000",
+                                           "--json", "--heatmap", (dir / "heat.ply").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(test::run_cli({"compare", bunny, (dir / "lod.ply").string(), "--samples", "200000", "--heatmap",
+                           (dir / "heat.gltf").string()})
+                .exit_code,
+            0);
+  const Mesh a = read_mesh(bunny), ply = read_mesh(dir / "heat.ply"), gltf = read_mesh(dir / "heat.gltf");
+  ASSERT_EQ(ply.colors.size(), a.vertex_count());
+  EXPECT_EQ(gltf.colors, ply.colors);
+  const auto& p = j["a_to_b"]["max_point"];
+  const float x = p[0].get<float>(), y = p[1].get<float>(), z = p[2].get<float>();
+  size_t nearest = 0;
+  float best = 1e30f;
+  for (size_t v = 0; v < a.vertex_count(); ++v) {
+    const float dx = a.positions[v].x - x, dy = a.positions[v].y - y, dz = a.positions[v].z - z;
+    if (dx * dx + dy * dy + dz * dz < best) best = dx * dx + dy * dy + dz * dz, nearest = v;
+  }
+  EXPECT_EQ(ply.colors[nearest], (float4{1, 0, 0, 1}));
+  // Most of the bunny is close to its LOD: cool colours dominate.
+  size_t hot = 0;
+  for (const float4& c : ply.colors) hot += c.x > 0.5f;
+  EXPECT_LT(hot, a.vertex_count() / 4);
+}
+
 TEST(CliCompare, RefineReportsABound) {
   test::TempDir dir;
   write_mesh(shapes::icosphere(2), dir / "a.off");
