@@ -168,7 +168,7 @@ class Engine {
       for (uint32_t k = 0; k < 3; ++k) {
         const uint32_t slot = fill_[c[k]]++;
         s_.star[slot] = t;
-        s_.wings[slot] = {c[(k + 1) % 3], c[(k + 2) % 3]};
+        s_.wings[slot] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k]};
       }
     }
   }
@@ -195,19 +195,18 @@ class Engine {
       f &= uint8_t(~(flag_border | flag_complex | flag_seam | flag_changed));
       if (f & flag_dead) continue;
       const auto star = s_.triangles_of(uint32_t(u));
+      const auto wings = s_.wings_of(uint32_t(u));
       if (star.empty()) continue;
       next.clear(), prev.clear();
       bool complex = false, seam = false;
       uint32_t wedge = none, material = none;
-      for (const uint32_t t : star) {
-        uint32_t k = 0;
-        while (s_.corner_position(t, k) != u) ++k;
-        const uint32_t w = s_.corners[3 * t + k], m = s_.material(t);
-        seam |= wedge != none && (w != wedge || m != material);
-        wedge = w, material = m;
-        const uint32_t n = s_.corner_position(t, (k + 1) % 3), p = s_.corner_position(t, (k + 2) % 3);
-        complex |= n == u || p == u || n == p;  // degenerate triangle (also listed twice here)
-        next.push_back(n), prev.push_back(p);
+      for (size_t i = 0; i < star.size(); ++i) {
+        const Wing& w = wings[i];
+        const uint32_t m = s_.material(star[i]);
+        seam |= wedge != none && (w.wedge != wedge || m != material);
+        wedge = w.wedge, material = m;
+        complex |= w.next == u || w.prev == u || w.next == w.prev;  // degenerate triangle
+        next.push_back(w.next), prev.push_back(w.prev);
       }
       // A manifold star: each neighbour is `next` at most once and `prev` at most once, and the
       // triangles form one fan, open (border) or closed.
@@ -452,10 +451,10 @@ class Engine {
       }
       if (!known) pairs.push_back({from, to, m});
     }
-    for (const uint32_t t : s_.triangles_of(removed)) {
-      uint32_t k = 0;
-      while (s_.corner_position(t, k) != removed) ++k;
-      const uint32_t w = s_.corners[3 * t + k], m = s_.material(t);
+    const auto star = s_.triangles_of(removed);
+    const auto wings = s_.wings_of(removed);
+    for (size_t i = 0; i < star.size(); ++i) {
+      const uint32_t w = wings[i].wedge, m = s_.material(star[i]);
       bool found = false;
       for (const WedgePair& pair : pairs) found |= pair.from == w && pair.material == m;
       if (!found) return false;
@@ -465,10 +464,8 @@ class Engine {
 
   void wedges_of(uint32_t x, std::vector<uint32_t>& out) const {
     out.clear();
-    for (const uint32_t t : s_.triangles_of(x))
-      for (uint32_t k = 0; k < 3; ++k)
-        if (s_.corner_position(t, k) == x && std::find(out.begin(), out.end(), s_.corners[3 * t + k]) == out.end())
-          out.push_back(s_.corners[3 * t + k]);
+    for (const Wing& w : s_.wings_of(x))
+      if (std::find(out.begin(), out.end(), w.wedge) == out.end()) out.push_back(w.wedge);
   }
 
   // Would any surviving face around the edge flip, degenerate or get too thin with `kept` and

@@ -39,9 +39,10 @@ struct AttributeLayout {
   int color = -1;
 };
 
-// The other two corners of a star triangle, in winding order after the star's centre.
+// A star triangle seen from its centre: the other two corners in winding order, and the wedge
+// (input vertex) at the centre's corner.
 struct Wing {
-  uint32_t next, prev;
+  uint32_t next, prev, wedge;
 };
 
 struct State {
