@@ -129,6 +129,7 @@ struct SimplifyResult {
   uint64_t input_triangles = 0, output_triangles = 0;
   uint64_t input_vertices = 0, output_vertices = 0;
   uint64_t collapses = 0;
+  uint64_t virtual_pairs = 0;  // collapses that joined two positions without a shared face (aggregation)
   uint64_t rejected_topology = 0, rejected_flip = 0, rejected_seam = 0, rejected_shape = 0;
   uint64_t pruned_triangles = 0;
   uint32_t passes = 0;

@@ -694,6 +694,7 @@ class Engine {
       }
       c.moved_count = uint32_t(record.moved_wedges.size()) - c.moved_begin;
       merged_into_[d.removed] = d.kept;
+      ++result_.virtual_pairs;
     }
 
     for (const uint32_t t : s_.triangles_of(d.removed)) {

@@ -30,6 +30,28 @@ TEST(CliSimplify, WritesTheLibraryResultAndReportsIt) {
   EXPECT_EQ(lib.mesh.positions, out.positions);
 }
 
+// --aggregate: two spheres 0.05 apart come out as one part, and the report counts the virtual pairs.
+TEST(CliSimplify, AggregateJoinsParts) {
+  test::TempDir dir;
+  Mesh two = shapes::icosphere(2);
+  const size_t n = two.positions.size();
+  two.normals.clear();
+  for (size_t v = 0; v < n; ++v) two.positions[v].x -= 1.025f;
+  const Mesh other = two;
+  for (size_t v = 0; v < n; ++v) two.positions.push_back({other.positions[v].x + 2.05f, other.positions[v].y, other.positions[v].z});
+  for (const uint32_t i : other.indices) two.indices.push_back(uint32_t(n) + i);
+  write_mesh(two, dir / "two.ply");
+  for (const char* reach : {"0", "0.3"}) {
+    const test::RunResult r = test::run_cli({"simplify", (dir / "two.ply").string(), "-o", (dir / "out.ply").string(),
+                                             "--ratio", "0.1", "--aggregate", reach, "--force", "--json"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    const size_t parts = compute_stats(read_mesh(dir / "out.ply")).components.size();
+    EXPECT_EQ(parts, std::string(reach) == "0" ? 2u : 1u) << reach;
+    EXPECT_EQ(j["virtual_pairs"].get<uint64_t>() > 0, std::string(reach) != "0") << reach;
+  }
+}
+
 TEST(CliSimplify, NeedsATarget) {
   test::TempDir dir;
   write_mesh(shapes::icosphere(1), dir / "s.ply");

@@ -122,7 +122,7 @@ Command register_simplify(CLI::App& root) {
             for (Mesh* m : meshes) validate(*m, o->input), total += m->triangle_count();
             uint64_t in_triangles = 0, out_triangles = 0, in_vertices = 0, out_vertices = 0;
             float error = 0, relative_error = 0;
-            uint64_t passes = 0, collapses = 0, pruned = 0, rejected[4] = {};
+            uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, rejected[4] = {};
             start = std::chrono::steady_clock::now();
             {
               ProgressBar bar("simplifying");
@@ -140,7 +140,7 @@ Command register_simplify(CLI::App& root) {
                 in_triangles += r.input_triangles, out_triangles += r.output_triangles;
                 in_vertices += r.input_vertices, out_vertices += r.output_vertices;
                 error = std::max(error, r.error);
-                passes += r.passes, collapses += r.collapses, pruned += r.pruned_triangles;
+                passes += r.passes, collapses += r.collapses, virtual_pairs += r.virtual_pairs, pruned += r.pruned_triangles;
                 rejected[0] += r.rejected_topology, rejected[1] += r.rejected_seam;
                 rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape;
                 relative_error = std::max(relative_error, r.relative_error);
@@ -158,7 +158,7 @@ Command register_simplify(CLI::App& root) {
                                   {"input_triangles", in_triangles}, {"output_triangles", out_triangles},
                                   {"input_vertices", in_vertices}, {"output_vertices", out_vertices},
                                   {"error", error}, {"relative_error", relative_error},
-                                  {"passes", passes}, {"collapses", collapses}, {"pruned_triangles", pruned},
+                                  {"passes", passes}, {"collapses", collapses}, {"virtual_pairs", virtual_pairs}, {"pruned_triangles", pruned},
                                   {"rejected", {{"topology", rejected[0]}, {"seam", rejected[1]},
                                                 {"flip", rejected[2]}, {"shape", rejected[3]}}},
                                   {"load_seconds", load_seconds}, {"simplify_seconds", simplify_seconds},
