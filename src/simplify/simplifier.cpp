@@ -71,7 +71,7 @@ class Engine {
     while (s_.live_triangles > target_triangles) {
       build_star();
       roll_flags(first);
-      classify();
+      if (first) classify();
       if (aggregate_) {
         if (first) find_virtual_pairs();
         update_virtual_pairs();
@@ -179,20 +179,17 @@ class Engine {
     for (uint8_t& f : s_.flags) {
       const bool touched = first || (f & flag_pass_locked);
       f = uint8_t((f & ~(flag_dirty | flag_pass_locked)) | (touched ? flag_dirty : 0));
-      if (first) f |= flag_changed;
     }
   }
 
-  // Border, seam and non-manifold flags of the positions whose star gained or lost triangles. The
-  // other locked positions only saw a corner renamed (removed -> kept), which the link condition
-  // keeps manifold and which moves a border edge along with it.
+  // Border, seam and non-manifold flags of every position, from its star, on the first pass. Later
+  // collapses update them directly (apply): the link condition keeps stars manifold.
   void classify() {
     core::parallel_blocks(s_.position_count, 4096, s_.threads, [&](size_t, size_t begin, size_t end) {
      std::vector<uint32_t> next, prev;  // per block: thread_local costs a TLS lookup per use here
      for (size_t u = begin; u < end; ++u) {
       uint8_t& f = s_.flags[u];
-      if (!(f & flag_changed)) continue;
-      f &= uint8_t(~(flag_border | flag_complex | flag_seam | flag_changed));
+      f &= uint8_t(~(flag_border | flag_complex | flag_seam));
       if (f & flag_dead) continue;
       const auto star = s_.triangles_of(uint32_t(u));
       const auto wings = s_.wings_of(uint32_t(u));
@@ -701,7 +698,6 @@ class Engine {
       uint32_t k = 0;
       while (s_.corner_position(t, k) != d.removed) ++k;
       if (std::find(scratch.removed_faces.begin(), scratch.removed_faces.end(), t) != scratch.removed_faces.end()) {
-        for (uint32_t j = 0; j < 3; ++j) s_.flags[s_.corner_position(t, j)] |= flag_changed;
         s_.alive[t] = 0;
         --s_.live_triangles;
         if (keep_record) record.removed_faces.push_back(t);
@@ -719,7 +715,7 @@ class Engine {
     }
     if (virtual_pair) {
       // The moved wedges sit at kept's position from now on, even if it stays put (see Replay).
-      s_.flags[d.kept] |= flag_changed;
+      s_.flags[d.kept] |= flag_complex | flag_seam;  // two fans and both sets of wedges
       s_.position[d.kept] = c.new_position;
       ++s_.moves[d.kept];
     } else if (!d.fixed && !(c.new_position == c.old_position)) {
@@ -727,6 +723,9 @@ class Engine {
       ++s_.moves[d.kept];
     }
     s_.flags[d.removed] |= flag_dead;
+    // An edge collapse that passed the link condition keeps the surface manifold: the kept position
+    // is on a border or seam if either end was (a seam that closes up is kept conservatively).
+    if (!virtual_pair) s_.flags[d.kept] |= s_.flags[d.removed] & (flag_border | flag_seam);
     best_[d.removed] = Best{};  // a dead position ranks nothing
     if (s_.layout.stride) update_attributes(d, pairs, scratch.kept_wedges, old_kept, keep_record);
 

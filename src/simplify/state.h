@@ -27,7 +27,6 @@ enum : uint8_t {
   flag_dead = 16,       // removed by a collapse
   flag_dirty = 32,      // its star changed in the last pass (or this is the first): re-evaluate
   flag_seam = 64,       // its corners use more than one wedge or material
-  flag_changed = 128,   // its star lost or gained triangles in this pass: classify again
 };
 
 // Attribute layout of a wedge: normals (3), each UV set (2), colour (4), for the streams present.
