@@ -9,7 +9,7 @@ packages=(
   build-essential cmake ninja-build pkg-config git ca-certificates
   clang-14 libclang-rt-14-dev           # the fuzz preset (libFuzzer)
   libfmt-dev nlohmann-json3-dev libcli11-dev libtinygltf-dev libstb-dev
-  libeigen3-dev libtbb-dev
+  libeigen3-dev libtbb-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libassimp-dev                          # bench/io: the peer loader
   libmeshoptimizer-dev libcgal-dev libopenmesh-dev   # bench/peers: the simplifiers we measure against

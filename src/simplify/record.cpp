@@ -102,84 +102,80 @@ Mesh materialize(const Mesh& input, const Snapshot& s) {
   return out;
 }
 
-namespace {
+Replay::Replay(const Mesh& mesh) {
+  const PositionIds ids = position_ids(mesh);
+  position_of = ids.id;
+  position.resize(ids.count);
+  for (size_t v = mesh.vertex_count(); v-- > 0;) position[ids.id[v]] = mesh.positions[v];
+  moves.assign(ids.count, 0);
+  corners = mesh.indices;
+  alive.assign(mesh.triangle_count(), 1);
+  layout = attribute_layout(mesh);
+  attributes = gather_attributes(mesh, layout);
+}
 
-// The working state of a replay: what Snapshot views.
-struct Replay {
-  std::vector<uint32_t> position_of, moves, corners;
-  std::vector<float3> position;
-  std::vector<uint8_t> alive;
-  AttributeLayout layout;
-  std::vector<float> attributes;
+void Replay::check(const SimplifyRecord& record, const Collapse& c) const {
+  const auto bad = [] { throw_usage("replay: the collapse record does not belong to this mesh"); };
+  if (!valid(record, c)) bad();
+}
 
-  explicit Replay(const Mesh& mesh) {
-    const PositionIds ids = position_ids(mesh);
-    position_of = ids.id;
-    position.resize(ids.count);
-    for (size_t v = mesh.vertex_count(); v-- > 0;) position[ids.id[v]] = mesh.positions[v];
-    moves.assign(ids.count, 0);
-    corners = mesh.indices;
-    alive.assign(mesh.triangle_count(), 1);
-    layout = attribute_layout(mesh);
-    attributes = gather_attributes(mesh, layout);
+bool Replay::valid(const SimplifyRecord& record, const Collapse& c) const {
+  if (c.kept >= position.size() || c.removed >= position.size()) return false;
+  if (size_t(c.faces_begin) + c.removed_face_count > record.removed_faces.size()) return false;
+  if (size_t(c.relinks_begin) + c.relink_count > record.relinks.size()) return false;
+  if (size_t(c.wedges_begin) + c.wedge_count > record.wedges.size()) return false;
+  if (record.stride != layout.stride) return false;
+  for (uint32_t i = 0; i < c.removed_face_count; ++i)
+    if (record.removed_faces[c.faces_begin + i] >= alive.size()) return false;
+  for (uint32_t i = 0; i < c.relink_count; ++i) {
+    const Relink& r = record.relinks[c.relinks_begin + i];
+    if (r.triangle >= alive.size() || r.corner > 2 || r.from >= position_of.size() || r.to >= position_of.size())
+      return false;
   }
-  Snapshot snapshot() const { return {position_of, position, moves, corners, alive, &layout, attributes}; }
-
-  void check(const SimplifyRecord& record, const Collapse& c) const {
-    const auto bad = [] { throw_usage("replay: the collapse record does not belong to this mesh"); };
-    if (c.kept >= position.size() || c.removed >= position.size()) bad();
-    if (size_t(c.faces_begin) + c.removed_face_count > record.removed_faces.size()) bad();
-    if (size_t(c.relinks_begin) + c.relink_count > record.relinks.size()) bad();
-    if (size_t(c.wedges_begin) + c.wedge_count > record.wedges.size()) bad();
-    if (record.stride != layout.stride) bad();
-    for (uint32_t i = 0; i < c.removed_face_count; ++i)
-      if (record.removed_faces[c.faces_begin + i] >= alive.size()) bad();
-    for (uint32_t i = 0; i < c.relink_count; ++i) {
-      const Relink& r = record.relinks[c.relinks_begin + i];
-      if (r.triangle >= alive.size() || r.corner > 2 || r.from >= position_of.size() || r.to >= position_of.size()) bad();
-    }
-    for (uint32_t i = 0; i < c.wedge_count; ++i) {
-      const WedgeChange& w = record.wedges[c.wedges_begin + i];
-      if (w.vertex >= position_of.size() || size_t(w.values_begin) + layout.stride > record.new_values.size()) bad();
-    }
-    if (size_t(c.moved_begin) + c.moved_count > record.moved_wedges.size()) bad();
-    for (uint32_t i = 0; i < c.moved_count; ++i)
-      if (record.moved_wedges[c.moved_begin + i] >= position_of.size()) bad();
+  for (uint32_t i = 0; i < c.wedge_count; ++i) {
+    const WedgeChange& w = record.wedges[c.wedges_begin + i];
+    if (w.vertex >= position_of.size() || size_t(w.values_begin) + layout.stride > record.new_values.size() ||
+        size_t(w.values_begin) + layout.stride > record.old_values.size())
+      return false;
   }
+  if (size_t(c.moved_begin) + c.moved_count > record.moved_wedges.size()) return false;
+  for (uint32_t i = 0; i < c.moved_count; ++i)
+    if (record.moved_wedges[c.moved_begin + i] >= position_of.size()) return false;
+  return true;
+}
 
-  void apply(const SimplifyRecord& record, const Collapse& c) {
-    check(record, c);
-    for (uint32_t i = 0; i < c.removed_face_count; ++i) alive[record.removed_faces[c.faces_begin + i]] = 0;
-    for (uint32_t i = 0; i < c.relink_count; ++i) {
-      const Relink& r = record.relinks[c.relinks_begin + i];
-      corners[3 * r.triangle + r.corner] = r.to;
-    }
-    for (uint32_t i = 0; i < c.moved_count; ++i) position_of[record.moved_wedges[c.moved_begin + i]] = c.kept;
-    // Wedges moved in from a virtual pair sit at kept's position even when it stays put.
-    if (!(c.new_position == c.old_position) || c.moved_count) position[c.kept] = c.new_position, ++moves[c.kept];
-    set_values(record, c, record.new_values);
+void Replay::apply(const SimplifyRecord& record, const Collapse& c) {
+  check(record, c);
+  for (uint32_t i = 0; i < c.removed_face_count; ++i) alive[record.removed_faces[c.faces_begin + i]] = 0;
+  for (uint32_t i = 0; i < c.relink_count; ++i) {
+    const Relink& r = record.relinks[c.relinks_begin + i];
+    corners[3 * r.triangle + r.corner] = r.to;
   }
+  for (uint32_t i = 0; i < c.moved_count; ++i) position_of[record.moved_wedges[c.moved_begin + i]] = c.kept;
+  // Wedges moved in from a virtual pair sit at kept's position even when it stays put.
+  if (!(c.new_position == c.old_position) || c.moved_count) position[c.kept] = c.new_position, ++moves[c.kept];
+  set_values(record, c, record.new_values);
+}
 
-  void undo(const SimplifyRecord& record, const Collapse& c) {
-    set_values(record, c, record.old_values);
-    if (!(c.new_position == c.old_position) || c.moved_count) position[c.kept] = c.old_position, --moves[c.kept];
-    for (uint32_t i = 0; i < c.moved_count; ++i) position_of[record.moved_wedges[c.moved_begin + i]] = c.removed;
-    for (uint32_t i = c.relink_count; i-- > 0;) {
-      const Relink& r = record.relinks[c.relinks_begin + i];
-      corners[3 * r.triangle + r.corner] = r.from;
-    }
-    for (uint32_t i = 0; i < c.removed_face_count; ++i) alive[record.removed_faces[c.faces_begin + i]] = 1;
+void Replay::undo(const SimplifyRecord& record, const Collapse& c) {
+  check(record, c);
+  set_values(record, c, record.old_values);
+  if (!(c.new_position == c.old_position) || c.moved_count) position[c.kept] = c.old_position, --moves[c.kept];
+  for (uint32_t i = 0; i < c.moved_count; ++i) position_of[record.moved_wedges[c.moved_begin + i]] = c.removed;
+  for (uint32_t i = c.relink_count; i-- > 0;) {
+    const Relink& r = record.relinks[c.relinks_begin + i];
+    corners[3 * r.triangle + r.corner] = r.from;
   }
+  for (uint32_t i = 0; i < c.removed_face_count; ++i) alive[record.removed_faces[c.faces_begin + i]] = 1;
+}
 
-  void set_values(const SimplifyRecord& record, const Collapse& c, const std::vector<float>& values) {
-    for (uint32_t i = 0; i < c.wedge_count; ++i) {
-      const WedgeChange& w = record.wedges[c.wedges_begin + i];
-      std::copy_n(values.begin() + w.values_begin, layout.stride, attributes.begin() + size_t(w.vertex) * layout.stride);
-    }
+void Replay::set_values(const SimplifyRecord& record, const Collapse& c, const std::vector<float>& values) {
+  for (uint32_t i = 0; i < c.wedge_count; ++i) {
+    const WedgeChange& w = record.wedges[c.wedges_begin + i];
+    std::copy_n(values.begin() + w.values_begin, layout.stride, attributes.begin() + size_t(w.vertex) * layout.stride);
   }
-};
+}
 
-}  // namespace
 }  // namespace collapse
 
 Mesh replay(const Mesh& mesh, const SimplifyRecord& record, size_t count) {

@@ -30,4 +30,27 @@ Mesh compact(const Mesh& input, const Snapshot& snapshot, std::vector<uint32_t>*
 // Every vertex and every live triangle, in input order (after a full undo: the input itself).
 Mesh materialize(const Mesh& input, const Snapshot& snapshot);
 
+// A collapse record played forwards (apply) or backwards (undo) on the input mesh: what Snapshot
+// views. Replay, undo and progressive meshes all run on this.
+class Replay {
+ public:
+  explicit Replay(const Mesh& mesh);
+  Snapshot snapshot() const { return {position_of, position, moves, corners, alive, &layout, attributes}; }
+  // False if any index of the collapse is out of range for this mesh (a record of another mesh, or
+  // corrupt data): applying or undoing it would write out of bounds.
+  bool valid(const SimplifyRecord& record, const Collapse& c) const;
+  void check(const SimplifyRecord& record, const Collapse& c) const;  // throws usage if not valid
+  void apply(const SimplifyRecord& record, const Collapse& c);
+  void undo(const SimplifyRecord& record, const Collapse& c);
+
+ private:
+  void set_values(const SimplifyRecord& record, const Collapse& c, const std::vector<float>& values);
+
+  std::vector<uint32_t> position_of, moves, corners;
+  std::vector<float3> position;
+  std::vector<uint8_t> alive;
+  AttributeLayout layout;
+  std::vector<float> attributes;
+};
+
 }  // namespace lod::collapse
