@@ -1,9 +1,11 @@
-// lodkit: what the simplifier's output becomes in an application. A progressive mesh (refine or
-// coarsen to any size), and a file format that stores it.
+// lodkit: what the simplifier's output becomes in an application: a chain of discrete LODs with
+// error bounds and geomorphs between them, and a progressive mesh (refine or coarsen to any size)
+// with a file format that stores it.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -13,6 +15,84 @@
 #include "lodkit/simplify.h"
 
 namespace lod {
+
+// ---- geomorphs ------------------------------------------------------------------------------------
+
+// Where each vertex of a finer level goes in the next coarser one (Houle's correspondence table):
+// `target[v]` is the coarser vertex that vertex v of the finer level becomes, chains of collapses
+// already shortened (A -> B -> C is stored as A -> C). Attributes follow the same table, so a UV
+// seam vertex moves to a vertex on its own side of the seam.
+struct Geomorph {
+  std::vector<uint32_t> target;  // per finer vertex: a coarser vertex index
+  friend bool operator==(const Geomorph&, const Geomorph&) = default;
+};
+
+// m(a -> c) = m(b -> c) after m(a -> b).
+Geomorph compose(const Geomorph& a_to_b, const Geomorph& b_to_c);
+
+// The finer level morphed towards the coarser one: P' = (1 - t) P + t P_target, the same for UVs and
+// colours, and normals renormalised. t = 0 gives `finer` bit for bit; t = 1 puts every vertex on its
+// target, so the triangles of non-zero area are exactly the coarser level's and the rest have none.
+Mesh morph(const Mesh& finer, const Mesh& coarser, const Geomorph& table, float t);
+// Positions only, into `out` (resized): the per-frame work of a geomorph, without allocation.
+void morph_positions(std::span<const float3> finer, std::span<const float3> coarser, const Geomorph& table, float t,
+                     std::vector<float3>& out);
+
+// ---- LOD chains -----------------------------------------------------------------------------------
+
+struct LodOptions {
+  // Fractions of the input's triangles, one per level, finest first (level 0 is usually 1: the
+  // input). Empty: `levels` levels halving each time (1, 1/2, 1/4, ...).
+  std::vector<float> ratios;
+  uint32_t levels = 4;
+  // Instead of ratios: each level's error limit as a fraction of the bounding-box diagonal (finest
+  // first; 0 for the input itself).
+  std::vector<float> errors;
+  // Each level simplified from the previous one (errors accumulate; needed for geomorphs) or from
+  // the input.
+  bool from_previous = true;
+  // Subset placement, and one vertex buffer: SharedVertices orders it so each coarser level uses a
+  // prefix. Attribute values then stay as they are (attribute weights are ignored).
+  bool shared_vertices = false;
+  // Geomorph tables between consecutive levels (needs from_previous).
+  bool morph = false;
+  // Certified Hausdorff bound per level against the input (lod::compare with refinement).
+  bool measure = true;
+  SimplifyOptions simplify;  // metric, attribute weights, locks, threads; the target fields are set per level
+  std::function<void(double fraction)> progress;
+};
+
+struct LodLevel {
+  Mesh mesh;
+  float ratio = 1;         // triangles / input triangles
+  float engine_error = 0;  // the simplifier's error, accumulated along the chain (object space)
+  // Object-space upper bound on the symmetric Hausdorff distance to the input (lod::compare with
+  // refinement); the runtime's e_obj. With measure off, engine_error.
+  float error = 0;
+  float relative_error = 0;  // error / bounding-box diagonal
+};
+
+// With shared_vertices: one vertex buffer for all levels, and per level its indices into it; level i
+// uses only the first `prefix[i]` vertices.
+struct SharedVertices {
+  Mesh vertices;  // streams only (no indices)
+  std::vector<std::vector<uint32_t>> indices;
+  std::vector<uint32_t> prefix;
+};
+
+struct LodChain {
+  std::vector<LodLevel> levels;    // finest first
+  std::vector<Geomorph> morphs;    // morphs[i]: level i -> level i + 1 (with LodOptions::morph)
+  SharedVertices shared;           // with LodOptions::shared_vertices
+  float diagonal = 0;              // of the input's bounding box
+};
+
+// Throws lod::Error (usage) on invalid options.
+LodChain build_lod_chain(const Mesh& mesh, const LodOptions& options = {});
+
+// The distance at which a level's error reaches `pixels` on screen: e_px = e_obj * H / (2 d tan(fov/2))
+// solved for d. fov in radians (vertical), H in pixels.
+double switch_distance(double object_error, double pixels, double screen_height, double fov);
 
 // A progressive mesh (Hoppe 1996) built from a collapse record: the coarsest mesh plus, read
 // backwards, one vertex split per collapse. Moving to a size applies or undoes collapses from the

@@ -1,0 +1,139 @@
+// Discrete LOD chains: levels by ratio or error, simplified from the previous level or the input,
+// with certified error bounds, geomorph tables and an optional shared vertex buffer.
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "lod/internal.h"
+#include "lodkit/error.h"
+#include "lodkit/lod.h"
+#include "lodkit/measure.h"
+
+namespace lod {
+
+namespace {
+
+void check_options(const LodOptions& o) {
+  if (!o.errors.empty() && !o.ratios.empty()) throw_usage("lod: give ratios or errors, not both");
+  for (size_t i = 0; i < o.ratios.size(); ++i) {
+    if (!(o.ratios[i] > 0 && o.ratios[i] <= 1)) throw_usage("lod: ratios must be in (0, 1]");
+    if (i && !(o.ratios[i] < o.ratios[i - 1])) throw_usage("lod: ratios must decrease, finest first");
+  }
+  for (size_t i = 0; i < o.errors.size(); ++i) {
+    if (!(o.errors[i] >= 0) || !std::isfinite(o.errors[i])) throw_usage("lod: errors must be finite and >= 0");
+    if (i && !(o.errors[i] > o.errors[i - 1])) throw_usage("lod: errors must increase, finest first");
+  }
+  if (o.ratios.empty() && o.errors.empty() && (o.levels < 1 || o.levels > 32))
+    throw_usage("lod: levels must be in [1, 32]");
+  if (o.morph && !o.from_previous) throw_usage("lod: geomorphs need each level simplified from the previous one");
+}
+
+// Level i's vertices as indices into the input's, for the shared buffer.
+SharedVertices share_vertices(const Mesh& input, const std::vector<LodLevel>& levels,
+                              const std::vector<std::vector<uint32_t>>& origin) {
+  // Coarsest level that uses each input vertex: the buffer lists the coarsest level's vertices
+  // first, then those the next finer level adds, and so on.
+  std::vector<int> coarsest(input.vertex_count(), -1);
+  for (size_t i = 0; i < levels.size(); ++i)
+    for (const uint32_t v : origin[i]) coarsest[v] = std::max(coarsest[v], int(i));
+  std::vector<uint32_t> order;
+  for (uint32_t v = 0; v < input.vertex_count(); ++v)
+    if (coarsest[v] >= 0) order.push_back(v);
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return coarsest[a] > coarsest[b]; });
+  std::vector<uint32_t> slot(input.vertex_count(), ~0u);
+  SharedVertices shared;
+  for (uint32_t i = 0; i < order.size(); ++i) {
+    slot[order[i]] = i;
+    append_vertex(shared.vertices, input, order[i]);
+  }
+  for (size_t i = 0; i < levels.size(); ++i) {
+    std::vector<uint32_t> indices;
+    indices.reserve(levels[i].mesh.indices.size());
+    for (const uint32_t v : levels[i].mesh.indices) indices.push_back(slot[origin[i][v]]);
+    shared.indices.push_back(std::move(indices));
+    shared.prefix.push_back(uint32_t(std::count_if(order.begin(), order.end(), [&](uint32_t v) { return coarsest[v] >= int(i); })));
+  }
+  return shared;
+}
+
+}  // namespace
+
+LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
+  check_options(o);
+  validate(input, "lod input");
+  LodChain chain;
+  float3 lo, hi;
+  bounding_box(input, lo, hi);
+  chain.diagonal = std::sqrt(double(hi.x - lo.x) * (hi.x - lo.x) + double(hi.y - lo.y) * (hi.y - lo.y) +
+                             double(hi.z - lo.z) * (hi.z - lo.z));
+
+  // One entry per level: a ratio, or an error limit (then ratio 0).
+  std::vector<float> ratios = o.ratios, errors;
+  if (!o.errors.empty()) errors = o.errors, ratios.assign(o.errors.size(), 0.0f);
+  if (ratios.empty())
+    for (uint32_t i = 0; i < o.levels; ++i) ratios.push_back(std::ldexp(1.0f, -int(i)));
+
+  const uint64_t input_triangles = input.triangle_count();
+  std::vector<std::vector<uint32_t>> origin;  // per level: input vertex of each vertex
+  const size_t count = ratios.size();
+  for (size_t i = 0; i < count; ++i) {
+    const bool by_error = !errors.empty();
+    const uint64_t target = by_error ? 0 : uint64_t(std::llround(double(ratios[i]) * double(input_triangles)));
+    const bool previous = o.from_previous && i > 0;
+    const Mesh& source = previous ? chain.levels.back().mesh : input;
+    LodLevel level;
+    std::vector<uint32_t> level_origin;
+    if ((!by_error && target >= source.triangle_count() && !previous) || (by_error && errors[i] == 0 && !previous)) {
+      // Everything kept: the input itself, vertex order and all.
+      level.mesh = input;
+      level_origin.resize(input.vertex_count());
+      std::iota(level_origin.begin(), level_origin.end(), 0u);
+    } else {
+      SimplifyOptions so = o.simplify;
+      so.target_ratio = 0;
+      so.target_triangles = by_error ? 0 : std::max<uint64_t>(target, 1);
+      if (by_error) so.target_ratio = 0, so.max_error = errors[i] * chain.diagonal, so.max_relative_error = -1;
+      so.record = o.morph;
+      if (o.shared_vertices) {
+        so.keep_vertices = true;
+        so.normal_weight = so.uv_weight = so.color_weight = 0;
+      }
+      SimplifyResult r = simplify(source, so);
+      if (o.morph && previous) chain.morphs.push_back(geomorph_from_record(source, r));
+      level.engine_error = (previous ? chain.levels.back().engine_error : 0.0f) + r.error;
+      level_origin.resize(r.vertex_origin.size());
+      for (size_t v = 0; v < r.vertex_origin.size(); ++v)
+        level_origin[v] = previous ? origin.back()[r.vertex_origin[v]] : r.vertex_origin[v];
+      level.mesh = std::move(r.mesh);
+    }
+    level.ratio = input_triangles ? float(double(level.mesh.triangle_count()) / double(input_triangles)) : 1.0f;
+    level.error = level.engine_error;
+    chain.levels.push_back(std::move(level));
+    origin.push_back(std::move(level_origin));
+    if (o.progress) o.progress(double(i + 1) / double(count) * (o.measure ? 0.5 : 1.0));
+  }
+
+  if (o.measure)
+    for (size_t i = 0; i < count; ++i) {
+      LodLevel& level = chain.levels[i];
+      if (level.mesh.triangle_count() && !(level.mesh == input)) {
+        // Refinement stops once the bound is within its tolerance; the budget only caps hard cases.
+        const Deviation d = compare(input, level.mesh, {.refine = true, .refine_budget = std::max<uint64_t>(1'000'000, 20 * input_triangles),
+                                                        .attributes = false, .threads = o.simplify.threads});
+        level.error = float(d.hausdorff_bound);
+      } else if (!level.mesh.triangle_count()) {
+        level.error = chain.diagonal;  // nothing left: everything is that far off, at most
+      }
+      if (o.progress) o.progress(0.5 + 0.5 * double(i + 1) / double(count));
+    }
+  for (LodLevel& level : chain.levels) level.relative_error = chain.diagonal > 0 ? level.error / chain.diagonal : 0;
+  if (o.shared_vertices) chain.shared = share_vertices(input, chain.levels, origin);
+  return chain;
+}
+
+double switch_distance(double object_error, double pixels, double screen_height, double fov) {
+  if (!(pixels > 0) || !(screen_height > 0) || !(fov > 0 && fov < M_PI)) throw_usage("switch_distance: bad camera");
+  return object_error * screen_height / (2.0 * pixels * std::tan(fov / 2));
+}
+
+}  // namespace lod

@@ -1,0 +1,157 @@
+// LOD chains and geomorphs: level sizes and error bounds, the geomorph invariants at t = 0 and 1
+// and linearity between, composition, and the shared vertex buffer.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <tuple>
+
+#include "core/shapes.h"
+#include "lodkit/error.h"
+#include "lodkit/lod.h"
+#include "lodkit/measure.h"
+
+namespace lod {
+namespace {
+
+// A corner's full vertex data, and a triangle as three of them rotated to start at the smallest
+// (winding kept), so triangles compare as values.
+using Corner = std::tuple<float, float, float, float, float, float, float, float>;
+using Triangle = std::array<Corner, 3>;
+
+Corner corner(const Mesh& m, uint32_t v) {
+  const float3& p = m.positions[v];
+  const float3 n = m.normals.empty() ? float3{} : m.normals[v];
+  const float2 uv = m.uvs[0].empty() ? float2{} : m.uvs[0][v];
+  return {p.x, p.y, p.z, n.x, n.y, n.z, uv.x, uv.y};
+}
+
+// Triangles whose three corners sit at distinct positions, as a sorted multiset.
+std::vector<Triangle> proper_triangles(const Mesh& m) {
+  std::vector<Triangle> out;
+  for (size_t t = 0; t < m.triangle_count(); ++t) {
+    const uint32_t* i = &m.indices[3 * t];
+    const float3 &a = m.positions[i[0]], &b = m.positions[i[1]], &c = m.positions[i[2]];
+    if (a == b || b == c || c == a) continue;
+    Triangle tri = {corner(m, i[0]), corner(m, i[1]), corner(m, i[2])};
+    std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
+    out.push_back(tri);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+LodChain morph_chain(const Mesh& mesh) {
+  return build_lod_chain(mesh, {.ratios = {1.0f, 0.5f, 0.2f, 0.05f},
+                                .morph = true,
+                                .measure = false,
+                                .simplify = {.normal_weight = 0.5f, .uv_weight = 0.5f}});
+}
+
+TEST(LodChain, LevelsFollowTheRatios) {
+  const Mesh mesh = shapes::torus(1.0f, 0.3f, 48, 24);
+  const LodChain chain = build_lod_chain(mesh, {.levels = 5});
+  ASSERT_EQ(chain.levels.size(), 5u);
+  EXPECT_EQ(chain.levels[0].mesh, mesh);
+  EXPECT_EQ(chain.levels[0].error, 0.0f);
+  for (size_t i = 1; i < chain.levels.size(); ++i) {
+    const size_t expected = size_t(std::llround(double(mesh.triangle_count()) / double(1u << i)));
+    EXPECT_LE(chain.levels[i].mesh.triangle_count(), expected);
+    EXPECT_GE(chain.levels[i].mesh.triangle_count() + 2, expected);  // a collapse removes at most 2
+    EXPECT_GE(chain.levels[i].engine_error, chain.levels[i - 1].engine_error);
+    EXPECT_GT(chain.levels[i].error, 0.0f);
+  }
+}
+
+// The stored bound covers what an independent, denser measurement finds.
+TEST(LodChain, ErrorBoundCoversAFinerMeasurement) {
+  const Mesh mesh = shapes::icosphere(3);
+  const LodChain chain = build_lod_chain(mesh, {.ratios = {1.0f, 0.3f, 0.1f}});
+  for (size_t i = 1; i < chain.levels.size(); ++i) {
+    const Deviation d = compare(mesh, chain.levels[i].mesh, {.samples = 200'000, .seed = 99});
+    EXPECT_GE(chain.levels[i].error, float(d.hausdorff) * (1 - 1e-5f)) << "level " << i;
+    // ... and is not wildly loose: within the refinement tolerance of the sampled maximum.
+    EXPECT_LE(chain.levels[i].error, float(d.hausdorff) + 2e-4f * chain.diagonal) << "level " << i;
+  }
+}
+
+TEST(LodChain, LevelsByErrorSteps) {
+  const Mesh mesh = shapes::torus(1.0f, 0.3f, 48, 24);
+  const LodChain chain = build_lod_chain(mesh, {.errors = {0.0f, 0.002f, 0.01f}, .from_previous = false});
+  ASSERT_EQ(chain.levels.size(), 3u);
+  EXPECT_EQ(chain.levels[0].mesh, mesh);
+  EXPECT_LT(chain.levels[2].mesh.triangle_count(), chain.levels[1].mesh.triangle_count());
+  EXPECT_LT(chain.levels[1].mesh.triangle_count(), mesh.triangle_count());
+  // From the input, each level's engine error stays within its own limit.
+  EXPECT_LE(chain.levels[1].engine_error, 0.002f * chain.diagonal * 1.0001f);
+  EXPECT_LE(chain.levels[2].engine_error, 0.01f * chain.diagonal * 1.0001f);
+}
+
+TEST(Geomorph, EndsAreExactAndTheMiddleIsLinear) {
+  for (const Mesh& mesh : {shapes::torus(1.0f, 0.3f, 32, 16), shapes::cylinder(24, 2.0f)}) {
+    const LodChain chain = morph_chain(mesh);
+    ASSERT_EQ(chain.morphs.size(), chain.levels.size() - 1);
+    for (size_t i = 0; i + 1 < chain.levels.size(); ++i) {
+      SCOPED_TRACE("level " + std::to_string(i));
+      const Mesh &fine = chain.levels[i].mesh, &coarse = chain.levels[i + 1].mesh;
+      const Geomorph& g = chain.morphs[i];
+      EXPECT_EQ(morph(fine, coarse, g, 0.0f), fine);
+      // t = 1: the proper triangles are exactly the coarser level's, attributes included.
+      const Mesh end = morph(fine, coarse, g, 1.0f);
+      EXPECT_EQ(proper_triangles(end), proper_triangles(coarse));
+      EXPECT_EQ(proper_triangles(coarse).size(), coarse.triangle_count());
+      // In between, every position is the linear blend.
+      const Mesh half = morph(fine, coarse, g, 0.25f);
+      for (size_t v = 0; v < fine.vertex_count(); ++v) {
+        const float3 &a = fine.positions[v], &b = coarse.positions[g.target[v]], &m = half.positions[v];
+        ASSERT_NEAR(m.x, 0.75f * a.x + 0.25f * b.x, 1e-6f);
+        ASSERT_NEAR(m.y, 0.75f * a.y + 0.25f * b.y, 1e-6f);
+        ASSERT_NEAR(m.z, 0.75f * a.z + 0.25f * b.z, 1e-6f);
+      }
+    }
+  }
+}
+
+TEST(Geomorph, ChainsComposeAndEveryTargetExists) {
+  const LodChain chain = morph_chain(shapes::torus(1.0f, 0.3f, 32, 16));
+  Geomorph total = chain.morphs[0];
+  for (size_t i = 0; i < chain.morphs.size(); ++i) {
+    for (const uint32_t t : chain.morphs[i].target) ASSERT_LT(t, chain.levels[i + 1].mesh.vertex_count());
+    if (i) total = compose(total, chain.morphs[i]);
+    // Level 0 morphed straight to level i + 1 ends exactly on it.
+    const Mesh& coarse = chain.levels[i + 1].mesh;
+    EXPECT_EQ(proper_triangles(morph(chain.levels[0].mesh, coarse, total, 1.0f)), proper_triangles(coarse))
+        << "0 -> " << i + 1;
+  }
+  EXPECT_THROW(compose(chain.morphs[0], chain.morphs[2]), Error);  // level 1 targets past level 2's table
+}
+
+TEST(LodChain, SharedVerticesArePrefixes) {
+  const Mesh mesh = shapes::torus(1.0f, 0.3f, 32, 16);
+  const LodChain chain = build_lod_chain(mesh, {.ratios = {1.0f, 0.4f, 0.1f}, .shared_vertices = true});
+  const SharedVertices& s = chain.shared;
+  ASSERT_EQ(s.indices.size(), 3u);
+  EXPECT_EQ(s.prefix[0], s.vertices.vertex_count());
+  for (size_t i = 0; i < 3; ++i) {
+    if (i) {
+      EXPECT_LT(s.prefix[i], s.prefix[i - 1]);
+    }
+    for (const uint32_t v : s.indices[i]) ASSERT_LT(v, s.prefix[i]);
+    // The level drawn from the shared buffer is the level (positions: subset placement keeps them).
+    ASSERT_EQ(s.indices[i].size(), chain.levels[i].mesh.indices.size());
+    for (size_t k = 0; k < s.indices[i].size(); ++k)
+      ASSERT_EQ(s.vertices.positions[s.indices[i][k]], chain.levels[i].mesh.positions[chain.levels[i].mesh.indices[k]]);
+  }
+}
+
+TEST(LodChain, BadOptionsAreUsageErrors) {
+  const Mesh mesh = shapes::icosphere(1);
+  EXPECT_THROW(build_lod_chain(mesh, {.ratios = {0.5f, 0.7f}}), Error);
+  EXPECT_THROW(build_lod_chain(mesh, {.ratios = {1.0f}, .errors = {0.0f}}), Error);
+  EXPECT_THROW(build_lod_chain(mesh, {.from_previous = false, .morph = true}), Error);
+  EXPECT_DOUBLE_EQ(switch_distance(0.01, 1.0, 1080.0, M_PI / 2), 0.01 * 1080.0 / 2.0);
+}
+
+}  // namespace
+}  // namespace lod
