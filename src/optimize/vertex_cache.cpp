@@ -1,0 +1,194 @@
+// Vertex-cache order: a greedy walk in the manner of Tom Forsyth's "linear-speed vertex cache
+// optimisation". A simulated cache of the target size and policy holds the vertices the walk has
+// just used; each vertex scores by its place in that cache (about to be evicted scores low) and by
+// how few triangles still need it (finishing a vertex off frees a cache slot for good); the next
+// triangle is the best-scoring one among the triangles of the cached vertices. When none is left
+// (a dead end), the walk restarts from the most recently cached vertex that still has triangles, which
+// keeps it local, and only then from the next triangle in input order.
+#include <algorithm>
+#include <cmath>
+
+#include "lodkit/error.h"
+#include "lodkit/optimize.h"
+
+namespace lod {
+
+namespace {
+
+constexpr uint32_t none = 0xFFFFFFFFu;
+constexpr uint32_t max_cache = 64;
+constexpr uint32_t valence_table_size = 32;
+
+struct Scores {
+  float cache[max_cache + 1];  // by cache position; [size] is "not cached"
+  float valence[valence_table_size];
+  uint32_t size;
+  float vertex(uint32_t position, uint32_t live) const {
+    if (live == 0) return 0;
+    return cache[position] + valence[std::min(live, valence_table_size - 1)];
+  }
+};
+
+Scores make_scores(const VertexCacheOptions& o) {
+  Scores s{};
+  s.size = o.cache_size;
+  const float size = float(o.cache_size);
+  for (uint32_t p = 0; p < o.cache_size; ++p) {
+    if (o.policy == CachePolicy::lru && p < 3) {
+      // Forsyth: the last triangle's own vertices score a little less than the next ones, so the walk
+      // does not run off in a thin strip.
+      s.cache[p] = 0.75f;
+    } else {
+      const float first = o.policy == CachePolicy::lru ? 3.0f : 0.0f;
+      s.cache[p] = std::pow(1.0f - (float(p) - first) / (size - first), 1.5f);
+    }
+  }
+  s.cache[o.cache_size] = 0;
+  s.valence[0] = 0;
+  for (uint32_t l = 1; l < valence_table_size; ++l) s.valence[l] = 2.0f / std::sqrt(float(l));
+  return s;
+}
+
+}  // namespace
+
+std::vector<uint32_t> vertex_cache_order(std::span<const uint32_t> indices, size_t vertex_count, const VertexCacheOptions& options) {
+  if (indices.size() % 3) throw_usage("optimize_vertex_cache: the index count is not a multiple of 3");
+  if (options.cache_size < 3 || options.cache_size > max_cache)
+    throw_usage("optimize_vertex_cache: cache size must be in [3, " + std::to_string(max_cache) + "]");
+  const uint32_t F = uint32_t(indices.size() / 3);
+  const uint32_t V = uint32_t(vertex_count);
+  for (const uint32_t i : indices)
+    if (i >= V) throw_usage("optimize_vertex_cache: index " + std::to_string(i) + " out of range");
+  const Scores scores = make_scores(options);
+  const uint32_t K = options.cache_size;
+
+  // Vertex -> triangles (CSR). The first live[v] entries of each list are the triangles not yet emitted.
+  std::vector<uint32_t> offset(V + 1, 0), live(V, 0);
+  for (const uint32_t i : indices) ++offset[i + 1];
+  for (uint32_t v = 0; v < V; ++v) offset[v + 1] += offset[v];
+  std::vector<uint32_t> triangles(indices.size());
+  for (uint32_t t = 0; t < F; ++t)
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t v = indices[3 * t + k];
+      triangles[offset[v] + live[v]++] = t;
+    }
+
+  std::vector<uint32_t> position(V, K);  // cache position, K when not cached
+  std::vector<float> score(V);
+  for (uint32_t v = 0; v < V; ++v) score[v] = scores.vertex(K, live[v]);
+  std::vector<uint8_t> emitted(F, 0);
+  std::vector<uint32_t> order;
+  order.reserve(F);
+
+  uint32_t cache[max_cache + 3];
+  uint32_t cache_count = 0;
+  std::vector<uint32_t> recent;  // vertices in the order they entered the cache: dead-end restarts
+  uint32_t cursor = 0;           // input order restarts
+
+  auto best_triangle_of = [&](uint32_t v) {
+    uint32_t best = none;
+    float best_score = -1;
+    for (uint32_t j = offset[v], e = offset[v] + live[v]; j < e; ++j) {
+      const uint32_t t = triangles[j];
+      const float s = score[indices[3 * t]] + score[indices[3 * t + 1]] + score[indices[3 * t + 2]];
+      if (s > best_score) best_score = s, best = t;
+    }
+    return best;
+  };
+
+  // Start at the best-scoring triangle of the vertex with the fewest triangles (a border or corner).
+  uint32_t next = none;
+  {
+    uint32_t start_vertex = none;
+    for (uint32_t v = 0; v < V; ++v)
+      if (live[v] && (start_vertex == none || live[v] < live[start_vertex])) start_vertex = v;
+    if (start_vertex != none) next = best_triangle_of(start_vertex);
+  }
+
+  while (next != none) {
+    const uint32_t t = next;
+    emitted[t] = 1;
+    order.push_back(t);
+    const uint32_t tv[3] = {indices[3 * t], indices[3 * t + 1], indices[3 * t + 2]};
+    for (const uint32_t v : tv) {
+      // Drop t from v's live triangles (swap with the last live one).
+      uint32_t* list = triangles.data() + offset[v];
+      for (uint32_t j = 0; j < live[v]; ++j)
+        if (list[j] == t) {
+          std::swap(list[j], list[live[v] - 1]);
+          --live[v];
+          break;
+        }
+    }
+
+    // Update the simulated cache. Old entries beyond K are evicted (kept in cache[K..] for rescoring).
+    uint32_t fresh[3];
+    uint32_t fresh_count = 0;
+    if (options.policy == CachePolicy::fifo) {
+      for (const uint32_t v : tv)
+        if (position[v] == K && std::find(fresh, fresh + fresh_count, v) == fresh + fresh_count) fresh[fresh_count++] = v;
+      // Newest first: the last vertex pushed sits at position 0.
+      std::move_backward(cache, cache + cache_count, cache + cache_count + fresh_count);
+      for (uint32_t j = 0; j < fresh_count; ++j) cache[j] = fresh[fresh_count - 1 - j];
+      cache_count += fresh_count;
+    } else {
+      // Accessing a, b, c moves each to the front in turn: c, b, a, then the others in their order.
+      uint32_t front[3];
+      uint32_t front_count = 0;
+      for (int k = 2; k >= 0; --k)
+        if (std::find(front, front + front_count, tv[k]) == front + front_count) front[front_count++] = tv[k];
+      uint32_t rest[max_cache + 3];
+      uint32_t rest_count = 0;
+      for (uint32_t j = 0; j < cache_count; ++j)
+        if (std::find(front, front + front_count, cache[j]) == front + front_count) rest[rest_count++] = cache[j];
+      for (uint32_t j = 0; j < front_count; ++j) {
+        if (position[front[j]] == K) fresh[fresh_count++] = front[j];
+        cache[j] = front[j];
+      }
+      std::copy(rest, rest + rest_count, cache + front_count);
+      cache_count = front_count + rest_count;
+    }
+    for (uint32_t j = 0; j < fresh_count; ++j) recent.push_back(fresh[j]);
+    for (uint32_t j = 0; j < cache_count; ++j) {
+      const uint32_t v = cache[j];
+      position[v] = j < K ? j : K;
+      score[v] = scores.vertex(position[v], live[v]);
+    }
+    cache_count = std::min(cache_count, K);
+
+    // The best triangle touching the cache.
+    next = none;
+    float best_score = -1;
+    for (uint32_t j = 0; j < cache_count; ++j) {
+      const uint32_t v = cache[j];
+      for (uint32_t i = offset[v], e = offset[v] + live[v]; i < e; ++i) {
+        const uint32_t c = triangles[i];
+        const float s = score[indices[3 * c]] + score[indices[3 * c + 1]] + score[indices[3 * c + 2]];
+        if (s > best_score) best_score = s, next = c;
+      }
+    }
+    if (next != none) continue;
+    // Dead end: the most recently cached vertex with triangles left, else the next in input order.
+    while (!recent.empty() && next == none) {
+      const uint32_t v = recent.back();
+      recent.pop_back();
+      if (live[v]) next = best_triangle_of(v);
+    }
+    while (next == none && cursor < F) {
+      if (!emitted[cursor]) next = cursor;
+      ++cursor;
+    }
+  }
+  if (order.size() != F) throw_internal("optimize_vertex_cache: lost triangles");
+  return order;
+}
+
+std::vector<uint32_t> optimize_vertex_cache(std::span<const uint32_t> indices, size_t vertex_count, const VertexCacheOptions& options) {
+  const std::vector<uint32_t> order = vertex_cache_order(indices, vertex_count, options);
+  std::vector<uint32_t> out(indices.size());
+  for (size_t k = 0; k < order.size(); ++k)
+    for (uint32_t c = 0; c < 3; ++c) out[3 * k + c] = indices[3 * size_t(order[k]) + c];
+  return out;
+}
+
+}  // namespace lod
