@@ -139,4 +139,27 @@ std::string expect_bad_input(const Reader& read, const std::string& input, const
   return {};
 }
 
+static std::filesystem::path validator_script() { return std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-validator/validate.mjs"; }
+
+bool validator_available() {
+  std::error_code ec;
+  return std::filesystem::exists(std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-validator/node_modules/gltf-validator", ec) &&
+         std::system("command -v node >/dev/null 2>&1") == 0;
+}
+
+ValidatorRun run_validator(const std::vector<std::filesystem::path>& files) {
+  std::string command = "node '" + validator_script().string() + "'";
+  for (const auto& f : files) command += " '" + f.string() + "'";
+  command += " 2>&1";
+  ValidatorRun run;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return run;
+  char buffer[4096];
+  size_t n;
+  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) run.output.append(buffer, n);
+  const int status = pclose(pipe);
+  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
 }  // namespace lod::test

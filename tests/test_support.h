@@ -36,6 +36,14 @@ std::filesystem::path corpus_dir();
 std::vector<std::filesystem::path> corpus_files();
 
 void write_text(const std::filesystem::path& path, const std::string& text);
+
+// Khronos gltf-validator (tests/gltf-validator, installed by scripts/setup.sh through npm).
+struct ValidatorRun {
+  int status = -1;     // 0 when every file has zero errors
+  std::string output;  // its report
+};
+bool validator_available();
+ValidatorRun run_validator(const std::vector<std::filesystem::path>& files);
 void write_bytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes);
 
 inline std::span<const uint8_t> bytes_of(const std::string& s) {

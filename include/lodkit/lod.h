@@ -56,7 +56,7 @@ struct LodOptions {
   bool shared_vertices = false;
   // Geomorph tables between consecutive levels (needs from_previous).
   bool morph = false;
-  // Certified Hausdorff bound per level against the input (lod::compare with refinement).
+  // Measure each level against the input (lod::compare, with a certified bound from refinement).
   bool measure = true;
   SimplifyOptions simplify;  // metric, attribute weights, locks, threads; the target fields are set per level
   std::function<void(double fraction)> progress;
@@ -66,9 +66,12 @@ struct LodLevel {
   Mesh mesh;
   float ratio = 1;         // triangles / input triangles
   float engine_error = 0;  // the simplifier's error, accumulated along the chain (object space)
-  // Object-space upper bound on the symmetric Hausdorff distance to the input (lod::compare with
-  // refinement); the runtime's e_obj. With measure off, engine_error.
+  // Symmetric Hausdorff distance to the input measured by lod::compare (Metro-style sampling): the
+  // runtime's e_obj. With measure off, engine_error.
   float error = 0;
+  // A certified upper bound on it (lod::compare's refinement; >= error, can be loose where the
+  // refinement budget ran out). With measure off, engine_error.
+  float error_bound = 0;
   float relative_error = 0;  // error / bounding-box diagonal
 };
 

@@ -1211,6 +1211,28 @@ std::string valid_utf8(const std::string& s) {
   return out;
 }
 
+// nlohmann::json -> tinygltf::Value (extras written from JSON text).
+tg::Value json_to_value(const nlohmann::json& j) {
+  switch (j.type()) {
+    case nlohmann::json::value_t::object: {
+      tg::Value::Object object;
+      for (const auto& [key, value] : j.items()) object[key] = json_to_value(value);
+      return tg::Value(std::move(object));
+    }
+    case nlohmann::json::value_t::array: {
+      tg::Value::Array array;
+      for (const auto& value : j) array.push_back(json_to_value(value));
+      return tg::Value(std::move(array));
+    }
+    case nlohmann::json::value_t::string: return tg::Value(j.get<std::string>());
+    case nlohmann::json::value_t::boolean: return tg::Value(j.get<bool>());
+    case nlohmann::json::value_t::number_integer:
+    case nlohmann::json::value_t::number_unsigned: return tg::Value(int(j.get<int64_t>()));
+    case nlohmann::json::value_t::number_float: return tg::Value(j.get<double>());
+    default: return tg::Value();
+  }
+}
+
 // A minimal document for a Scene without source: meshes by gltf_mesh, materials named from
 // material_names, the Scene's nodes (or one node per mesh), one scene.
 tg::Model model_from_scene(const Scene& scene, std::vector<Slot>& slots) {
@@ -1250,6 +1272,16 @@ tg::Model model_from_scene(const Scene& scene, std::vector<Slot>& slots) {
       }
       for (int32_t child : in.children)
         if (child >= 0 && size_t(child) < scene.nodes.size()) node.children.push_back(child);
+      if (!in.lod_ids.empty()) {
+        tg::Value::Array ids;
+        for (const int32_t id : in.lod_ids) ids.emplace_back(int(id));
+        tg::Value::Object lod;
+        lod["ids"] = tg::Value(std::move(ids));
+        node.extensions["MSFT_lod"] = tg::Value(std::move(lod));
+        if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), "MSFT_lod") == model.extensionsUsed.end())
+          model.extensionsUsed.push_back("MSFT_lod");
+      }
+      if (!in.extras_json.empty()) node.extras = json_to_value(nlohmann::json::parse(in.extras_json));
       if (in.has_matrix) {
         const std::array<float, 16> identity = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
         if (in.matrix != identity) node.matrix.assign(in.matrix.begin(), in.matrix.end());

@@ -107,7 +107,7 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
       level.mesh = std::move(r.mesh);
     }
     level.ratio = input_triangles ? float(double(level.mesh.triangle_count()) / double(input_triangles)) : 1.0f;
-    level.error = level.engine_error;
+    level.error = level.error_bound = level.engine_error;
     chain.levels.push_back(std::move(level));
     origin.push_back(std::move(level_origin));
     if (o.progress) o.progress(double(i + 1) / double(count) * (o.measure ? 0.5 : 1.0));
@@ -117,12 +117,16 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
     for (size_t i = 0; i < count; ++i) {
       LodLevel& level = chain.levels[i];
       if (level.mesh.triangle_count() && !(level.mesh == input)) {
-        // Refinement stops once the bound is within its tolerance; the budget only caps hard cases.
-        const Deviation d = compare(input, level.mesh, {.refine = true, .refine_budget = std::max<uint64_t>(1'000'000, 20 * input_triangles),
-                                                        .attributes = false, .threads = o.simplify.threads});
-        level.error = float(d.hausdorff_bound);
+        // Two samples per input triangle find the maximum well on meshes of that density; the
+        // refinement then certifies a bound (it stops within its tolerance or at its budget).
+        const uint64_t samples = std::clamp<uint64_t>(2 * input_triangles, 20'000, 1'000'000);
+        const Deviation d = compare(input, level.mesh,
+                                    {.samples = samples, .refine = true, .refine_tolerance = 1e-3f,
+                                     .attributes = false, .threads = o.simplify.threads});
+        level.error = float(d.hausdorff);
+        level.error_bound = float(d.hausdorff_bound);
       } else if (!level.mesh.triangle_count()) {
-        level.error = chain.diagonal;  // nothing left: everything is that far off, at most
+        level.error = level.error_bound = chain.diagonal;  // nothing left
       }
       if (o.progress) o.progress(0.5 + 0.5 * double(i + 1) / double(count));
     }

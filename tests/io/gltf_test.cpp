@@ -947,36 +947,8 @@ TEST(GltfWrite, EmptyMeshWritesAValidEmptyScene) {
 
 // ---- the Khronos validator --------------------------------------------------------------------------
 
-struct ValidatorRun {
-  int status = -1;
-  std::string output;
-};
-
-std::filesystem::path validator_script() { return std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-validator/validate.mjs"; }
-
-bool validator_available() {
-  std::error_code ec;
-  return std::filesystem::exists(std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-validator/node_modules/gltf-validator", ec) &&
-         std::system("command -v node >/dev/null 2>&1") == 0;
-}
-
-ValidatorRun run_validator(const std::vector<std::filesystem::path>& files) {
-  std::string command = "node '" + validator_script().string() + "'";
-  for (const auto& f : files) command += " '" + f.string() + "'";
-  command += " 2>&1";
-  ValidatorRun run;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return run;
-  char buffer[4096];
-  size_t n;
-  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) run.output.append(buffer, n);
-  const int status = pclose(pipe);
-  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return run;
-}
-
 TEST(GltfValidator, WrittenFilesHaveNoErrors) {
-  if (!validator_available())
+  if (!test::validator_available())
     GTEST_SKIP() << "gltf-validator not installed: run `npm ci --prefix tests/gltf-validator` (needs node on PATH)";
   TempDir dir;
   std::vector<std::filesystem::path> files;
@@ -1002,7 +974,7 @@ TEST(GltfValidator, WrittenFilesHaveNoErrors) {
   files.push_back(dir / "multi.gltf");
   write_scene(scene_from_mesh(multi), files.back());
 
-  const ValidatorRun run = run_validator(files);
+  const test::ValidatorRun run = test::run_validator(files);
   EXPECT_EQ(run.status, 0) << run.output;
   for (const auto& f : files) EXPECT_NE(run.output.find(f.string() + ": 0 errors"), std::string::npos) << run.output;
 }

@@ -26,6 +26,13 @@ struct SimplifyCommand {
   unsigned threads = 0;
 };
 
+bool is_gltf(const std::string& path) {
+  const FileFormat format = format_from_path(path);
+  return format == FileFormat::gltf || format == FileFormat::glb;
+}
+
+}  // namespace
+
 Metric parse_metric(const std::string& name) {
   for (const Metric m : {Metric::edge_length, Metric::qem, Metric::constrained_qem, Metric::memoryless,
                          Metric::constrained_memoryless})
@@ -59,13 +66,6 @@ void parse_attributes(const std::string& text, SimplifyOptions& options) {
     begin = end + 1;
   }
 }
-
-bool is_gltf(const std::string& path) {
-  const FileFormat format = format_from_path(path);
-  return format == FileFormat::gltf || format == FileFormat::glb;
-}
-
-}  // namespace
 
 Command register_simplify(CLI::App& root) {
   auto o = std::make_shared<SimplifyCommand>();

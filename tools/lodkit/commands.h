@@ -5,6 +5,8 @@
 #include <functional>
 #include <string>
 
+#include "lodkit/simplify.h"
+
 namespace lod::cli {
 
 // A subcommand's body; returns the process exit code. Library errors propagate as lod::Error.
@@ -17,6 +19,11 @@ Command register_info(CLI::App& root);
 Command register_convert(CLI::App& root);
 Command register_simplify(CLI::App& root);
 Command register_compare(CLI::App& root);
+Command register_lod(CLI::App& root);
+
+// Shared option parsers (simplify, lod): --metric NAME and --attributes normal=W,uv=W,color=W.
+Metric parse_metric(const std::string& name);
+void parse_attributes(const std::string& text, SimplifyOptions& options);
 
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);
