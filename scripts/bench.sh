@@ -4,6 +4,7 @@
 #   scripts/bench.sh io [RUNS=5]
 #   scripts/bench.sh simplify [--quick] [RUNS=3]
 #   scripts/bench.sh measure [PAIRS=20]
+#   scripts/bench.sh lod [RUNS=15]
 #
 # io: loads a binary PLY and an OBJ of >= 3M triangles (bunny00.off subdivided 1->4) with lodkit and
 # with Assimp, each loader in its own process under /usr/bin/time -v; prints a markdown table of
@@ -19,6 +20,9 @@
 # measure: `lodkit compare` against CGAL's distance (cgal_distance) on PAIRS (mesh, simplified) pairs:
 # values and time at the same sample count; writes bench/results/measure.json.
 #
+# lod: geomorph throughput (lod::morph_positions on >= 1M vertices) against memcpy of the same bytes
+# in the same process (target: morph <= 3x memcpy); with its peak memory.
+#
 # The build is the release preset (build/release); LODKIT_BENCH_BUILD=DIR uses another configured
 # build directory instead.
 set -euo pipefail
@@ -26,7 +30,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 usage() {
-  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | measure [PAIRS=20]" >&2
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -152,8 +156,27 @@ area_measure() {
   python3 bench/simplify/measure.py "$build/bench" "$build/lodkit" build/bench-data/measure bench/results/measure.json "$pairs" "$machine"
 }
 
+# ---- lod -----------------------------------------------------------------------------------------
+area_lod() {
+  [ $# -le 1 ] || usage
+  local runs=${1:-15}
+  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  configure
+  build_targets lodkit_bench_morph
+  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
+  echo
+  machine_line
+  echo
+  local log
+  log=$(mktemp)
+  /usr/bin/time -v "$build/bench/lodkit_bench_morph" data/corpus/bunny00.off "$runs" 2>"$log"
+  echo "peak memory: $(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); printf "%.1f MiB", $2 / 1024}' "$log")"
+  rm -f "$log"
+}
+
 case $area in
   io) area_io "$@" ;;
+  lod) area_lod "$@" ;;
   simplify) area_simplify "$@" ;;
   measure) area_measure "$@" ;;
   *) usage ;;
