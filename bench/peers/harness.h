@@ -1,12 +1,14 @@
 // The simplification benchmark's common harness, shared by every peer program and by lodkit's driver,
 // so that all tools are loaded, timed and reported the same way:
 //
-//   PROG [MODE] IN OUT TARGET_TRIANGLES RUNS [--json] [tool options]
+//   PROG [MODE] IN OUT TARGET_TRIANGLES RUNS [--json] [--budget SECONDS] [tool options]
 //
 // - IN is read with lodkit's reader and reduced to positions and triangles (every tool gets the same
 //   floats and indices; attributes would be extra work for some tools only).
 // - Converting to the tool's own structure is untimed and is redone before every run (simplification
 //   mutates it). Only the simplification call is timed, with steady_clock.
+// - --budget S: no further run starts once the timed runs add up to S seconds (at least one run is
+//   always done); "runs" in the JSON is the number done. It bounds the bench on slow cases.
 // - The last run's result is written to OUT with lodkit's writer (".ply" binary); "-" writes nothing.
 // - One JSON line: tool, mode, input, triangles in/out, the times, median/min/max, and the process's
 //   peak RSS before the first run (getrusage), so the report can tell loading from simplifying.
@@ -34,6 +36,7 @@ struct Args {
   std::string mode, input, output;
   uint64_t target_triangles = 0;
   int runs = 1;
+  double budget_seconds = 0;  // 0: no budget
   bool json = false;
   std::vector<std::string> options;  // whatever follows, for the tool to read
 };
@@ -54,6 +57,7 @@ inline Args parse_args(int argc, char** argv, const std::vector<std::string>& mo
   if (args.runs < 1) throw std::invalid_argument("RUNS must be at least 1");
   for (i += 4; i < a.size(); ++i) {
     if (a[i] == "--json") args.json = true;
+    else if (a[i] == "--budget" && i + 1 < a.size()) args.budget_seconds = std::stod(a[++i]);
     else args.options.push_back(a[i]);
   }
   return args;
@@ -113,15 +117,21 @@ inline double peak_rss_mib() {
   return double(usage.ru_maxrss) / 1024.0;  // kilobytes on Linux
 }
 
-// RUNS times: state = setup() untimed, then simplify(state) timed. Returns the last state.
+// args.runs times (or until the budget is spent): state = setup() untimed, then simplify(state)
+// timed. Returns the last state.
 template <class Setup, class Simplify>
-auto timed_runs(int runs, std::vector<double>& seconds, Setup setup, Simplify simplify) {
+auto timed_runs(const Args& args, std::vector<double>& seconds, Setup setup, Simplify simplify) {
   auto state = setup();
-  for (int r = 0; r < runs; ++r) {
-    if (r > 0) state = setup();
+  double total = 0;
+  for (int r = 0; r < args.runs; ++r) {
+    if (r > 0) {
+      if (args.budget_seconds > 0 && total >= args.budget_seconds) break;
+      state = setup();
+    }
     const auto start = std::chrono::steady_clock::now();
     simplify(state);
     seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    total += seconds.back();
   }
   return state;
 }
@@ -145,7 +155,8 @@ inline void finish(const std::string& tool, const Args& args, const lod::Mesh& i
                       {"vertices_in", input.vertex_count()},
                       {"triangles_out", result.triangle_count()},
                       {"vertices_out", result.vertex_count()},
-                      {"runs", args.runs},
+                      {"runs", seconds.size()},
+                      {"runs_asked", args.runs},
                       {"times", seconds},
                       {"median_s", median(seconds)},
                       {"min_s", *std::min_element(seconds.begin(), seconds.end())},
@@ -155,9 +166,9 @@ inline void finish(const std::string& tool, const Args& args, const lod::Mesh& i
   if (args.json) {
     std::printf("%s\n", j.dump().c_str());
   } else {
-    std::printf("%s %s %s: %zu -> %zu triangles, median %.4f s (min %.4f, max %.4f) over %d runs\n", tool.c_str(),
+    std::printf("%s %s %s: %zu -> %zu triangles, median %.4f s (min %.4f, max %.4f) over %zu runs\n", tool.c_str(),
                 args.mode.c_str(), args.input.c_str(), input.triangle_count(), result.triangle_count(), j["median_s"].get<double>(),
-                j["min_s"].get<double>(), j["max_s"].get<double>(), args.runs);
+                j["min_s"].get<double>(), j["max_s"].get<double>(), seconds.size());
   }
 }
 

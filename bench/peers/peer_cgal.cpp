@@ -1,7 +1,7 @@
 // CGAL 5.5 (Debian libcgal-dev): Surface_mesh_simplification::edge_collapse on a Surface_mesh with
 // double coordinates, stopped at the target face count.
 //
-//   peer_cgal gh|lt IN OUT TARGET_TRIANGLES RUNS [--json]
+//   peer_cgal gh|lt IN OUT TARGET_TRIANGLES RUNS [--json] [--budget S]
 //
 //   gh  GarlandHeckbert_plane_policies (classic plane quadrics, optimal placement)
 //   lt  LindstromTurk_cost + LindstromTurk_placement (memoryless, volume and boundary preserving)
@@ -42,7 +42,7 @@ struct FaceCountStop {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return bench::run_main("peer_cgal", "peer_cgal gh|lt IN OUT TARGET_TRIANGLES RUNS [--json]", [&] {
+  return bench::run_main("peer_cgal", "peer_cgal gh|lt IN OUT TARGET_TRIANGLES RUNS [--json] [--budget S]", [&] {
     const bench::Args args = bench::parse_args(argc, argv, {"gh", "lt"});
     const lod::Mesh input = bench::load_positions(args.input);
     const bench::Welded welded = bench::weld(input);
@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
     const double rss = [&] { build(); return bench::peak_rss_mib(); }();
     std::vector<double> seconds;
     int collapses = 0;
-    const auto mesh = bench::timed_runs(args.runs, seconds, build, [&](std::unique_ptr<SurfaceMesh>& m) {
+    const auto mesh = bench::timed_runs(args, seconds, build, [&](std::unique_ptr<SurfaceMesh>& m) {
       const FaceCountStop stop{m.get(), size_t(args.target_triangles)};
       if (args.mode == "gh") {
         SMS::GarlandHeckbert_plane_policies<SurfaceMesh, Kernel> policies(*m);

@@ -1,7 +1,7 @@
 // meshoptimizer 0.18 (Debian libmeshoptimizer-dev): meshopt_simplify on positions only, to the same
 // triangle target, with no error limit (target_error = FLT_MAX) and no options.
 //
-//   peer_meshopt IN OUT TARGET_TRIANGLES RUNS [--json]
+//   peer_meshopt IN OUT TARGET_TRIANGLES RUNS [--json] [--budget S]
 //
 // meshopt_simplify reads the input buffers without changing them, so nothing is rebuilt between runs;
 // the timed call is meshopt_simplify alone (it writes an index buffer over the original vertices, which
@@ -13,7 +13,7 @@
 #include "harness.h"
 
 int main(int argc, char** argv) {
-  return bench::run_main("peer_meshopt", "peer_meshopt IN OUT TARGET_TRIANGLES RUNS [--json]", [&] {
+  return bench::run_main("peer_meshopt", "peer_meshopt IN OUT TARGET_TRIANGLES RUNS [--json] [--budget S]", [&] {
     const bench::Args args = bench::parse_args(argc, argv, {});
     const lod::Mesh input = bench::load_positions(args.input);
     struct State {
@@ -23,8 +23,7 @@ int main(int argc, char** argv) {
     };
     const double rss = bench::peak_rss_mib();
     std::vector<double> seconds;
-    State s = bench::timed_runs(
-        args.runs, seconds, [&] { return State{std::vector<uint32_t>(input.indices.size()), 0, 0.0f}; },
+    State s = bench::timed_runs(args, seconds, [&] { return State{std::vector<uint32_t>(input.indices.size()), 0, 0.0f}; },
         [&](State& state) {
           state.index_count = meshopt_simplify(state.destination.data(), input.indices.data(), input.indices.size(),
                                                &input.positions[0].x, input.vertex_count(), sizeof(lod::float3),

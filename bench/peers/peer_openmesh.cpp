@@ -1,7 +1,7 @@
 // OpenMesh 9 (Debian libopenmesh-dev): DecimaterT with ModQuadricT as the priority module (no error
 // limit), decimate_to_faces to the target.
 //
-//   peer_openmesh IN OUT TARGET_TRIANGLES RUNS [--json]
+//   peer_openmesh IN OUT TARGET_TRIANGLES RUNS [--json] [--budget S]
 //
 // The TriMesh (float coordinates, OpenMesh's default) is built from the welded input before every
 // run, untimed. The timed part is the decimater's construction (it requests the status attributes),
@@ -23,7 +23,7 @@ using ModQuadric = OpenMesh::Decimater::ModQuadricT<TriMesh>::Handle;
 }  // namespace
 
 int main(int argc, char** argv) {
-  return bench::run_main("peer_openmesh", "peer_openmesh IN OUT TARGET_TRIANGLES RUNS [--json]", [&] {
+  return bench::run_main("peer_openmesh", "peer_openmesh IN OUT TARGET_TRIANGLES RUNS [--json] [--budget S]", [&] {
     const bench::Args args = bench::parse_args(argc, argv, {});
     const lod::Mesh input = bench::load_positions(args.input);
     const bench::Welded welded = bench::weld(input);
@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
     const double rss = [&] { build(); return bench::peak_rss_mib(); }();
     std::vector<double> seconds;
     size_t removed = 0;
-    const auto mesh = bench::timed_runs(args.runs, seconds, build, [&](std::unique_ptr<TriMesh>& m) {
+    const auto mesh = bench::timed_runs(args, seconds, build, [&](std::unique_ptr<TriMesh>& m) {
       Decimater decimater(*m);
       ModQuadric quadric;
       decimater.add(quadric);

@@ -1,6 +1,6 @@
 // lodkit's side of the simplification benchmark, timed exactly like the peers (bench/peers/harness.h).
 //
-//   lodkit_bench_simplify METRIC IN OUT TARGET_TRIANGLES RUNS [--json] [--threads N]
+//   lodkit_bench_simplify METRIC IN OUT TARGET_TRIANGLES RUNS [--json] [--budget S] [--threads N]
 //       METRIC: edge, qem, cqem, memoryless, cmemoryless. The timed call is lod::simplify with
 //       record = false (no collapse record: the peers keep none either) and threads N (0: all).
 //       lod::simplify takes the mesh by const reference, so nothing is rebuilt between runs.
@@ -45,7 +45,7 @@ lod::Metric parse_metric(const std::string& name) {
 
 int main(int argc, char** argv) {
   const char* usage =
-      "lodkit_bench_simplify edge|qem|cqem|memoryless|cmemoryless IN OUT TARGET_TRIANGLES RUNS [--json] [--threads N]\n"
+      "lodkit_bench_simplify edge|qem|cqem|memoryless|cmemoryless IN OUT TARGET_TRIANGLES RUNS [--json] [--budget S] [--threads N]\n"
       "       lodkit_bench_simplify make-inputs MESH OUT_DIR LEVEL...";
   return bench::run_main("lodkit_bench_simplify", usage, [&] {
     if (argc >= 5 && std::string(argv[1]) == "make-inputs") {
@@ -68,8 +68,7 @@ int main(int argc, char** argv) {
     std::vector<double> seconds;
     lod::SimplifyResult result;
     // The previous run's result is freed before the next, untimed, so no run holds two results.
-    bench::timed_runs(
-        args.runs, seconds, [&] { return result = lod::SimplifyResult{}, 0; }, [&](int&) { result = lod::simplify(input, options); });
+    bench::timed_runs(args, seconds, [&] { return result = lod::SimplifyResult{}, 0; }, [&](int&) { result = lod::simplify(input, options); });
     bench::finish("lodkit", args, input, result.mesh, seconds, rss,
                   {{"threads", threads},
                    {"hardware_threads", std::thread::hardware_concurrency()},
