@@ -31,7 +31,7 @@ def run_json(command):
     p = subprocess.run(command, capture_output=True, text=True, timeout=900)
     if p.returncode != 0:
         raise RuntimeError(f"{' '.join(command[:3])}: {(p.stderr.strip().splitlines() or ['failed'])[0]}")
-    return json.loads(p.stdout.strip().splitlines()[-1])
+    return json.loads(p.stdout)
 
 
 def rel(a, b):
