@@ -26,6 +26,7 @@ struct EdgeQuery {
   std::span<const WedgePair> wedges;        // removed's wedges -> kept's wedges
   std::span<const uint32_t> kept_wedges;    // every wedge of kept
   std::span<const uint32_t> removed_faces;  // triangles holding both
+  bool on_edge = false;                     // the result must lie on the edge (a border along itself)
 };
 
 struct Placement {

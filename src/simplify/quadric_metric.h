@@ -43,7 +43,9 @@ class QuadricMetric {
     if (!attributes_.empty()) attributes_.add_merged(edge, q);
     const vec3d a = state.normalized(edge.kept), b = state.normalized(edge.removed);
     vec3d p = a;
-    if (!edge.fixed) {
+    if (edge.on_edge) {
+      p = core::segment_optimum(q, a, b);
+    } else if (!edge.fixed) {
       // Trust the 3x3 optimum only near the edge: a far optimum of an ill-fitting quadric makes spikes.
       const bool near = core::optimum(q, p) && length_squared(p - (a + b) * 0.5) <= 4 * length_squared(b - a);
       if (!near) p = core::segment_optimum(q, a, b);

@@ -605,16 +605,26 @@ class Engine {
     const bool fixed = s_.options.keep_vertices || ((fu | fv) & flag_locked);
     const bool seam = (fu | fv) & flag_seam;
     bool can[2];
-    can[0] = !(fv & flag_locked) && (!wedges || map_wedges(u, v, faces, scratch.pairs[0]));
-    const bool need_second = !can[0] || fixed || seam;
-    can[1] = need_second && !(fu & flag_locked) && (!wedges || map_wedges(v, u, faces, scratch.pairs[1]));
+    // Metrics without border terms keep borders topologically, as seams: a border position only
+    // collapses along a border edge into another border position, and an interior position
+    // collapsing into a border one leaves it where it is.
+    const bool border_edge = faces.size() == 1;
+    const auto border_allows = [&](uint8_t fkept, uint8_t fremoved) {
+      return !keep_borders_ || !(fremoved & flag_border) || ((fkept & flag_border) && border_edge);
+    };
+    can[0] = !(fv & flag_locked) && border_allows(fu, fv) && (!wedges || map_wedges(u, v, faces, scratch.pairs[0]));
+    const bool need_second = !can[0] || fixed || seam || (keep_borders_ && ((fu | fv) & flag_border));
+    can[1] = need_second && !(fu & flag_locked) && border_allows(fv, fu) &&
+             (!wedges || map_wedges(v, u, faces, scratch.pairs[1]));
     if (!can[0] && !can[1]) return Reject::seam;
 
     decision = {};
     for (int d = 0; d < 2; ++d) {
       if (!can[d]) continue;
       const uint32_t kept = d == 0 ? u : v, removed = d == 0 ? v : u;
-      if (!fixed && decision.kept != none) break;  // free placement: one direction is enough
+      // Free placement: one direction is enough (both give the same optimum), unless border rules
+      // make them differ.
+      if (!fixed && decision.kept != none && !(keep_borders_ && ((fu | fv) & flag_border))) break;
       if (!fixed && d == 0 && can[1] && seam) {
         // Both directions work: keep the position with more wedges (seam ends stay put), else u.
         wedges_of(u, scratch.kept_wedges);
@@ -624,10 +634,13 @@ class Engine {
       }
       if (channel_floats_) wedges_of(kept, scratch.kept_wedges);
       else scratch.kept_wedges.clear();
-      EdgeQuery query{kept, removed, fixed, scratch.pairs[d], scratch.kept_wedges, faces};
+      const uint8_t fk = s_.flags[kept], fr = s_.flags[removed];
+      const bool pinned = keep_borders_ && (fk & flag_border) && !(fr & flag_border);
+      EdgeQuery query{kept, removed, fixed || pinned, scratch.pairs[d], scratch.kept_wedges, faces};
+      query.on_edge = keep_borders_ && (fk & fr & flag_border);
       const Placement placement = metric_.place(s_, query);
       if (decision.kept == none || placement.cost < decision.placement.cost)
-        decision = {kept, removed, fixed, placement, d};
+        decision = {kept, removed, fixed || pinned, placement, d};
     }
     if (decision.kept == none) return Reject::seam;
     if (checked) return check_faces(decision.kept, decision.removed, decision.placement.position);
@@ -805,6 +818,7 @@ class Engine {
   std::vector<Channel> channels_;
   uint32_t channel_floats_ = 0;
   bool aggregate_ = false;  // rank virtual pairs too
+  bool keep_borders_ = false;  // the metric has no border term: keep borders by the rules in place()
   double max_cost_ = 0;
   uint64_t rejected_[5] = {};
 
@@ -840,6 +854,7 @@ void run(State& state, MetricT& metric, const std::vector<Channel>& channels, ui
   Engine<MetricT> engine(state, metric, result);
   engine.channels_ = channels;
   engine.aggregate_ = state.options.aggregate_distance > 0;
+  engine.keep_borders_ = state.options.metric == Metric::qem || state.options.metric == Metric::edge_length;
   for (const Channel& c : channels) engine.channel_floats_ += c.size;
   engine.run(target, cost_limit);
   result.error = float(std::sqrt(engine.max_cost_) / state.scale);

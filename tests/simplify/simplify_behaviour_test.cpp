@@ -70,8 +70,6 @@ double one_sided_hausdorff(const Mesh& from, const Mesh& to) {
   return std::sqrt(worst);
 }
 
-double hausdorff(const Mesh& a, const Mesh& b) { return std::max(one_sided_hausdorff(a, b), one_sided_hausdorff(b, a)); }
-
 TEST(SimplifyHelpers, PointTriangleDistanceByHand) {
   const vec3d a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};
   EXPECT_DOUBLE_EQ(point_triangle2({0.2, 0.2, 3}, a, b, c), 9.0);   // above the inside

@@ -21,7 +21,7 @@ namespace lod::cli {
 namespace {
 
 struct LodCommand {
-  std::string input, output, ratios, errors, metric = "qem", attributes, lpm;
+  std::string input, output, ratios, errors, metric = "cqem", attributes, lpm;
   uint32_t levels = 0;
   float error_px = 1.0f, screen_height = 1080.0f, fov_degrees = 60.0f;
   bool from_input = false, json = false, force = false;
@@ -89,7 +89,7 @@ Command register_lod(CLI::App& root) {
   app->add_option("--screen-height", o->screen_height, "Screen height in pixels (default 1080)");
   app->add_option("--fov", o->fov_degrees, "Vertical field of view in degrees (default 60)");
   app->add_flag("--from-input", o->from_input, "Simplify every level from the input, not from the previous level");
-  app->add_option("--metric", o->metric, "edge, qem (default), cqem, memoryless or cmemoryless");
+  app->add_option("--metric", o->metric, "edge, qem, cqem (default), memoryless or cmemoryless");
   app->add_option("--attributes", o->attributes, "Attribute weights, e.g. normal=1,uv=1,color=1");
   app->add_option("--lpm", o->lpm, "Also write a progressive mesh (.lpm) down to the coarsest level");
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");

@@ -21,7 +21,7 @@ struct SimplifyCommand {
   std::string input, output;
   float ratio = -1, error = -1, aggregate = 0;
   uint64_t triangles = 0;
-  std::string metric = "qem", attributes;
+  std::string metric = "cqem", attributes;
   bool keep_vertices = false, lock_border = false, prune = false, json = false, force = false;
   unsigned threads = 0;
 };
@@ -75,7 +75,7 @@ Command register_simplify(CLI::App& root) {
   app->add_option("--ratio", o->ratio, "Fraction of the triangles to keep, in [0, 1]");
   app->add_option("--triangles", o->triangles, "Number of triangles to keep");
   app->add_option("--error", o->error, "Stop before the error exceeds this fraction of the bounding-box diagonal");
-  app->add_option("--metric", o->metric, "edge, qem (default), cqem, memoryless or cmemoryless");
+  app->add_option("--metric", o->metric, "edge, qem, cqem (default), memoryless or cmemoryless");
   app->add_option("--attributes", o->attributes, "Attribute weights, e.g. normal=1,uv=1,color=1");
   app->add_flag("--keep-vertices", o->keep_vertices, "Use only input vertices (LODs can share one vertex buffer)");
   app->add_flag("--lock-border", o->lock_border, "Never move border vertices");
