@@ -162,7 +162,9 @@ class LodRuntime {
     uint32_t to = 0;    // the level after the step
     bool hold = false;
   };
-  static bool heap_order(const Candidate& a, const Candidate& b);
+  struct HeapOrder {
+    bool operator()(const Candidate& a, const Candidate& b) const;
+  };
 
   uint32_t dense_index(ObjectId id) const;
   void place(uint32_t dense, const BoundingSphere& bounds, const Transform& transform);

@@ -104,7 +104,7 @@ std::vector<RuntimeLevel> runtime_levels(const LodChain& chain) {
 
 // std heaps keep the largest first; ours keeps the cheapest step first (invisible steps before
 // visible ones, then the least error per triangle, then the lowest slot, for determinism).
-bool LodRuntime::heap_order(const Candidate& a, const Candidate& b) {
+inline bool LodRuntime::HeapOrder::operator()(const Candidate& a, const Candidate& b) const {
   if (a.tier != b.tier) return a.tier > b.tier;
   if (a.metric != b.metric) return a.metric > b.metric;
   return a.slot > b.slot;
@@ -255,9 +255,9 @@ void LodRuntime::budget_goals(uint64_t budget) {
   for (uint32_t i = 0; i < n; ++i)
     if (const uint32_t k = cheaper_level(i, level_[i]); k != kNone)
       heap_.push_back({step_cost(i, level_[i], k), 0, ids_[i].slot, i, k, false});
-  std::make_heap(heap_.begin(), heap_.end(), heap_order);
+  std::make_heap(heap_.begin(), heap_.end(), HeapOrder{});
   while (total > budget && !heap_.empty()) {
-    std::pop_heap(heap_.begin(), heap_.end(), heap_order);
+    std::pop_heap(heap_.begin(), heap_.end(), HeapOrder{});
     const Candidate c = heap_.back();
     heap_.pop_back();
     const RuntimeLevel* l = &levels_[level_offset_[c.dense]];
@@ -266,7 +266,7 @@ void LodRuntime::budget_goals(uint64_t budget) {
     goal_[c.dense] = c.to;
     if (const uint32_t k = cheaper_level(c.dense, c.to); k != kNone) {
       heap_.push_back({step_cost(c.dense, c.to, k), 0, c.slot, c.dense, k, false});
-      std::push_heap(heap_.begin(), heap_.end(), heap_order);
+      std::push_heap(heap_.begin(), heap_.end(), HeapOrder{});
     }
   }
 }
@@ -292,9 +292,9 @@ void LodRuntime::budget_frame(uint64_t budget) {
       heap_.push_back({step_cost(i, drawn, k), fresh_[i] ? 0u : 1u, ids_[i].slot, i, k, false});
     }
   }
-  std::make_heap(heap_.begin(), heap_.end(), heap_order);
+  std::make_heap(heap_.begin(), heap_.end(), HeapOrder{});
   while (total > budget && !heap_.empty()) {
-    std::pop_heap(heap_.begin(), heap_.end(), heap_order);
+    std::pop_heap(heap_.begin(), heap_.end(), HeapOrder{});
     const Candidate c = heap_.back();
     heap_.pop_back();
     const RuntimeLevel* l = &levels_[level_offset_[c.dense]];
@@ -304,7 +304,7 @@ void LodRuntime::budget_frame(uint64_t budget) {
     if (!c.hold && !fresh_[c.dense]) ++draw_.pops;
     if (const uint32_t k = cheaper_level(c.dense, c.to); k != kNone) {
       heap_.push_back({step_cost(c.dense, c.to, k), fresh_[c.dense] ? 0u : 1u, c.slot, c.dense, k, false});
-      std::push_heap(heap_.begin(), heap_.end(), heap_order);
+      std::push_heap(heap_.begin(), heap_.end(), HeapOrder{});
     }
   }
   draw_.over_budget = total > budget;
