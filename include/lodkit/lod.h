@@ -58,6 +58,9 @@ struct LodOptions {
   bool morph = false;
   // Measure each level against the input (lod::compare, with a certified bound from refinement).
   bool measure = true;
+  // Reorder each level's triangles for the vertex cache and its vertices by first use
+  // (lod::optimize_vertex_cache, lod::vertex_fetch_remap); geomorph tables follow.
+  bool optimize = true;
   SimplifyOptions simplify;  // metric, attribute weights, locks, threads; the target fields are set per level
   std::function<void(double fraction)> progress;
 };

@@ -8,6 +8,7 @@
 #include "lodkit/error.h"
 #include "lodkit/lod.h"
 #include "lodkit/measure.h"
+#include "lodkit/optimize.h"
 
 namespace lod {
 
@@ -75,6 +76,7 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
 
   const uint64_t input_triangles = input.triangle_count();
   std::vector<std::vector<uint32_t>> origin;  // per level: input vertex of each vertex
+  std::vector<bool> identity;                 // per level: the input itself (no error to measure)
   const size_t count = ratios.size();
   for (size_t i = 0; i < count; ++i) {
     const bool by_error = !errors.empty();
@@ -108,15 +110,36 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
     }
     level.ratio = input_triangles ? float(double(level.mesh.triangle_count()) / double(input_triangles)) : 1.0f;
     level.error = level.error_bound = level.engine_error;
+    identity.push_back(level.mesh.triangle_count() == input_triangles && level.engine_error == 0 && !previous &&
+                       level_origin.size() == input.vertex_count());
     chain.levels.push_back(std::move(level));
     origin.push_back(std::move(level_origin));
     if (o.progress) o.progress(double(i + 1) / double(count) * (o.measure ? 0.5 : 1.0));
   }
 
+  if (o.optimize) {
+    // new_index[i][v]: where vertex v of level i went.
+    std::vector<std::vector<uint32_t>> new_index(count);
+    for (size_t i = 0; i < count; ++i) {
+      Mesh& m = chain.levels[i].mesh;
+      m = reorder_triangles(m, vertex_cache_order(m.indices, m.vertex_count()));
+      new_index[i] = vertex_fetch_remap(m.indices, m.vertex_count());
+      m = remap_vertices(m, new_index[i], m.vertex_count());
+      std::vector<uint32_t> moved(origin[i].size());
+      for (size_t v = 0; v < origin[i].size(); ++v) moved[new_index[i][v]] = origin[i][v];
+      origin[i] = std::move(moved);
+    }
+    for (size_t i = 0; i < chain.morphs.size(); ++i) {
+      std::vector<uint32_t> target(chain.morphs[i].target.size());
+      for (size_t v = 0; v < target.size(); ++v) target[new_index[i][v]] = new_index[i + 1][chain.morphs[i].target[v]];
+      chain.morphs[i].target = std::move(target);
+    }
+  }
+
   if (o.measure)
     for (size_t i = 0; i < count; ++i) {
       LodLevel& level = chain.levels[i];
-      if (level.mesh.triangle_count() && !(level.mesh == input)) {
+      if (level.mesh.triangle_count() && !identity[i]) {
         // Two samples per input triangle find the maximum well on meshes of that density; the
         // refinement then certifies a bound (it stops within its tolerance or at its budget).
         const uint64_t samples = std::clamp<uint64_t>(2 * input_triangles, 20'000, 1'000'000);
