@@ -80,14 +80,17 @@ struct RuntimeOptions {
   // error on screen is at most this (the switch points).
   double error_px = 1;
   // Width of the transition zone below each switch point, as a fraction of error_px in [0, 1]:
-  // while the coarser level's error on screen is in (error_px * (1 - zone), error_px], the object
-  // sits part way through the morph between the two levels, from t = 1 (fully coarse) at the lower
-  // end to t = 0 at the switch point, linearly. Outside the zones it draws one level, unmorphed. 0:
-  // no zone; t runs through the whole morph over transition_seconds once the switch point is crossed.
+  // while the coarser level's error on screen is in (error_px * (1 - zone), error_px], the object's
+  // goal is part way through the morph between the two levels, from t = 1 (fully coarse) at the
+  // lower end to t = 0 at the switch point, linearly; t follows the goal at the rate limit. Outside
+  // the zones the goal is one level, unmorphed. An approaching object thus starts refining before
+  // the coarser level reaches the threshold. 0: no zone; the goal jumps at the switch point and t
+  // runs through the whole morph over transition_seconds.
   double transition_zone = 0.25;
-  // Fraction >= 0: an object that moves away keeps its finer selection until its screen-space
-  // errors have shrunk by the factor 1 + hysteresis (approaching objects switch at once). Only
-  // errors smaller than the true ones are ever ignored, so the threshold is never exceeded.
+  // Fraction >= 0: an object that moves away (or whose errors shrink on screen otherwise) keeps its
+  // selection until its screen-space errors have shrunk by the factor 1 + hysteresis; growing errors
+  // count at once. Selection only ever uses errors at least the true ones, so hysteresis never makes
+  // a steady level exceed error_px.
   double hysteresis = 0.1;
   // Seconds a full morph takes: t changes by at most dt / transition_seconds per frame. 0: hard
   // switches (levels change at once, like a plain discrete LOD).
