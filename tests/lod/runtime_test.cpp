@@ -14,6 +14,7 @@
 
 #include "core/shapes.h"
 #include "lodkit/error.h"
+#include "lodkit/lod.h"
 #include "lodkit/runtime.h"
 
 // Counts allocations made by the current thread while `counting` is set (the no-allocation test).
@@ -517,6 +518,21 @@ TEST(RuntimeApi, IdsAndValidation) {
   ASSERT_EQ(list.items.size(), 2u);
   EXPECT_NO_THROW(item_of(list, b));
   EXPECT_NO_THROW(item_of(list, c));
+}
+
+TEST(RuntimeApi, LevelsFromAChain) {
+  const LodChain chain = build_lod_chain(shapes::icosphere(3), {.levels = 3, .measure = false});
+  const std::vector<RuntimeLevel> levels = runtime_levels(chain);
+  ASSERT_EQ(levels.size(), 3u);
+  float error = 0;
+  for (size_t i = 0; i < levels.size(); ++i) {
+    EXPECT_EQ(levels[i].triangles, chain.levels[i].mesh.triangle_count());
+    error = std::max(error, chain.levels[i].error);
+    EXPECT_EQ(levels[i].error, error);
+  }
+  EXPECT_EQ(levels[0].triangles, 1280u);
+  LodRuntime runtime;
+  EXPECT_NO_THROW(runtime.add(bounding_sphere(chain.levels[0].mesh), levels));
 }
 
 TEST(RuntimeApi, BoundingSphereContainsTheMesh) {
