@@ -102,8 +102,9 @@ std::vector<uint32_t> vertex_fetch_remap(std::span<const uint32_t> indices, size
 enum class StripMethod {
   sgi,   // the course's SGI algorithm: start at a triangle with the fewest free neighbours, grow one
          // strip through each of them, keep the longest, repeat
-  best,  // lodkit's: follows a vertex-cache order, turns with a swap (one repeated index) instead of
-         // ending the strip, and looks ahead to avoid stranding triangles
+  best,  // lodkit's: a greedy walk that turns with a swap (one repeated index) instead of ending the
+         // strip, prefers the neighbour that would otherwise be stranded, and starts new strips in a
+         // vertex-cache order; the shortest of that, the same in input order, and SGI is kept
 };
 const char* strip_method_name(StripMethod method);
 
@@ -129,7 +130,8 @@ Strips stripify(std::span<const uint32_t> indices, size_t vertex_count, const St
 
 // Appends `more` to `into` with `into`'s join (a restart index, or repeated indices that keep the
 // winding parity), so strips of several index ranges make one buffer. Both must use the same join.
-// `more.triangle_order` is appended unchanged (renumber it first if it counts from another base).
+// `more.triangle_order` follows its buffer (reversed when the buffer is, to save a join index); it is
+// not renumbered, so renumber it first if it counts from another base.
 void append_strips(Strips& into, const Strips& more);
 
 // Decodes a strip buffer to a triangle list: every triangle with three distinct indices, with the

@@ -43,24 +43,89 @@ struct Graph {
   }
 };
 
-// Appends one strip (which starts at even parity) to the output buffer with the requested join.
-void append_strip(Strips& out, const std::vector<uint32_t>& seq) {
-  if (seq.empty()) return;
+// Appends one strip (made to start at even parity) and its triangles to the output with the requested
+// join. Degenerate joins repeat the last index and the strip's first: ..., last, last, first, first,
+// ... (four degenerate triangles). When that would put the strip at odd parity (every winding
+// reversed), a strip of odd length goes in backwards instead, which reverses every winding once more;
+// only a strip of even length then needs one more copy of its first index.
+void append_strip(Strips& out, const uint32_t* seq, size_t length, const uint32_t* triangles, size_t triangle_count) {
+  if (!length) return;
   std::vector<uint32_t>& b = out.indices;
+  bool backwards = false;
   if (!b.empty()) {
     if (out.use_restart) {
       b.push_back(out.restart_index);
     } else {
-      // ..., last, last, first, first, ... : four degenerate triangles; one more copy of `first` when
-      // the strip would otherwise start at odd parity (its windings would all be reversed).
+      const bool odd_start = b.size() % 2 == 1;  // b.size() + 2 join indices, same parity
+      backwards = odd_start && length % 2 == 1;
+      const uint32_t first = backwards ? seq[length - 1] : seq[0];
       b.push_back(b.back());
-      b.push_back(seq[0]);
-      if (b.size() % 2) b.push_back(seq[0]);
+      b.push_back(first);
+      if (odd_start && !backwards) b.push_back(first);
     }
   }
-  b.insert(b.end(), seq.begin(), seq.end());
+  if (backwards) {
+    b.insert(b.end(), std::reverse_iterator(seq + length), std::reverse_iterator(seq));
+    out.triangle_order.insert(out.triangle_order.end(), std::reverse_iterator(triangles + triangle_count), std::reverse_iterator(triangles));
+  } else {
+    b.insert(b.end(), seq, seq + length);
+    out.triangle_order.insert(out.triangle_order.end(), triangles, triangles + triangle_count);
+  }
   ++out.strips;
 }
+
+// Joins strips as the stripifiers produce them. With degenerate joins the extra index is due only for
+// an even-length strip at odd parity, and only odd-length strips change the parity: such a strip waits
+// until an odd-length one has turned the parity even again, so the extra index is paid at most once.
+class StripWriter {
+ public:
+  explicit StripWriter(Strips& out) : out_(out) {}
+  void add(const std::vector<uint32_t>& seq, const std::vector<uint32_t>& triangles) {
+    if (out_.use_restart || seq.size() % 2 == 1 || out_.indices.size() % 2 == 0) {
+      append_strip(out_, seq.data(), seq.size(), triangles.data(), triangles.size());
+      flush();
+      return;
+    }
+    waiting_.push_back({seq_.size(), seq.size(), triangles_.size(), triangles.size()});
+    seq_.insert(seq_.end(), seq.begin(), seq.end());
+    triangles_.insert(triangles_.end(), triangles.begin(), triangles.end());
+  }
+  // Writes whatever still waits: at the front of the buffer, where the parity is even (the strips
+  // waiting have even lengths, so what was written keeps its even start behind them).
+  void finish() {
+    if (waiting_.empty()) return;
+    Strips front;
+    front.use_restart = out_.use_restart;
+    front.restart_index = out_.restart_index;
+    for (const Waiting& w : waiting_)
+      append_strip(front, seq_.data() + w.seq_begin, w.seq_size, triangles_.data() + w.triangles_begin, w.triangles_size);
+    if (!out_.indices.empty()) {
+      front.indices.push_back(front.indices.back());
+      front.indices.push_back(out_.indices.front());
+      front.indices.insert(front.indices.end(), out_.indices.begin(), out_.indices.end());
+      front.triangle_order.insert(front.triangle_order.end(), out_.triangle_order.begin(), out_.triangle_order.end());
+    }
+    out_.indices = std::move(front.indices);
+    out_.triangle_order = std::move(front.triangle_order);
+    out_.strips += front.strips;
+    waiting_.clear(), seq_.clear(), triangles_.clear();
+  }
+
+ private:
+  struct Waiting {
+    size_t seq_begin, seq_size, triangles_begin, triangles_size;
+  };
+  // After an odd-length strip the parity may be even again: the waiting strips go in free.
+  void flush() {
+    if (waiting_.empty() || out_.indices.size() % 2 == 1) return;
+    for (const Waiting& w : waiting_)
+      append_strip(out_, seq_.data() + w.seq_begin, w.seq_size, triangles_.data() + w.triangles_begin, w.triangles_size);
+    waiting_.clear(), seq_.clear(), triangles_.clear();
+  }
+  Strips& out_;
+  std::vector<Waiting> waiting_;
+  std::vector<uint32_t> seq_, triangles_;
+};
 
 // The free-neighbour count of each triangle, with buckets to find a triangle of the fewest.
 // Entries are lazy: one is valid while its triangle is unused and its count still matches.
@@ -110,6 +175,7 @@ struct FreeDegree {
 // 3. extend each as far as it goes (a triangle is taken by one of these strips at most);
 // 4. keep the longest, remove its triangles; 5. repeat while triangles are left.
 void stripify_sgi(const Graph& g, Strips& out) {
+  StripWriter writer(out);
   const uint32_t F = uint32_t(g.adj.triangle_count());
   std::vector<uint32_t> input_order(F);
   for (uint32_t t = 0; t < F; ++t) input_order[t] = t;
@@ -143,28 +209,22 @@ void stripify_sgi(const Graph& g, Strips& out) {
       best_tris = {start};
     }
     for (const uint32_t t : best_tris) free.use(g, t);
-    append_strip(out, best_seq);
-    out.triangle_order.insert(out.triangle_order.end(), best_tris.begin(), best_tris.end());
+    writer.add(best_seq, best_tris);
   }
+  writer.finish();
 }
 
 // ---- best: lodkit's ------------------------------------------------------------------------------
-// Starts, like SGI, at a triangle with the fewest free neighbours, ties going to the earliest in a
-// vertex-cache order (so strips are laid down roughly in that order). From each triangle it can leave
+// The greedy walk: starts, like SGI, at a triangle with the fewest free neighbours, ties going to the
+// lowest rank (a vertex-cache order lays the strips down roughly in that order). From each triangle it can leave
 // through its forced edge or, with a swap, through the other edge of its newest vertex; it takes the
 // neighbour with fewer free neighbours of its own (a triangle left with none would become a strip of
 // its own), the forced one on a tie.
-void stripify_best(const Graph& g, size_t vertex_count, uint32_t cache_size, Strips& out) {
-  const uint32_t F = uint32_t(g.adj.triangle_count());
-  std::vector<uint32_t> rank(F);
-  {
-    const std::vector<uint32_t> order =
-        vertex_cache_order(g.indices, vertex_count, {.cache_size = cache_size, .policy = CachePolicy::fifo});
-    for (uint32_t k = 0; k < F; ++k) rank[order[k]] = k;
-  }
+void stripify_greedy(const Graph& g, const std::vector<uint32_t>& rank, Strips& out) {
+  StripWriter writer(out);
   FreeDegree free;
   free.init(g, rank);
-  std::vector<uint32_t> seq;
+  std::vector<uint32_t> seq, tris;
   // Free neighbours of a candidate, not counting the current triangle (already marked used).
   auto free_degree_without = [&](uint32_t n) { return free.degree[n]; };
   for (uint32_t start = free.pop_fewest(); start != none; start = free.pop_fewest()) {
@@ -180,7 +240,7 @@ void stripify_best(const Graph& g, size_t vertex_count, uint32_t cache_size, Str
     }
     if (exit == none) exit = 0;
     seq = {g.corner(start, (exit + 2) % 3), g.corner(start, exit), g.corner(start, (exit + 1) % 3)};
-    out.triangle_order.push_back(start);
+    tris = {start};
     uint32_t current = start;
     for (;;) {
       const size_t n = seq.size();
@@ -202,10 +262,11 @@ void stripify_best(const Graph& g, size_t vertex_count, uint32_t cache_size, Str
         current = forced;
       }
       free.use(g, current);
-      out.triangle_order.push_back(current);
+      tris.push_back(current);
     }
-    append_strip(out, seq);
+    writer.add(seq, tris);
   }
+  writer.finish();
 }
 
 }  // namespace
@@ -214,13 +275,13 @@ void append_strips(Strips& into, const Strips& more) {
   if (into.use_restart != more.use_restart || (into.use_restart && into.restart_index != more.restart_index))
     throw_usage("append_strips: the two buffers use different joins");
   if (more.indices.empty()) return;
-  // `more` starts at even parity like any single strip: join it as one.
+  // `more` starts at even parity like any single strip: join it as one (backwards if that is cheaper;
+  // then its triangle order is reversed too).
   const uint64_t strips = into.strips + more.strips;
-  append_strip(into, more.indices);
+  append_strip(into, more.indices.data(), more.indices.size(), more.triangle_order.data(), more.triangle_order.size());
   into.strips = strips;
   into.triangles += more.triangles;
   into.dropped_degenerate += more.dropped_degenerate;
-  into.triangle_order.insert(into.triangle_order.end(), more.triangle_order.begin(), more.triangle_order.end());
 }
 
 Strips stripify(std::span<const uint32_t> indices, size_t vertex_count, const StripOptions& options) {
@@ -236,8 +297,41 @@ Strips stripify(std::span<const uint32_t> indices, size_t vertex_count, const St
   out.dropped_degenerate = g.adj.degenerate_triangles;
   out.indices.reserve(indices.size() / 2);
   out.triangle_order.reserve(indices.size() / 3);
-  if (options.method == StripMethod::sgi) stripify_sgi(g, out);
-  else stripify_best(g, vertex_count, options.cache_size, out);
+  if (options.method == StripMethod::sgi) {
+    stripify_sgi(g, out);
+  } else {
+    // The greedy walk with ties going to a vertex-cache order, then to the input order, and SGI: the
+    // shortest buffer wins (all three are linear; on small or odd meshes each wins somewhere).
+    const uint32_t F = uint32_t(indices.size() / 3);
+    std::vector<uint32_t> rank(F);
+    const std::vector<uint32_t> order =
+        vertex_cache_order(indices, vertex_count, {.cache_size = options.cache_size, .policy = CachePolicy::fifo});
+    for (uint32_t k = 0; k < F; ++k) rank[order[k]] = k;
+    stripify_greedy(g, rank, out);
+    // Small inputs also try random tie-breaks (a fixed seed: the result depends on the input only), as
+    // many as keep the extra work near 20,000 triangle visits.
+    const uint32_t random_tries = F ? std::min<uint32_t>(32, 20000 / F) : 0;
+    uint64_t seed = 0x9E3779B97F4A7C15ull;
+    for (uint32_t variant = 0; variant < 2 + random_tries; ++variant) {
+      Strips other;
+      other.use_restart = out.use_restart;
+      other.restart_index = out.restart_index;
+      other.dropped_degenerate = out.dropped_degenerate;
+      if (variant == 0) {
+        for (uint32_t t = 0; t < F; ++t) rank[t] = t;
+        stripify_greedy(g, rank, other);
+      } else if (variant == 1) {
+        stripify_sgi(g, other);
+      } else {
+        for (uint32_t t = 0; t < F; ++t) {
+          seed ^= seed >> 12, seed ^= seed << 25, seed ^= seed >> 27;  // xorshift64*
+          rank[t] = uint32_t((seed * 0x2545F4914F6CDD1Dull) >> 32);
+        }
+        stripify_greedy(g, rank, other);
+      }
+      if (other.indices.size() < out.indices.size()) out = std::move(other);
+    }
+  }
   out.triangles = out.triangle_order.size();
   return out;
 }

@@ -10,57 +10,37 @@
 
 #include "lodkit/error.h"
 #include "lodkit/optimize.h"
+#include "optimize/vertex_cache.h"
 
 namespace lod {
 
+namespace detail {
+
 namespace {
-
 constexpr uint32_t none = 0xFFFFFFFFu;
-constexpr uint32_t max_cache = 64;
-constexpr uint32_t valence_table_size = 32;
+}  // namespace
 
-struct Scores {
-  float cache[max_cache + 1];  // by cache position; [size] is "not cached"
-  float valence[valence_table_size];
-  uint32_t size;
-  float vertex(uint32_t position, uint32_t live) const {
-    if (live == 0) return 0;
-    return cache[position] + valence[std::min(live, valence_table_size - 1)];
-  }
-};
-
-Scores make_scores(const VertexCacheOptions& o) {
-  Scores s{};
-  s.size = o.cache_size;
-  const float size = float(o.cache_size);
-  for (uint32_t p = 0; p < o.cache_size; ++p) {
-    if (o.policy == CachePolicy::lru && p < 3) {
-      // Forsyth: the last triangle's own vertices score a little less than the next ones, so the walk
-      // does not run off in a thin strip.
-      s.cache[p] = 0.75f;
-    } else {
-      const float first = o.policy == CachePolicy::lru ? 3.0f : 0.0f;
-      s.cache[p] = std::pow(1.0f - (float(p) - first) / (size - first), 1.5f);
-    }
-  }
-  s.cache[o.cache_size] = 0;
-  s.valence[0] = 0;
-  for (uint32_t l = 1; l < valence_table_size; ++l) s.valence[l] = 2.0f / std::sqrt(float(l));
+CacheScoring default_scoring(uint32_t cache_size) {
+  // Forsyth's published shape: the last triangle's own vertices score a little less than the next
+  // ones (so the walk does not run off in a thin strip), then the score falls with age; a vertex with
+  // few triangles left scores high (finishing it frees a slot for good).
+  CacheScoring s;
+  s.cache_size = cache_size;
+  s.model = CachePolicy::lru;
+  for (uint32_t p = 0; p < cache_size; ++p)
+    s.cache[p] = p < 3 ? 0.75f : std::pow(1.0f - float(p - 3) / float(cache_size - 3), 1.5f);
+  s.cache[cache_size] = 0;
+  for (uint32_t l = 1; l < live_table_size; ++l) s.live[l] = 2.0f / std::sqrt(float(l));
   return s;
 }
 
-}  // namespace
-
-std::vector<uint32_t> vertex_cache_order(std::span<const uint32_t> indices, size_t vertex_count, const VertexCacheOptions& options) {
-  if (indices.size() % 3) throw_usage("optimize_vertex_cache: the index count is not a multiple of 3");
-  if (options.cache_size < 3 || options.cache_size > max_cache)
-    throw_usage("optimize_vertex_cache: cache size must be in [3, " + std::to_string(max_cache) + "]");
+std::vector<uint32_t> greedy_cache_order(std::span<const uint32_t> indices, size_t vertex_count, const CacheScoring& scoring) {
   const uint32_t F = uint32_t(indices.size() / 3);
   const uint32_t V = uint32_t(vertex_count);
-  for (const uint32_t i : indices)
-    if (i >= V) throw_usage("optimize_vertex_cache: index " + std::to_string(i) + " out of range");
-  const Scores scores = make_scores(options);
-  const uint32_t K = options.cache_size;
+  const uint32_t K = scoring.cache_size;
+  auto vertex_score = [&](uint32_t position, uint32_t live_count) {
+    return live_count ? scoring.cache[position] + scoring.live[std::min(live_count, live_table_size - 1)] : 0.0f;
+  };
 
   // Vertex -> triangles (CSR). The first live[v] entries of each list are the triangles not yet emitted.
   std::vector<uint32_t> offset(V + 1, 0), live(V, 0);
@@ -75,12 +55,12 @@ std::vector<uint32_t> vertex_cache_order(std::span<const uint32_t> indices, size
 
   std::vector<uint32_t> position(V, K);  // cache position, K when not cached
   std::vector<float> score(V);
-  for (uint32_t v = 0; v < V; ++v) score[v] = scores.vertex(K, live[v]);
+  for (uint32_t v = 0; v < V; ++v) score[v] = vertex_score(K, live[v]);
   std::vector<uint8_t> emitted(F, 0);
   std::vector<uint32_t> order;
   order.reserve(F);
 
-  uint32_t cache[max_cache + 3];
+  uint32_t cache[max_cache_size + 3];
   uint32_t cache_count = 0;
   std::vector<uint32_t> recent;  // vertices in the order they entered the cache: dead-end restarts
   uint32_t cursor = 0;           // input order restarts
@@ -124,7 +104,7 @@ std::vector<uint32_t> vertex_cache_order(std::span<const uint32_t> indices, size
     // Update the simulated cache. Old entries beyond K are evicted (kept in cache[K..] for rescoring).
     uint32_t fresh[3];
     uint32_t fresh_count = 0;
-    if (options.policy == CachePolicy::fifo) {
+    if (scoring.model == CachePolicy::fifo) {
       for (const uint32_t v : tv)
         if (position[v] == K && std::find(fresh, fresh + fresh_count, v) == fresh + fresh_count) fresh[fresh_count++] = v;
       // Newest first: the last vertex pushed sits at position 0.
@@ -137,7 +117,7 @@ std::vector<uint32_t> vertex_cache_order(std::span<const uint32_t> indices, size
       uint32_t front_count = 0;
       for (int k = 2; k >= 0; --k)
         if (std::find(front, front + front_count, tv[k]) == front + front_count) front[front_count++] = tv[k];
-      uint32_t rest[max_cache + 3];
+      uint32_t rest[max_cache_size + 3];
       uint32_t rest_count = 0;
       for (uint32_t j = 0; j < cache_count; ++j)
         if (std::find(front, front + front_count, cache[j]) == front + front_count) rest[rest_count++] = cache[j];
@@ -152,7 +132,7 @@ std::vector<uint32_t> vertex_cache_order(std::span<const uint32_t> indices, size
     for (uint32_t j = 0; j < cache_count; ++j) {
       const uint32_t v = cache[j];
       position[v] = j < K ? j : K;
-      score[v] = scores.vertex(position[v], live[v]);
+      score[v] = vertex_score(position[v], live[v]);
     }
     cache_count = std::min(cache_count, K);
 
@@ -181,6 +161,102 @@ std::vector<uint32_t> vertex_cache_order(std::span<const uint32_t> indices, size
   }
   if (order.size() != F) throw_internal("optimize_vertex_cache: lost triangles");
   return order;
+}
+
+// Tipsify (Sander, Nehab and Barczak, 2007): fan around one vertex at a time (emit all its remaining
+// triangles), then move to the neighbour that will still be cached after its own fan, the oldest such
+// first; at a dead end, back to the most recently used vertex with triangles left.
+std::vector<uint32_t> tipsify_order(std::span<const uint32_t> indices, size_t vertex_count, uint32_t cache_size) {
+  const uint32_t F = uint32_t(indices.size() / 3);
+  const uint32_t V = uint32_t(vertex_count);
+  std::vector<uint32_t> offset(V + 1, 0), live(V, 0);
+  for (const uint32_t i : indices) ++offset[i + 1];
+  for (uint32_t v = 0; v < V; ++v) offset[v + 1] += offset[v];
+  std::vector<uint32_t> triangles(indices.size());
+  for (uint32_t t = 0; t < F; ++t)
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t v = indices[3 * t + k];
+      triangles[offset[v] + live[v]++] = t;
+    }
+  std::vector<uint64_t> entered(V, 0);  // miss count when the vertex entered the FIFO (0: never)
+  uint64_t time = cache_size + 1;
+  std::vector<uint8_t> emitted(F, 0);
+  std::vector<uint32_t> dead_end, candidates, order;
+  dead_end.reserve(indices.size());
+  order.reserve(F);
+  uint32_t cursor = 0;
+  uint32_t fan = F ? indices[0] : none;
+  while (fan != none) {
+    candidates.clear();
+    for (uint32_t j = offset[fan]; j < offset[fan + 1]; ++j) {
+      const uint32_t t = triangles[j];
+      if (emitted[t]) continue;
+      emitted[t] = 1;
+      order.push_back(t);
+      for (uint32_t k = 0; k < 3; ++k) {
+        const uint32_t v = indices[3 * t + k];
+        dead_end.push_back(v);
+        candidates.push_back(v);
+        --live[v];
+        if (time - entered[v] > cache_size) entered[v] = time++;
+      }
+    }
+    // The next fan: a candidate that stays cached through its own fan (about two misses per
+    // triangle), the oldest in the cache first.
+    fan = none;
+    uint64_t best = 0;
+    for (const uint32_t v : candidates) {
+      if (!live[v]) continue;
+      const uint64_t age = time - entered[v];
+      if (age + 2 * uint64_t(live[v]) <= cache_size && age > best) best = age, fan = v;
+    }
+    if (fan != none) continue;
+    while (!dead_end.empty() && fan == none) {
+      const uint32_t v = dead_end.back();
+      dead_end.pop_back();
+      if (live[v]) fan = v;
+    }
+    while (fan == none && cursor < V) {
+      if (live[cursor]) fan = cursor;
+      ++cursor;
+    }
+  }
+  return order;
+}
+
+}  // namespace detail
+
+namespace {
+constexpr uint32_t max_cache = detail::max_cache_size;
+uint64_t cache_misses(std::span<const uint32_t> indices, std::span<const uint32_t> order, size_t vertex_count, const VertexCacheOptions& o) {
+  std::vector<uint32_t> list(indices.size());
+  for (size_t k = 0; k < order.size(); ++k)
+    for (uint32_t c = 0; c < 3; ++c) list[3 * k + c] = indices[3 * size_t(order[k]) + c];
+  return analyze_vertex_cache(list, vertex_count, o).misses;
+}
+}  // namespace
+
+std::vector<uint32_t> vertex_cache_order(std::span<const uint32_t> indices, size_t vertex_count, const VertexCacheOptions& options) {
+  if (indices.size() % 3) throw_usage("optimize_vertex_cache: the index count is not a multiple of 3");
+  if (options.cache_size < 3 || options.cache_size > max_cache)
+    throw_usage("optimize_vertex_cache: cache size must be in [3, " + std::to_string(max_cache) + "]");
+  for (const uint32_t i : indices)
+    if (i >= vertex_count) throw_usage("optimize_vertex_cache: index " + std::to_string(i) + " out of range");
+  // Two orderers with different strengths (the greedy walk on irregular parts, Tipsify when it knows
+  // the exact FIFO size); the analyzer decides, on the caller's cache. The input order is a candidate
+  // too, so the result is never worse than what came in.
+  const uint32_t F = uint32_t(indices.size() / 3);
+  std::vector<uint32_t> best(F);
+  for (uint32_t t = 0; t < F; ++t) best[t] = t;
+  uint64_t best_misses = analyze_vertex_cache(indices, vertex_count, options).misses;
+  for (int candidate = 0; candidate < 2; ++candidate) {
+    std::vector<uint32_t> order = candidate == 0
+                                      ? detail::greedy_cache_order(indices, vertex_count, detail::default_scoring(options.cache_size))
+                                      : detail::tipsify_order(indices, vertex_count, options.cache_size);
+    const uint64_t misses = cache_misses(indices, order, vertex_count, options);
+    if (misses < best_misses) best_misses = misses, best = std::move(order);
+  }
+  return best;
 }
 
 std::vector<uint32_t> optimize_vertex_cache(std::span<const uint32_t> indices, size_t vertex_count, const VertexCacheOptions& options) {

@@ -1,0 +1,103 @@
+// The whole consolidation on a Mesh: every step keeps the triangles (as position triples with their
+// winding) and the per-triangle streams; strips decode to the output mesh's triangles.
+#include <gtest/gtest.h>
+
+#include <tuple>
+
+#include "core/shapes.h"
+#include "lodkit/optimize.h"
+#include "optimize_test_support.h"
+
+namespace lod {
+namespace {
+
+// Each triangle as (its position triple, its material, its group), sorted.
+std::vector<std::tuple<test::TriangleKey, uint32_t, uint32_t>> tagged_triangles(const Mesh& m) {
+  std::vector<std::tuple<test::TriangleKey, uint32_t, uint32_t>> out;
+  for (size_t t = 0; t < m.triangle_count(); ++t) {
+    const std::vector<uint32_t> one(m.indices.begin() + long(3 * t), m.indices.begin() + long(3 * t + 3));
+    out.emplace_back(test::position_triangles(m.positions, one)[0], m.material(t), m.groups.empty() ? 0 : m.groups[t]);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+Mesh with_materials(Mesh m) {
+  for (size_t t = 0; t < m.triangle_count(); ++t) m.materials.push_back(uint32_t(t % 3)), m.groups.push_back(uint32_t(t % 2));
+  m.material_names = {"a", "b", "c"};
+  return m;
+}
+
+TEST(Optimize, EveryStepKeepsTheTriangles) {
+  const Mesh inputs[] = {with_materials(shapes::torus(1.0f, 0.3f, 24, 12)), shapes::cube(), shapes::cylinder(), shapes::icosphere(2)};
+  for (const Mesh& input : inputs)
+    for (const bool strips : {false, true})
+      for (const bool fetch : {false, true}) {
+        SCOPED_TRACE(std::to_string(input.triangle_count()) + (strips ? " strips" : "") + (fetch ? " fetch" : ""));
+        const OptimizeResult r = optimize(input, {.weld = true, .orient = false, .cache = {.cache_size = 16}, .strips = strips, .vertex_fetch = fetch});
+        EXPECT_EQ(tagged_triangles(r.mesh), tagged_triangles(input));
+        validate(r.mesh);
+        // The cache order is never worse than the input's (strips follow their own order, and
+        // materials split the mesh into ranges the input did not have).
+        if (!strips && input.materials.empty()) EXPECT_LE(r.cache_after.misses, r.cache_before.misses);
+        // Every output vertex carries the streams of some input vertex at the same position.
+        EXPECT_EQ(r.mesh.normals.empty(), input.normals.empty());
+        if (strips) {
+          // The strip buffer draws the output mesh's triangles, over its vertices.
+          EXPECT_EQ(test::position_triangles(r.mesh.positions, unstripify(r.strips.indices, r.strips.use_restart, r.strips.restart_index)),
+                    test::position_triangles(r.mesh));
+          for (uint32_t k = 0; k < r.strips.triangle_order.size(); ++k) EXPECT_EQ(r.strips.triangle_order[k], k);
+        }
+        if (fetch) {
+          // Vertices in order of first use.
+          uint32_t next = 0;
+          for (const uint32_t i : r.mesh.indices) {
+            ASSERT_LE(i, next);
+            if (i == next) ++next;
+          }
+        }
+      }
+}
+
+TEST(Optimize, MaterialsStayContiguousAndOrdered) {
+  const Mesh input = with_materials(shapes::icosphere(2));
+  const OptimizeResult r = optimize(input);
+  ASSERT_EQ(r.mesh.materials.size(), input.triangle_count());
+  EXPECT_TRUE(std::is_sorted(r.mesh.materials.begin(), r.mesh.materials.end()));
+  EXPECT_EQ(r.mesh.material_names, input.material_names);
+}
+
+TEST(Optimize, WeldAndOrientRepairASoup) {
+  // An icosphere soup with a third of its faces flipped and its triangles shuffled: after weld and
+  // orient it is the sphere again, as a set of position triples with the sphere's own winding.
+  const Mesh sphere = shapes::icosphere(3);
+  Mesh broken = sphere;
+  broken.indices = test::shuffled_triangles(sphere.indices, 4);
+  for (size_t t = 0; t < broken.triangle_count(); t += 3) std::swap(broken.indices[3 * t + 1], broken.indices[3 * t + 2]);
+  broken = test::triangle_soup(broken);
+  const OptimizeResult r = optimize(broken, {.weld = true, .orient = true});
+  EXPECT_EQ(r.mesh.vertex_count(), sphere.vertex_count());
+  EXPECT_EQ(r.weld.output_vertices, sphere.vertex_count());
+  EXPECT_EQ(r.orient.flipped_triangles, (sphere.triangle_count() + 2) / 3);
+  EXPECT_EQ(test::position_triangles(r.mesh), test::position_triangles(sphere));
+  // The cache order makes a real difference on a shuffled soup.
+  EXPECT_LT(r.cache_after.acmr, 0.5 * r.cache_before.acmr);
+}
+
+TEST(Optimize, ReorderAndRemapByHand) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  m.indices = {0, 1, 2, 2, 1, 3};
+  m.materials = {7, 8};
+  const Mesh r = reorder_triangles(m, std::vector<uint32_t>{1, 0});
+  EXPECT_EQ(r.indices, (std::vector<uint32_t>{2, 1, 3, 0, 1, 2}));
+  EXPECT_EQ(r.materials, (std::vector<uint32_t>{8, 7}));
+  // New vertex remap[v] is old vertex v.
+  const Mesh v = remap_vertices(m, std::vector<uint32_t>{3, 2, 1, 0}, 4);
+  EXPECT_EQ(v.indices, (std::vector<uint32_t>{3, 2, 1, 1, 2, 0}));
+  EXPECT_EQ(v.positions[3], m.positions[0]);
+  EXPECT_EQ(test::position_triangles(v), test::position_triangles(m));
+}
+
+}  // namespace
+}  // namespace lod
