@@ -39,8 +39,17 @@ struct WriteOptions {
 // writing changes only the primitives' geometry: materials, textures (image bytes identical), node
 // transforms, skins and animations are written back as they were.
 
+// A glTF morph target: per-vertex displacements, added with the mesh's weight.
+struct MorphTarget {
+  std::vector<float3> positions;  // one per vertex
+  std::vector<float3> normals;    // empty, or one per vertex
+};
+
 struct Primitive {
   Mesh mesh;                    // triangles only; materials[] is empty (the primitive has one material)
+  // Written with the geometry when the glTF primitive has no targets of its own (scenes built by
+  // lodkit, such as lodkit lod --morph's geomorphs); not filled by the reader.
+  std::vector<MorphTarget> targets;
   uint32_t gltf_mesh = 0;       // index of the glTF mesh this primitive belongs to
   uint32_t gltf_primitive = 0;  // index within that mesh
   int32_t material = -1;        // glTF material index, -1 for none

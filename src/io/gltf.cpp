@@ -942,7 +942,7 @@ class BinWriter {
   }
 
   // Appends the Mesh's streams and indices; returns nothing, fills the primitive's references.
-  void add_geometry(const Mesh& mesh, tg::Primitive& prim) {
+  void add_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim) {
     const size_t n = mesh.vertex_count();
     const int array = TINYGLTF_TARGET_ARRAY_BUFFER;
     const int position = add_accessor(mesh.positions, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
@@ -966,6 +966,23 @@ class BinWriter {
           add_accessor(mesh.joints, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4, array);
     if (!mesh.weights.empty())
       prim.attributes["WEIGHTS_0"] = add_accessor(mesh.weights, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
+    if (prim.targets.empty())
+      for (const MorphTarget& target : targets) {
+        std::map<std::string, int> attributes;
+        const int moved = add_accessor(target.positions, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
+        std::vector<double> lo(3, 0.0), hi(3, 0.0);  // glTF requires the bounds of a target's POSITION
+        for (size_t v = 0; v < target.positions.size(); ++v) {
+          const float3& d = target.positions[v];
+          const double c[3] = {d.x, d.y, d.z};
+          for (int k = 0; k < 3; ++k) lo[k] = v ? std::min(lo[k], c[k]) : c[k], hi[k] = v ? std::max(hi[k], c[k]) : c[k];
+        }
+        model_.accessors[size_t(moved)].minValues = lo;
+        model_.accessors[size_t(moved)].maxValues = hi;
+        attributes["POSITION"] = moved;
+        if (!target.normals.empty())
+          attributes["NORMAL"] = add_accessor(target.normals, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
+        prim.targets.push_back(std::move(attributes));
+      }
     // 16-bit indices while no index can be 65535, which readers may take for a primitive restart.
     const int elements = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
     if (n <= 65535) {
@@ -1026,6 +1043,10 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     if (material < -1 || (material >= 0 && size_t(material) >= model.materials.size()))
       throw_usage(where + " uses material " + std::to_string(material) + ", which the document does not have");
     check_writable(scene.primitives[i].mesh, i);
+    for (const MorphTarget& target : scene.primitives[i].targets)
+      if (target.positions.size() != scene.primitives[i].mesh.vertex_count() ||
+          (!target.normals.empty() && target.normals.size() != target.positions.size()))
+        throw_usage(where + ": a morph target does not have one entry per vertex");
   }
 
   // Rebuild each mesh's primitive list. A triangle primitive that no scene primitive replaces, or
@@ -1187,7 +1208,8 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
 
   BinWriter writer(model, bin);
   for (const Pending& p : pending)
-    writer.add_geometry(scene.primitives[p.scene_primitive].mesh, model.meshes[p.mesh].primitives[p.primitive]);
+    writer.add_geometry(scene.primitives[p.scene_primitive].mesh, scene.primitives[p.scene_primitive].targets,
+                        model.meshes[p.mesh].primitives[p.primitive]);
   return bin;
 }
 

@@ -24,7 +24,7 @@ struct LodCommand {
   std::string input, output, ratios, errors, metric = "cqem", attributes, lpm;
   uint32_t levels = 0;
   float error_px = 1.0f, screen_height = 1080.0f, fov_degrees = 60.0f;
-  bool from_input = false, json = false, force = false;
+  bool from_input = false, morph = false, json = false, force = false;
   unsigned threads = 0;
 };
 
@@ -58,12 +58,30 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
     node.name = fmt::format("LOD{}", i);
     node.mesh = int32_t(i);
     const LodLevel& level = chain.levels[i];
+    if (i < chain.morphs.size()) {
+      // The geomorph as a glTF morph target: weight t gives (1 - t) P + t P_target, positions and
+      // normals, in any viewer; LODKIT_geomorph in the extras says where it leads.
+      const Mesh& fine = chain.levels[i].mesh;
+      const Mesh& coarse = chain.levels[i + 1].mesh;
+      MorphTarget target;
+      for (size_t v = 0; v < fine.vertex_count(); ++v) {
+        const uint32_t to = chain.morphs[i].target[v];
+        const float3 &a = fine.positions[v], &b = coarse.positions[to];
+        target.positions.push_back({b.x - a.x, b.y - a.y, b.z - a.z});
+        if (!fine.normals.empty() && !coarse.normals.empty()) {
+          const float3 &n = fine.normals[v], &m = coarse.normals[to];
+          target.normals.push_back({m.x - n.x, m.y - n.y, m.z - n.z});
+        }
+      }
+      scene.primitives.back().targets.push_back(std::move(target));
+    }
     nlohmann::json extras = {{"lodkit", {{"level", i},
                                          {"triangles", level.mesh.triangle_count()},
                                          {"error", level.error},
                                          {"error_bound", level.error_bound},
                                          {"relative_error", level.relative_error},
                                          {"switch_distance", distances[i]}}}};
+    if (i < chain.morphs.size()) extras["LODKIT_geomorph"] = {{"target", 0}, {"to_node", i + 1}};
     if (i == 0) {
       for (size_t k = 1; k < chain.levels.size(); ++k) node.lod_ids.push_back(int32_t(k));
       extras["MSFT_screencoverage"] = coverage;
@@ -89,6 +107,7 @@ Command register_lod(CLI::App& root) {
   app->add_option("--screen-height", o->screen_height, "Screen height in pixels (default 1080)");
   app->add_option("--fov", o->fov_degrees, "Vertical field of view in degrees (default 60)");
   app->add_flag("--from-input", o->from_input, "Simplify every level from the input, not from the previous level");
+  app->add_flag("--morph", o->morph, "Write geomorphs: each level's morph target 0 moves it onto the next level");
   app->add_option("--metric", o->metric, "edge, qem, cqem (default), memoryless or cmemoryless");
   app->add_option("--attributes", o->attributes, "Attribute weights, e.g. normal=1,uv=1,color=1");
   app->add_option("--lpm", o->lpm, "Also write a progressive mesh (.lpm) down to the coarsest level");
@@ -108,6 +127,8 @@ Command register_lod(CLI::App& root) {
             if (!o->errors.empty()) options.errors = parse_list(o->errors, "--errors");
             if (o->levels) options.levels = o->levels;
             options.from_previous = !o->from_input;
+            if (o->morph && o->from_input) throw_usage("--morph needs each level simplified from the previous one (drop --from-input)");
+            options.morph = o->morph;
             options.simplify.metric = parse_metric(o->metric);
             options.simplify.threads = o->threads;
             if (!o->attributes.empty()) parse_attributes(o->attributes, options.simplify);
