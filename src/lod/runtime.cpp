@@ -273,39 +273,55 @@ void LodRuntime::budget_goals(uint64_t budget) {
 
 // Makes this frame's positions (next_) fit the budget: first hold refinements that would start
 // drawing a finer level (and coarsen new objects, which nobody has seen yet), then make objects jump
-// coarser. Both in order of least screen-space error per triangle saved.
+// coarser. Both in order of least screen-space error per triangle saved. The two tiers run one after
+// the other (a single heap ordered by tier would pop the same steps), so the usual frame, where a few
+// held refinements suffice, never builds a heap over every object.
 void LodRuntime::budget_frame(uint64_t budget) {
   const uint32_t n = uint32_t(ids_.size());
   uint64_t total = 0;
   for (uint32_t i = 0; i < n; ++i) total += levels_[level_offset_[i] + uint32_t(next_[i])].triangles;
   draw_.over_budget = false;
   if (total <= budget) return;
+
+  auto run = [&] {
+    std::make_heap(heap_.begin(), heap_.end(), HeapOrder{});
+    while (total > budget && !heap_.empty()) {
+      std::pop_heap(heap_.begin(), heap_.end(), HeapOrder{});
+      const Candidate c = heap_.back();
+      heap_.pop_back();
+      const RuntimeLevel* l = &levels_[level_offset_[c.dense]];
+      total -= l[uint32_t(next_[c.dense])].triangles - l[c.to].triangles;
+      next_[c.dense] = c.to;
+      if (c.tier) ++draw_.pops;
+      if (c.hold) continue;  // a held object may still have to jump, but in tier 1
+      if (const uint32_t k = cheaper_level(c.dense, c.to); k != kNone) {
+        heap_.push_back({step_cost(c.dense, c.to, k), c.tier, c.slot, c.dense, k, false});
+        std::push_heap(heap_.begin(), heap_.end(), HeapOrder{});
+      }
+    }
+  };
+
+  // Tier 0: refinements starting this frame (coordinate_ is then an integer), and new objects.
   heap_.clear();
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t drawn = uint32_t(next_[i]);
     const uint32_t from = uint32_t(coordinate_[i]);
     const RuntimeLevel* l = &levels_[level_offset_[i]];
-    if (!fresh_[i] && drawn < from && l[drawn].triangles > l[from].triangles) {
-      // A refinement starting this frame (coordinate_ is then an integer).
+    if (fresh_[i]) {
+      if (const uint32_t k = cheaper_level(i, drawn); k != kNone) heap_.push_back({step_cost(i, drawn, k), 0, ids_[i].slot, i, k, false});
+    } else if (drawn < from && l[drawn].triangles > l[from].triangles) {
       heap_.push_back({step_cost(i, drawn, from), 0, ids_[i].slot, i, from, true});
-    } else if (const uint32_t k = cheaper_level(i, drawn); k != kNone) {
-      heap_.push_back({step_cost(i, drawn, k), fresh_[i] ? 0u : 1u, ids_[i].slot, i, k, false});
     }
   }
-  std::make_heap(heap_.begin(), heap_.end(), HeapOrder{});
-  while (total > budget && !heap_.empty()) {
-    std::pop_heap(heap_.begin(), heap_.end(), HeapOrder{});
-    const Candidate c = heap_.back();
-    heap_.pop_back();
-    const RuntimeLevel* l = &levels_[level_offset_[c.dense]];
-    const uint32_t drawn = uint32_t(next_[c.dense]);
-    total -= l[drawn].triangles - l[c.to].triangles;
-    next_[c.dense] = c.to;
-    if (!c.hold && !fresh_[c.dense]) ++draw_.pops;
-    if (const uint32_t k = cheaper_level(c.dense, c.to); k != kNone) {
-      heap_.push_back({step_cost(c.dense, c.to, k), fresh_[c.dense] ? 0u : 1u, c.slot, c.dense, k, false});
-      std::push_heap(heap_.begin(), heap_.end(), HeapOrder{});
-    }
+  run();
+  if (total > budget) {
+    // Tier 1: jumps of objects already on screen.
+    heap_.clear();
+    for (uint32_t i = 0; i < n; ++i)
+      if (!fresh_[i])
+        if (const uint32_t k = cheaper_level(i, uint32_t(next_[i])); k != kNone)
+          heap_.push_back({step_cost(i, uint32_t(next_[i]), k), 1, ids_[i].slot, i, k, false});
+    run();
   }
   draw_.over_budget = total > budget;
 }
