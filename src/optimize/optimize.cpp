@@ -1,27 +1,39 @@
 // The whole consolidation on a Mesh: weld, orient, order triangles per material for the vertex cache
 // (or as strips), then vertices by first use.
 #include <algorithm>
+#include <chrono>
 
 #include "lodkit/error.h"
 #include "lodkit/optimize.h"
 
 namespace lod {
 
+namespace {
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+}  // namespace
+
 OptimizeResult optimize(const Mesh& mesh, const OptimizeOptions& options) {
   OptimizeResult r;
   Mesh m = mesh;
+  auto start = std::chrono::steady_clock::now();
   if (options.weld) {
     r.weld = weld(m, options.weld_options);
     m = std::move(r.weld.mesh);
     r.weld.mesh = {};
+    r.weld_seconds = seconds_since(start);
   }
+  start = std::chrono::steady_clock::now();
   if (options.orient) {
     r.orient = orient(m, options.orient_options);
     m = std::move(r.orient.mesh);
     r.orient.mesh = {};
+    r.orient_seconds = seconds_since(start);
   }
   r.cache_before = analyze_vertex_cache(m.indices, m.vertex_count(), options.cache);
 
+  start = std::chrono::steady_clock::now();
   // Material ranges, each ordered on its own.
   const uint32_t F = uint32_t(m.triangle_count());
   std::vector<uint32_t> by_material(F);
@@ -63,11 +75,14 @@ OptimizeResult optimize(const Mesh& mesh, const OptimizeOptions& options) {
     for (uint32_t& t : r.strips.triangle_order) t = output_of[t];
   }
 
+  r.order_seconds = seconds_since(start);
+  start = std::chrono::steady_clock::now();
   if (options.vertex_fetch) {
     const std::vector<uint32_t> remap = vertex_fetch_remap(m.indices, m.vertex_count());
     m = remap_vertices(m, remap, m.vertex_count());
     for (uint32_t& i : r.strips.indices)
       if (!(r.strips.use_restart && i == r.strips.restart_index)) i = remap[i];
+    r.fetch_seconds = seconds_since(start);
   }
   r.cache_after = analyze_vertex_cache(m.indices, m.vertex_count(), options.cache);
   r.mesh = std::move(m);

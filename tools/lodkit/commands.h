@@ -19,6 +19,8 @@ Command register_info(CLI::App& root);
 Command register_convert(CLI::App& root);
 Command register_simplify(CLI::App& root);
 Command register_compare(CLI::App& root);
+Command register_optimize(CLI::App& root);
+Command register_analyze(CLI::App& root);
 Command register_lod(CLI::App& root);
 
 // Shared option parsers (simplify, lod): --metric NAME and --attributes normal=W,uv=W,color=W.

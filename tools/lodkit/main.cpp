@@ -12,7 +12,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "lodkit 0.1.0");
   const lod::cli::Command commands[] = {lod::cli::register_info(app), lod::cli::register_convert(app),
                                         lod::cli::register_simplify(app), lod::cli::register_compare(app),
-                                        lod::cli::register_lod(app)};
+                                        lod::cli::register_lod(app), lod::cli::register_optimize(app),
+                                        lod::cli::register_analyze(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

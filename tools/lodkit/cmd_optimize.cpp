@@ -1,0 +1,206 @@
+// lodkit optimize IN -o OUT: consolidate a mesh for the GPU. Optionally weld duplicate vertices and
+// repair the winding; always order triangles for the vertex cache (or as strips) and vertices by
+// first use. A glTF written from a glTF keeps everything else; each primitive is optimized on its own.
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "lodkit/error.h"
+#include "lodkit/io.h"
+#include "lodkit/optimize.h"
+#include "progress.h"
+
+namespace lod::cli {
+
+namespace {
+
+struct OptimizeCommand {
+  std::string input, output, strips, strip_indices;
+  float weld = -1;  // -1: no weld; 0: exact; > 0: tolerance (object space)
+  float attribute_tolerance = 0;
+  bool weld_positions = false, orient = false, lru = false, restart = false, no_fetch = false, json = false, force = false;
+  uint32_t cache = 16;
+};
+
+bool is_gltf(const std::string& path) {
+  const FileFormat format = format_from_path(path);
+  return format == FileFormat::gltf || format == FileFormat::glb;
+}
+
+// Little-endian uint32, as a GPU index buffer.
+void write_indices(const std::string& path, const std::vector<uint32_t>& indices) {
+  std::string bytes(indices.size() * 4, '\0');
+  for (size_t k = 0; k < indices.size(); ++k)
+    for (int b = 0; b < 4; ++b) bytes[4 * k + size_t(b)] = char((indices[k] >> (8 * b)) & 0xFF);
+  write_file_atomic(path, bytes);
+}
+
+}  // namespace
+
+Command register_optimize(CLI::App& root) {
+  auto o = std::make_shared<OptimizeCommand>();
+  CLI::App* app = root.add_subcommand(
+      "optimize", "Consolidate for the GPU: weld, orient, vertex-cache order or strips, vertex-fetch order");
+  app->add_option("input", o->input, "Input mesh file")->required();
+  app->add_option("-o,--output", o->output, "Output mesh file; the format follows the extension")->required();
+  app->add_option("--weld", o->weld,
+                  "Weld duplicate vertices: bitwise equal, or with --weld=EPS positions closer than EPS (object space)")
+      ->expected(0, 1)
+      ->default_str("0");
+  app->add_flag("--weld-positions", o->weld_positions, "Weld by position alone (drops UV seams and hard normals)");
+  app->add_option("--attribute-tolerance", o->attribute_tolerance,
+                  "With --weld: normals, UVs, colours, tangents and weights may differ by this much per component");
+  app->add_flag("--orient", o->orient, "Make the winding consistent per part, closed parts facing outward");
+  app->add_option("--strips", o->strips, "Also build triangle strips: sgi (the course's baseline) or best");
+  app->add_flag("--restart", o->restart, "Join strips with a restart index (0xFFFFFFFF) instead of degenerate triangles");
+  app->add_option("--strip-indices", o->strip_indices, "With --strips: write the strip index buffer here (little-endian uint32)");
+  app->add_option("--cache", o->cache, "Vertex cache entries to optimize for (default 16)");
+  app->add_flag("--lru", o->lru, "Optimize for an LRU cache (default FIFO)");
+  app->add_flag("--no-fetch", o->no_fetch, "Keep the vertex order (no renumbering by first use)");
+  app->add_flag("--force", o->force, "Allow writing over the input file");
+  app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
+  return {app, [o, app] {
+            const bool weld_given = app->count("--weld") > 0;
+            if (weld_given && !(o->weld >= 0)) throw_usage("--weld=EPS needs EPS >= 0");
+            if (!weld_given) o->weld = -1;
+            if (o->strips != "" && o->strips != "sgi" && o->strips != "best")
+              throw_usage("--strips must be sgi or best (got '" + o->strips + "')");
+            if (!o->strip_indices.empty() && o->strips.empty()) throw_usage("--strip-indices needs --strips");
+            if (o->cache < 3 || o->cache > 64) throw_usage("--cache must be in [3, 64]");
+            if (!(o->attribute_tolerance >= 0)) throw_usage("--attribute-tolerance must be >= 0");
+            if ((o->weld_positions || o->attribute_tolerance > 0) && o->weld < 0) o->weld = 0;
+            check_not_input(o->input, o->output, o->force);
+            const float t = o->attribute_tolerance;
+            OptimizeOptions options{
+                .weld = o->weld >= 0,
+                .weld_options = {.position_tolerance = std::max(0.0f, o->weld), .normal_tolerance = t, .tangent_tolerance = t,
+                                 .uv_tolerance = t, .color_tolerance = t, .weight_tolerance = t,
+                                 .ignore_attributes = o->weld_positions, .remove_degenerate = o->weld > 0},
+                .orient = o->orient,
+                .cache = {.cache_size = o->cache, .policy = o->lru ? CachePolicy::lru : CachePolicy::fifo},
+                .strips = !o->strips.empty(),
+                .strip_options = {.method = o->strips == "sgi" ? StripMethod::sgi : StripMethod::best, .use_restart = o->restart},
+                .vertex_fetch = !o->no_fetch,
+            };
+
+            const bool as_scene = is_gltf(o->input) && is_gltf(o->output);
+            auto start = std::chrono::steady_clock::now();
+            Scene scene;
+            std::vector<Mesh*> meshes;
+            Mesh mesh;
+            {
+              ProgressBar bar("loading");
+              if (as_scene) scene = read_scene(o->input, bar.read_options());
+              else mesh = read_mesh(o->input, bar.read_options());
+            }
+            if (as_scene) for (Primitive& p : scene.primitives) meshes.push_back(&p.mesh);
+            else meshes.push_back(&mesh);
+            const double load_seconds = seconds_since(start);
+            if (!o->strip_indices.empty() && meshes.size() != 1)
+              throw_usage("--strip-indices needs a single mesh (the input has " + std::to_string(meshes.size()) + " primitives)");
+
+            // Totals over the primitives.
+            uint64_t in_triangles = 0, in_vertices = 0, out_triangles = 0, out_vertices = 0, welded_vertices = 0;
+            uint64_t degenerate = 0, flipped = 0, parts = 0, closed = 0, outward = 0, non_orientable = 0, non_manifold = 0;
+            VertexCacheStats before, after;
+            StripStats strip_stats;
+            double seconds[4] = {};
+            std::vector<uint32_t> strip_buffer;
+            for (Mesh* m : meshes) {
+              validate(*m, o->input);
+              in_triangles += m->triangle_count(), in_vertices += m->vertex_count();
+              OptimizeResult r = optimize(*m, options);
+              welded_vertices += options.weld ? r.weld.output_vertices : m->vertex_count();
+              degenerate += r.weld.degenerate_triangles;
+              flipped += r.orient.flipped_triangles, parts += r.orient.components, closed += r.orient.closed_components;
+              outward += r.orient.turned_outward, non_orientable += r.orient.non_orientable_components;
+              non_manifold += r.orient.non_manifold_edges;
+              before.triangles += r.cache_before.triangles, before.misses += r.cache_before.misses;
+              before.referenced_vertices += r.cache_before.referenced_vertices;
+              after.triangles += r.cache_after.triangles, after.misses += r.cache_after.misses;
+              after.referenced_vertices += r.cache_after.referenced_vertices;
+              if (options.strips) {
+                const StripStats s = analyze_strips(r.strips.indices, r.strips.use_restart, r.strips.restart_index);
+                strip_stats.indices += s.indices, strip_stats.strips += s.strips, strip_stats.triangles += s.triangles;
+                strip_stats.degenerate_triangles += s.degenerate_triangles;
+                strip_buffer = std::move(r.strips.indices);
+              }
+              seconds[0] += r.weld_seconds, seconds[1] += r.orient_seconds, seconds[2] += r.order_seconds, seconds[3] += r.fetch_seconds;
+              *m = std::move(r.mesh);
+              out_triangles += m->triangle_count(), out_vertices += m->vertex_count();
+            }
+            for (VertexCacheStats* s : {&before, &after}) {
+              s->acmr = s->triangles ? double(s->misses) / double(s->triangles) : 0;
+              s->atvr = s->referenced_vertices ? double(s->misses) / double(s->referenced_vertices) : 0;
+            }
+            strip_stats.indices_per_triangle = strip_stats.triangles ? double(strip_stats.indices) / double(strip_stats.triangles) : 0;
+            if (non_orientable)
+              std::fprintf(stderr,
+                           "lodkit: warning: %llu non-orientable part(s) (Moebius-like): their winding cannot be made "
+                           "consistent\n",
+                           static_cast<unsigned long long>(non_orientable));
+
+            start = std::chrono::steady_clock::now();
+            if (as_scene) write_scene(scene, o->output);
+            else write_mesh(mesh, o->output);
+            if (!o->strip_indices.empty()) write_indices(o->strip_indices, strip_buffer);
+            const double write_seconds = seconds_since(start);
+
+            const std::string cache_name = fmt::format("{} {}", o->lru ? "LRU" : "FIFO", o->cache);
+            if (o->json) {
+              nlohmann::json j = {{"input", o->input}, {"output", o->output},
+                                  {"input_triangles", in_triangles}, {"output_triangles", out_triangles},
+                                  {"input_vertices", in_vertices}, {"output_vertices", out_vertices},
+                                  {"cache", {{"size", o->cache}, {"policy", o->lru ? "lru" : "fifo"}}},
+                                  {"acmr_before", before.acmr}, {"acmr_after", after.acmr},
+                                  {"atvr_before", before.atvr}, {"atvr_after", after.atvr},
+                                  {"load_seconds", load_seconds}, {"write_seconds", write_seconds},
+                                  {"order_seconds", seconds[2]}, {"fetch_seconds", seconds[3]}};
+              if (options.weld)
+                j["weld"] = {{"tolerance", options.weld_options.position_tolerance}, {"positions_only", o->weld_positions},
+                             {"vertices", welded_vertices}, {"degenerate_triangles", degenerate}, {"seconds", seconds[0]}};
+              if (options.orient)
+                j["orient"] = {{"flipped_triangles", flipped}, {"components", parts}, {"closed_components", closed},
+                               {"turned_outward", outward}, {"non_orientable_components", non_orientable},
+                               {"non_manifold_edges", non_manifold}, {"seconds", seconds[1]}};
+              if (options.strips)
+                j["strips"] = {{"method", o->strips}, {"restart", o->restart}, {"indices", strip_stats.indices},
+                               {"strips", strip_stats.strips}, {"triangles", strip_stats.triangles},
+                               {"indices_per_triangle", strip_stats.indices_per_triangle}};
+              fmt::print("{}\n", j.dump(2));
+            } else {
+              fmt::print("{:<10}{:>12}{:>12}{:>10}{:>10}  {}\n", "step", "triangles", "vertices", "ACMR", "time", "");
+              fmt::print("{:<10}{:>12}{:>12}{:>10.3f}{:>9.3f}s  {} ({})\n", "read", in_triangles, in_vertices, before.acmr,
+                         load_seconds, o->input, cache_name);
+              if (options.weld)
+                fmt::print("{:<10}{:>12}{:>12}{:>10}{:>9.3f}s  {}{}\n", "weld", in_triangles - (o->weld > 0 ? degenerate : 0),
+                           welded_vertices, "", seconds[0],
+                           o->weld > 0 ? fmt::format("within {:g}", o->weld) : std::string("exact"),
+                           degenerate ? fmt::format(", {} degenerate triangle(s){}", degenerate, o->weld > 0 ? " removed" : "") : "");
+              if (options.orient)
+                fmt::print("{:<10}{:>12}{:>12}{:>10}{:>9.3f}s  {} flipped, {} part(s), {} closed, {} turned outward{}\n", "orient",
+                           out_triangles, welded_vertices, "", seconds[1], flipped, parts, closed, outward,
+                           non_orientable ? fmt::format(", {} NON-ORIENTABLE", non_orientable) : "");
+              if (options.strips)
+                fmt::print("{:<10}{:>12}{:>12}{:>10.3f}{:>9.3f}s  {} strips, {} indices, {:.3f} per triangle ({})\n",
+                           "strips", out_triangles, welded_vertices, after.acmr, seconds[2], strip_stats.strips,
+                           strip_stats.indices, strip_stats.indices_per_triangle,
+                           fmt::format("{}, {}", o->strips, o->restart ? "restart index" : "degenerate joins"));
+              else
+                fmt::print("{:<10}{:>12}{:>12}{:>10.3f}{:>9.3f}s  ATVR {:.3f} -> {:.3f}\n", "cache", out_triangles,
+                           welded_vertices, after.acmr, seconds[2], before.atvr, after.atvr);
+              if (options.vertex_fetch)
+                fmt::print("{:<10}{:>12}{:>12}{:>10.3f}{:>9.3f}s  vertices by first use\n", "fetch", out_triangles,
+                           out_vertices, after.acmr, seconds[3]);
+              fmt::print("{:<10}{:>12}{:>12}{:>10}{:>9.3f}s  {}\n", "write", out_triangles, out_vertices, "", write_seconds,
+                         o->output);
+            }
+            return 0;
+          }};
+}
+
+}  // namespace lod::cli
