@@ -44,6 +44,8 @@ configure() {
   else
     [ -f "$build/build.ninja" ] || { echo "bench: $build is not a configured build directory" >&2; exit 1; }
   fi
+  # Regenerate when a CMakeLists.txt changed, so the target checks below see the current targets.
+  cmake --build "$build" --target build.ninja >/dev/null 2>&1 || cmake "$build" >/dev/null
 }
 # Builds only the named targets and what they link: a broken test elsewhere should not stop a
 # benchmark run. Targets missing from the build (a peer's package is not installed) are skipped.
