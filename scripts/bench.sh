@@ -21,7 +21,9 @@
 # values and time at the same sample count; writes bench/results/measure.json.
 #
 # lod: geomorph throughput (lod::morph_positions on >= 1M vertices) against memcpy of the same bytes
-# in the same process (target: morph <= 3x memcpy); with its peak memory.
+# in the same process (target: morph <= 3x memcpy), with its peak memory; popping along a camera
+# flight past 3 corpus models, geomorphs against hard switches (target: <= 1 px per frame); the
+# runtime's selection cost for 10,000 objects.
 #
 # The build is the release preset (build/release); LODKIT_BENCH_BUILD=DIR uses another configured
 # build directory instead.
@@ -164,16 +166,26 @@ area_lod() {
   local runs=${1:-15}
   [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
   configure
-  build_targets lodkit_bench_morph
+  build_targets lodkit_bench_morph lodkit_bench_popping lodkit_bench_selection
   [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
   echo
   machine_line
   echo
-  local log
+  local log status=0
   log=$(mktemp)
+  echo "## geomorph throughput"
   /usr/bin/time -v "$build/bench/lodkit_bench_morph" data/corpus/bunny00.off "$runs" 2>"$log"
   echo "peak memory: $(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); printf "%.1f MiB", $2 / 1024}' "$log")"
   rm -f "$log"
+  echo
+  echo "## popping: hard switches against geomorphs"
+  "$build/bench/lodkit_bench_popping" data/corpus/bunny00.off data/corpus/fandisk.off data/corpus/armadillo.off || status=1
+  if [ -x "$build/bench/lodkit_bench_selection" ]; then
+    echo
+    echo "## selection: LodRuntime::update for 10,000 objects"
+    "$build/bench/lodkit_bench_selection" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+  fi
+  return $status
 }
 
 case $area in

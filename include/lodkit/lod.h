@@ -96,6 +96,39 @@ struct LodChain {
 // Throws lod::Error (usage) on invalid options.
 LodChain build_lod_chain(const Mesh& mesh, const LodOptions& options = {});
 
+// ---- popping --------------------------------------------------------------------------------------
+
+// A camera flies past a LOD chain (with geomorph tables) along a straight line, from where the
+// coarsest level shows to closer than the finest level's switch point and away on the other side,
+// looking at the object; a LodRuntime picks the levels each frame. Per frame, the largest screen
+// displacement of the drawn surface against the previous frame is measured, both frames seen from
+// the current camera (so camera motion does not count): every vertex of the finest level is
+// followed through its collapses to where it is drawn (its image in the drawn level, morphed by t),
+// and its displacement across the surface (along the finest level's vertex normal: sliding along
+// the surface changes nothing on screen) is projected at its distance from the eye. Visibility is
+// ignored (hidden vertices count too).
+struct PoppingOptions {
+  double error_px = 1;             // the runtime's threshold (RuntimeOptions::error_px)
+  double screen_height = 1080;     // pixels
+  double fov = 1.0471975511965976; // vertical, radians
+  double fps = 60;
+  double transition_seconds = 1;   // geomorph duration; the hard-switch run uses 0
+  double transition_zone = 0.25;
+  double flight_seconds = 20;      // frames = fps * flight_seconds
+};
+struct PoppingRun {
+  double max_px = 0;               // largest per-frame displacement, pixels
+  double mean_px = 0;              // over frames that moved at all
+  uint32_t frames = 0, moving_frames = 0;
+  uint32_t level_changes = 0;      // drawn-level swaps
+  std::vector<float> per_frame_px; // one per frame
+};
+struct PoppingResult {
+  PoppingRun geomorph, hard;
+};
+// Throws usage if the chain has no geomorph tables (build it with LodOptions::morph).
+PoppingResult measure_popping(const LodChain& chain, const PoppingOptions& options = {});
+
 // The distance at which a level's error reaches `pixels` on screen: e_px = e_obj * H / (2 d tan(fov/2))
 // solved for d. fov in radians (vertical), H in pixels.
 double switch_distance(double object_error, double pixels, double screen_height, double fov);
