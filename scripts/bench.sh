@@ -5,6 +5,7 @@
 #   scripts/bench.sh simplify [--quick] [RUNS=3]
 #   scripts/bench.sh measure [PAIRS=20]
 #   scripts/bench.sh lod [RUNS=15]
+#   scripts/bench.sh optimize [--quick] [--no-big] [RUNS=5]
 #
 # io: loads a binary PLY and an OBJ of >= 3M triangles (bunny00.off subdivided 1->4) with lodkit and
 # with Assimp, each loader in its own process under /usr/bin/time -v; prints a markdown table of
@@ -32,7 +33,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 usage() {
-  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15]" >&2
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | optimize [--quick] [--no-big] [RUNS=5]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -188,8 +189,34 @@ area_lod() {
   return $status
 }
 
+# ---- optimize ------------------------------------------------------------------------------------
+area_optimize() {
+  local flags=() runs=""
+  for a in "$@"; do
+    case $a in
+      --quick | --no-big) flags+=("$a") ;;
+      *) [[ $a =~ ^[1-9][0-9]*$ ]] && [ -z "$runs" ] || usage; runs=$a ;;
+    esac
+  done
+  local started=$SECONDS
+  configure
+  build_targets lodkit_cli lodkit_bench_optimize
+  [ -x "$build/bench/lodkit_bench_optimize" ] ||
+    { echo "bench: lodkit_bench_optimize was not built (is libmeshoptimizer-dev installed?)" >&2; exit 1; }
+  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
+  echo
+  machine_line
+  echo
+  mkdir -p bench/results
+  python3 bench/optimize/run.py "$build/bench" "$build/lodkit" bench/results/optimize.jsonl ${runs:+--runs "$runs"} "${flags[@]}"
+  python3 bench/optimize/report.py bench/results/optimize.jsonl bench/results/optimize.json "$machine" "${runs:-5}"
+  echo
+  echo "whole run: $((SECONDS - started)) s"
+}
+
 case $area in
   io) area_io "$@" ;;
+  optimize) area_optimize "$@" ;;
   lod) area_lod "$@" ;;
   simplify) area_simplify "$@" ;;
   measure) area_measure "$@" ;;

@@ -1,7 +1,7 @@
 // The optimize benchmark's program: lodkit and meshoptimizer on the same index buffer, one tool and
 // one operation per process (so /usr/bin/time -v gives each its own peak memory).
 //
-//   lodkit_bench_optimize TOOL OP IN RUNS [--json]
+//   lodkit_bench_optimize TOOL OP IN RUNS [--min-seconds S] [--json]
 //     TOOL lodkit | meshopt | meshopt-fifo
 //     OP   vcache16 | vcache32: vertex-cache order for a FIFO cache of 16 or 32 entries.
 //              lodkit: lod::optimize_vertex_cache with that cache size (FIFO);
@@ -14,7 +14,9 @@
 //   lodkit_bench_optimize make-input MESH OUT LEVEL: MESH subdivided 1->4 LEVEL times, binary PLY.
 //
 // IN is read with lodkit's reader; every tool gets the same index buffer (positions and triangles,
-// attributes dropped). Only the library calls are timed (steady_clock), RUNS times, median reported.
+// attributes dropped). Only the library calls are timed (steady_clock), RUNS times or, with
+// --min-seconds, until the runs add up to S seconds (at most 1000 runs: small meshes take
+// microseconds, and a median over many runs is steadier); the median is reported.
 // Every result is checked before it is reported: a reordered list must hold the same triangles with
 // the same winding, a strip must decode to them (lod::unstripify); a failed check exits 3. ACMR and
 // ATVR are measured with lodkit's analyzer (FIFO 16 and 32, LRU 16) for every tool, and with
@@ -88,7 +90,7 @@ int make_input(const std::string& source, const std::string& out, int level) {
   return 0;
 }
 
-int run(const std::string& tool, const std::string& op, const std::string& input, int runs, bool json) {
+int run(const std::string& tool, const std::string& op, const std::string& input, int runs, double min_seconds, bool json) {
   lod::Mesh mesh;
   {
     lod::Mesh full = lod::read_mesh(input);
@@ -141,10 +143,12 @@ int run(const std::string& tool, const std::string& op, const std::string& input
   const double rss_before = peak_rss_mib();
   std::vector<double> seconds;
   std::vector<uint32_t> out;
-  for (int r = 0; r < runs; ++r) {
+  double total = 0;
+  for (int r = 0; r < runs || (total < min_seconds && r < 1000); ++r) {
     const auto start = Clock::now();
     out = operation();
     seconds.push_back(std::chrono::duration<double>(Clock::now() - start).count());
+    total += seconds.back();
   }
 
   // Check, then measure the triangle list the GPU would draw.
@@ -154,7 +158,7 @@ int run(const std::string& tool, const std::string& op, const std::string& input
     return 3;
   }
   nlohmann::json j = {{"tool", tool}, {"op", op}, {"input", input}, {"triangles", mesh.triangle_count()}, {"vertices", V},
-                      {"runs", runs}, {"times", seconds}, {"median_s", median(seconds)},
+                      {"runs", seconds.size()}, {"median_s", median(seconds)},
                       {"min_s", *std::min_element(seconds.begin(), seconds.end())}, {"rss_before_runs_mib", rss_before}};
   for (const uint32_t k : {16u, 32u}) {
     const lod::VertexCacheStats s = lod::analyze_vertex_cache(list, V, {.cache_size = k, .policy = lod::CachePolicy::fifo});
@@ -184,11 +188,14 @@ int main(int argc, char** argv) {
     if (a.size() == 4 && a[0] == "make-input") return make_input(a[1], a[2], std::stoi(a[3]));
     if (a.size() < 4) throw std::invalid_argument("usage");
     const bool json = std::find(a.begin(), a.end(), "--json") != a.end();
-    return run(a[0], a[1], a[2], std::stoi(a[3]), json);
+    double min_seconds = 0;
+    for (size_t i = 4; i + 1 < a.size(); ++i)
+      if (a[i] == "--min-seconds") min_seconds = std::stod(a[i + 1]);
+    return run(a[0], a[1], a[2], std::stoi(a[3]), min_seconds, json);
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr,
                  "lodkit_bench_optimize: %s\nusage: lodkit_bench_optimize lodkit|meshopt|meshopt-fifo "
-                 "vcache16|vcache32|strip|strip-restart|sgi|sgi-restart IN RUNS [--json]\n"
+                 "vcache16|vcache32|strip|strip-restart|sgi|sgi-restart IN RUNS [--min-seconds S] [--json]\n"
                  "       lodkit_bench_optimize make-input MESH OUT LEVEL\n",
                  e.what());
     return 1;
