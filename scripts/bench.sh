@@ -24,7 +24,8 @@
 # lod: geomorph throughput (lod::morph_positions on >= 1M vertices) against memcpy of the same bytes
 # in the same process (target: morph <= 3x memcpy), with its peak memory; popping along a camera
 # flight past 3 corpus models, geomorphs against hard switches (target: <= 1 px per frame); the
-# runtime's selection cost for 10,000 objects.
+# runtime's selection cost for 10,000 objects; the chain's levels against gltfpack's (npm) at the same
+# ratios: error and file size.
 #
 # The build is the release preset (build/release); LODKIT_BENCH_BUILD=DIR uses another configured
 # build directory instead.
@@ -181,6 +182,13 @@ area_lod() {
   echo
   echo "## popping: hard switches against geomorphs"
   "$build/bench/lodkit_bench_popping" data/corpus/bunny00.off data/corpus/fandisk.off data/corpus/armadillo.off || status=1
+  if command -v npx >/dev/null; then
+    echo
+    echo "## the chain against gltfpack 1.3.0 (npm, -si R -noq)"
+    build_targets lodkit_cli
+    python3 bench/lod/gltfpack.py "$build/lodkit" data/corpus/bunny00.off data/corpus/fandisk.off data/corpus/armadillo.off \
+      --out build/bench-data/gltfpack || status=1
+  fi
   if [ -x "$build/bench/lodkit_bench_selection" ]; then
     echo
     echo "## selection: LodRuntime::update for 10,000 objects"
