@@ -50,6 +50,10 @@ struct Primitive {
   // Written with the geometry when the glTF primitive has no targets of its own (scenes built by
   // lodkit, such as lodkit lod --morph's geomorphs); not filled by the reader.
   std::vector<MorphTarget> targets;
+  // Scenes built by lodkit: an earlier scene primitive whose vertex streams (identical to this
+  // mesh's) this one reuses, so the file holds one vertex buffer and an index buffer per primitive
+  // (lodkit lod --shared-vertices). -1: its own.
+  int32_t shares_vertices_with = -1;
   uint32_t gltf_mesh = 0;       // index of the glTF mesh this primitive belongs to
   uint32_t gltf_primitive = 0;  // index within that mesh
   int32_t material = -1;        // glTF material index, -1 for none

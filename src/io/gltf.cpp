@@ -983,6 +983,12 @@ class BinWriter {
           attributes["NORMAL"] = add_accessor(target.normals, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
         prim.targets.push_back(std::move(attributes));
       }
+    add_indices(mesh, prim);
+  }
+
+  // The index buffer only (a primitive reusing another's vertex accessors).
+  void add_indices(const Mesh& mesh, tg::Primitive& prim) {
+    const size_t n = mesh.vertex_count();
     // 16-bit indices while no index can be 65535, which readers may take for a primitive restart.
     const int elements = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
     if (n <= 65535) {
@@ -1043,6 +1049,14 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     if (material < -1 || (material >= 0 && size_t(material) >= model.materials.size()))
       throw_usage(where + " uses material " + std::to_string(material) + ", which the document does not have");
     check_writable(scene.primitives[i].mesh, i);
+    if (const int32_t shared = scene.primitives[i].shares_vertices_with; shared >= 0) {
+      const Mesh& a = scene.primitives[i].mesh;
+      if (size_t(shared) >= i) throw_usage(where + " shares the vertices of a primitive that does not come before it");
+      const Mesh& b = scene.primitives[size_t(shared)].mesh;
+      if (a.positions != b.positions || a.normals != b.normals || a.tangents != b.tangents || a.uvs != b.uvs ||
+          a.colors != b.colors || a.joints != b.joints || a.weights != b.weights)
+        throw_usage(where + " shares the vertices of primitive " + std::to_string(shared) + " but its streams differ");
+    }
     for (const MorphTarget& target : scene.primitives[i].targets)
       if (target.positions.size() != scene.primitives[i].mesh.vertex_count() ||
           (!target.normals.empty() && target.normals.size() != target.positions.size()))
@@ -1207,9 +1221,19 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
   model.buffers.clear();
 
   BinWriter writer(model, bin);
-  for (const Pending& p : pending)
-    writer.add_geometry(scene.primitives[p.scene_primitive].mesh, scene.primitives[p.scene_primitive].targets,
-                        model.meshes[p.mesh].primitives[p.primitive]);
+  std::vector<const tg::Primitive*> written(scene.primitives.size(), nullptr);
+  for (const Pending& p : pending) {
+    const Primitive& in = scene.primitives[p.scene_primitive];
+    tg::Primitive& out = model.meshes[p.mesh].primitives[p.primitive];
+    const int32_t shared = in.shares_vertices_with;
+    if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && in.targets.empty()) {
+      out.attributes = written[size_t(shared)]->attributes;  // one vertex buffer, several index buffers
+      writer.add_indices(in.mesh, out);
+    } else {
+      writer.add_geometry(in.mesh, in.targets, out);
+    }
+    written[p.scene_primitive] = &out;
+  }
   return bin;
 }
 

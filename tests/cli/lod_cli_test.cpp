@@ -132,6 +132,29 @@ TEST(CliLod, GeomorphsAreMorphTargets) {
   EXPECT_EQ(v.status, 0) << v.output;
 }
 
+// --shared-vertices: every level's primitive reads the same vertex accessors, and level i's indices
+// stay within its prefix of them.
+TEST(CliLod, SharedVerticesWriteOneVertexBuffer) {
+  test::TempDir dir;
+  write_mesh(shapes::torus(1.0f, 0.3f, 32, 16), dir / "torus.ply");
+  const test::RunResult r = test::run_cli({"lod", (dir / "torus.ply").string(), "-o", (dir / "s.glb").string(),
+                                           "--ratios", "1,0.4,0.1", "--shared-vertices"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json doc = glb_json(dir / "s.glb");
+  const Scene scene = read_scene(dir / "s.glb");
+  ASSERT_EQ(scene.primitives.size(), 3u);
+  const auto position = doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"];
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(doc["meshes"][i]["primitives"][0]["attributes"]["POSITION"], position) << "level " << i;
+    const uint32_t prefix = doc["nodes"][i]["extras"]["lodkit"]["vertex_prefix"].get<uint32_t>();
+    for (const uint32_t v : scene.primitives[i].mesh.indices) ASSERT_LT(v, prefix) << "level " << i;
+    if (i) EXPECT_LT(scene.primitives[i].mesh.triangle_count(), scene.primitives[i - 1].mesh.triangle_count());
+  }
+  if (!test::validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
+  const test::ValidatorRun v = test::run_validator({dir / "s.glb"});
+  EXPECT_EQ(v.status, 0) << v.output;
+}
+
 TEST(CliLod, RefusesNonGltfOutputAndBadLists) {
   test::TempDir dir;
   write_mesh(shapes::icosphere(2), dir / "s.ply");

@@ -24,7 +24,7 @@ struct LodCommand {
   std::string input, output, ratios, errors, metric = "cqem", attributes, lpm;
   uint32_t levels = 0;
   float error_px = 1.0f, screen_height = 1080.0f, fov_degrees = 60.0f;
-  bool from_input = false, morph = false, json = false, force = false;
+  bool from_input = false, morph = false, shared = false, json = false, force = false;
   unsigned threads = 0;
 };
 
@@ -50,7 +50,14 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
   Scene scene;
   for (size_t i = 0; i < chain.levels.size(); ++i) {
     Primitive prim;
-    prim.mesh = chain.levels[i].mesh;
+    if (!chain.shared.indices.empty()) {
+      // One vertex buffer for the chain; level i's indices use only its first prefix[i] vertices.
+      prim.mesh = chain.shared.vertices;
+      prim.mesh.indices = chain.shared.indices[i];
+      if (i > 0) prim.shares_vertices_with = 0;
+    } else {
+      prim.mesh = chain.levels[i].mesh;
+    }
     prim.mesh.materials.clear();
     prim.gltf_mesh = uint32_t(i);
     scene.primitives.push_back(std::move(prim));
@@ -82,6 +89,7 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
                                          {"relative_error", level.relative_error},
                                          {"switch_distance", distances[i]}}}};
     if (i < chain.morphs.size()) extras["LODKIT_geomorph"] = {{"target", 0}, {"to_node", i + 1}};
+    if (!chain.shared.prefix.empty()) extras["lodkit"]["vertex_prefix"] = chain.shared.prefix[i];
     if (i == 0) {
       for (size_t k = 1; k < chain.levels.size(); ++k) node.lod_ids.push_back(int32_t(k));
       extras["MSFT_screencoverage"] = coverage;
@@ -108,6 +116,8 @@ Command register_lod(CLI::App& root) {
   app->add_option("--fov", o->fov_degrees, "Vertical field of view in degrees (default 60)");
   app->add_flag("--from-input", o->from_input, "Simplify every level from the input, not from the previous level");
   app->add_flag("--morph", o->morph, "Write geomorphs: each level's morph target 0 moves it onto the next level");
+  app->add_flag("--shared-vertices", o->shared,
+                "Subset placement and one vertex buffer for all levels (coarser levels use a prefix of it)");
   app->add_option("--metric", o->metric, "edge, qem, cqem (default), memoryless or cmemoryless");
   app->add_option("--attributes", o->attributes, "Attribute weights, e.g. normal=1,uv=1,color=1");
   app->add_option("--lpm", o->lpm, "Also write a progressive mesh (.lpm) down to the coarsest level");
@@ -129,6 +139,8 @@ Command register_lod(CLI::App& root) {
             options.from_previous = !o->from_input;
             if (o->morph && o->from_input) throw_usage("--morph needs each level simplified from the previous one (drop --from-input)");
             options.morph = o->morph;
+            if (o->morph && o->shared) throw_usage("--morph and --shared-vertices cannot be combined yet");
+            options.shared_vertices = o->shared;
             options.simplify.metric = parse_metric(o->metric);
             options.simplify.threads = o->threads;
             if (!o->attributes.empty()) parse_attributes(o->attributes, options.simplify);
