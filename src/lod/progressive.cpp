@@ -129,7 +129,7 @@ struct Reader {
   void array(std::vector<T>& v, const char* what) {
     const uint64_t n = count(sizeof(T), what);
     v.resize(n);
-    std::memcpy(v.data(), bytes.data() + at, n * sizeof(T));
+    if (n) std::memcpy(v.data(), bytes.data() + at, n * sizeof(T));  // an empty vector's data() may be null
     at += n * sizeof(T);
   }
   void strings(std::vector<std::string>& v, const char* what) {
@@ -216,14 +216,17 @@ ProgressiveMesh decode_progressive_mesh(std::span<const uint8_t> bytes, const st
   r.array(rec.new_values, "new values");
   if (r.at != bytes.size()) r.fail("unexpected bytes after the collapse record");
 
-  // Every index in the record must fit the mesh: a record that does not is corrupt, not a usage error.
-  const collapse::Replay check(mesh);
+  // The record must play on the mesh: every index in range and every collapse starting from the
+  // state the previous ones left (so undoing is exact). A record that does not is corrupt.
+  collapse::Replay check(mesh);
   if (position_ids(mesh).count < rec.collapses.size())
     throw_bad_input_at_byte(name, collapses_at, "more collapses than the mesh has positions");
   for (size_t i = 0; i < rec.collapses.size(); ++i)
-    if (!check.valid(rec, rec.collapses[i]))
+    if (!check.apply_consistent(rec, rec.collapses[i]))
       throw_bad_input_at_byte(name, collapses_at + 8 + i * sizeof(Collapse),
-                              "collapse " + std::to_string(i) + " refers to faces, vertices or values the mesh does not have");
+                              "collapse " + std::to_string(i) +
+                                  " does not fit the mesh (faces, vertices or values it does not have, or not as "
+                                  "the earlier collapses left them)");
   return ProgressiveMesh(std::move(mesh), std::move(rec));
 }
 

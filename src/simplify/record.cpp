@@ -157,6 +157,39 @@ void Replay::apply(const SimplifyRecord& record, const Collapse& c) {
   set_values(record, c, record.new_values);
 }
 
+bool Replay::apply_consistent(const SimplifyRecord& record, const Collapse& c) {
+  if (!valid(record, c) || c.kept == c.removed) return false;
+  if (!(position[c.kept] == c.old_position)) return false;
+  for (uint32_t i = 0; i < c.removed_face_count; ++i)
+    if (!alive[record.removed_faces[c.faces_begin + i]]) return false;
+  for (uint32_t i = 0; i < c.relink_count; ++i) {
+    const Relink& r = record.relinks[c.relinks_begin + i];
+    if (!alive[r.triangle] || corners[3 * r.triangle + r.corner] != r.from) return false;
+  }
+  for (uint32_t i = 0; i < c.moved_count; ++i)
+    if (position_of[record.moved_wedges[c.moved_begin + i]] != c.removed) return false;
+  for (uint32_t i = 0; i < c.wedge_count; ++i) {
+    const WedgeChange& w = record.wedges[c.wedges_begin + i];
+    if (!std::equal(record.old_values.begin() + w.values_begin, record.old_values.begin() + w.values_begin + layout.stride,
+                    attributes.begin() + size_t(w.vertex) * layout.stride))
+      return false;
+  }
+  // Relinks and wedge changes listed twice would not undo exactly either.
+  for (uint32_t i = 0; i < c.relink_count; ++i)
+    for (uint32_t j = 0; j < i; ++j) {
+      const Relink &a = record.relinks[c.relinks_begin + i], &b = record.relinks[c.relinks_begin + j];
+      if (a.triangle == b.triangle && a.corner == b.corner) return false;
+    }
+  for (uint32_t i = 0; i < c.wedge_count; ++i)
+    for (uint32_t j = 0; j < i; ++j)
+      if (record.wedges[c.wedges_begin + i].vertex == record.wedges[c.wedges_begin + j].vertex) return false;
+  for (uint32_t i = 0; i < c.moved_count; ++i)
+    for (uint32_t j = 0; j < i; ++j)
+      if (record.moved_wedges[c.moved_begin + i] == record.moved_wedges[c.moved_begin + j]) return false;
+  apply(record, c);
+  return true;
+}
+
 void Replay::undo(const SimplifyRecord& record, const Collapse& c) {
   check(record, c);
   set_values(record, c, record.old_values);

@@ -41,6 +41,10 @@ class Replay {
   bool valid(const SimplifyRecord& record, const Collapse& c) const;
   void check(const SimplifyRecord& record, const Collapse& c) const;  // throws usage if not valid
   void apply(const SimplifyRecord& record, const Collapse& c);
+  // Applies `c` only if it fits the current state exactly (its faces alive, each relink starting
+  // from the corner's current wedge, moved wedges on `removed`, old position and values current),
+  // so that undo restores this state bit for bit; false (state unspecified) otherwise.
+  bool apply_consistent(const SimplifyRecord& record, const Collapse& c);
   void undo(const SimplifyRecord& record, const Collapse& c);
 
  private:
