@@ -140,6 +140,15 @@ TEST(ProgressiveMeshFile, CorruptFilesAreRejectedWithTheirOffset) {
   std::memcpy(bytes.data() + at, &far, sizeof(Relink));
   fix_crc(bytes);
   EXPECT_NE(rejection(bytes).find("collapse"), std::string::npos);
+
+  // In range but not what the mesh holds there (a relink from another wedge): undo would not be
+  // exact, so the record is refused too.
+  Relink wrong = relink;
+  wrong.from = (relink.from + 1) % uint32_t(pm.input().vertex_count());
+  bytes = encode_progressive_mesh(pm);
+  std::memcpy(bytes.data() + at, &wrong, sizeof(Relink));
+  fix_crc(bytes);
+  EXPECT_NE(rejection(bytes).find("collapse 3"), std::string::npos);
 }
 
 }  // namespace
