@@ -1,10 +1,16 @@
-// Vertex-cache order: a greedy walk in the manner of Tom Forsyth's "linear-speed vertex cache
-// optimisation". A simulated cache of the target size and policy holds the vertices the walk has
-// just used; each vertex scores by its place in that cache (about to be evicted scores low) and by
-// how few triangles still need it (finishing a vertex off frees a cache slot for good); the next
-// triangle is the best-scoring one among the triangles of the cached vertices. When none is left
-// (a dead end), the walk restarts from the most recently cached vertex that still has triangles, which
-// keeps it local, and only then from the next triangle in input order.
+// Vertex-cache order. Three orderers, the analyzer picking the best on the caller's cache:
+// - the fan orderer (lodkit's, for FIFO caches): emits all remaining triangles around one vertex at a
+//   time, like Tipsify, but chooses the next centre among all cached vertices by the exact cost of its
+//   fan in the simulated FIFO (misses per triangle, with small terms for the entries it pushes out and
+//   for the triangles left around it);
+// - Tipsify (Sander, Nehab and Barczak 2007): the next centre is the oldest neighbour that stays
+//   cached through its own fan;
+// - a greedy walk in the manner of Tom Forsyth's linear-speed optimiser (for LRU caches): a simulated
+//   cache of the target size holds the vertices just used; each vertex scores by its place in that
+//   cache and by how few triangles still need it; the next triangle is the best-scoring one among the
+//   triangles of the cached vertices.
+// At a dead end each restarts from the most recently used vertex that still has triangles (it keeps
+// the walk local), and only then from the next triangle in input order.
 #include <algorithm>
 #include <cmath>
 
@@ -224,15 +230,159 @@ std::vector<uint32_t> tipsify_order(std::span<const uint32_t> indices, size_t ve
   return order;
 }
 
+std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t vertex_count, const FanScoring& scoring) {
+  const uint32_t F = uint32_t(indices.size() / 3);
+  const uint32_t V = uint32_t(vertex_count);
+  const uint32_t K = scoring.cache_size;
+  std::vector<uint32_t> offset(V + 1, 0), live(V, 0);
+  for (const uint32_t i : indices) ++offset[i + 1];
+  for (uint32_t v = 0; v < V; ++v) offset[v + 1] += offset[v];
+  std::vector<uint32_t> triangles(indices.size());
+  for (uint32_t t = 0; t < F; ++t)
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t v = indices[3 * t + k];
+      triangles[offset[v] + live[v]++] = t;
+    }
+  // The FIFO: a ring of K entries (ring[head] is the oldest, overwritten by the next miss) and the
+  // miss count at which each vertex entered; a vertex is cached while fewer than K misses followed.
+  std::vector<uint32_t> ring(K, none), entered(V, 0);
+  uint32_t head = 0, time = 0;
+  auto cached = [&](uint32_t v) { return entered[v] && time - entered[v] < K; };
+  // Per vertex, the misses its whole fan would take now (distinct uncached corners of its live
+  // triangles), recomputed only when marked stale: when its triangles or their corners' cache state
+  // changed.
+  std::vector<uint32_t> fan_misses(V, 0);
+  std::vector<uint8_t> stale(V, 1);
+  auto mark_neighbours = [&](uint32_t w) {
+    for (uint32_t i = offset[w], e = offset[w] + live[w]; i < e; ++i) {
+      const uint32_t* c = &indices[3 * size_t(triangles[i])];
+      stale[c[0]] = stale[c[1]] = stale[c[2]] = 1;
+    }
+  };
+  std::vector<uint32_t> order, dead_end;
+  order.reserve(F);
+  dead_end.reserve(indices.size());
+  uint32_t cursor = 0;
+
+  auto emit = [&](uint32_t t) {
+    order.push_back(t);
+    const uint32_t* c = &indices[3 * size_t(t)];
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t v = c[k];
+      stale[v] = 1;
+      uint32_t* list = triangles.data() + offset[v];
+      for (uint32_t j = 0; j < live[v]; ++j)
+        if (list[j] == t) {
+          std::swap(list[j], list[live[v] - 1]);
+          --live[v];
+          break;
+        }
+    }
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t v = c[k];
+      dead_end.push_back(v);
+      if (cached(v)) continue;
+      const uint32_t evicted = ring[head];
+      if (evicted != none) {
+        entered[evicted] = 0;
+        mark_neighbours(evicted);
+      }
+      ring[head] = v;
+      head = head + 1 == K ? 0 : head + 1;
+      entered[v] = ++time;
+      mark_neighbours(v);
+    }
+  };
+  auto misses_of = [&](uint32_t t) {
+    return uint32_t(!cached(indices[3 * t])) + !cached(indices[3 * t + 1]) + !cached(indices[3 * t + 2]);
+  };
+  auto count_fan_misses = [&](uint32_t v) {
+    constexpr uint32_t max_new = 64;
+    uint32_t fresh[max_new];
+    uint32_t n = 0;
+    const uint32_t* list = triangles.data() + offset[v];
+    for (uint32_t j = 0; j < live[v]; ++j) {
+      const uint32_t* c = &indices[3 * size_t(list[j])];
+      for (uint32_t k = 0; k < 3; ++k) {
+        const uint32_t w = c[k];
+        if (cached(w) || std::find(fresh, fresh + n, w) != fresh + n) continue;
+        if (n < max_new) fresh[n++] = w;
+      }
+    }
+    return n;
+  };
+  // with_work[q]: how many of the q oldest entries still have triangles (they would be loaded again).
+  std::vector<uint32_t> with_work(K + 1, 0);
+
+  // Start around the vertex with the fewest triangles (a border or a corner).
+  uint32_t focus = none;
+  for (uint32_t v = 0; v < V; ++v)
+    if (live[v] && (focus == none || live[v] < live[focus])) focus = v;
+  while (focus != none) {
+    while (live[focus]) {
+      const uint32_t* list = triangles.data() + offset[focus];
+      uint32_t best = list[0], best_misses = misses_of(list[0]);
+      for (uint32_t j = 1; j < live[focus] && best_misses; ++j) {
+        const uint32_t m = misses_of(list[j]);
+        if (m < best_misses) best_misses = m, best = list[j];
+      }
+      emit(best);
+    }
+    // The next centre: the cached vertex whose fan costs least, the oldest on ties. Its cost: misses
+    // per triangle, plus a weight per entry the fan pushes out that still has triangles (the n oldest,
+    // not counting the centre), plus a weight per triangle.
+    for (uint32_t q = 0, slot = head; q < K; ++q, slot = slot + 1 == K ? 0 : slot + 1) {
+      const uint32_t u = ring[slot];
+      with_work[q + 1] = with_work[q] + (u != none && live[u] > 0);
+    }
+    focus = none;
+    float best_cost = 0;
+    for (uint32_t q = 0, slot = head; q < K; ++q, slot = slot + 1 == K ? 0 : slot + 1) {
+      const uint32_t v = ring[slot];
+      if (v == none || !live[v]) continue;
+      if (stale[v]) fan_misses[v] = count_fan_misses(v), stale[v] = 0;
+      const uint32_t n = fan_misses[v];
+      const uint32_t pushed_out = with_work[std::min(n, K)] - (q < n ? 1u : 0u);
+      const float cost = (float(n) + scoring.eviction_weight * float(pushed_out)) / float(live[v]) + scoring.live_weight * float(live[v]);
+      if (focus == none || cost < best_cost) best_cost = cost, focus = v;
+    }
+    if (focus != none) continue;
+    // Dead end: the most recently used vertex with triangles left, else the next in input order.
+    while (!dead_end.empty() && focus == none) {
+      const uint32_t v = dead_end.back();
+      dead_end.pop_back();
+      if (live[v]) focus = v;
+    }
+    while (focus == none && cursor < V) {
+      if (live[cursor]) focus = cursor;
+      ++cursor;
+    }
+  }
+  return order;
+}
+
 }  // namespace detail
 
 namespace {
 constexpr uint32_t max_cache = detail::max_cache_size;
+
+// Cache misses of the triangles taken in `order` (the analyzer's simulation, without building the list).
 uint64_t cache_misses(std::span<const uint32_t> indices, std::span<const uint32_t> order, size_t vertex_count, const VertexCacheOptions& o) {
-  std::vector<uint32_t> list(indices.size());
-  for (size_t k = 0; k < order.size(); ++k)
-    for (uint32_t c = 0; c < 3; ++c) list[3 * k + c] = indices[3 * size_t(order[k]) + c];
-  return analyze_vertex_cache(list, vertex_count, o).misses;
+  if (o.policy == CachePolicy::lru) {
+    std::vector<uint32_t> list(indices.size());
+    for (size_t k = 0; k < order.size(); ++k)
+      for (uint32_t c = 0; c < 3; ++c) list[3 * k + c] = indices[3 * size_t(order[k]) + c];
+    return analyze_vertex_cache(list, vertex_count, o).misses;
+  }
+  std::vector<uint64_t> entered(vertex_count, 0);
+  uint64_t misses = 0;
+  for (const uint32_t t : order)
+    for (uint32_t c = 0; c < 3; ++c) {
+      const uint32_t v = indices[3 * size_t(t) + c];
+      if (entered[v] && misses - entered[v] < o.cache_size) continue;
+      entered[v] = ++misses;
+    }
+  return misses;
 }
 }  // namespace
 
@@ -242,17 +392,18 @@ std::vector<uint32_t> vertex_cache_order(std::span<const uint32_t> indices, size
     throw_usage("optimize_vertex_cache: cache size must be in [3, " + std::to_string(max_cache) + "]");
   for (const uint32_t i : indices)
     if (i >= vertex_count) throw_usage("optimize_vertex_cache: index " + std::to_string(i) + " out of range");
-  // Two orderers with different strengths (the greedy walk on irregular parts, Tipsify when it knows
-  // the exact FIFO size); the analyzer decides, on the caller's cache. The input order is a candidate
-  // too, so the result is never worse than what came in.
+  // Two orderers with different strengths, the analyzer deciding on the caller's cache: for a FIFO,
+  // lodkit's fan orderer (exact fan costs) and Tipsify; for an LRU, the Forsyth-style walk (its cache
+  // model is an LRU) and Tipsify. The input order is a candidate too, so the result is never worse.
   const uint32_t F = uint32_t(indices.size() / 3);
   std::vector<uint32_t> best(F);
   for (uint32_t t = 0; t < F; ++t) best[t] = t;
-  uint64_t best_misses = analyze_vertex_cache(indices, vertex_count, options).misses;
+  uint64_t best_misses = cache_misses(indices, best, vertex_count, options);
   for (int candidate = 0; candidate < 2; ++candidate) {
-    std::vector<uint32_t> order = candidate == 0
-                                      ? detail::greedy_cache_order(indices, vertex_count, detail::default_scoring(options.cache_size))
-                                      : detail::tipsify_order(indices, vertex_count, options.cache_size);
+    std::vector<uint32_t> order;
+    if (candidate == 1) order = detail::tipsify_order(indices, vertex_count, options.cache_size);
+    else if (options.policy == CachePolicy::fifo) order = detail::fan_cache_order(indices, vertex_count, {.cache_size = options.cache_size});
+    else order = detail::greedy_cache_order(indices, vertex_count, detail::default_scoring(options.cache_size));
     const uint64_t misses = cache_misses(indices, order, vertex_count, options);
     if (misses < best_misses) best_misses = misses, best = std::move(order);
   }

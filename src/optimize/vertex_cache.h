@@ -24,6 +24,18 @@ CacheScoring default_scoring(uint32_t cache_size);
 // Forsyth-style greedy walk with the given scoring; returns the triangle order.
 std::vector<uint32_t> greedy_cache_order(std::span<const uint32_t> indices, size_t vertex_count, const CacheScoring& scoring);
 
+// lodkit's FIFO orderer: fans around one vertex at a time, like Tipsify, but picks the next fan
+// centre among all cached vertices by the exact cost of its fan in the simulated FIFO: misses per
+// triangle, plus `eviction_weight` per entry the fan pushes out that still has other triangles, plus
+// `live_weight` per triangle left around the centre (ties go to the oldest entry). Inside a fan, the
+// triangle needing the fewest misses goes first.
+struct FanScoring {
+  uint32_t cache_size = 16;
+  float eviction_weight = -0.2f;
+  float live_weight = 0.02f;
+};
+std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t vertex_count, const FanScoring& scoring);
+
 // Tipsify for a FIFO cache of `cache_size`; returns the triangle order.
 std::vector<uint32_t> tipsify_order(std::span<const uint32_t> indices, size_t vertex_count, uint32_t cache_size);
 
