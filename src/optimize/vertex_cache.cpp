@@ -319,12 +319,24 @@ std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t 
   for (uint32_t v = 0; v < V; ++v)
     if (live[v] && (focus == none || live[v] < live[focus])) focus = v;
   while (focus != none) {
+    // The fan, cheapest triangle first; on a tie, the one holding the oldest cached corner besides
+    // the centre (use it before it leaves).
     while (live[focus]) {
       const uint32_t* list = triangles.data() + offset[focus];
-      uint32_t best = list[0], best_misses = misses_of(list[0]);
-      for (uint32_t j = 1; j < live[focus] && best_misses; ++j) {
+      auto oldest_corner = [&](uint32_t t) {
+        uint32_t oldest = 0xFFFFFFFFu;
+        for (uint32_t k = 0; k < 3; ++k) {
+          const uint32_t w = indices[3 * size_t(t) + k];
+          if (w != focus && cached(w)) oldest = std::min(oldest, entered[w]);
+        }
+        return oldest;
+      };
+      uint32_t best = list[0], best_misses = misses_of(list[0]), best_oldest = oldest_corner(list[0]);
+      for (uint32_t j = 1; j < live[focus]; ++j) {
         const uint32_t m = misses_of(list[j]);
-        if (m < best_misses) best_misses = m, best = list[j];
+        if (m > best_misses) continue;
+        const uint32_t oldest = oldest_corner(list[j]);
+        if (m < best_misses || oldest < best_oldest) best = list[j], best_misses = m, best_oldest = oldest;
       }
       emit(best);
     }

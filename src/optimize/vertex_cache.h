@@ -28,7 +28,7 @@ std::vector<uint32_t> greedy_cache_order(std::span<const uint32_t> indices, size
 // centre among all cached vertices by the exact cost of its fan in the simulated FIFO: misses per
 // triangle, plus `eviction_weight` per entry the fan pushes out that still has other triangles, plus
 // `live_weight` per triangle left around the centre (ties go to the oldest entry). Inside a fan, the
-// triangle needing the fewest misses goes first.
+// triangle needing the fewest misses goes first, on a tie the one holding the oldest cached corner.
 struct FanScoring {
   uint32_t cache_size = 16;
   float eviction_weight = -0.2f;
