@@ -244,19 +244,20 @@ std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t 
       triangles[offset[v] + live[v]++] = t;
     }
   // The FIFO: a ring of K entries (ring[head] is the oldest, overwritten by the next miss) and the
-  // miss count at which each vertex entered; a vertex is cached while fewer than K misses followed.
+  // miss count at which each cached vertex entered (0 when it is not cached: eviction clears it).
   std::vector<uint32_t> ring(K, none), entered(V, 0);
   uint32_t head = 0, time = 0;
-  auto cached = [&](uint32_t v) { return entered[v] && time - entered[v] < K; };
-  // Per vertex, the misses its whole fan would take now (distinct uncached corners of its live
-  // triangles), recomputed only when marked stale: when its triangles or their corners' cache state
-  // changed.
-  std::vector<uint32_t> fan_misses(V, 0);
-  std::vector<uint8_t> stale(V, 1);
-  auto mark_neighbours = [&](uint32_t w) {
+  auto cached = [&](uint32_t v) { return entered[v] != 0; };
+  // Per vertex, the corner misses of its fan: over its live triangles, the corners not cached (a
+  // corner shared by two of them counts twice). Kept up to date as triangles leave and vertices enter
+  // or leave the cache. A centre's fan costs about that many misses, fewer where corners are shared;
+  // counting them all favours fans whose new corners are also needed by their neighbours' fans.
+  std::vector<uint32_t> corner_misses(V, 0);
+  for (uint32_t v = 0; v < V; ++v) corner_misses[v] = 3 * live[v];
+  auto add_to_corners = [&](uint32_t w, int32_t delta) {  // w entered (-1) or left (+1) the cache
     for (uint32_t i = offset[w], e = offset[w] + live[w]; i < e; ++i) {
       const uint32_t* c = &indices[3 * size_t(triangles[i])];
-      stale[c[0]] = stale[c[1]] = stale[c[2]] = 1;
+      corner_misses[c[0]] += delta, corner_misses[c[1]] += delta, corner_misses[c[2]] += delta;
     }
   };
   std::vector<uint32_t> order, dead_end;
@@ -267,9 +268,10 @@ std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t 
   auto emit = [&](uint32_t t) {
     order.push_back(t);
     const uint32_t* c = &indices[3 * size_t(t)];
+    const uint32_t uncached = uint32_t(!cached(c[0])) + !cached(c[1]) + !cached(c[2]);
     for (uint32_t k = 0; k < 3; ++k) {
       const uint32_t v = c[k];
-      stale[v] = 1;
+      corner_misses[v] -= uncached;
       uint32_t* list = triangles.data() + offset[v];
       for (uint32_t j = 0; j < live[v]; ++j)
         if (list[j] == t) {
@@ -285,31 +287,16 @@ std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t 
       const uint32_t evicted = ring[head];
       if (evicted != none) {
         entered[evicted] = 0;
-        mark_neighbours(evicted);
+        add_to_corners(evicted, +1);
       }
       ring[head] = v;
       head = head + 1 == K ? 0 : head + 1;
       entered[v] = ++time;
-      mark_neighbours(v);
+      add_to_corners(v, -1);
     }
   };
   auto misses_of = [&](uint32_t t) {
     return uint32_t(!cached(indices[3 * t])) + !cached(indices[3 * t + 1]) + !cached(indices[3 * t + 2]);
-  };
-  auto count_fan_misses = [&](uint32_t v) {
-    constexpr uint32_t max_new = 64;
-    uint32_t fresh[max_new];
-    uint32_t n = 0;
-    const uint32_t* list = triangles.data() + offset[v];
-    for (uint32_t j = 0; j < live[v]; ++j) {
-      const uint32_t* c = &indices[3 * size_t(list[j])];
-      for (uint32_t k = 0; k < 3; ++k) {
-        const uint32_t w = c[k];
-        if (cached(w) || std::find(fresh, fresh + n, w) != fresh + n) continue;
-        if (n < max_new) fresh[n++] = w;
-      }
-    }
-    return n;
   };
   // with_work[q]: how many of the q oldest entries still have triangles (they would be loaded again).
   std::vector<uint32_t> with_work(K + 1, 0);
@@ -340,9 +327,9 @@ std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t 
       }
       emit(best);
     }
-    // The next centre: the cached vertex whose fan costs least, the oldest on ties. Its cost: misses
-    // per triangle, plus a weight per entry the fan pushes out that still has triangles (the n oldest,
-    // not counting the centre), plus a weight per triangle.
+    // The next centre: the cached vertex whose fan costs least, the oldest on ties. Its cost: corner
+    // misses per triangle, plus a weight per entry among the n oldest that still has triangles (not
+    // counting the centre), plus a weight per triangle.
     for (uint32_t q = 0, slot = head; q < K; ++q, slot = slot + 1 == K ? 0 : slot + 1) {
       const uint32_t u = ring[slot];
       with_work[q + 1] = with_work[q] + (u != none && live[u] > 0);
@@ -352,8 +339,7 @@ std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t 
     for (uint32_t q = 0, slot = head; q < K; ++q, slot = slot + 1 == K ? 0 : slot + 1) {
       const uint32_t v = ring[slot];
       if (v == none || !live[v]) continue;
-      if (stale[v]) fan_misses[v] = count_fan_misses(v), stale[v] = 0;
-      const uint32_t n = fan_misses[v];
+      const uint32_t n = corner_misses[v];
       const uint32_t pushed_out = with_work[std::min(n, K)] - (q < n ? 1u : 0u);
       const float cost = (float(n) + scoring.eviction_weight * float(pushed_out)) / float(live[v]) + scoring.live_weight * float(live[v]);
       if (focus == none || cost < best_cost) best_cost = cost, focus = v;
@@ -386,8 +372,8 @@ uint64_t cache_misses(std::span<const uint32_t> indices, std::span<const uint32_
       for (uint32_t c = 0; c < 3; ++c) list[3 * k + c] = indices[3 * size_t(order[k]) + c];
     return analyze_vertex_cache(list, vertex_count, o).misses;
   }
-  std::vector<uint64_t> entered(vertex_count, 0);
-  uint64_t misses = 0;
+  std::vector<uint32_t> entered(vertex_count, 0);
+  uint32_t misses = 0;
   for (const uint32_t t : order)
     for (uint32_t c = 0; c < 3; ++c) {
       const uint32_t v = indices[3 * size_t(t) + c];
