@@ -1,8 +1,8 @@
 // Vertex-cache order. Three orderers, the analyzer picking the best on the caller's cache:
 // - the fan orderer (lodkit's, for FIFO caches): emits all remaining triangles around one vertex at a
-//   time, like Tipsify, but chooses the next centre among all cached vertices by the exact cost of its
-//   fan in the simulated FIFO (misses per triangle, with small terms for the entries it pushes out and
-//   for the triangles left around it);
+//   time, like Tipsify, but chooses the next centre among all cached vertices by the cost of its fan
+//   in the simulated FIFO (uncached corners per triangle, kept up to date incrementally, with small
+//   terms for the entries it pushes out and for the triangles left around it);
 // - Tipsify (Sander, Nehab and Barczak 2007): the next centre is the oldest neighbour that stays
 //   cached through its own fan;
 // - a greedy walk in the manner of Tom Forsyth's linear-speed optimiser (for LRU caches): a simulated

@@ -25,8 +25,9 @@ CacheScoring default_scoring(uint32_t cache_size);
 std::vector<uint32_t> greedy_cache_order(std::span<const uint32_t> indices, size_t vertex_count, const CacheScoring& scoring);
 
 // lodkit's FIFO orderer: fans around one vertex at a time, like Tipsify, but picks the next fan
-// centre among all cached vertices by the exact cost of its fan in the simulated FIFO: misses per
-// triangle, plus `eviction_weight` per entry the fan pushes out that still has other triangles, plus
+// centre among all cached vertices by the cost of its fan in the simulated FIFO: its corner misses
+// (uncached corners over its remaining triangles, a corner shared by two counting twice) per
+// triangle, plus `eviction_weight` per entry among that many oldest that still has triangles, plus
 // `live_weight` per triangle left around the centre (ties go to the oldest entry). Inside a fan, the
 // triangle needing the fewest misses goes first, on a tie the one holding the oldest cached corner.
 struct FanScoring {
