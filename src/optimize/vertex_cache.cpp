@@ -328,8 +328,8 @@ std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t 
       emit(best);
     }
     // The next centre: the cached vertex whose fan costs least, the oldest on ties. Its cost: corner
-    // misses per triangle, plus a weight per entry among the n oldest that still has triangles (not
-    // counting the centre), plus a weight per triangle.
+    // misses per triangle, plus a weight per entry the fan would push out that still has triangles
+    // (not counting the centre), plus a weight per triangle.
     for (uint32_t q = 0, slot = head; q < K; ++q, slot = slot + 1 == K ? 0 : slot + 1) {
       const uint32_t u = ring[slot];
       with_work[q + 1] = with_work[q] + (u != none && live[u] > 0);
@@ -340,7 +340,9 @@ std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t 
       const uint32_t v = ring[slot];
       if (v == none || !live[v]) continue;
       const uint32_t n = corner_misses[v];
-      const uint32_t pushed_out = with_work[std::min(n, K)] - (q < n ? 1u : 0u);
+      // About n / 2 distinct vertices enter (inner corners are shared by two triangles of the fan).
+      const uint32_t entering = std::min(n / 2, K);
+      const uint32_t pushed_out = with_work[entering] - (q < entering ? 1u : 0u);
       const float cost = (float(n) + scoring.eviction_weight * float(pushed_out)) / float(live[v]) + scoring.live_weight * float(live[v]);
       if (focus == none || cost < best_cost) best_cost = cost, focus = v;
     }

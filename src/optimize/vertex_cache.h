@@ -27,7 +27,8 @@ std::vector<uint32_t> greedy_cache_order(std::span<const uint32_t> indices, size
 // lodkit's FIFO orderer: fans around one vertex at a time, like Tipsify, but picks the next fan
 // centre among all cached vertices by the cost of its fan in the simulated FIFO: its corner misses
 // (uncached corners over its remaining triangles, a corner shared by two counting twice) per
-// triangle, plus `eviction_weight` per entry among that many oldest that still has triangles, plus
+// triangle, plus `eviction_weight` per entry among the oldest it would push out (half the corner
+// misses) that still has triangles, plus
 // `live_weight` per triangle left around the centre (ties go to the oldest entry). Inside a fan, the
 // triangle needing the fewest misses goes first, on a tie the one holding the oldest cached corner.
 struct FanScoring {
