@@ -151,7 +151,7 @@ area_measure() {
   local pairs=${1:-20}
   [[ $pairs =~ ^[1-9][0-9]*$ ]] || usage
   configure
-  build_targets lodkit_cli lodkit_bench_simplify cgal_distance
+  build_targets lodkit_cli lodkit_bench_simplify lodkit_bench_compare lodkit_bench_brute_force cgal_distance
   [ -x "$build/bench/cgal_distance" ] || { echo "bench: cgal_distance was not built (libcgal-dev missing?)" >&2; exit 1; }
   "$build/lodkit" compare --help >/dev/null 2>&1 || { echo "bench: this lodkit has no 'compare' subcommand yet" >&2; exit 1; }
   [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
