@@ -61,7 +61,7 @@ def main():
     print("### Vertex cache (ACMR = misses per triangle, FIFO; lower is better; ratio = lodkit ÷ meshoptimizer)")
     print()
     print("| input | triangles | input ACMR 16 | lodkit 16 | meshopt 16 | ratio | lodkit 32 | meshopt 32 | ratio | "
-          "Tipsify 16 / 32 | ATVR 16 lodkit / meshopt | time lodkit 16 / 32 ms | meshopt ms | time ratio | peak MiB lodkit / meshopt |")
+          "Tipsify 16 / 32 | ATVR 16 lodkit / meshopt | time lodkit 16 / 32 ms | meshopt ms | time ratio (of minima) | peak MiB lodkit / meshopt |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for i in used:
         n = i["name"]
@@ -87,11 +87,15 @@ def main():
             c[f"acmr_ratio{k}"] = a / b if a is not None and b else None
         slow = max([t for t in (c["lodkit_s16"], c["lodkit_s32"]) if t is not None], default=None)
         c["time_ratio"] = slow / c["meshopt_s"] if slow is not None and c["meshopt_s"] else None
+        # The fastest runs too: on a loaded machine a median can catch a burst of someone else's work.
+        fast = max([t for t in (get(n, "lodkit", "vcache16", "min_s"), get(n, "lodkit", "vcache32", "min_s")) if t is not None], default=None)
+        meshopt_min = get(n, "meshopt", "vcache16", "min_s")
+        c["time_ratio_min"] = fast / meshopt_min if fast is not None and meshopt_min else None
         cases.append(c)
         print(f"| {n} | {i['triangles']:,} | {fmt(c['input_acmr16'])} | {fmt(c['lodkit_acmr16'])} | {fmt(c['meshopt_acmr16'])} | "
               f"{fmt(c['acmr_ratio16'])} | {fmt(c['lodkit_acmr32'])} | {fmt(c['meshopt_acmr32'])} | {fmt(c['acmr_ratio32'])} | "
               f"{fmt(c['tipsify_acmr16'])} / {fmt(c['tipsify_acmr32'])} | {fmt(c['lodkit_atvr16'])} / {fmt(c['meshopt_atvr16'])} | "
-              f"{ms(c['lodkit_s16'])} / {ms(c['lodkit_s32'])} | {ms(c['meshopt_s'])} | {fmt(c['time_ratio'], 2)} | "
+              f"{ms(c['lodkit_s16'])} / {ms(c['lodkit_s32'])} | {ms(c['meshopt_s'])} | {fmt(c['time_ratio'], 2)} ({fmt(c['time_ratio_min'], 2)}) | "
               f"{fmt(c['lodkit_peak_mib'], 1)} / {fmt(c['meshopt_peak_mib'], 1)} |")
     print()
 
@@ -162,8 +166,12 @@ def main():
         target(f"ACMR FIFO {k} ≤ meshoptimizer on every corpus mesh", [(c["name"], c[f"acmr_ratio{k}"]) for c in corpus_cases], 1.0,
                "meshes at or below")
     timed = [c for c in cases if c["triangles"] >= TIME_MIN_TRIANGLES]
-    target(f"vertex-cache time ≤ 2× meshoptimizer (inputs ≥ {TIME_MIN_TRIANGLES:,} triangles, slower of lodkit's 16 and 32)",
+    target(f"vertex-cache time ≤ 2× meshoptimizer (inputs ≥ {TIME_MIN_TRIANGLES:,} triangles, slower of lodkit's 16 and 32, medians)",
            [(c["name"], c["time_ratio"]) for c in timed], 2.0, "inputs within")
+    fastest = [c["time_ratio_min"] for c in timed if c["time_ratio_min"] is not None]
+    if fastest:
+        print(f"  (the same from each process's fastest run: worst {max(fastest):.2f}, "
+              f"{sum(1 for r in fastest if r <= 2.0)}/{len(fastest)} within 2×)")
     total_l = sum(max(c["lodkit_s16"] or 0, c["lodkit_s32"] or 0) for c in corpus_cases)
     total_m = sum(c["meshopt_s"] or 0 for c in corpus_cases)
     if total_m:
