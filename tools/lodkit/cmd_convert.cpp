@@ -30,6 +30,31 @@ void check_not_input(const std::string& input, const std::string& output, bool f
     throw_usage(output + ": refusing to overwrite the input file (use --force)");
 }
 
+namespace {
+bool is_gltf(const std::string& path) {
+  const FileFormat format = format_from_path(path);
+  return format == FileFormat::gltf || format == FileFormat::glb;
+}
+}  // namespace
+
+GeometryFile::GeometryFile(const std::string& input, const std::string& output)
+    : as_scene_(is_gltf(input) && is_gltf(output)) {
+  {
+    ProgressBar bar("loading");
+    if (as_scene_) scene_ = read_scene(input, bar.read_options());
+    else mesh_ = read_mesh(input, bar.read_options());
+  }
+  if (as_scene_)
+    for (Primitive& p : scene_.primitives) meshes.push_back(&p.mesh);
+  else
+    meshes.push_back(&mesh_);
+}
+
+void GeometryFile::write(const std::string& output) const {
+  if (as_scene_) write_scene(scene_, output);
+  else write_mesh(mesh_, output);
+}
+
 Command register_convert(CLI::App& root) {
   auto options = std::make_shared<ConvertOptions>();
   CLI::App* app = root.add_subcommand("convert", "Convert a mesh between OBJ, PLY, OFF, STL, glTF and GLB");

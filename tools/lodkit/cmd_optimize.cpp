@@ -26,11 +26,6 @@ struct OptimizeCommand {
   uint32_t cache = 16;
 };
 
-bool is_gltf(const std::string& path) {
-  const FileFormat format = format_from_path(path);
-  return format == FileFormat::gltf || format == FileFormat::glb;
-}
-
 // Little-endian uint32, as a GPU index buffer.
 void write_indices(const std::string& path, const std::vector<uint32_t>& indices) {
   std::string bytes(indices.size() * 4, '\0');
@@ -87,18 +82,9 @@ Command register_optimize(CLI::App& root) {
                 .vertex_fetch = !o->no_fetch,
             };
 
-            const bool as_scene = is_gltf(o->input) && is_gltf(o->output);
             auto start = std::chrono::steady_clock::now();
-            Scene scene;
-            std::vector<Mesh*> meshes;
-            Mesh mesh;
-            {
-              ProgressBar bar("loading");
-              if (as_scene) scene = read_scene(o->input, bar.read_options());
-              else mesh = read_mesh(o->input, bar.read_options());
-            }
-            if (as_scene) for (Primitive& p : scene.primitives) meshes.push_back(&p.mesh);
-            else meshes.push_back(&mesh);
+            GeometryFile file(o->input, o->output);
+            std::vector<Mesh*>& meshes = file.meshes;
             const double load_seconds = seconds_since(start);
             if (!o->strip_indices.empty() && meshes.size() != 1)
               throw_usage("--strip-indices needs a single mesh (the input has " + std::to_string(meshes.size()) + " primitives)");
@@ -145,8 +131,7 @@ Command register_optimize(CLI::App& root) {
                            static_cast<unsigned long long>(non_orientable));
 
             start = std::chrono::steady_clock::now();
-            if (as_scene) write_scene(scene, o->output);
-            else write_mesh(mesh, o->output);
+            file.write(o->output);
             if (!o->strip_indices.empty()) write_indices(o->strip_indices, strip_buffer);
             const double write_seconds = seconds_since(start);
 

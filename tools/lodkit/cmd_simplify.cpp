@@ -26,11 +26,6 @@ struct SimplifyCommand {
   unsigned threads = 0;
 };
 
-bool is_gltf(const std::string& path) {
-  const FileFormat format = format_from_path(path);
-  return format == FileFormat::gltf || format == FileFormat::glb;
-}
-
 }  // namespace
 
 Metric parse_metric(const std::string& name) {
@@ -104,18 +99,9 @@ Command register_simplify(CLI::App& root) {
             if (!o->attributes.empty()) parse_attributes(o->attributes, options);
             if (o->ratio < 0 && o->triangles == 0) options.target_ratio = 0;  // error only
 
-            const bool as_scene = is_gltf(o->input) && is_gltf(o->output);
             auto start = std::chrono::steady_clock::now();
-            Scene scene;
-            std::vector<Mesh*> meshes;
-            Mesh mesh;
-            {
-              ProgressBar bar("loading");
-              if (as_scene) scene = read_scene(o->input, bar.read_options());
-              else mesh = read_mesh(o->input, bar.read_options());
-            }
-            if (as_scene) for (Primitive& p : scene.primitives) meshes.push_back(&p.mesh);
-            else meshes.push_back(&mesh);
+            GeometryFile file(o->input, o->output);
+            std::vector<Mesh*>& meshes = file.meshes;
             const double load_seconds = seconds_since(start);
 
             uint64_t total = 0;
@@ -149,8 +135,7 @@ Command register_simplify(CLI::App& root) {
             }
             const double simplify_seconds = seconds_since(start);
             start = std::chrono::steady_clock::now();
-            if (as_scene) write_scene(scene, o->output);
-            else write_mesh(mesh, o->output);
+            file.write(o->output);
             const double write_seconds = seconds_since(start);
 
             if (o->json) {

@@ -5,6 +5,7 @@
 #include <functional>
 #include <string>
 
+#include "lodkit/io.h"
 #include "lodkit/simplify.h"
 
 namespace lod::cli {
@@ -26,6 +27,24 @@ Command register_lod(CLI::App& root);
 // Shared option parsers (simplify, lod): --metric NAME and --attributes normal=W,uv=W,color=W.
 Metric parse_metric(const std::string& name);
 void parse_attributes(const std::string& text, SimplifyOptions& options);
+
+// A command's input geometry: the whole glTF scene when input and output are both glTF (nodes,
+// skins, animations and materials are written back as they were), else one mesh. `meshes` lists
+// what to process in place. Not copyable: `meshes` points into it.
+class GeometryFile {
+ public:
+  GeometryFile(const std::string& input, const std::string& output);
+  GeometryFile(const GeometryFile&) = delete;
+  GeometryFile& operator=(const GeometryFile&) = delete;
+  void write(const std::string& output) const;
+
+  std::vector<Mesh*> meshes;
+
+ private:
+  bool as_scene_ = false;
+  Scene scene_;
+  Mesh mesh_;
+};
 
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);
