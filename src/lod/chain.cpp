@@ -144,7 +144,7 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
         // refinement then certifies a bound (it stops within its tolerance or at its budget).
         const uint64_t samples = std::clamp<uint64_t>(2 * input_triangles, 20'000, 1'000'000);
         const Deviation d = compare(input, level.mesh,
-                                    {.samples = samples, .refine = true, .refine_tolerance = 1e-3f,
+                                    {.samples = samples, .refine = true, .refine_tolerance = 1e-5f,
                                      .attributes = false, .threads = o.simplify.threads});
         level.error = float(d.hausdorff);
         level.error_bound = float(d.hausdorff_bound);

@@ -363,8 +363,10 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
   return out;
 }
 
-void refine_direction(Direction& dir, const Surface& from, const TriangleBvh& to, const CompareOptions& options,
-                      float tolerance, uint64_t budget, Progress& progress) {
+void refine_direction(Direction& dir, const Surface& from, const Surface& to_surface, const TriangleBvh& to,
+                      const CompareOptions& options, float tolerance, uint64_t budget, Progress& progress) {
+  const core::TriangleAdjacency to_adjacency =
+      core::triangle_adjacency(to_surface.mesh->indices, to_surface.ids.id, to_surface.ids.count);
   measure::RefineInput in;
   in.from = from.mesh;
   in.position_id = &from.ids.id;
@@ -372,6 +374,7 @@ void refine_direction(Direction& dir, const Surface& from, const TriangleBvh& to
   in.position_closest = &dir.position_closest;
   in.triangle_closest = &dir.triangle_closest;
   in.to = &to;
+  in.neighbours = &to_adjacency;
   in.tolerance = tolerance;
   in.budget = budget;
   in.threads = options.threads;
@@ -432,8 +435,8 @@ Deviation compare(const Mesh& a, const Mesh& b, const CompareOptions& options) {
                 plan_b.edge_start.back() + plan_b.area_samples;
   if (options.refine) {
     const float tolerance = float(options.refine_tolerance * dev.diagonal);
-    refine_direction(ab, sa, bvh_b, options, tolerance, budget, progress);
-    refine_direction(ba, sb, bvh_a, options, tolerance, budget, progress);
+    refine_direction(ab, sa, sb, bvh_b, options, tolerance, budget, progress);
+    refine_direction(ba, sb, sa, bvh_a, options, tolerance, budget, progress);
     dev.queries += ab.result.refine_samples + ba.result.refine_samples;
   }
 

@@ -1,6 +1,7 @@
 #include "measure/refine.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "core/parallel.h"
@@ -28,24 +29,99 @@ constexpr size_t max_batch = 8192;
 
 }  // namespace
 
+namespace {
+
+// Sutherland-Hodgman: keep the part of a convex polygon (barycentric points) where g(b) <= 0, g linear.
+int clip_polygon(const std::array<float, 3>* in, int n, const float g[3], std::array<float, 3>* out) {
+  auto value = [&](const std::array<float, 3>& b) { return b[0] * g[0] + b[1] * g[1] + b[2] * g[2]; };
+  int m = 0;
+  for (int i = 0; i < n; ++i) {
+    const std::array<float, 3>& a = in[i];
+    const std::array<float, 3>& b = in[(i + 1) % n];
+    const float va = value(a), vb = value(b);
+    if (va <= 0) out[m++] = a;
+    if ((va < 0 && vb > 0) || (va > 0 && vb < 0)) {
+      const float s = va / (va - vb);
+      out[m++] = {a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]), a[2] + s * (b[2] - a[2])};
+    }
+  }
+  return m;
+}
+
+}  // namespace
+
+namespace {
+
+constexpr int max_candidates = 16;
+
+// Piecewise: split the patch where each candidate's linear interpolant l_k (from its corner values
+// f[k]) is the lowest. The pieces cover the patch, each is convex, and on piece k the distance is at
+// most dist(., T_k), which is convex: so the bound is the largest dist(v, T_k) over piece k's
+// vertices. Where the distances are affine (over the interior of the candidates) the cut falls where
+// they are equal and the bound meets the true maximum; one triangle alone is loose across a fold.
+// Stops early once the bound reaches `give_up` (it can only grow).
+float piecewise_bound(const vec3f corners[3], const uint32_t* candidate, const float (*f)[3], int count,
+                      const TriangleBvh& to, float give_up) {
+  float bound = 0;
+  for (int k = 0; k < count && bound < give_up; ++k) {
+    std::array<float, 3> buffer[2][max_candidates + 3];
+    buffer[0][0] = {1, 0, 0}, buffer[0][1] = {0, 1, 0}, buffer[0][2] = {0, 0, 1};
+    int n = 3, cur = 0;
+    for (int j = 0; j < count && n > 0; ++j) {
+      if (j == k) continue;
+      const float g[3] = {f[k][0] - f[j][0], f[k][1] - f[j][1], f[k][2] - f[j][2]};
+      n = clip_polygon(buffer[cur], n, g, buffer[1 - cur]);
+      cur = 1 - cur;
+    }
+    for (int v = 0; v < n; ++v) {
+      const std::array<float, 3>& b = buffer[cur][v];
+      float d;
+      if (b[0] == 1 || b[1] == 1 || b[2] == 1) d = f[k][b[0] == 1 ? 0 : b[1] == 1 ? 1 : 2];
+      else d = std::sqrt(to.to_triangle(corners[0] * b[0] + corners[1] * b[1] + corners[2] * b[2], candidate[k]).distance_squared);
+      bound = std::max(bound, d);
+    }
+  }
+  return bound;
+}
+
+}  // namespace
+
 float patch_bound(const vec3f corners[3], const float distances[3], const uint32_t closest[3], uint32_t extra,
-                  const TriangleBvh& to, uint32_t* best) {
+                  const TriangleBvh& to, const core::TriangleAdjacency* neighbours, float enough, uint32_t* best) {
   const float e01 = distance(corners[0], corners[1]), e12 = distance(corners[1], corners[2]),
               e20 = distance(corners[2], corners[0]);
   float bound = std::min({distances[0] + std::max(e01, e20), distances[1] + std::max(e01, e12),
                           distances[2] + std::max(e12, e20)});
-  uint32_t chosen = closest[0];
-  const uint32_t candidates[4] = {closest[0], closest[1], closest[2], extra};
-  for (int i = 0; i < 4; ++i) {
-    const uint32_t t = candidates[i];
-    if (t == UINT32_MAX || (i > 0 && t == candidates[0]) || (i > 1 && t == candidates[1]) || (i > 2 && t == candidates[2]))
-      continue;
-    float worst = i < 3 ? distances[i] : 0.0f;  // a corner's distance to its own closest triangle is known
-    for (int j = 0; j < 3 && worst < bound; ++j)
-      if (j != i) worst = std::max(worst, std::sqrt(to.to_triangle(corners[j], t).distance_squared));
-    if (worst < bound) bound = worst, chosen = t;
+
+  // Distinct candidate triangles and each corner's distance to each (f[k][i]).
+  uint32_t candidate[max_candidates];
+  float f[max_candidates][3];
+  int count = 0;
+  auto add = [&](uint32_t t) {
+    if (t == UINT32_MAX || count == max_candidates || std::find(candidate, candidate + count, t) != candidate + count)
+      return;
+    candidate[count] = t;
+    for (int i = 0; i < 3; ++i)
+      f[count][i] = closest[i] == t ? distances[i] : std::sqrt(to.to_triangle(corners[i], t).distance_squared);
+    ++count;
+  };
+  for (uint32_t t : {closest[0], closest[1], closest[2], extra}) add(t);
+  // One triangle for the whole patch: dist(., T) is convex, so its largest corner value bounds it.
+  uint32_t chosen = count ? candidate[0] : UINT32_MAX;
+  for (int k = 0; k < count; ++k) {
+    const float worst = std::max({f[k][0], f[k][1], f[k][2]});
+    if (worst < bound) bound = worst, chosen = candidate[k];
   }
   if (best) *best = chosen;
+  if (count >= 2 && bound > enough) bound = std::min(bound, piecewise_bound(corners, candidate, f, count, to, bound));
+  // Still too loose: the patch spans triangles no corner is closest to. Their edge neighbours are
+  // the likely ones (the patch is usually no wider than a couple of the other surface's triangles).
+  if (neighbours && bound > enough) {
+    const int first = count;
+    for (int k = 0; k < first; ++k)
+      for (uint32_t e = 0; e < 3; ++e) add(neighbours->neighbour(candidate[k], e));
+    if (count > first) bound = std::min(bound, piecewise_bound(corners, candidate, f, count, to, bound));
+  }
   return bound;
 }
 
@@ -75,7 +151,7 @@ RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& 
       }
       p.triangle = uint32_t(t);
       const uint32_t inner = input.triangle_closest ? (*input.triangle_closest)[t] : UINT32_MAX;
-      p.bound = patch_bound(p.corner, p.distance, p.closest, inner, to, &p.extra);
+      p.bound = patch_bound(p.corner, p.distance, p.closest, inner, to, input.neighbours, max + input.tolerance, &p.extra);
       if (p.bound > max + input.tolerance) open_per_block[b].push_back(p);
       else settled_per_block[b] = std::max(settled_per_block[b], p.bound);
     }
@@ -95,6 +171,7 @@ RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& 
     std::stable_sort(open.begin(), open.end(), [](const Patch& x, const Patch& y) { return x.bound > y.bound; });
     const size_t batch = std::min({open.size(), size_t((input.budget - result.queries) / 3), max_batch});
     splits.resize(batch);
+    const float threshold = result.max + input.tolerance;  // the max only grows: a safe "enough"
     core::parallel_for(
         batch, input.threads,
         [&](size_t i) {
@@ -121,7 +198,7 @@ RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& 
           for (int k = 0; k < 3; ++k) set(s.child[3], k, m[k], md[k], mc[k]);
           for (Patch& child : s.child) {
             child.triangle = p.triangle;
-            child.bound = patch_bound(child.corner, child.distance, child.closest, p.extra, to, &child.extra);
+            child.bound = patch_bound(child.corner, child.distance, child.closest, p.extra, to, input.neighbours, threshold, &child.extra);
           }
         },
         64);
@@ -147,7 +224,6 @@ RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& 
     open.swap(next);
   }
   result.bound = std::max(result.max, settled);
-  for (const Patch& p : open) result.bound = std::max(result.bound, p.bound);
   return result;
 }
 

@@ -3,8 +3,12 @@
 // f(q) = distance from q to the other surface. Over a triangular patch with corners c_i:
 //  - f is 1-Lipschitz, so f <= f(c_i) + max_j |c_i - c_j| for any corner i;
 //  - f(q) <= dist(q, T) for any one triangle T of the other surface, and dist(., T) is convex, so
-//    over the patch it is at most its largest corner value. T = each corner's closest triangle.
-// The smaller of these bounds each patch. Patches whose bound exceeds the largest distance found
+//    over the patch it is at most its largest corner value. T = each corner's closest triangle;
+//  - piecewise: the patch is cut where the candidates' (linearly interpolated) distances cross, and
+//    each piece is bounded by its own triangle's convex distance at the piece's vertices. This is
+//    what makes the bound tight across folds of the other surface (a simplified mesh against its
+//    original: corners on the surface, several of its triangles under one patch).
+// The smallest of these bounds each patch. Patches whose bound exceeds the largest distance found
 // are split 1 -> 4 (three new corner queries each), the worst first, in rounds.
 #pragma once
 
@@ -13,6 +17,7 @@
 #include <vector>
 
 #include "lodkit/measure.h"
+#include "core/adjacency.h"
 #include "measure/bvh.h"
 
 namespace lod::measure {
@@ -27,6 +32,7 @@ struct RefineInput {
   // one triangle that may cover the whole patch. May be null.
   const std::vector<uint32_t>* triangle_closest = nullptr;
   const TriangleBvh* to = nullptr;
+  const core::TriangleAdjacency* neighbours = nullptr;  // of `to`, for candidates a patch's corners miss
   float tolerance = 0;  // object space: stop when the bound is within this of the largest distance
   uint64_t budget = 0;  // queries
   unsigned threads = 0;
@@ -46,7 +52,10 @@ RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& 
 
 // The bound of one patch. Candidate triangles for the convexity bound: each corner's closest and
 // `extra` (UINT32_MAX for none); `best` receives the candidate that gave the smallest bound.
+// `neighbours` (the adjacency of `to`, may be null) adds the candidates' neighbours when the bound is
+// above `enough`; below it the cheaper bound is returned as is.
 float patch_bound(const vec3f corners[3], const float distances[3], const uint32_t closest[3], uint32_t extra,
-                  const TriangleBvh& to, uint32_t* best = nullptr);
+                  const TriangleBvh& to, const core::TriangleAdjacency* neighbours, float enough,
+                  uint32_t* best = nullptr);
 
 }  // namespace lod::measure

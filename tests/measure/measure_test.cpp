@@ -9,6 +9,7 @@
 
 #include "core/shapes.h"
 #include "lodkit/error.h"
+#include "lodkit/simplify.h"
 #include "measure/triangle_distance.h"
 
 namespace lod {
@@ -233,6 +234,58 @@ TEST(MeasureRefine, BoundHoldsAgainstADenseBruteForceScan) {
   const Deviation coarse = compare(a, b, {.samples = 3, .edge_samples = false});
   EXPECT_LT(coarse.a_to_b.max, dense - 1e-3);
   EXPECT_EQ(coarse.a_to_b.max_bound, coarse.a_to_b.max);
+}
+
+// A big triangle cutting through a finely folded sheet (ridges and valleys along grid lines): every
+// patch spans several folds, so no single triangle of b bounds it. The bound must hold the true
+// maximum (a dense brute-force scan) and close in on it with a small budget.
+TEST(MeasureRefine, FoldedSurfaceIsBoundedTightlyAndSafely) {
+  Mesh a;
+  a.positions = {{0.05f, 0.05f, 0.005f}, {0.95f, 0.1f, 0.005f}, {0.4f, 0.9f, 0.0055f}};
+  a.indices = {0, 1, 2};
+  Mesh b = shapes::grid(40, 40);
+  for (float3& p : b.positions) {
+    const float x = p.x * 40 / 4;  // folds every 4 cells
+    const float saw = std::abs(x - 2 * std::round(x / 2));  // 0 .. 1
+    p.z = 0.008f * saw + 0.005f * p.y * p.y;
+  }
+  b.normals.clear();
+  const Deviation d = compare(a, b, {.samples = 3, .edge_samples = false, .refine = true,
+                                     .refine_tolerance = 1e-5f, .refine_budget = 30'000});
+  double dense = 0;
+  const int n = 240;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; i + j <= n; ++j) {
+      const float u = float(i) / n, v = float(j) / n, w = 1 - u - v;
+      const measure::vec3f p{w * 0.05f + u * 0.95f + v * 0.4f, w * 0.05f + u * 0.1f + v * 0.9f,
+                             w * 0.005f + u * 0.005f + v * 0.0055f};
+      float best = 1e30f;
+      for (size_t t = 0; t < b.triangle_count(); ++t)
+        best = std::min(best, measure::closest_on_triangle(p, b.positions[b.indices[3 * t]],
+                                                           b.positions[b.indices[3 * t + 1]],
+                                                           b.positions[b.indices[3 * t + 2]])
+                                  .distance_squared);
+      dense = std::max(dense, double(std::sqrt(best)));
+    }
+  const OneSidedDeviation& r = d.a_to_b;
+  EXPECT_GE(r.max_bound, dense - 1e-6);
+  EXPECT_LE(r.max_bound - r.max, 1e-5 * d.diagonal);
+  EXPECT_LE(r.refine_samples, 30'000u);
+}
+
+// A simplified surface lies within a fraction of its triangles' size of the original: corners sit on
+// the other surface, so the Lipschitz bound (distance + patch size) is far too loose, and a patch
+// spans several of the finer surface's triangles. The bound must still come within 5% of the max.
+TEST(MeasureRefine, SimplifiedSurfaceBoundIsTight) {
+  Mesh a = shapes::torus(1.0f, 0.3f, 96, 48);
+  for (float3& p : a.positions) p.z += 0.02f * std::sin(7 * p.x) * std::cos(5 * p.y);  // no symmetry
+  a.normals.clear();
+  SimplifyOptions so;
+  so.target_ratio = 0.25f;
+  const Mesh b = simplify(a, so).mesh;
+  const Deviation d = compare(a, b, {.refine = true, .refine_tolerance = 1e-5f});
+  EXPECT_GE(d.hausdorff_bound, d.hausdorff);
+  EXPECT_LE(d.hausdorff_bound, 1.05 * d.hausdorff);
 }
 
 TEST(MeasureCompare, SameResultOnAnyThreadCount) {
