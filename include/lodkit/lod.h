@@ -69,11 +69,12 @@ struct LodLevel {
   Mesh mesh;
   float ratio = 1;         // triangles / input triangles
   float engine_error = 0;  // the simplifier's error, accumulated along the chain (object space)
-  // Symmetric Hausdorff distance to the input measured by lod::compare (Metro-style sampling): the
-  // runtime's e_obj. With measure off, engine_error.
+  // Symmetric Hausdorff distance to the input measured by lod::compare (Metro-style sampling).
+  // With measure off, engine_error.
   float error = 0;
-  // A certified upper bound on it (lod::compare's refinement; >= error, can be loose where the
-  // refinement budget ran out). With measure off, engine_error.
+  // A certified upper bound on it (lod::compare's refinement to 1e-5 of the diagonal: typically a
+  // few percent above `error`; looser only where the refinement budget ran out): the runtime's
+  // e_obj and the switch distances. With measure off, engine_error (not certified).
   float error_bound = 0;
   float relative_error = 0;  // error / bounding-box diagonal
 };

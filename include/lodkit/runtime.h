@@ -55,9 +55,9 @@ struct RuntimeLevel {
   uint32_t triangles = 0;
 };
 
-// A chain's levels for the runtime: each level's measured Hausdorff distance to the input
-// (LodLevel::error; the certified but looser LodLevel::error_bound is not used), made
-// non-decreasing along the chain, and its triangle count.
+// A chain's levels for the runtime: each level's certified bound on its Hausdorff distance to the
+// input (LodLevel::error_bound, so a level never shows more than the threshold), made non-decreasing
+// along the chain, and its triangle count.
 std::vector<RuntimeLevel> runtime_levels(const LodChain& chain);
 
 // Object space to world space: world = x * p.x + y * p.y + z * p.z + translation (the columns of a

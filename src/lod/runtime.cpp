@@ -94,7 +94,7 @@ std::vector<RuntimeLevel> runtime_levels(const LodChain& chain) {
   std::vector<RuntimeLevel> out;
   float error = 0;
   for (const LodLevel& level : chain.levels) {
-    error = std::max(error, level.error);
+    error = std::max(error, level.error_bound);
     out.push_back({error, uint32_t(std::min<uint64_t>(level.mesh.triangle_count(), kNone))});
   }
   return out;

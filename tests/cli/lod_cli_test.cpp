@@ -148,7 +148,9 @@ TEST(CliLod, SharedVerticesWriteOneVertexBuffer) {
     EXPECT_EQ(doc["meshes"][i]["primitives"][0]["attributes"]["POSITION"], position) << "level " << i;
     const uint32_t prefix = doc["nodes"][i]["extras"]["lodkit"]["vertex_prefix"].get<uint32_t>();
     for (const uint32_t v : scene.primitives[i].mesh.indices) ASSERT_LT(v, prefix) << "level " << i;
-    if (i) EXPECT_LT(scene.primitives[i].mesh.triangle_count(), scene.primitives[i - 1].mesh.triangle_count());
+    if (i) {
+      EXPECT_LT(scene.primitives[i].mesh.triangle_count(), scene.primitives[i - 1].mesh.triangle_count());
+    }
   }
   if (!test::validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
   const test::ValidatorRun v = test::run_validator({dir / "s.glb"});

@@ -74,6 +74,8 @@ TEST(LodChain, ErrorBoundCoversAFinerMeasurement) {
     const Deviation d = compare(mesh, chain.levels[i].mesh, {.samples = 200'000, .seed = 99});
     EXPECT_GE(chain.levels[i].error_bound, float(d.hausdorff) * (1 - 1e-5f)) << "level " << i;
     EXPECT_GE(chain.levels[i].error_bound, chain.levels[i].error) << "level " << i;
+    // And it is tight enough to drive the runtime: within the refinement's 1e-5 of the diagonal.
+    EXPECT_LE(chain.levels[i].error_bound, chain.levels[i].error + 1.01e-5f * float(chain.diagonal)) << "level " << i;
     // The lighter measurement stored finds nearly the same maximum as the dense one.
     EXPECT_NEAR(chain.levels[i].error, float(d.hausdorff), 0.05f * float(d.hausdorff)) << "level " << i;
   }

@@ -551,13 +551,14 @@ TEST(RuntimeApi, IdsAndValidation) {
 }
 
 TEST(RuntimeApi, LevelsFromAChain) {
-  const LodChain chain = build_lod_chain(shapes::icosphere(3), {.levels = 3, .measure = false});
+  const LodChain chain = build_lod_chain(shapes::icosphere(3), {.levels = 3});
   const std::vector<RuntimeLevel> levels = runtime_levels(chain);
+  // The certified bound, not the sampled error.
   ASSERT_EQ(levels.size(), 3u);
   float error = 0;
   for (size_t i = 0; i < levels.size(); ++i) {
     EXPECT_EQ(levels[i].triangles, chain.levels[i].mesh.triangle_count());
-    error = std::max(error, chain.levels[i].error);
+    error = std::max(error, chain.levels[i].error_bound);
     EXPECT_EQ(levels[i].error, error);
   }
   EXPECT_EQ(levels[0].triangles, 1280u);

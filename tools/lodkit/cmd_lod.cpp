@@ -169,7 +169,7 @@ Command register_lod(CLI::App& root) {
             const double radius = 0.5 * chain.diagonal;
             std::vector<double> distances, coverage;
             for (const LodLevel& level : chain.levels)
-              distances.push_back(switch_distance(level.error, o->error_px, o->screen_height, fov));
+              distances.push_back(switch_distance(level.error_bound, o->error_px, o->screen_height, fov));
             for (size_t i = 0; i < chain.levels.size(); ++i) {
               const double d = i + 1 < chain.levels.size() ? distances[i + 1] : 0.0;
               coverage.push_back(d > 0 ? std::min(1.0, radius / (d * std::tan(fov / 2))) : 0.0);
@@ -207,7 +207,7 @@ Command register_lod(CLI::App& root) {
                            l.mesh.vertex_count(), l.error, 100.0 * l.relative_error, l.error_bound, distances[i]);
               }
               fmt::print("error: Hausdorff distance to the input (measured); bound: certified upper bound; switch at: the "
-                         "distance where the error is {} px ({} px screen, {} deg fov)\n",
+                         "distance where the bound is {} px ({} px screen, {} deg fov)\n",
                          o->error_px, o->screen_height, o->fov_degrees);
               fmt::print("loaded in {:.3f}s, built in {:.3f}s, wrote {} in {:.3f}s\n", load_seconds, build_seconds,
                          o->output, write_seconds);
