@@ -1,0 +1,79 @@
+// lodkit: skinned (articulated) models. Skeletons and animation sampling from glTF, linear blend
+// skinning on the CPU, and simplification whose LODs keep playing the original animations
+// (Houle 2000; lodkit's multi-pose quadrics go past his single simplification pose).
+//
+//   lod::Scene scene = lod::read_scene("character.glb");
+//   lod::Pose pose = lod::rest_pose(scene);
+//   lod::sample_animation(scene, 0, 0.5f, pose);               // clip 0 at t = 0.5 s
+//   auto world = lod::world_matrices(scene, pose);
+//   auto joints = lod::joint_matrices(scene, 0, world);        // skin 0
+//   lod::SkinnedVertices v;
+//   lod::skin_vertices(scene.primitives[0].mesh, joints, v);   // world-space positions and normals
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "lodkit/io.h"
+#include "lodkit/lod.h"
+#include "lodkit/simplify.h"
+
+namespace lod {
+
+// ---- small matrix helpers -----------------------------------------------------------------------
+using mat4 = std::array<float, 16>;  // column-major, like glTF: m[4 * column + row]
+
+mat4 identity_matrix();
+mat4 multiply(const mat4& a, const mat4& b);  // a * b
+// Inverse of an affine matrix (last row 0 0 0 1); a singular linear part gives the identity.
+mat4 affine_inverse(const mat4& m);
+mat4 compose_trs(const float3& translation, const float4& rotation, const float3& scale);
+float3 transform_point(const mat4& m, const float3& p);
+float3 transform_vector(const mat4& m, const float3& v);  // linear part only
+
+// ---- poses and animation ------------------------------------------------------------------------
+// The local transform of every node of a scene. Nodes given by a matrix keep it (glTF does not
+// animate them); the others are translation * rotation * scale.
+struct Pose {
+  std::vector<float3> translation;
+  std::vector<float4> rotation;  // unit quaternions x, y, z, w
+  std::vector<float3> scale;
+};
+
+// The nodes' own transforms (the pose the file was saved in).
+Pose rest_pose(const Scene& scene);
+// The largest key time over the clip's channels, seconds (0 for an empty clip).
+float animation_duration(const Scene& scene, size_t animation);
+// Overwrites the channels of clip `animation` at `time` (clamped to its keys): step, linear (slerp
+// for rotations, shortest arc) and cubic spline (glTF's Hermite form). Rotations come out unit
+// length. Morph-weight channels are ignored. Throws lod::Error (usage) for a bad clip index.
+void sample_animation(const Scene& scene, size_t animation, float time, Pose& pose);
+// World matrix of every node: parent's world * local. Throws lod::Error (bad_input) on a cycle.
+std::vector<mat4> world_matrices(const Scene& scene, const Pose& pose);
+// Joint matrices of skin `skin` (glTF): world(joint) * inverse_bind_matrix(joint). Skinned vertices
+// land in world space (the skinned mesh node's own transform is ignored, as glTF requires).
+std::vector<mat4> joint_matrices(const Scene& scene, size_t skin, const std::vector<mat4>& world);
+
+// A primitive that is skinned: its node and that node's skin.
+struct SkinnedPrimitive {
+  uint32_t primitive = 0;  // index into Scene::primitives
+  uint32_t node = 0;
+  uint32_t skin = 0;
+};
+// Every primitive instanced by a node that has a skin, and whose mesh has joints and weights.
+std::vector<SkinnedPrimitive> skinned_primitives(const Scene& scene);
+
+// ---- linear blend skinning ----------------------------------------------------------------------
+// p' = sum_i w_i J[j_i] p over a vertex's influences; normals by the blended linear part,
+// renormalised. Structure of arrays: positions, normals, joints and weights are separate streams.
+struct SkinnedVertices {
+  std::vector<float3> positions;
+  std::vector<float3> normals;  // empty when the mesh has none
+};
+void skin_vertices(const Mesh& mesh, std::span<const mat4> joints, SkinnedVertices& out, unsigned threads = 1);
+// The blended matrix sum_i w_i J[j_i] of one vertex.
+mat4 blend_matrix(std::span<const mat4> joints, const ushort4& joint, const float4& weight);
+
+}  // namespace lod
