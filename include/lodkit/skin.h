@@ -76,4 +76,48 @@ void skin_vertices(const Mesh& mesh, std::span<const mat4> joints, SkinnedVertic
 // The blended matrix sum_i w_i J[j_i] of one vertex.
 mat4 blend_matrix(std::span<const mat4> joints, const ushort4& joint, const float4& weight);
 
+// ---- skinned simplification ---------------------------------------------------------------------
+enum class SkinMode : uint8_t {
+  // Houle (2000): simplify in one pose (SkinSimplifyOptions::poses[0]), then carry each survivor's
+  // world-space displacement back to bind space through its blended joint matrix; the survivor keeps
+  // its weights.
+  houle,
+  // Subset placement in the bind pose: only input vertices, weights untouched (what meshoptimizer and
+  // gltfpack effectively do).
+  subset,
+  // lodkit's default: one quadric per sampled pose, the bind-space position optimal over all of them,
+  // the survivor's weights chosen among the ends' and their blend by the same error, and a bone-weight
+  // term against collapsing across different influences.
+  multipose,
+};
+const char* skin_mode_name(SkinMode mode);  // "houle", "subset", "multipose"
+
+// Joint matrices of skin `skin` in `count` poses spread evenly over the time of every clip of the
+// scene, clip after clip (the rest pose alone when there is no clip).
+std::vector<std::vector<mat4>> sample_poses(const Scene& scene, uint32_t skin, uint32_t count);
+// A "mid-range" pose: per node, the mean of its local transforms over `samples` poses spread over
+// every clip (rotations averaged in one hemisphere, renormalised): each joint half way through its
+// range of motion. The rest pose when there is no clip.
+Pose mid_range_pose(const Scene& scene, uint32_t samples = 64);
+
+struct SkinSimplifyOptions {
+  SkinMode mode = SkinMode::multipose;
+  SimplifyOptions simplify;  // targets, safety, threads; the metric applies to houle and subset
+  // Joint matrices of the poses (lod::joint_matrices, lod::sample_poses). multipose sums its quadrics
+  // over all of them; houle simplifies in poses[0]; subset ignores them.
+  std::vector<std::vector<mat4>> poses;
+  std::vector<float> pose_weights;  // multipose: importance per pose; empty: all alike
+  // multipose: collapsing an edge whose ends have disjoint influences costs as much as moving by
+  // bone_weight times its length (half the L1 distance of the weights scales it).
+  float bone_weight = 1.0f;
+};
+
+// Simplifies a skinned mesh given in bind space (positions, normals, joints and weights) so that it
+// keeps playing the skeleton's clips. The result is in bind space, and every vertex has at most four
+// influences with valid joints and weights summing to 1 within 1e-6 (subset: the input's, untouched).
+// SimplifyResult::error is the engine's error: in poses[0] (houle), in the bind pose (subset), or the
+// root mean square over the poses (multipose). Throws lod::Error (usage) for a mesh without joints
+// and weights, joints outside the poses, or a mode without the poses it needs.
+SimplifyResult simplify_skinned(const Mesh& mesh, const SkinSimplifyOptions& options);
+
 }  // namespace lod

@@ -21,6 +21,40 @@ namespace lod::collapse {
 using core::Quadric;
 using core::QuadricD;
 
+// Planes through the border edges at `u` in triangle t (corners p, unit normal `unit`), perpendicular
+// to t, weighted by border_weight * length^2 * importance.
+inline void add_border_planes(const State& state, uint32_t u, uint32_t t, const vec3d* p, const vec3d& unit,
+                              double importance, QuadricD& q) {
+  for (uint32_t k = 0; k < 3; ++k) {
+    const uint32_t i = state.corner_position(t, k), j = state.corner_position(t, (k + 1) % 3);
+    if ((i != u && j != u) || !is_border_edge(state, u, i == u ? j : i)) continue;
+    const vec3d edge = p[(k + 1) % 3] - p[k];
+    const vec3d m = cross(edge, unit);
+    const double len = length(m);
+    if (!(len > 0)) continue;
+    const vec3d normal = m * (1.0 / len);
+    QuadricD plane = core::plane_quadric(normal, -dot(normal, p[k]),
+                                         state.options.border_weight * length_squared(edge) * importance);
+    plane.w = 0;
+    q += plane;
+  }
+}
+
+// What triangle t contributes to the quadric of its corner position u, with the corners at p (any
+// frame: the rest positions, or a skinned pose): its area-weighted plane and, when `constrained`,
+// the planes through its border edges at u.
+inline void add_face_quadric(const State& state, uint32_t u, uint32_t t, const vec3d* p, double importance,
+                             bool constrained, QuadricD& q) {
+  const vec3d n = cross(p[1] - p[0], p[2] - p[0]);
+  const double double_area = length(n);
+  if (!(double_area > 0)) return;
+  const vec3d unit = n * (1.0 / double_area);
+  QuadricD face = core::plane_quadric(unit, -dot(unit, p[0]), 0.5 * double_area * importance);
+  face.w = 0.5 * double_area;  // the normalising area is not scaled by importance
+  q += face;
+  if (constrained) add_border_planes(state, u, t, p, unit, importance, q);
+}
+
 class QuadricMetric {
  public:
   QuadricMetric(bool constrained, bool memoryless, std::vector<Channel> channels)
@@ -79,36 +113,11 @@ class QuadricMetric {
       for (const uint32_t t : star) {
         vec3d p[3];
         for (uint32_t k = 0; k < 3; ++k) p[k] = state.normalized(state.corner_position(t, k));
-        const vec3d n = cross(p[1] - p[0], p[2] - p[0]);
-        const double double_area = length(n);
-        if (!(double_area > 0)) continue;
-        const vec3d unit = n * (1.0 / double_area);
-        QuadricD face = core::plane_quadric(unit, -dot(unit, p[0]), 0.5 * double_area * importance);
-        face.w = 0.5 * double_area;  // the normalising area is not scaled by importance
-        q += face;
-        if (constrained_) add_border_planes(state, uint32_t(u), t, p, unit, importance, q);
+        add_face_quadric(state, uint32_t(u), t, p, importance, constrained_, q);
       }
       quadric_[u] = q;
       if (!attributes_.empty()) attributes_.rebuild_position(state, uint32_t(u));
     });
-  }
-
-  // Planes through the border edges at `u` in triangle t, perpendicular to t.
-  void add_border_planes(const State& state, uint32_t u, uint32_t t, const vec3d* p, const vec3d& unit,
-                         double importance, QuadricD& q) const {
-    for (uint32_t k = 0; k < 3; ++k) {
-      const uint32_t i = state.corner_position(t, k), j = state.corner_position(t, (k + 1) % 3);
-      if ((i != u && j != u) || !is_border_edge(state, u, i == u ? j : i)) continue;
-      const vec3d edge = p[(k + 1) % 3] - p[k];
-      const vec3d m = cross(edge, unit);
-      const double len = length(m);
-      if (!(len > 0)) continue;
-      const vec3d normal = m * (1.0 / len);
-      QuadricD plane = core::plane_quadric(normal, -dot(normal, p[k]),
-                                           state.options.border_weight * length_squared(edge) * importance);
-      plane.w = 0;
-      q += plane;
-    }
   }
 
   // Lindstrom–Turk: keep the volume enclosed by the star (one plane, the volume gradient) and, when

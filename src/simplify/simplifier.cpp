@@ -18,6 +18,7 @@
 #include "core/union_find.h"
 #include "lodkit/error.h"
 #include "simplify/edge_length.h"
+#include "simplify/multipose_metric.h"
 #include "simplify/quadric_metric.h"
 #include "simplify/record.h"
 
@@ -936,8 +937,11 @@ void check_options(const Mesh& mesh, const SimplifyOptions& o) {
 }  // namespace
 }  // namespace collapse
 
-SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
-  using namespace collapse;
+namespace collapse {
+
+// The engine around any metric: the quadric family, or (with `multipose`) the multi-pose metric of
+// skinned meshes, whose chosen influences then replace the output's joints and weights.
+SimplifyResult simplify_with(const Mesh& mesh, const SimplifyOptions& options, const MultiposeInput* multipose) {
   const auto start = clock::now();
   check_options(mesh, options);
   SimplifyResult result;
@@ -1002,19 +1006,20 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   result.record.stride = state.layout.stride;
   const auto engine_start = clock::now();
   result.seconds_setup = seconds(start, engine_start);
-  switch (options.metric) {
-    case Metric::edge_length: {
-      EdgeLengthMetric metric;
-      run(state, metric, {}, target, cost_limit, result);
-      break;
-    }
-    default: {
-      const bool constrained = options.metric == Metric::constrained_qem || options.metric == Metric::constrained_memoryless;
-      const bool memoryless = options.metric == Metric::memoryless || options.metric == Metric::constrained_memoryless;
-      QuadricMetric metric(constrained, memoryless, channels);
-      run(state, metric, channels, target, cost_limit, result);
-      break;
-    }
+  std::vector<Influences> final_influences;  // multipose: per input vertex
+  if (multipose) {
+    MultiposeMetric metric(*multipose);
+    run(state, metric, {}, target, cost_limit, result);
+    final_influences.resize(mesh.vertex_count());
+    for (size_t v = 0; v < mesh.vertex_count(); ++v) final_influences[v] = metric.influences(state.position_of[v]);
+  } else if (options.metric == Metric::edge_length) {
+    EdgeLengthMetric metric;
+    run(state, metric, {}, target, cost_limit, result);
+  } else {
+    const bool constrained = options.metric == Metric::constrained_qem || options.metric == Metric::constrained_memoryless;
+    const bool memoryless = options.metric == Metric::memoryless || options.metric == Metric::constrained_memoryless;
+    QuadricMetric metric(constrained, memoryless, channels);
+    run(state, metric, channels, target, cost_limit, result);
   }
   const auto engine_end = clock::now();
   result.seconds_collapse = seconds(engine_start, engine_end);
@@ -1024,6 +1029,12 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   const Snapshot snapshot{state.position_of, state.position, state.moves, state.corners,
                           state.alive, &state.layout, state.attributes};
   result.mesh = compact(mesh, snapshot, &result.vertex_origin, &result.triangle_origin);
+  if (multipose)
+    for (size_t v = 0; v < result.mesh.vertex_count(); ++v) {
+      const Influences& w = final_influences[result.vertex_origin[v]];
+      result.mesh.joints[v] = {w.joint[0], w.joint[1], w.joint[2], w.joint[3]};
+      result.mesh.weights[v] = {w.weight[0], w.weight[1], w.weight[2], w.weight[3]};
+    }
   result.relative_error = result.diagonal > 0 ? result.error / result.diagonal : 0;
   result.input_triangles = triangles;
   result.input_vertices = mesh.vertex_count();
@@ -1031,6 +1042,26 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   result.output_vertices = result.mesh.vertex_count();
   result.seconds_total = seconds(start, clock::now());
   return result;
+}
+
+SimplifyResult simplify_multipose(const Mesh& mesh, const SimplifyOptions& options, const MultiposeInput& input) {
+  if (mesh.joints.empty() || mesh.weights.empty()) throw_usage("simplify: the multi-pose metric needs joints and weights");
+  if (input.poses.empty()) throw_usage("simplify: the multi-pose metric needs at least one pose");
+  for (const auto& pose : input.poses)
+    if (pose.size() != input.poses[0].size()) throw_usage("simplify: every pose needs the same joint count");
+  if (!input.pose_weights.empty() && input.pose_weights.size() != input.poses.size())
+    throw_usage("simplify: pose_weights needs one weight per pose");
+  for (const float w : input.pose_weights)
+    if (!(w >= 0) || !std::isfinite(w)) throw_usage("simplify: pose weights must be finite and >= 0");
+  SimplifyOptions o = options;
+  o.metric = Metric::constrained_qem;  // for the engine's border rules: the metric has border planes
+  return simplify_with(mesh, o, &input);
+}
+
+}  // namespace collapse
+
+SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
+  return collapse::simplify_with(mesh, options, nullptr);
 }
 
 }  // namespace lod
