@@ -123,8 +123,13 @@ class MultiposeMetric {
         for (uint32_t k = 0; k < K; ++k) {
           vec3d p[3];
           for (uint32_t c = 0; c < 3; ++c) p[c] = posed[size_t(state.corner_position(t, c)) * K + k];
-          QuadricD q;
-          add_face_quadric(state, uint32_t(u), t, p, importance, constrained_, q);
+          add_face_quadric(state, uint32_t(u), t, p, importance, constrained_, quadric_[u * K + k]);
+        }
+      // Each pose's share, applied once per sum (with one pose it is 1: the sums are bind-pose QEM's).
+      for (uint32_t k = 0; k < K; ++k)
+        if (pose_weight_[k] != 1.0) {
+          const QuadricD q = quadric_[u * K + k];
+          quadric_[u * K + k] = {};
           quadric_[u * K + k].add_scaled(q, pose_weight_[k]);
         }
     });
@@ -207,7 +212,7 @@ class MultiposeMetric {
     out.b0 += x.m[0][0] * g[0] + x.m[1][0] * g[1] + x.m[2][0] * g[2];
     out.b1 += x.m[0][1] * g[0] + x.m[1][1] * g[1] + x.m[2][1] * g[2];
     out.b2 += x.m[0][2] * g[0] + x.m[1][2] * g[1] + x.m[2][2] * g[2];
-    out.c += t[0] * (g[0] + b[0]) + t[1] * (g[1] + b[1]) + t[2] * (g[2] + b[2]);
+    out.c += q.c + t[0] * (g[0] + b[0]) + t[1] * (g[1] + b[1]) + t[2] * (g[2] + b[2]);
     out.w += q.w;
   }
 
