@@ -62,6 +62,9 @@ struct LodOptions {
   // (lod::optimize_vertex_cache, lod::vertex_fetch_remap); geomorph tables follow.
   bool optimize = true;
   SimplifyOptions simplify;  // metric, attribute weights, locks, threads; the target fields are set per level
+  // The simplifier each level is made with; empty: lod::simplify. Skinned chains pass
+  // lod::simplify_skinned with their poses (levels are then measured in the bind pose).
+  std::function<SimplifyResult(const Mesh&, const SimplifyOptions&)> simplifier;
   std::function<void(double fraction)> progress;
 };
 

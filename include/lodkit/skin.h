@@ -76,6 +76,15 @@ void skin_vertices(const Mesh& mesh, std::span<const mat4> joints, SkinnedVertic
 // The blended matrix sum_i w_i J[j_i] of one vertex.
 mat4 blend_matrix(std::span<const mat4> joints, const ushort4& joint, const float4& weight);
 
+// ---- skeletal geomorph ---------------------------------------------------------------------------
+// Houle's skinned geomorph: the finer and the coarser level are skinned in this frame, then morphed
+// with the LOD chain's table (lod::Geomorph): P' = (1 - t) skin(P) + t skin(P_target), normals
+// likewise and renormalised. At t = 0 it is the skinned finer level, at t = 1 every vertex sits
+// exactly on its skinned target (the coarser level's triangles). `coarser_skinned` is scratch for
+// the coarser level, kept between frames so that nothing is allocated per frame.
+void skin_and_morph(const Mesh& finer, const Mesh& coarser, const Geomorph& table, std::span<const mat4> joints,
+                    float t, SkinnedVertices& out, SkinnedVertices& coarser_skinned, unsigned threads = 1);
+
 // ---- skinned simplification ---------------------------------------------------------------------
 enum class SkinMode : uint8_t {
   // Houle (2000): simplify in one pose (SkinSimplifyOptions::poses[0]), then carry each survivor's

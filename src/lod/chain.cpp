@@ -100,7 +100,7 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
         so.keep_vertices = true;
         so.normal_weight = so.uv_weight = so.color_weight = 0;
       }
-      SimplifyResult r = simplify(source, so);
+      SimplifyResult r = o.simplifier ? o.simplifier(source, so) : simplify(source, so);
       if (o.morph && previous) chain.morphs.push_back(geomorph_from_record(source, r));
       level.engine_error = (previous ? chain.levels.back().engine_error : 0.0f) + r.error;
       level_origin.resize(r.vertex_origin.size());

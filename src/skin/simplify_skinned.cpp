@@ -150,6 +150,25 @@ SimplifyResult simplify_skinned(const Mesh& mesh, const SkinSimplifyOptions& opt
   return r;
 }
 
+void skin_and_morph(const Mesh& finer, const Mesh& coarser, const Geomorph& table, std::span<const mat4> joints,
+                    float t, SkinnedVertices& out, SkinnedVertices& coarser_skinned, unsigned threads) {
+  if (table.target.size() != finer.vertex_count())
+    throw_usage("skin_and_morph: the table has " + std::to_string(table.target.size()) + " entries for " +
+                std::to_string(finer.vertex_count()) + " vertices");
+  for (const uint32_t target : table.target)
+    if (target >= coarser.vertex_count()) throw_usage("skin_and_morph: a target is outside the coarser level");
+  skin_vertices(finer, joints, out, threads);
+  if (t <= 0) return;
+  skin_vertices(coarser, joints, coarser_skinned, threads);
+  morph_positions(out.positions, coarser_skinned.positions, table, t, out.positions);  // in place: v reads v only
+  if (out.normals.empty() || coarser_skinned.normals.empty()) return;
+  const float s = t >= 1 ? 0.0f : 1 - t, u = t >= 1 ? 1.0f : t;
+  for (size_t v = 0; v < out.normals.size(); ++v) {
+    const float3 &a = out.normals[v], &b = coarser_skinned.normals[table.target[v]];
+    out.normals[v] = t >= 1 ? b : normalized3({s * a.x + u * b.x, s * a.y + u * b.y, s * a.z + u * b.z});
+  }
+}
+
 std::vector<std::vector<mat4>> sample_poses(const Scene& scene, uint32_t skin, uint32_t count) {
   if (skin >= scene.skins.size()) throw_usage("sample_poses: skin " + std::to_string(skin) + " does not exist");
   if (count == 0) throw_usage("sample_poses: ask for at least one pose");

@@ -209,6 +209,49 @@ TEST(SimplifySkinned, MultiposeIsBestOverTheRangeOfMotion) {
   EXPECT_LE(worst[2], worst[1]);
 }
 
+// A skinned chain built with the multi-pose simplifier, then the skeletal geomorph in several frames:
+// t = 0 is the skinned finer level, t = 1 puts every vertex exactly on its skinned target.
+TEST(SkinnedGeomorph, EndsAreTheSkinnedLevelsInAnyFrame) {
+  const Mesh m = arm();
+  std::vector<std::vector<mat4>> poses;
+  for (int k = 0; k < 6; ++k) poses.push_back(bent(2.0f * float(k) / 5));
+  LodOptions lo;
+  lo.ratios = {1.0f, 0.4f, 0.1f};
+  lo.morph = true;
+  lo.measure = false;
+  lo.simplifier = [&](const Mesh& mesh, const SimplifyOptions& so) {
+    SkinSimplifyOptions o;
+    o.simplify = so;
+    o.poses = poses;
+    return simplify_skinned(mesh, o);
+  };
+  const LodChain chain = build_lod_chain(m, lo);
+  ASSERT_EQ(chain.levels.size(), 3u);
+  ASSERT_EQ(chain.morphs.size(), 2u);
+  for (const LodLevel& level : chain.levels) expect_valid_influences(level.mesh, 2);
+  SkinnedVertices out, scratch, fine, coarse;
+  for (const float angle : {0.0f, 0.7f, 1.9f}) {
+    const std::vector<mat4> pose = bent(angle);
+    for (size_t i = 0; i + 1 < chain.levels.size(); ++i) {
+      const Mesh &finer = chain.levels[i].mesh, &coarser = chain.levels[i + 1].mesh;
+      skin_vertices(finer, pose, fine);
+      skin_vertices(coarser, pose, coarse);
+      skin_and_morph(finer, coarser, chain.morphs[i], pose, 0.0f, out, scratch);
+      EXPECT_EQ(out.positions, fine.positions);
+      skin_and_morph(finer, coarser, chain.morphs[i], pose, 1.0f, out, scratch);
+      for (size_t v = 0; v < finer.vertex_count(); ++v)
+        ASSERT_EQ(out.positions[v], coarse.positions[chain.morphs[i].target[v]]) << "level " << i << " vertex " << v;
+      // Half way: the midpoint of the two skinned positions.
+      skin_and_morph(finer, coarser, chain.morphs[i], pose, 0.5f, out, scratch);
+      for (size_t v = 0; v < finer.vertex_count(); v += 7) {
+        const float3 &a = fine.positions[v], &b = coarse.positions[chain.morphs[i].target[v]];
+        EXPECT_NEAR(out.positions[v].x, 0.5f * (a.x + b.x), 1e-6f);
+        EXPECT_NEAR(out.positions[v].y, 0.5f * (a.y + b.y), 1e-6f);
+      }
+    }
+  }
+}
+
 TEST(SimplifySkinned, BadInputIsAUsageError) {
   const Mesh m = arm(8, 6);
   SkinSimplifyOptions o;
