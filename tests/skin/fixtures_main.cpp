@@ -1,0 +1,27 @@
+// lodkit_fixtures OUT_DIR [MAN_OFF]: writes the skinned test characters (humanoid.glb, and man.glb
+// when man.off is there) for the skin benchmark and the README.
+#include <cstdio>
+#include <exception>
+
+#include "lodkit/error.h"
+#include "skin/fixtures.h"
+
+int main(int argc, char** argv) {
+  if (argc < 2 || argc > 3) {
+    std::fprintf(stderr, "usage: lodkit_fixtures OUT_DIR [MAN_OFF]   (MAN_OFF defaults to %s/man.off)\n", LODKIT_CORPUS_DIR);
+    return 1;
+  }
+  const std::filesystem::path man = argc > 2 ? std::filesystem::path(argv[2]) : std::filesystem::path(LODKIT_CORPUS_DIR) / "man.off";
+  try {
+    for (const auto& path : lod::fixtures::write_fixtures(argv[1], man)) std::printf("%s\n", path.string().c_str());
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(man, ec)) std::fprintf(stderr, "lodkit_fixtures: %s is absent, man.glb skipped\n", man.string().c_str());
+  } catch (const lod::Error& e) {
+    std::fprintf(stderr, "lodkit_fixtures: %s\n", e.what());
+    return e.category() == lod::ErrorCategory::usage ? 1 : e.category() == lod::ErrorCategory::bad_input ? 2 : 3;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "lodkit_fixtures: %s\n", e.what());
+    return 3;
+  }
+  return 0;
+}
