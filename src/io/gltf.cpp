@@ -1279,8 +1279,144 @@ tg::Value json_to_value(const nlohmann::json& j) {
   }
 }
 
+// Skins and animations of a Scene without source, as accessors over model.buffers[0] (which
+// rebuild_geometry then packs with the geometry). Everything a validator would reject is refused
+// with a usage error naming the skin or channel: lodkit writes only valid glTF.
+class SkinAnimationWriter {
+ public:
+  explicit SkinAnimationWriter(tg::Model& model) : model_(model) {
+    model_.buffers.resize(1);
+  }
+
+  void add_skins(const Scene& scene) {
+    const size_t nodes = scene.nodes.size();
+    for (size_t s = 0; s < scene.skins.size(); ++s) {
+      const Skin& in = scene.skins[s];
+      const std::string where = "cannot write glTF: skins[" + str(s) + "]";
+      if (in.joints.empty()) throw_usage(where + " has no joints");
+      tg::Skin skin;
+      skin.name = valid_utf8(in.name);
+      for (const int32_t joint : in.joints) {
+        if (joint < 0 || size_t(joint) >= nodes) throw_usage(where + " has joint node " + std::to_string(joint) + " of " + str(nodes));
+        skin.joints.push_back(joint);
+      }
+      if (in.skeleton >= 0) {
+        if (size_t(in.skeleton) >= nodes) throw_usage(where + " has skeleton node " + std::to_string(in.skeleton) + " of " + str(nodes));
+        skin.skeleton = in.skeleton;
+      }
+      // No matrices means identities in glTF too.
+      if (!in.inverse_bind_matrices.empty()) {
+        if (in.inverse_bind_matrices.size() != in.joints.size())
+          throw_usage(where + " has " + str(in.inverse_bind_matrices.size()) + " inverse bind matrices for " +
+                      str(in.joints.size()) + " joints");
+        std::vector<float> flat;
+        flat.reserve(16 * in.inverse_bind_matrices.size());
+        for (const auto& m : in.inverse_bind_matrices) {
+          for (const float v : m)
+            if (!std::isfinite(v)) throw_usage(where + " has a non-finite inverse bind matrix");
+          // glTF requires affine matrices (last row 0 0 0 1).
+          if (m[3] != 0 || m[7] != 0 || m[11] != 0 || m[15] != 1) throw_usage(where + " has an inverse bind matrix that is not affine");
+          flat.insert(flat.end(), m.begin(), m.end());
+        }
+        skin.inverseBindMatrices = add_accessor(flat, TINYGLTF_TYPE_MAT4, 16);
+      }
+      model_.skins.push_back(std::move(skin));
+    }
+  }
+
+  void add_animations(const Scene& scene) {
+    for (size_t a = 0; a < scene.animations.size(); ++a) {
+      const Animation& in = scene.animations[a];
+      tg::Animation anim;
+      anim.name = valid_utf8(in.name);
+      std::vector<std::pair<const std::vector<float>*, int>> inputs;  // key times already written
+      std::vector<std::pair<int32_t, AnimationPath>> targets;
+      for (size_t c = 0; c < in.channels.size(); ++c) {
+        const AnimationChannel& ch = in.channels[c];
+        const std::string where = "cannot write glTF: animations[" + str(a) + "].channels[" + str(c) + "]";
+        check_channel(ch, scene, where);
+        // glTF allows one channel per node and property in an animation.
+        const std::pair<int32_t, AnimationPath> target{ch.node, ch.path};
+        if (std::find(targets.begin(), targets.end(), target) != targets.end())
+          throw_usage(where + " animates the same node and property as an earlier channel");
+        targets.push_back(target);
+        // Channels with the same key times share one input accessor.
+        int input = -1;
+        for (const auto& [times, accessor] : inputs)
+          if (*times == ch.times) input = accessor;
+        if (input < 0) {
+          input = add_accessor(ch.times, TINYGLTF_TYPE_SCALAR, 1);
+          model_.accessors[size_t(input)].minValues = {ch.times.front()};  // required for sampler inputs
+          model_.accessors[size_t(input)].maxValues = {ch.times.back()};
+          inputs.push_back({&ch.times, input});
+        }
+        tg::AnimationSampler sampler;
+        sampler.input = input;
+        const int type = ch.path == AnimationPath::rotation ? TINYGLTF_TYPE_VEC4
+                         : ch.path == AnimationPath::weights ? TINYGLTF_TYPE_SCALAR
+                                                              : TINYGLTF_TYPE_VEC3;
+        sampler.output = add_accessor(ch.values, type, type_components(type));
+        sampler.interpolation = ch.interpolation == Interpolation::step     ? "STEP"
+                                : ch.interpolation == Interpolation::linear ? "LINEAR"
+                                                                            : "CUBICSPLINE";
+        anim.samplers.push_back(std::move(sampler));
+        tg::AnimationChannel channel;
+        channel.sampler = int(anim.samplers.size() - 1);
+        channel.target_node = ch.node;
+        channel.target_path = ch.path == AnimationPath::translation ? "translation"
+                              : ch.path == AnimationPath::rotation  ? "rotation"
+                              : ch.path == AnimationPath::scale     ? "scale"
+                                                                    : "weights";
+        anim.channels.push_back(std::move(channel));
+      }
+      if (anim.channels.empty()) throw_usage("cannot write glTF: animations[" + str(a) + "] has no channels");
+      model_.animations.push_back(std::move(anim));
+    }
+  }
+
+ private:
+  void check_channel(const AnimationChannel& ch, const Scene& scene, const std::string& where) const {
+    if (ch.node < 0 || size_t(ch.node) >= scene.nodes.size())
+      throw_usage(where + " targets node " + std::to_string(ch.node) + " of " + str(scene.nodes.size()));
+    if (scene.nodes[size_t(ch.node)].has_matrix) throw_usage(where + " animates a node given by a matrix");
+    const size_t expected = ch.path == AnimationPath::rotation ? 4 : ch.path == AnimationPath::weights ? ch.components : 3;
+    if (ch.components != expected || ch.components == 0)
+      throw_usage(where + " has " + str(ch.components) + " components per key");
+    if (ch.times.empty()) throw_usage(where + " has no keys");
+    for (size_t k = 0; k < ch.times.size(); ++k)
+      if (!std::isfinite(ch.times[k]) || ch.times[k] < 0 || (k > 0 && !(ch.times[k] > ch.times[k - 1])))
+        throw_usage(where + ": key times must be finite, non-negative and increasing (key " + str(k) + ")");
+    const size_t per_key = (ch.interpolation == Interpolation::cubic_spline ? 3 : 1) * size_t(ch.components);
+    if (ch.values.size() % per_key != 0 || ch.values.size() / per_key != ch.times.size())
+      throw_usage(where + " has " + str(ch.values.size()) + " values for " + str(ch.times.size()) + " keys");
+    for (const float v : ch.values)
+      if (!std::isfinite(v)) throw_usage(where + " has a non-finite value");
+  }
+
+  // A float accessor of values.size() / components elements in its own (4-aligned) bufferView.
+  int add_accessor(const std::vector<float>& values, int type, size_t components) {
+    std::vector<unsigned char>& data = model_.buffers[0].data;
+    tg::BufferView view;
+    view.buffer = 0;
+    view.byteOffset = data.size();
+    view.byteLength = values.size() * sizeof(float);
+    const auto* bytes = reinterpret_cast<const unsigned char*>(values.data());
+    data.insert(data.end(), bytes, bytes + view.byteLength);  // floats keep the buffer 4-aligned
+    model_.bufferViews.push_back(std::move(view));
+    tg::Accessor acc;
+    acc.bufferView = int(model_.bufferViews.size() - 1);
+    acc.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+    acc.type = type;
+    acc.count = values.size() / components;
+    model_.accessors.push_back(std::move(acc));
+    return int(model_.accessors.size() - 1);
+  }
+
+  tg::Model& model_;
+};
+
 // A minimal document for a Scene without source: meshes by gltf_mesh, materials named from
-// material_names, the Scene's nodes (or one node per mesh), one scene.
+// material_names, the Scene's nodes (or one node per mesh) with their skins, the animations, one scene.
 tg::Model model_from_scene(const Scene& scene, std::vector<Slot>& slots) {
   tg::Model model;
   model.asset.version = "2.0";
@@ -1316,6 +1452,13 @@ tg::Model model_from_scene(const Scene& scene, std::vector<Slot>& slots) {
         auto it = dense_mesh.find(uint32_t(in.mesh));
         if (it != dense_mesh.end()) node.mesh = it->second;
       }
+      // glTF: a skin belongs to a node with a mesh.
+      if (in.skin >= 0) {
+        if (size_t(in.skin) >= scene.skins.size())
+          throw_usage("cannot write glTF: nodes[" + str(model.nodes.size()) + "] uses skin " + std::to_string(in.skin) + " of " +
+                      str(scene.skins.size()));
+        if (node.mesh >= 0) node.skin = in.skin;
+      }
       for (int32_t child : in.children)
         if (child >= 0 && size_t(child) < scene.nodes.size()) node.children.push_back(child);
       if (!in.lod_ids.empty()) {
@@ -1343,6 +1486,11 @@ tg::Model model_from_scene(const Scene& scene, std::vector<Slot>& slots) {
     if (out_scene.nodes.empty())
       for (size_t n = 0; n < scene.nodes.size(); ++n)
         if (scene.nodes[n].parent < 0) out_scene.nodes.push_back(int(n));
+    if (!scene.skins.empty() || !scene.animations.empty()) {
+      SkinAnimationWriter writer(model);
+      writer.add_skins(scene);
+      writer.add_animations(scene);
+    }
   } else {
     for (size_t m = 0; m < model.meshes.size(); ++m) {
       tg::Node node;
