@@ -16,6 +16,9 @@ packages=(
   gnuplot-nox                            # bench plots (rate-distortion)
   nodejs                                 # gltf-validator (Khronos) in the tests; npm ships with it
   time                                   # /usr/bin/time -v for peak memory in benchmarks
+  # lodkit render: headless EGL + OpenGL 4.5 on Mesa's llvmpipe, the libepoxy GL loader (it dlopens
+  # libGL.so.1 for the GL entry points), FreeType and DejaVu for labels
+  libegl-dev libegl-mesa0 libgl1-mesa-dri libgl1 libepoxy-dev libfreetype-dev fonts-dejavu-core
 )
 # Debian's nodejs comes without npm (NodeSource's bundles it): ask for Debian's npm only when absent.
 command -v npm >/dev/null || packages+=(npm)

@@ -23,6 +23,7 @@ Command register_compare(CLI::App& root);
 Command register_optimize(CLI::App& root);
 Command register_analyze(CLI::App& root);
 Command register_lod(CLI::App& root);
+Command register_render(CLI::App& root);
 
 // Shared option parsers (simplify, lod): --metric NAME and --attributes normal=W,uv=W,color=W.
 Metric parse_metric(const std::string& name);

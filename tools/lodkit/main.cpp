@@ -13,7 +13,7 @@ int main(int argc, char** argv) {
   const lod::cli::Command commands[] = {lod::cli::register_info(app), lod::cli::register_convert(app),
                                         lod::cli::register_simplify(app), lod::cli::register_compare(app),
                                         lod::cli::register_lod(app), lod::cli::register_optimize(app),
-                                        lod::cli::register_analyze(app)};
+                                        lod::cli::register_analyze(app), lod::cli::register_render(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

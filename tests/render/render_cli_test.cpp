@@ -1,0 +1,188 @@
+// lodkit render end to end: single images, heat maps from lodkit compare, contact sheets of a
+// lodkit lod chain, turntables, determinism across processes, and the missing-driver path.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "core/shapes.h"
+#include "lodkit/io.h"
+#include "lodkit/render.h"
+#include "render/render_support.h"
+#include "test_support.h"
+
+namespace lod {
+namespace {
+
+using test::run_cli;
+
+std::string file_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+TEST(RenderCli, WritesThePictureAtTheRequestedSize) {
+  test::TempDir dir;
+  write_mesh(shapes::torus(), dir / "torus.ply");
+  const auto r = run_cli({"render", (dir / "torus.ply").string(), "-o", (dir / "t.png").string(), "--size", "320x200",
+                          "--view", "front", "--wire", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["triangles"], shapes::torus().triangle_count());
+  EXPECT_EQ(j["width"], 320);
+  const Image image = read_png(dir / "t.png");
+  EXPECT_EQ(image.width, 320u);
+  EXPECT_EQ(image.height, 200u);
+  // The torus (around +z, seen from the front) leaves its hole and the corners white, its ring drawn.
+  EXPECT_EQ(image.pixel(160, 100)[0], 255);
+  EXPECT_EQ(image.pixel(2, 2)[0], 255);
+  uint32_t drawn = 0;
+  for (size_t i = 0; i < image.rgba.size(); i += 4) drawn += image.rgba[i] < 250;
+  EXPECT_GT(drawn, 320u * 200 / 10);
+}
+
+// Two processes, the same bytes.
+TEST(RenderCli, Deterministic) {
+  test::TempDir dir;
+  write_mesh(shapes::icosphere(3), dir / "sphere.obj");
+  for (const char* name : {"a.png", "b.png"}) {
+    const auto r = run_cli({"render", (dir / "sphere.obj").string(), "-o", (dir / name).string(), "--size", "256x192",
+                            "--wire", "--flat"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  const std::string a = file_bytes(dir / "a.png"), b = file_bytes(dir / "b.png");
+  EXPECT_GT(a.size(), 1000u);
+  EXPECT_EQ(a, b);
+}
+
+// lodkit compare --heatmap colours A by its distance to B; lodkit render --heatmap shows them. Here
+// the left part of A lies on B (distance 0: blue) and the right part 0.1 from it (the maximum: red).
+TEST(RenderCli, HeatmapFromCompareReadsBackAtTheExpectedPixels) {
+  test::TempDir dir;
+  Mesh a, b;
+  test::add_rectangle(a, -1, -0.5f, -0.1f, 0.5f, 0);
+  test::add_rectangle(a, 0.1f, -0.5f, 1, 0.5f, 0);
+  test::add_rectangle(b, -1, -0.5f, -0.1f, 0.5f, 0);
+  test::add_rectangle(b, 0.1f, -0.5f, 1, 0.5f, -0.1f);
+  write_mesh(a, dir / "a.ply");
+  write_mesh(b, dir / "b.ply");
+  auto r = run_cli({"compare", (dir / "a.ply").string(), (dir / "b.ply").string(), "--heatmap", (dir / "heat.ply").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_cli({"render", (dir / "heat.ply").string(), "-o", (dir / "heat.png").string(), "--heatmap", "--view", "front",
+               "--ortho", "--size", "400x400"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Image image = read_png(dir / "heat.png");
+  // The rectangles fill x in [-1, 1] around the image centre: x = 0.55 is at a quarter of the width
+  // from either side whatever the scale, inside each rectangle (they cover |x| >= 0.1).
+  const uint8_t* left = image.pixel(100, 200);
+  const uint8_t* right = image.pixel(300, 200);
+  EXPECT_EQ(int(left[0]), 0);
+  EXPECT_EQ(int(left[1]), 0);
+  EXPECT_EQ(int(left[2]), 255);
+  EXPECT_EQ(int(right[0]), 255);
+  EXPECT_EQ(int(right[1]), 0);
+  EXPECT_EQ(int(right[2]), 0);
+  // Without colours --heatmap is bad input.
+  r = run_cli({"render", (dir / "b.ply").string(), "-o", (dir / "x.png").string(), "--heatmap"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.png"));
+}
+
+TEST(RenderCli, ContactSheetOfALodChain) {
+  test::TempDir dir;
+  write_mesh(shapes::icosphere(4), dir / "sphere.ply");
+  auto r = run_cli({"lod", (dir / "sphere.ply").string(), "-o", (dir / "chain.glb").string(), "--levels", "3", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Scene chain = read_scene(dir / "chain.glb");
+  ASSERT_EQ(chain.primitives.size(), 3u);
+  r = run_cli({"render", (dir / "chain.glb").string(), "--sheet", "-o", (dir / "sheet.png").string(), "--size", "600x300",
+               "--columns", "3", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["panels"].size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(j["panels"][i]["triangles"], chain.primitives[i].mesh.triangle_count());
+    const std::string label = j["panels"][i]["label"];
+    EXPECT_EQ(label.rfind("LOD" + std::to_string(i) + ":", 0), 0u) << label;
+    EXPECT_NE(label.find("triangles"), std::string::npos) << label;
+    EXPECT_NE(label.find("error"), std::string::npos) << label;
+  }
+  const Image sheet = read_png(dir / "sheet.png");
+  ASSERT_EQ(sheet.width, 600u);
+  ASSERT_EQ(sheet.height, 300u);
+  const SheetLayout layout = sheet_layout(3, {.width = 600, .height = 300, .columns = 3});
+  for (uint32_t k = 0; k < 3; ++k) {
+    // The sphere is drawn in the middle of each panel; its label under it.
+    const uint8_t* centre = sheet.pixel(k * 200 + 100, layout.panel_height / 2);
+    EXPECT_LT(centre[0], 250) << "panel " << k;
+    uint32_t dark = 0;
+    for (uint32_t y = layout.panel_height; y < 300; ++y)
+      for (uint32_t x = k * 200; x < k * 200 + 200; ++x) dark += sheet.pixel(x, y)[0] < 100;
+    EXPECT_GT(dark, 20u) << "label " << k;
+  }
+  // Not a chain: clean errors.
+  r = run_cli({"render", (dir / "sphere.ply").string(), "--sheet", "-o", (dir / "x.png").string()});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  write_mesh(shapes::cube(), dir / "cube.glb");
+  r = run_cli({"render", (dir / "cube.glb").string(), "--sheet", "-o", (dir / "x.png").string()});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("MSFT_lod"), std::string::npos) << r.err;
+}
+
+// Frame 0 of a level turntable is the front view.
+TEST(RenderCli, TurntableFrames) {
+  test::TempDir dir;
+  write_mesh(shapes::torus(1.0f, 0.3f), dir / "torus.ply");
+  auto r = run_cli({"render", (dir / "torus.ply").string(), "--turntable", "4", "--elevation", "0", "-o",
+                    (dir / "frames").string(), "--size", "160x120"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* name : {"frame-000.png", "frame-001.png", "frame-002.png", "frame-003.png"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "frames" / name)) << name;
+  EXPECT_FALSE(std::filesystem::exists(dir / "frames" / "frame-004.png"));
+  r = run_cli({"render", (dir / "torus.ply").string(), "--view", "front", "-o", (dir / "front.png").string(), "--size",
+               "160x120"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(file_bytes(dir / "frames" / "frame-000.png"), file_bytes(dir / "front.png"));
+  EXPECT_NE(file_bytes(dir / "frames" / "frame-000.png"), file_bytes(dir / "frames" / "frame-001.png"));
+}
+
+TEST(RenderCli, UsageAndInputErrors) {
+  test::TempDir dir;
+  write_mesh(shapes::cube(), dir / "cube.ply");
+  const std::string in = (dir / "cube.ply").string(), out = (dir / "o.png").string();
+  EXPECT_EQ(run_cli({"render", in, "-o", (dir / "o.jpg").string()}).exit_code, 1);
+  EXPECT_EQ(run_cli({"render", in, "-o", out, "--size", "12"}).exit_code, 1);
+  EXPECT_EQ(run_cli({"render", in, "-o", out, "--size", "0x10"}).exit_code, 1);
+  EXPECT_EQ(run_cli({"render", in, "-o", out, "--view", "sideways"}).exit_code, 1);
+  EXPECT_EQ(run_cli({"render", in, "-o", out, "--fov", "180"}).exit_code, 1);
+  EXPECT_EQ(run_cli({"render", in, "-o", out, "--sheet", "--turntable", "3"}).exit_code, 1);
+  EXPECT_EQ(run_cli({"render", (dir / "missing.ply").string(), "-o", out}).exit_code, 2);
+  test::write_text(dir / "bad.obj", "v 0 0 0\nf 1 2 3\n");
+  const auto r = run_cli({"render", (dir / "bad.obj").string(), "-o", out});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("bad.obj"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// With glvnd's EGL vendor list pointing nowhere there is no driver: one clear line, exit code 2.
+TEST(RenderCli, MissingDriverIsACleanError) {
+  test::TempDir dir;
+  write_mesh(shapes::cube(), dir / "cube.ply");
+  const char* old = std::getenv("__EGL_VENDOR_LIBRARY_FILENAMES");
+  const std::string saved = old ? old : "";
+  setenv("__EGL_VENDOR_LIBRARY_FILENAMES", "/nonexistent/egl_vendor.json", 1);
+  const auto r = run_cli({"render", (dir / "cube.ply").string(), "-o", (dir / "x.png").string()});
+  if (old)
+    setenv("__EGL_VENDOR_LIBRARY_FILENAMES", saved.c_str(), 1);
+  else
+    unsetenv("__EGL_VENDOR_LIBRARY_FILENAMES");
+  EXPECT_EQ(r.signal, 0);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(r.err.rfind("lodkit: error: OpenGL: no EGL driver", 0), 0u) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.png"));
+}
+
+}  // namespace
+}  // namespace lod
