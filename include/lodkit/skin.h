@@ -80,10 +80,26 @@ mat4 blend_matrix(std::span<const mat4> joints, const ushort4& joint, const floa
 // Houle's skinned geomorph: the finer and the coarser level are skinned in this frame, then morphed
 // with the LOD chain's table (lod::Geomorph): P' = (1 - t) skin(P) + t skin(P_target), normals
 // likewise and renormalised. At t = 0 it is the skinned finer level, at t = 1 every vertex sits
-// exactly on its skinned target (the coarser level's triangles). `coarser_skinned` is scratch for
-// the coarser level, kept between frames so that nothing is allocated per frame.
-void skin_and_morph(const Mesh& finer, const Mesh& coarser, const Geomorph& table, std::span<const mat4> joints,
-                    float t, SkinnedVertices& out, SkinnedVertices& coarser_skinned, unsigned threads = 1);
+// exactly on its skinned target (the coarser level's triangles).
+//
+// Built once per pair of levels: a finer vertex whose target has the same bind position, normal and
+// influences (untouched by the collapses) skins to the same point, so only the others are morphed,
+// and only the coarser vertices they lead to are skinned. A morphing frame then costs little more
+// than skinning the finer level. Keeps pointers to both meshes: they must outlive it.
+class SkinnedGeomorph {
+ public:
+  SkinnedGeomorph(const Mesh& finer, const Mesh& coarser, const Geomorph& table);
+  // Into `out` (resized; nothing is allocated once it has the size). One object per thread.
+  void evaluate(std::span<const mat4> joints, float t, SkinnedVertices& out, unsigned threads = 1);
+  size_t moving_vertices() const { return moving_; }
+
+ private:
+  const Mesh* finer_;
+  Mesh needed_;                     // the coarser vertices some moving vertex leads to
+  std::vector<uint32_t> slot_;      // per finer vertex: its target in needed_, or UINT32_MAX if it does not move
+  size_t moving_ = 0;
+  SkinnedVertices needed_skinned_;  // scratch
+};
 
 // ---- skinned simplification ---------------------------------------------------------------------
 enum class SkinMode : uint8_t {

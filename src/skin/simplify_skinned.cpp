@@ -7,6 +7,7 @@
 #include "lodkit/error.h"
 #include "lodkit/skin.h"
 #include "simplify/multipose_metric.h"
+#include "skin/lbs_kernel.h"
 
 namespace lod {
 
@@ -32,19 +33,6 @@ void normalize_influences(ushort4& joint, float4& weight) {
   *w[heaviest] = float(1.0 - rest);
   for (int i = 0; i < 4; ++i)
     if (*w[i] == 0) joint[size_t(i)] = 0;  // unused slots point at joint 0 (valid whatever the skin)
-}
-
-void check_skinned(const Mesh& mesh, size_t joints, const char* what) {
-  if (mesh.joints.size() != mesh.vertex_count() || mesh.weights.size() != mesh.vertex_count())
-    throw_usage(std::string(what) + ": the mesh needs joints and weights on every vertex");
-  for (size_t v = 0; v < mesh.vertex_count(); ++v) {
-    const float4& w = mesh.weights[v];
-    const float ws[4] = {w.x, w.y, w.z, w.w};
-    for (int i = 0; i < 4; ++i)
-      if (ws[i] != 0 && mesh.joints[v][size_t(i)] >= joints)
-        throw_usage(std::string(what) + ": vertex " + std::to_string(v) + " uses joint " +
-                    std::to_string(mesh.joints[v][size_t(i)]) + " but the poses have " + std::to_string(joints));
-  }
 }
 
 // The mesh with positions and normals skinned by `joints`.
@@ -126,8 +114,8 @@ SimplifyResult simplify_skinned(const Mesh& mesh, const SkinSimplifyOptions& opt
     throw_usage(std::string("simplify_skinned: the ") + skin_mode_name(options.mode) + " mode needs at least one pose");
   if (!(options.bone_weight >= 0) || !std::isfinite(options.bone_weight))
     throw_usage("simplify_skinned: bone_weight must be finite and >= 0");
-  check_skinned(mesh, options.mode == SkinMode::subset && options.poses.empty() ? size_t(65536) : joints,
-                "simplify_skinned");
+  skinning::check_influences(mesh, options.mode == SkinMode::subset && options.poses.empty() ? size_t(65536) : joints,
+                             "simplify_skinned");
 
   SimplifyResult r;
   switch (options.mode) {
@@ -150,23 +138,86 @@ SimplifyResult simplify_skinned(const Mesh& mesh, const SkinSimplifyOptions& opt
   return r;
 }
 
-void skin_and_morph(const Mesh& finer, const Mesh& coarser, const Geomorph& table, std::span<const mat4> joints,
-                    float t, SkinnedVertices& out, SkinnedVertices& coarser_skinned, unsigned threads) {
+SkinnedGeomorph::SkinnedGeomorph(const Mesh& finer, const Mesh& coarser, const Geomorph& table) : finer_(&finer) {
   if (table.target.size() != finer.vertex_count())
-    throw_usage("skin_and_morph: the table has " + std::to_string(table.target.size()) + " entries for " +
+    throw_usage("SkinnedGeomorph: the table has " + std::to_string(table.target.size()) + " entries for " +
                 std::to_string(finer.vertex_count()) + " vertices");
-  for (const uint32_t target : table.target)
-    if (target >= coarser.vertex_count()) throw_usage("skin_and_morph: a target is outside the coarser level");
-  skin_vertices(finer, joints, out, threads);
-  if (t <= 0) return;
-  skin_vertices(coarser, joints, coarser_skinned, threads);
-  morph_positions(out.positions, coarser_skinned.positions, table, t, out.positions);  // in place: v reads v only
-  if (out.normals.empty() || coarser_skinned.normals.empty()) return;
-  const float s = t >= 1 ? 0.0f : 1 - t, u = t >= 1 ? 1.0f : t;
-  for (size_t v = 0; v < out.normals.size(); ++v) {
-    const float3 &a = out.normals[v], &b = coarser_skinned.normals[table.target[v]];
-    out.normals[v] = t >= 1 ? b : normalized3({s * a.x + u * b.x, s * a.y + u * b.y, s * a.z + u * b.z});
+  skinning::check_influences(finer, 65536, "SkinnedGeomorph (finer level)");
+  skinning::check_influences(coarser, 65536, "SkinnedGeomorph (coarser level)");
+  if (finer.normals.empty() != coarser.normals.empty())
+    throw_usage("SkinnedGeomorph: both levels need normals, or neither");
+  std::vector<uint32_t> slot_of(coarser.vertex_count(), UINT32_MAX);
+  std::vector<uint32_t> needed;
+  slot_.assign(finer.vertex_count(), UINT32_MAX);
+  for (uint32_t v = 0; v < finer.vertex_count(); ++v) {
+    const uint32_t c = table.target[v];
+    if (c >= coarser.vertex_count()) throw_usage("SkinnedGeomorph: a target is outside the coarser level");
+    const bool same = finer.positions[v] == coarser.positions[c] && finer.joints[v] == coarser.joints[c] &&
+                      finer.weights[v] == coarser.weights[c] && (finer.normals.empty() || finer.normals[v] == coarser.normals[c]);
+    if (same) continue;  // skins to the very same point (and normal) in every frame
+    if (slot_of[c] == UINT32_MAX) slot_of[c] = uint32_t(needed.size()), needed.push_back(c);
+    slot_[v] = slot_of[c];
+    ++moving_;
   }
+  for (const uint32_t c : needed) {
+    needed_.positions.push_back(coarser.positions[c]);
+    if (!coarser.normals.empty()) needed_.normals.push_back(coarser.normals[c]);
+    needed_.joints.push_back(coarser.joints[c]);
+    needed_.weights.push_back(coarser.weights[c]);
+  }
+}
+
+void SkinnedGeomorph::evaluate(std::span<const mat4> joints, float t, SkinnedVertices& out, unsigned threads) {
+  if (t <= 0 || moving_ == 0) return skin_vertices(*finer_, joints, out, threads);
+  skinning::check_influences(*finer_, joints.size(), "SkinnedGeomorph");
+  skin_vertices(needed_, joints, needed_skinned_, threads);
+  const Mesh& f = *finer_;
+  const size_t n = f.vertex_count();
+  out.positions.resize(n);
+  out.normals.resize(f.normals.empty() ? 0 : n);
+  const float3* np = needed_skinned_.positions.data();
+  const float3* nn = needed_skinned_.normals.empty() ? nullptr : needed_skinned_.normals.data();
+  const bool end = t >= 1;
+  const float s = end ? 0.0f : 1 - t;
+  // Raw pointers: through the vectors the compiler must assume every store may alias the inputs.
+  const mat4* J = joints.data();
+  const uint32_t* slots = slot_.data();
+  const float3* positions = f.positions.data();
+  const float3* normals = nn && !f.normals.empty() ? f.normals.data() : nullptr;
+  const ushort4* joint = f.joints.data();
+  const float4* weight = f.weights.data();
+  float3* out_p = out.positions.data();
+  float3* out_n = normals ? out.normals.data() : nullptr;
+  // One pass: skin each finer vertex and blend it with its skinned target right away. Branch-free:
+  // a vertex that does not move blends with weight 0 (1 * p + 0 * b is p exactly), since about one
+  // vertex in four does not move, in no predictable pattern.
+  core::parallel_blocks(n, 8192, threads, [&](size_t, size_t begin, size_t stop) {
+    for (size_t v = begin; v < stop; ++v) {
+      const uint32_t slot = slots[v];
+      const bool moves = slot != UINT32_MAX;
+      const float tv = moves ? t : 0.0f, sv = moves ? s : 1.0f;
+      const uint32_t k = moves ? slot : 0;
+      const skinning::Affine a = skinning::blend_affine(J, joint[v], weight[v]);
+      const float3 p = skinning::apply_point(a, positions[v]);
+      const float3& b = np[k];
+      out_p[v] = {sv * p.x + tv * b.x, sv * p.y + tv * b.y, sv * p.z + tv * b.z};
+      if (!out_n) continue;
+      // The skinned normal is blended before it is normalised (one square root per vertex, as in
+      // plain skinning): a vertex that does not move gets its skinned normal, one that does
+      // gets the normalised blend of its near-unit skinned normal and its target's.
+      const float3 q = skinning::apply_linear(a, normals[v]);
+      const float3& m = nn[k];
+      const float3 r = {sv * q.x + tv * m.x, sv * q.y + tv * m.y, sv * q.z + tv * m.z};
+      const float inv = 1.0f / std::sqrt(std::max(r.x * r.x + r.y * r.y + r.z * r.z, 1e-30f));
+      out_n[v] = {r.x * inv, r.y * inv, r.z * inv};
+    }
+  });
+  if (end)  // t = 1: exactly the skinned coarser vertices (the same inputs through the same kernel)
+    for (size_t v = 0; v < n; ++v)
+      if (slots[v] != UINT32_MAX) {
+        out_p[v] = np[slots[v]];
+        if (out_n) out_n[v] = nn[slots[v]];
+      }
 }
 
 std::vector<std::vector<mat4>> sample_poses(const Scene& scene, uint32_t skin, uint32_t count) {
