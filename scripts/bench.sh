@@ -27,6 +27,12 @@
 # runtime's selection cost for 10,000 objects; the chain's levels against gltfpack's (npm) at the same
 # ratios: error and file size.
 #
+# skin: skinned simplification on the test characters (tests/skin/fixtures: the procedural humanoid
+# and man.off rigged by hand): houle, subset and multipose at 25%, 10% and 3%, Hausdorff and RMS over
+# every frame of every clip at 30 fps (mean and max over frames), simplification time; the skeletal
+# geomorph's per-frame cost against plain skinning (target <= 1.5x; multipose <= 0.8x the better
+# single-pose method's max-over-frames Hausdorff at 10% and 3%, never worse at 25%).
+#
 # The build is the release preset (build/release); LODKIT_BENCH_BUILD=DIR uses another configured
 # build directory instead.
 set -euo pipefail
@@ -34,7 +40,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 usage() {
-  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | optimize [--quick] [--no-big] [RUNS=5]" >&2
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -222,8 +228,28 @@ area_optimize() {
   echo "whole run: $((SECONDS - started)) s"
 }
 
+# ---- skin ----------------------------------------------------------------------------------------
+area_skin() {
+  [ $# -le 1 ] || usage
+  local runs=${1:-3}
+  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  configure
+  build_targets lodkit_bench_skin
+  [ -f data/corpus/man.off ] || scripts/fetch-corpus.sh
+  echo
+  machine_line
+  echo
+  local log status=0
+  log=$(mktemp)
+  /usr/bin/time -v "$build/bench/lodkit_bench_skin" data/corpus/man.off "$runs" 2>"$log" || status=1
+  echo "peak memory: $(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); printf "%.1f MiB", $2 / 1024}' "$log")"
+  rm -f "$log"
+  return $status
+}
+
 case $area in
   io) area_io "$@" ;;
+  skin) area_skin "$@" ;;
   optimize) area_optimize "$@" ;;
   lod) area_lod "$@" ;;
   simplify) area_simplify "$@" ;;
