@@ -6,6 +6,7 @@
 #   scripts/bench.sh measure [PAIRS=20]
 #   scripts/bench.sh lod [RUNS=15]
 #   scripts/bench.sh optimize [--quick] [--no-big] [RUNS=5]
+#   scripts/bench.sh render [RUNS=5]
 #
 # io: loads a binary PLY and an OBJ of >= 3M triangles (bunny00.off subdivided 1->4) with lodkit and
 # with Assimp, each loader in its own process under /usr/bin/time -v; prints a markdown table of
@@ -33,6 +34,12 @@
 # geomorph's per-frame cost against plain skinning (target <= 1.5x; multipose <= 0.8x the better
 # single-pose method's max-over-frames Hausdorff at 10% and 3%, never worse at 25%).
 #
+# render: a 1024x768 picture (4x MSAA) of bunny00.off subdivided to 1.2M triangles on this machine's
+# OpenGL (Mesa llvmpipe without a GPU): lodkit_bench_render times upload, draw + readback and PNG
+# encoding in one process over RUNS runs, and `lodkit render` runs end to end (load, context, upload,
+# draw, write) RUNS times, each under /usr/bin/time -v; prints the medians and peak memory (target:
+# under 5 s) and writes bench/results/render.json.
+#
 # The build is the release preset (build/release); LODKIT_BENCH_BUILD=DIR uses another configured
 # build directory instead.
 set -euo pipefail
@@ -40,7 +47,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 usage() {
-  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5]" >&2
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -247,6 +254,69 @@ area_skin() {
   return $status
 }
 
+# ---- render --------------------------------------------------------------------------------------
+area_render() {
+  [ $# -le 1 ] || usage
+  local runs=${1:-5}
+  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  configure
+  build_targets lodkit_cli lodkit_bench_render
+  [ -x "$build/bench/lodkit_bench_render" ] || { echo "bench: lodkit_bench_render was not built" >&2; exit 1; }
+  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
+  local input=build/bench-data/render/bunny-1m.ply out=build/bench-data/render
+  "$build/bench/lodkit_bench_render" make-input data/corpus/bunny00.off "$input"
+  echo
+  machine_line
+  echo
+  mkdir -p bench/results
+  local log inproc inproc_peak cli=() cli_peaks=() k json
+  log=$(mktemp)
+  # In one process: upload, draw + readback, PNG, RUNS times after the load and context creation.
+  inproc=$(/usr/bin/time -v "$build/bench/lodkit_bench_render" run "$input" "$runs" 1024x768 --json 2>"$log") ||
+    { cat "$log" >&2; rm -f "$log"; exit 1; }
+  inproc_peak=$(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); print $2}' "$log")
+  # End to end: the CLI as a user runs it, one process per run.
+  for ((k = 0; k < runs; k++)); do
+    json=$(/usr/bin/time -v "$build/lodkit" render "$input" -o "$out/bunny-1m.png" --size 1024x768 --json 2>"$log") ||
+      { cat "$log" >&2; rm -f "$log"; exit 1; }
+    cli+=("$json")
+    cli_peaks+=("$(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); print $2}' "$log")")
+  done
+  rm -f "$log"
+  python3 - "$machine" "$inproc" "$inproc_peak" "${cli_peaks[*]}" "${cli[@]}" <<'EOF'
+import json, statistics, sys
+machine, inproc, inproc_peak, peaks = sys.argv[1], json.loads(sys.argv[2]), int(sys.argv[3]), sys.argv[4].split()
+cli = [json.loads(j) for j in sys.argv[5:]]
+med = lambda key: statistics.median(c[key] for c in cli)
+mib = lambda kib: round(int(kib) / 1024, 1)
+print(f"input: {inproc['input']}, {inproc['triangles']:,} triangles, {inproc['vertices']:,} vertices; "
+      f"{inproc['width']}x{inproc['height']}, {inproc['samples']}x MSAA on {inproc['renderer']}")
+print()
+print("| step | median (s) | runs |")
+print("|---|---:|---:|")
+rows = [("in process: upload (normals computed)", inproc["median_upload_seconds"], inproc["runs"]),
+        ("in process: draw + resolve + readback", inproc["median_draw_seconds"], inproc["runs"]),
+        ("in process: PNG encode", inproc["median_encode_seconds"], inproc["runs"]),
+        ("in process: upload + draw + PNG", inproc["median_render_seconds"], inproc["runs"]),
+        ("CLI: load PLY", med("load_seconds"), len(cli)),
+        ("CLI: context", med("context_seconds"), len(cli)),
+        ("CLI: upload", med("upload_seconds"), len(cli)),
+        ("CLI: draw + readback", med("render_seconds"), len(cli)),
+        ("CLI: write PNG", med("write_seconds"), len(cli)),
+        ("**CLI: lodkit render end to end**", med("total_seconds"), len(cli))]
+for name, seconds, n in rows:
+    print(f"| {name} | {seconds:.3f} | {n} |")
+print()
+total = med("total_seconds")
+print(f"peak memory: CLI {statistics.median(mib(p) for p in peaks)} MiB (median over runs), in-process bench {mib(inproc_peak)} MiB")
+print(f"target: end to end under 5 s: {'PASS' if total < 5 else 'FAIL'} ({total:.2f} s)")
+json.dump({"machine": machine, "in_process": inproc, "in_process_peak_mib": mib(inproc_peak), "cli": cli,
+           "cli_peak_mib": [mib(p) for p in peaks], "median_total_seconds": total, "pass": total < 5},
+          open("bench/results/render.json", "w"), indent=2)
+sys.exit(0 if total < 5 else 1)
+EOF
+}
+
 case $area in
   io) area_io "$@" ;;
   skin) area_skin "$@" ;;
@@ -254,5 +324,6 @@ case $area in
   lod) area_lod "$@" ;;
   simplify) area_simplify "$@" ;;
   measure) area_measure "$@" ;;
+  render) area_render "$@" ;;
   *) usage ;;
 esac

@@ -185,17 +185,6 @@ Mat4 projection_matrix(const RenderCamera& c, double aspect) {
   return m;
 }
 
-Mat4 multiply(const Mat4& a, const Mat4& b) {
-  Mat4 m{};
-  for (int col = 0; col < 4; ++col)
-    for (int row = 0; row < 4; ++row) {
-      double s = 0;
-      for (int k = 0; k < 4; ++k) s += a[k * 4 + row] * b[col * 4 + k];
-      m[col * 4 + row] = s;
-    }
-  return m;
-}
-
 double eye_depth(const RenderCamera& c, double window_depth) {
   const double n = c.near, f = c.far;
   if (c.ortho_height > 0) return f - window_depth * (f - n);

@@ -71,18 +71,23 @@ EGLDisplay open_display() {
                                 driver_hint);
 }
 
+// Throws with the driver's log when a shader or program failed to build (and deletes it).
+template <typename GetIv, typename GetLog, typename Delete>
+void check_built(GLuint object, GLenum status, GetIv get_iv, GetLog get_log, Delete destroy, const char* what) {
+  GLint ok = 0;
+  get_iv(object, status, &ok);
+  if (ok) return;
+  char log[2048] = {};
+  get_log(object, sizeof log, nullptr, log);
+  destroy(object);
+  throw_internal(std::string("OpenGL: shader ") + what + " failed: " + log);
+}
+
 GLuint compile(GLenum stage, const char* source) {
   const GLuint shader = glCreateShader(stage);
   glShaderSource(shader, 1, &source, nullptr);
   glCompileShader(shader);
-  GLint ok = 0;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[2048] = {};
-    glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-    glDeleteShader(shader);
-    throw_internal(std::string("OpenGL: shader compilation failed: ") + log);
-  }
+  check_built(shader, GL_COMPILE_STATUS, glGetShaderiv, glGetShaderInfoLog, glDeleteShader, "compilation");
   return shader;
 }
 
@@ -95,7 +100,7 @@ layout(std430, binding = 1) readonly buffer Normals { float normals[]; };
 layout(std430, binding = 2) readonly buffer Colors { vec4 colors[]; };
 layout(std430, binding = 3) readonly buffer Indices { uint indices[]; };
 uniform mat4 view;             // object to eye
-uniform mat4 view_projection;  // object to clip
+uniform mat4 projection;       // eye to clip
 uniform bool use_colors;
 uniform vec3 base_color;
 out vec3 eye_position;
@@ -106,12 +111,13 @@ void main() {
   uint i = indices[gl_VertexID];
   vec4 p = vec4(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u], 1.0);
   vec3 n = vec3(normals[3u * i], normals[3u * i + 1u], normals[3u * i + 2u]);
-  eye_position = (view * p).xyz;
+  vec4 eye = view * p;
+  eye_position = eye.xyz;
   eye_normal = mat3(view) * n;
   albedo = use_colors ? colors[i].rgb : base_color;
   int corner = gl_VertexID % 3;
   barycentric = vec3(corner == 0, corner == 1, corner == 2);
-  gl_Position = view_projection * p;
+  gl_Position = projection * eye;
 }
 )";
 
@@ -164,14 +170,7 @@ GLuint link_program() {
   glLinkProgram(program);
   glDeleteShader(vs);
   glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[2048] = {};
-    glGetProgramInfoLog(program, sizeof log, nullptr, log);
-    glDeleteProgram(program);
-    throw_internal(std::string("OpenGL: shader linking failed: ") + log);
-  }
+  check_built(program, GL_LINK_STATUS, glGetProgramiv, glGetProgramInfoLog, glDeleteProgram, "linking");
   return program;
 }
 

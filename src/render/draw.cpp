@@ -156,7 +156,7 @@ Image render(RenderContext& context, const GpuMesh& mesh, const RenderCamera& ca
   const detail::Mat4 view = detail::view_matrix(camera);
   const detail::Mat4 projection = detail::projection_matrix(camera, double(options.width) / options.height);
   set_matrix(program, "view", view);
-  set_matrix(program, "view_projection", detail::multiply(projection, view));
+  set_matrix(program, "projection", projection);
   const bool colors = mesh.has_colors() && (options.vertex_colors || options.heatmap);
   glProgramUniform1i(program, glGetUniformLocation(program, "use_colors"), colors);
   set_vec3(program, "base_color", options.base_color);

@@ -38,7 +38,6 @@ using Mat4 = std::array<double, 16>;  // column-major, as GL takes it
 // float depth precise over the whole range.
 Mat4 view_matrix(const RenderCamera& camera);
 Mat4 projection_matrix(const RenderCamera& camera, double aspect);
-Mat4 multiply(const Mat4& a, const Mat4& b);
 // Throws lod::Error (usage) for a camera no image can be made from.
 void check_camera(const RenderCamera& camera);
 // The reversed [0, 1] window depth back to the distance along the view axis.

@@ -55,6 +55,10 @@ Image contact_sheet(std::span<const Image> panels, std::span<const std::string> 
   sheet.width = options.width;
   sheet.height = options.height;
   sheet.rgba.assign(size_t(sheet.width) * sheet.height * 4, 255);
+  // One type size for every label: the layout's, or smaller until the longest fits its panel.
+  uint32_t size = l.label_size;
+  for (const std::string& label : labels)
+    while (size > 8 && font.width(label, size) > int(l.panel_width) - int(l.label_size)) --size;
   for (size_t i = 0; i < panels.size(); ++i) {
     const Image& panel = panels[i];
     if (panel.width != l.panel_width || panel.height != l.panel_height)
@@ -67,10 +71,10 @@ Image contact_sheet(std::span<const Image> panels, std::span<const std::string> 
       std::memcpy(&sheet.rgba[(size_t(y0 + y) * sheet.width + x0) * 4], &panel.rgba[size_t(y) * panel.width * 4],
                   size_t(panel.width) * 4);
     // The label centred in the strip under the panel, its baseline a third of the way up.
-    const int text_width = font.width(labels[i], l.label_size);
+    const int text_width = font.width(labels[i], size);
     const int x = int(x0) + std::max(0, (int(l.panel_width) - text_width) / 2);
     const int baseline = int(y0 + l.panel_height + l.label_height) - int(l.label_height) / 3;
-    font.draw(sheet, x, baseline, labels[i], l.label_size, black);
+    font.draw(sheet, x, baseline, labels[i], size, black);
   }
   // Hairlines between the cells.
   const uint8_t grey[3] = {200, 200, 200};
