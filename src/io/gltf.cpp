@@ -1415,6 +1415,85 @@ class SkinAnimationWriter {
   tg::Model& model_;
 };
 
+// The MSFT_lod ids and the extras a lodkit-built node carries (none: the node is left as it is).
+void set_lod_and_extras(tg::Model& model, const Node& in, tg::Node& node) {
+  if (!in.lod_ids.empty()) {
+    tg::Value::Array ids;
+    for (const int32_t id : in.lod_ids) ids.emplace_back(int(id));
+    tg::Value::Object lod;
+    lod["ids"] = tg::Value(std::move(ids));
+    node.extensions["MSFT_lod"] = tg::Value(std::move(lod));
+    if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), "MSFT_lod") == model.extensionsUsed.end())
+      model.extensionsUsed.push_back("MSFT_lod");
+  }
+  if (!in.extras_json.empty()) node.extras = json_to_value(nlohmann::json::parse(in.extras_json));
+}
+
+void set_transform(const Node& in, tg::Node& node) {
+  if (in.has_matrix) {
+    const std::array<float, 16> identity = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    if (in.matrix != identity) node.matrix.assign(in.matrix.begin(), in.matrix.end());
+  } else {
+    if (in.translation != float3{}) node.translation = {in.translation.x, in.translation.y, in.translation.z};
+    if (in.rotation != float4{0, 0, 0, 1}) node.rotation = {in.rotation.x, in.rotation.y, in.rotation.z, in.rotation.w};
+    if (in.scale != float3{1, 1, 1}) node.scale = {in.scale.x, in.scale.y, in.scale.z};
+  }
+}
+
+// A scene read from glTF may grow (lodkit lod on a skinned character adds a mesh and a node per
+// level): primitives past the source's meshes become new meshes (with the source's materials),
+// nodes past the source's nodes are appended (name, transform, mesh, skin, MSFT_lod and extras; a
+// child of its parent, in the default scene if Scene::roots lists it), and MSFT_lod ids and extras
+// set on the source's own nodes are applied. Everything else of the source stays as it was.
+void add_to_source(tg::Model& model, const Scene& scene) {
+  const size_t source_meshes = model.meshes.size();
+  for (size_t i = 0; i < scene.primitives.size(); ++i) {
+    const Primitive& prim = scene.primitives[i];
+    if (prim.gltf_mesh < source_meshes) continue;
+    const std::string where = "cannot write glTF: scene primitive " + str(i);
+    // New meshes and primitives are numbered densely after the source's: a bound keeps a bad index
+    // from allocating without limit.
+    if (prim.gltf_mesh >= source_meshes + scene.primitives.size() || prim.gltf_primitive >= scene.primitives.size())
+      throw_usage(where + " asks for a new glTF mesh or primitive beyond what the scene can fill");
+    if (model.meshes.size() <= prim.gltf_mesh) model.meshes.resize(size_t(prim.gltf_mesh) + 1);
+    std::vector<tg::Primitive>& prims = model.meshes[prim.gltf_mesh].primitives;
+    if (prims.size() <= prim.gltf_primitive) prims.resize(size_t(prim.gltf_primitive) + 1);
+    prims[prim.gltf_primitive].mode = TINYGLTF_MODE_TRIANGLES;
+    prims[prim.gltf_primitive].material = prim.material;
+  }
+  for (size_t m = source_meshes; m < model.meshes.size(); ++m)
+    if (model.meshes[m].primitives.empty()) throw_usage("cannot write glTF: new mesh " + str(m) + " has no primitive");
+
+  const size_t source_nodes = model.nodes.size();
+  if (scene.nodes.size() < source_nodes) return;  // a scene that lost nodes adds none
+  for (size_t i = 0; i < scene.nodes.size(); ++i) {
+    const Node& in = scene.nodes[i];
+    if (i < source_nodes) {
+      set_lod_and_extras(model, in, model.nodes[i]);
+      continue;
+    }
+    tg::Node node;
+    node.name = valid_utf8(in.name);
+    if (in.mesh >= 0) {
+      if (size_t(in.mesh) >= model.meshes.size()) throw_usage("cannot write glTF: nodes[" + str(i) + "] uses a mesh the document does not have");
+      node.mesh = in.mesh;
+      if (in.skin >= 0) {
+        if (size_t(in.skin) >= model.skins.size()) throw_usage("cannot write glTF: nodes[" + str(i) + "] uses a skin the document does not have");
+        node.skin = in.skin;
+      }
+    }
+    set_lod_and_extras(model, in, node);
+    set_transform(in, node);
+    model.nodes.push_back(std::move(node));
+    if (in.parent >= 0 && size_t(in.parent) < i) model.nodes[size_t(in.parent)].children.push_back(int(i));
+  }
+  if (model.scenes.empty()) return;
+  std::vector<int>& roots = model.scenes[size_t(std::max(0, model.defaultScene))].nodes;
+  for (const int32_t root : scene.roots)
+    if (root >= 0 && size_t(root) >= source_nodes && size_t(root) < model.nodes.size() && scene.nodes[size_t(root)].parent < 0)
+      roots.push_back(root);
+}
+
 // A minimal document for a Scene without source: meshes by gltf_mesh, materials named from
 // material_names, the Scene's nodes (or one node per mesh) with their skins, the animations, one scene.
 tg::Model model_from_scene(const Scene& scene, std::vector<Slot>& slots) {
@@ -1461,24 +1540,8 @@ tg::Model model_from_scene(const Scene& scene, std::vector<Slot>& slots) {
       }
       for (int32_t child : in.children)
         if (child >= 0 && size_t(child) < scene.nodes.size()) node.children.push_back(child);
-      if (!in.lod_ids.empty()) {
-        tg::Value::Array ids;
-        for (const int32_t id : in.lod_ids) ids.emplace_back(int(id));
-        tg::Value::Object lod;
-        lod["ids"] = tg::Value(std::move(ids));
-        node.extensions["MSFT_lod"] = tg::Value(std::move(lod));
-        if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), "MSFT_lod") == model.extensionsUsed.end())
-          model.extensionsUsed.push_back("MSFT_lod");
-      }
-      if (!in.extras_json.empty()) node.extras = json_to_value(nlohmann::json::parse(in.extras_json));
-      if (in.has_matrix) {
-        const std::array<float, 16> identity = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-        if (in.matrix != identity) node.matrix.assign(in.matrix.begin(), in.matrix.end());
-      } else {
-        if (in.translation != float3{}) node.translation = {in.translation.x, in.translation.y, in.translation.z};
-        if (in.rotation != float4{0, 0, 0, 1}) node.rotation = {in.rotation.x, in.rotation.y, in.rotation.z, in.rotation.w};
-        if (in.scale != float3{1, 1, 1}) node.scale = {in.scale.x, in.scale.y, in.scale.z};
-      }
+      set_lod_and_extras(model, in, node);
+      set_transform(in, node);
       model.nodes.push_back(std::move(node));
     }
     for (int32_t root : scene.roots)
@@ -1661,6 +1724,7 @@ void write_gltf(const Scene& scene, const std::filesystem::path& path, const Wri
   tg::Model model;
   if (scene.source) {
     model = scene.source->model;
+    add_to_source(model, scene);
     for (const Primitive& prim : scene.primitives) slots.push_back({int(prim.gltf_mesh), int(prim.gltf_primitive)});
   } else {
     model = model_from_scene(scene, slots);

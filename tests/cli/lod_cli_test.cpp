@@ -12,6 +12,8 @@
 #include "core/shapes.h"
 #include "lodkit/io.h"
 #include "lodkit/lod.h"
+#include "lodkit/skin.h"
+#include "skin/fixtures.h"
 #include "test_support.h"
 
 namespace lod {
@@ -164,6 +166,84 @@ TEST(CliLod, RefusesNonGltfOutputAndBadLists) {
   EXPECT_EQ(test::run_cli({"lod", (dir / "s.ply").string(), "-o", (dir / "o.glb").string(), "--ratios", "1,x"}).exit_code, 1);
   EXPECT_EQ(test::run_cli({"lod", (dir / "s.ply").string(), "-o", (dir / "o.glb").string(), "--ratios", "0.5,0.7"}).exit_code, 1);
   EXPECT_EQ(test::run_cli({"lod", (dir / "missing.ply").string(), "-o", (dir / "o.glb").string()}).exit_code, 2);
+}
+
+}  // namespace
+}  // namespace lod
+
+namespace lod {
+namespace {
+
+// A skinned character: the skinned node gets MSFT_lod levels drawn by new nodes with the same skin;
+// the skeleton, the skin and both clips are written back unchanged; every level's influences are
+// valid; the file passes the validator.
+TEST(CliLod, SkinnedCharacterKeepsItsSkeletonAndClips) {
+  test::TempDir dir;
+  const Scene input = fixtures::humanoid_scene();
+  write_scene(input, dir / "humanoid.glb");
+  const Scene written = read_scene(dir / "humanoid.glb");
+  const test::RunResult r = test::run_cli({"lod", (dir / "humanoid.glb").string(), "-o", (dir / "lod.glb").string(),
+                                           "--ratios", "1,0.4,0.1", "--poses", "8", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["skinned"]["mode"], "multipose");
+  ASSERT_EQ(report["skinned"]["chains"].size(), 1u);
+  ASSERT_EQ(report["levels"].size(), 3u);
+
+  const Scene out = read_scene(dir / "lod.glb");
+  ASSERT_EQ(out.skins.size(), written.skins.size());
+  EXPECT_EQ(out.skins[0].joints, written.skins[0].joints);
+  EXPECT_EQ(out.skins[0].inverse_bind_matrices, written.skins[0].inverse_bind_matrices);
+  ASSERT_EQ(out.animations.size(), written.animations.size());
+  for (size_t a = 0; a < out.animations.size(); ++a) {
+    EXPECT_EQ(out.animations[a].name, written.animations[a].name);
+    ASSERT_EQ(out.animations[a].channels.size(), written.animations[a].channels.size());
+    for (size_t c = 0; c < out.animations[a].channels.size(); ++c) {
+      EXPECT_EQ(out.animations[a].channels[c].node, written.animations[a].channels[c].node);
+      EXPECT_EQ(out.animations[a].channels[c].times, written.animations[a].channels[c].times);
+      EXPECT_EQ(out.animations[a].channels[c].values, written.animations[a].channels[c].values);
+    }
+  }
+  // The skinned node lists two new nodes, each drawing a level with the same skin.
+  const std::vector<SkinnedPrimitive> skinned = skinned_primitives(written);
+  ASSERT_EQ(skinned.size(), 1u);
+  const nlohmann::json doc = glb_json(dir / "lod.glb");  // the reader keeps MSFT_lod in the source only
+  const auto& ids = doc["nodes"][skinned[0].node]["extensions"]["MSFT_lod"]["ids"];
+  ASSERT_EQ(ids.size(), 2u);
+  uint64_t previous = out.primitives[skinned[0].primitive].mesh.triangle_count();
+  EXPECT_EQ(previous, input.primitives[skinned[0].primitive].mesh.triangle_count());
+  for (const auto& id : ids) {
+    const Node& node = out.nodes[id.get<size_t>()];
+    EXPECT_EQ(node.skin, int32_t(skinned[0].skin));
+    const auto it = std::find_if(out.primitives.begin(), out.primitives.end(),
+                                 [&](const Primitive& p) { return int32_t(p.gltf_mesh) == node.mesh; });
+    ASSERT_NE(it, out.primitives.end());
+    const Mesh& m = it->mesh;
+    EXPECT_LT(m.triangle_count(), previous);
+    previous = m.triangle_count();
+    ASSERT_EQ(m.weights.size(), m.vertex_count());
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+      const float4& w = m.weights[v];
+      EXPECT_NEAR(double(w.x) + w.y + w.z + w.w, 1.0, 1e-6);
+      for (size_t k = 0; k < 4; ++k) EXPECT_LT(m.joints[v][k], out.skins[0].joints.size());
+    }
+  }
+  if (!test::validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
+  const test::ValidatorRun v = test::run_validator({dir / "lod.glb"});
+  EXPECT_EQ(v.status, 0) << v.output;
+}
+
+TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {
+  test::TempDir dir;
+  write_scene(fixtures::humanoid_scene(), dir / "humanoid.glb");
+  for (const char* flag : {"--morph", "--shared-vertices"}) {
+    const test::RunResult r = test::run_cli({"lod", (dir / "humanoid.glb").string(), "-o", (dir / "x.glb").string(), flag});
+    EXPECT_EQ(r.exit_code, 1) << flag << ": " << r.err;
+  }
+  const test::RunResult bad = test::run_cli(
+      {"lod", (dir / "humanoid.glb").string(), "-o", (dir / "x.glb").string(), "--skin-mode", "rigid"});
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("--skin-mode"), std::string::npos) << bad.err;
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "lodkit/error.h"
 #include "lodkit/io.h"
 #include "lodkit/lod.h"
+#include "lodkit/skin.h"
 #include "progress.h"
 
 namespace lod::cli {
@@ -26,6 +27,8 @@ struct LodCommand {
   float error_px = 1.0f, screen_height = 1080.0f, fov_degrees = 60.0f;
   bool from_input = false, morph = false, shared = false, json = false, force = false;
   unsigned threads = 0;
+  std::string skin_mode = "multipose";
+  uint32_t poses = 16;
 };
 
 std::vector<float> parse_list(const std::string& text, const char* option) {
@@ -101,6 +104,130 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
   return scene;
 }
 
+struct ChainReport {
+  std::string node;  // the skinned node's name; empty for a static mesh
+  LodChain chain;
+  std::vector<double> distances, coverage;
+};
+
+// Switch distances: where a level's error bound shrinks to error_px on screen. Screen coverage
+// (MSFT_screencoverage): the bounding sphere's projected height over the screen height at the
+// distance where the next level takes over; 0 after the last (never culled).
+void set_switching(ChainReport& r, const LodCommand& o) {
+  const double fov = o.fov_degrees * M_PI / 180.0;
+  const double radius = 0.5 * r.chain.diagonal;
+  for (const LodLevel& level : r.chain.levels)
+    r.distances.push_back(switch_distance(level.error_bound, o.error_px, o.screen_height, fov));
+  for (size_t i = 0; i < r.chain.levels.size(); ++i) {
+    const double d = i + 1 < r.chain.levels.size() ? r.distances[i + 1] : 0.0;
+    r.coverage.push_back(d > 0 ? std::min(1.0, radius / (d * std::tan(fov / 2))) : 0.0);
+  }
+}
+
+nlohmann::json levels_json(const ChainReport& r) {
+  nlohmann::json levels = nlohmann::json::array();
+  for (size_t i = 0; i < r.chain.levels.size(); ++i) {
+    const LodLevel& l = r.chain.levels[i];
+    levels.push_back({{"level", i}, {"triangles", l.mesh.triangle_count()}, {"vertices", l.mesh.vertex_count()},
+                      {"error", l.error}, {"error_bound", l.error_bound}, {"relative_error", l.relative_error},
+                      {"engine_error", l.engine_error}, {"switch_distance", r.distances[i]},
+                      {"screen_coverage", r.coverage[i]}});
+  }
+  return levels;
+}
+
+SkinMode parse_skin_mode(const std::string& name) {
+  for (const SkinMode m : {SkinMode::houle, SkinMode::subset, SkinMode::multipose})
+    if (name == skin_mode_name(m)) return m;
+  throw_usage("--skin-mode: '" + name + "' is not houle, subset or multipose");
+}
+
+// One chain per skinned glTF mesh instance: its primitives (all with the node's skin) simplified
+// together level by level, so that level i of every primitive goes into the same new glTF mesh.
+// Each primitive's chain is built separately; the node's errors are the largest of its primitives'.
+std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<SkinnedPrimitive>& skinned, SkinMode mode,
+                                       uint32_t pose_count, const LodOptions& base,
+                                       const std::function<void(double)>& progress) {
+  if (pose_count == 0) throw_usage("--poses must be at least 1");
+  std::vector<ChainReport> reports;
+  std::vector<bool> done(scene.primitives.size(), false);
+  for (size_t k = 1; k < skinned.size(); ++k)
+    for (size_t j = 0; j < k; ++j)
+      if (skinned[j].node == skinned[k].node)
+        throw_usage("skinned node " + std::to_string(skinned[k].node) +
+                    " draws several primitives (materials); lodkit lod handles one primitive per skinned mesh for now");
+  for (size_t k = 0; k < skinned.size(); ++k) {
+    const SkinnedPrimitive& sp = skinned[k];
+    if (done[sp.primitive]) continue;  // a primitive instanced twice gets one chain
+    done[sp.primitive] = true;
+    SkinSimplifyOptions so;
+    so.mode = mode;
+    if (mode == SkinMode::houle) {
+      so.poses = {joint_matrices(scene, sp.skin, world_matrices(scene, mid_range_pose(scene)))};
+    } else if (mode == SkinMode::multipose) {
+      so.poses = sample_poses(scene, sp.skin, pose_count);
+    }
+    LodOptions options = base;
+    options.simplifier = [so](const Mesh& mesh, const SimplifyOptions& simplify) {
+      SkinSimplifyOptions o = so;
+      o.simplify = simplify;
+      return simplify_skinned(mesh, o);
+    };
+    options.progress = [&](double f) { progress((double(k) + f) / double(skinned.size())); };
+    const Mesh& mesh = scene.primitives[sp.primitive].mesh;
+    validate(mesh, scene.name);
+    ChainReport r;
+    r.node = scene.nodes[sp.node].name.empty() ? "node " + std::to_string(sp.node) : scene.nodes[sp.node].name;
+    r.chain = build_lod_chain(mesh, options);
+    reports.push_back(std::move(r));
+  }
+  return reports;
+}
+
+// The input scene with each skinned primitive's levels: level 0 replaces the primitive's geometry,
+// level i > 0 becomes primitive 0 of a new glTF mesh drawn by a new node with the same skin, listed
+// in the skinned node's MSFT_lod. Skeleton, skins, animations, materials and everything else of the
+// source are written back unchanged.
+Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, const std::vector<ChainReport>& reports) {
+  uint32_t next_mesh = 0;
+  for (const Primitive& p : scene.primitives) next_mesh = std::max(next_mesh, p.gltf_mesh + 1);
+  std::vector<bool> done(scene.primitives.size(), false);
+  size_t report = 0;
+  for (const SkinnedPrimitive& sp : skinned) {
+    if (done[sp.primitive]) continue;
+    done[sp.primitive] = true;
+    const ChainReport& r = reports[report++];
+    const Primitive source = scene.primitives[sp.primitive];
+    scene.primitives[sp.primitive].mesh = r.chain.levels[0].mesh;
+    const std::string owner = scene.nodes[sp.node].name;  // a copy: scene.nodes grows below
+    const std::string& old_extras = scene.nodes[sp.node].extras_json;
+    nlohmann::json extras = old_extras.empty() ? nlohmann::json::object() : nlohmann::json::parse(old_extras);
+    extras["MSFT_screencoverage"] = r.coverage;
+    nlohmann::json levels = nlohmann::json::array();
+    for (size_t i = 0; i < r.chain.levels.size(); ++i) {
+      const LodLevel& level = r.chain.levels[i];
+      levels.push_back({{"level", i}, {"triangles", level.mesh.triangle_count()}, {"error", level.error},
+                        {"error_bound", level.error_bound}, {"switch_distance", r.distances[i]}});
+      if (i == 0) continue;
+      Primitive prim;
+      prim.mesh = level.mesh;
+      prim.material = source.material;
+      prim.gltf_mesh = next_mesh++;
+      prim.gltf_primitive = 0;
+      scene.primitives.push_back(std::move(prim));
+      Node node;
+      node.name = fmt::format("{}_LOD{}", owner, i);
+      node.mesh = int32_t(scene.primitives.back().gltf_mesh);
+      node.skin = int32_t(sp.skin);
+      scene.nodes.push_back(std::move(node));
+      scene.nodes[sp.node].lod_ids.push_back(int32_t(scene.nodes.size() - 1));
+    }
+    extras["lodkit"] = {{"levels", levels}};
+    scene.nodes[sp.node].extras_json = extras.dump();
+  }
+  return scene;
+}
+
 }  // namespace
 
 Command register_lod(CLI::App& root) {
@@ -120,6 +247,9 @@ Command register_lod(CLI::App& root) {
                 "Subset placement and one vertex buffer for all levels (coarser levels use a prefix of it)");
   app->add_option("--metric", o->metric, "edge, qem, cqem (default), memoryless or cmemoryless");
   app->add_option("--attributes", o->attributes, "Attribute weights, e.g. normal=1,uv=1,color=1");
+  app->add_option("--skin-mode", o->skin_mode,
+                 "Skinned glTF input: houle, subset or multipose (default: quadrics over --poses poses of every clip)");
+  app->add_option("--poses", o->poses, "Skinned input, multipose mode: poses sampled over the clips (default 16)");
   app->add_option("--lpm", o->lpm, "Also write a progressive mesh (.lpm) down to the coarsest level");
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
@@ -146,69 +276,75 @@ Command register_lod(CLI::App& root) {
             if (!o->attributes.empty()) parse_attributes(o->attributes, options.simplify);
 
             auto start = std::chrono::steady_clock::now();
+            // glTF input is read as a scene: a skinned character keeps its skeleton and clips.
+            const FileFormat in_format = format_from_path(o->input);
+            Scene scene;
             Mesh mesh;
             {
               ProgressBar bar("loading");
-              mesh = read_mesh(o->input, bar.read_options());
+              if (in_format == FileFormat::glb || in_format == FileFormat::gltf) scene = read_scene(o->input, bar.read_options());
+              else mesh = read_mesh(o->input, bar.read_options());
             }
-            validate(mesh, o->input);
+            const std::vector<SkinnedPrimitive> skinned = scene.source ? skinned_primitives(scene) : std::vector<SkinnedPrimitive>{};
+            if (scene.source && skinned.empty()) mesh = flatten(scene);
             const double load_seconds = seconds_since(start);
+
+            std::vector<ChainReport> reports;
             start = std::chrono::steady_clock::now();
-            LodChain chain;
-            {
+            if (!skinned.empty()) {
+              if (o->morph) throw_usage("--morph: skinned input morphs at run time (lod::SkinnedGeomorph), not as glTF morph targets");
+              if (o->shared) throw_usage("--shared-vertices is not available for skinned input yet");
+              if (!o->lpm.empty()) throw_usage("--lpm is not available for skinned input yet");
+              ProgressBar bar("building skinned LODs");
+              reports = build_skinned(scene, skinned, parse_skin_mode(o->skin_mode), o->poses, options,
+                                      [&](double f) { bar.update(f); });
+            } else {
+              validate(mesh, o->input);
               ProgressBar bar("building LODs");
               options.progress = [&](double f) { bar.update(f); };
-              chain = build_lod_chain(mesh, options);
+              reports.push_back({"", build_lod_chain(mesh, options), {}, {}});
             }
             const double build_seconds = seconds_since(start);
+            for (ChainReport& r : reports) set_switching(r, *o);
 
-            // Switch distances: where a level's error shrinks to error_px on screen. Screen coverage
-            // (MSFT_screencoverage): the bounding sphere's projected height over the screen height at
-            // the distance where the next level takes over; 0 after the last (never culled).
-            const double fov = o->fov_degrees * M_PI / 180.0;
-            const double radius = 0.5 * chain.diagonal;
-            std::vector<double> distances, coverage;
-            for (const LodLevel& level : chain.levels)
-              distances.push_back(switch_distance(level.error_bound, o->error_px, o->screen_height, fov));
-            for (size_t i = 0; i < chain.levels.size(); ++i) {
-              const double d = i + 1 < chain.levels.size() ? distances[i + 1] : 0.0;
-              coverage.push_back(d > 0 ? std::min(1.0, radius / (d * std::tan(fov / 2))) : 0.0);
-            }
             start = std::chrono::steady_clock::now();
-            write_scene(chain_scene(chain, distances, coverage), o->output);
-            if (!o->lpm.empty()) {
-              // The progressive mesh spans the input down to the coarsest level's size.
-              SimplifyOptions so = options.simplify;
-              so.target_triangles = std::max<uint64_t>(1, chain.levels.back().mesh.triangle_count());
-              SimplifyResult r = simplify(mesh, so);
-              write_progressive_mesh(ProgressiveMesh(mesh, std::move(r.record)), o->lpm);
+            if (!skinned.empty()) {
+              write_scene(skinned_scene(std::move(scene), skinned, reports), o->output);
+            } else {
+              write_scene(chain_scene(reports[0].chain, reports[0].distances, reports[0].coverage), o->output);
+              if (!o->lpm.empty()) {
+                // The progressive mesh spans the input down to the coarsest level's size.
+                SimplifyOptions so = options.simplify;
+                so.target_triangles = std::max<uint64_t>(1, reports[0].chain.levels.back().mesh.triangle_count());
+                SimplifyResult r = simplify(mesh, so);
+                write_progressive_mesh(ProgressiveMesh(mesh, std::move(r.record)), o->lpm);
+              }
             }
             const double write_seconds = seconds_since(start);
 
             if (o->json) {
-              nlohmann::json levels = nlohmann::json::array();
-              for (size_t i = 0; i < chain.levels.size(); ++i) {
-                const LodLevel& l = chain.levels[i];
-                levels.push_back({{"level", i}, {"triangles", l.mesh.triangle_count()}, {"vertices", l.mesh.vertex_count()},
-                                  {"error", l.error}, {"error_bound", l.error_bound}, {"relative_error", l.relative_error},
-                                  {"engine_error", l.engine_error},
-                                  {"switch_distance", distances[i]}, {"screen_coverage", coverage[i]}});
-              }
-              const nlohmann::json j = {{"input", o->input}, {"output", o->output}, {"diagonal", chain.diagonal},
-                                        {"levels", levels}, {"load_seconds", load_seconds},
-                                        {"build_seconds", build_seconds}, {"write_seconds", write_seconds}};
+              nlohmann::json chains = nlohmann::json::array();
+              for (const ChainReport& r : reports) chains.push_back({{"node", r.node}, {"diagonal", r.chain.diagonal}, {"levels", levels_json(r)}});
+              nlohmann::json j = {{"input", o->input}, {"output", o->output}, {"diagonal", reports[0].chain.diagonal},
+                                  {"levels", levels_json(reports[0])}, {"load_seconds", load_seconds},
+                                  {"build_seconds", build_seconds}, {"write_seconds", write_seconds}};
+              if (!skinned.empty())
+                j["skinned"] = {{"mode", o->skin_mode}, {"poses", o->poses}, {"chains", chains}};
               fmt::print("{}\n", j.dump(2));
             } else {
-              fmt::print("{:<6}{:>12}{:>12}{:>14}{:>11}{:>14}{:>14}\n", "level", "triangles", "vertices", "error", "% diag",
-                         "bound", "switch at");
-              for (size_t i = 0; i < chain.levels.size(); ++i) {
-                const LodLevel& l = chain.levels[i];
-                fmt::print("{:<6}{:>12}{:>12}{:>14.6g}{:>10.4f}%{:>14.6g}{:>14.6g}\n", i, l.mesh.triangle_count(),
-                           l.mesh.vertex_count(), l.error, 100.0 * l.relative_error, l.error_bound, distances[i]);
+              for (const ChainReport& r : reports) {
+                if (!r.node.empty()) fmt::print("skinned node '{}' ({} mode, {} poses)\n", r.node, o->skin_mode, o->poses);
+                fmt::print("{:<6}{:>12}{:>12}{:>14}{:>11}{:>14}{:>14}\n", "level", "triangles", "vertices", "error", "% diag",
+                           "bound", "switch at");
+                for (size_t i = 0; i < r.chain.levels.size(); ++i) {
+                  const LodLevel& l = r.chain.levels[i];
+                  fmt::print("{:<6}{:>12}{:>12}{:>14.6g}{:>10.4f}%{:>14.6g}{:>14.6g}\n", i, l.mesh.triangle_count(),
+                             l.mesh.vertex_count(), l.error, 100.0 * l.relative_error, l.error_bound, r.distances[i]);
+                }
               }
-              fmt::print("error: Hausdorff distance to the input (measured); bound: certified upper bound; switch at: the "
+              fmt::print("error: Hausdorff distance to the input (measured{}); bound: certified upper bound; switch at: the "
                          "distance where the bound is {} px ({} px screen, {} deg fov)\n",
-                         o->error_px, o->screen_height, o->fov_degrees);
+                         skinned.empty() ? "" : ", bind pose", o->error_px, o->screen_height, o->fov_degrees);
               fmt::print("loaded in {:.3f}s, built in {:.3f}s, wrote {} in {:.3f}s\n", load_seconds, build_seconds,
                          o->output, write_seconds);
             }
