@@ -93,7 +93,8 @@ void sample_channel(const AnimationChannel& ch, float time, float* out) {
       const float* a = value(k);
       const float* b = value(k + 1);
       if (ch.path == AnimationPath::rotation) {
-        const float4 q = slerp({a[0], a[1], a[2], a[3]}, {b[0], b[1], b[2], b[3]}, t);
+        // Keys a little off unit length (quantised files) would bend the arc: normalise them first.
+        const float4 q = slerp(normalized({a[0], a[1], a[2], a[3]}), normalized({b[0], b[1], b[2], b[3]}), t);
         out[0] = q.x, out[1] = q.y, out[2] = q.z, out[3] = q.w;
       } else {
         for (size_t c = 0; c < n; ++c) out[c] = a[c] + (b[c] - a[c]) * t;

@@ -160,7 +160,8 @@ void assign_weights(Mesh& mesh, const Rig& rig) {
               [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
     double total = 0;
     size_t count = 0;
-    for (; count < 4 && candidates[count].first > 0; ++count) total += candidates[count].first;
+    // Influences under 1% (mostly what smoothing spread around) would only add work and noise.
+    for (; count < 4 && candidates[count].first >= 0.01; ++count) total += candidates[count].first;
     float w[4] = {0, 0, 0, 0};
     ushort4 joints = {0, 0, 0, 0};  // unused slots: joint 0 with weight 0
     for (size_t k = 0; k < count; ++k) {
