@@ -57,8 +57,10 @@ Image read_png(const std::filesystem::path& path);
 
 // ---- context --------------------------------------------------------------------------------------
 
-// A headless OpenGL 4.5 core context, current on the creating thread while it lives (one per
-// thread; everything below must be called on that thread). Creating it throws lod::Error
+// A headless OpenGL 4.5 core context. Each call that draws or uploads makes it current on the
+// calling thread; a context must not be used from two threads at once. The EGL display stays
+// initialised until the process exits: displays are shared process-wide, so terminating one would
+// end every other context on it. Creating it throws lod::Error
 // (bad_input) naming the missing piece when there is no usable EGL driver or GL 4.5 core support,
 // for example "no EGL driver: ...", instead of crashing.
 class RenderContext {
@@ -73,7 +75,7 @@ class RenderContext {
   uint32_t max_samples() const;         // the most MSAA samples per pixel the driver offers
 
   struct State;
-  State& state() { return *state_; }
+  State& state();  // made current on the calling thread
 
  private:
   std::unique_ptr<State> state_;
@@ -98,6 +100,7 @@ class GpuMesh {
 
  private:
   void release();
+  RenderContext* context_ = nullptr;
   uint32_t buffers_[4] = {0, 0, 0, 0};  // GL buffer names: positions, normals, colours, indices
   uint64_t triangles_ = 0;
   bool has_colors_ = false;

@@ -177,7 +177,7 @@ GLuint link_program() {
 // Undoes whatever part of the context was made when the constructor throws half-way.
 void destroy(RenderContext::State& s) {
   if (s.display == EGL_NO_DISPLAY) return;
-  if (s.context != EGL_NO_CONTEXT) {
+  if (s.context != EGL_NO_CONTEXT && eglMakeCurrent(s.display, s.surface, s.surface, s.context)) {
     GLuint framebuffers[] = {s.multisample_fbo, s.resolve_fbo};
     glDeleteFramebuffers(2, framebuffers);
     GLuint renderbuffers[] = {s.multisample_color, s.multisample_depth, s.resolve_color, s.resolve_depth};
@@ -185,10 +185,10 @@ void destroy(RenderContext::State& s) {
     if (s.vertex_array) glDeleteVertexArrays(1, &s.vertex_array);
     if (s.program) glDeleteProgram(s.program);
     eglMakeCurrent(s.display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
-    eglDestroyContext(s.display, s.context);
   }
+  if (s.context != EGL_NO_CONTEXT) eglDestroyContext(s.display, s.context);
   if (s.surface != EGL_NO_SURFACE) eglDestroySurface(s.display, s.surface);
-  eglTerminate(s.display);
+  // No eglTerminate: the display is shared by every context in the process (Mesa frees it at exit).
   eglReleaseThread();
   s.display = EGL_NO_DISPLAY;
 }
@@ -198,7 +198,7 @@ void create(RenderContext::State& s) {
   EGLint major = 0, minor = 0;
   if (!eglInitialize(s.display, &major, &minor)) {
     const EGLint code = eglGetError();
-    s.display = EGL_NO_DISPLAY;  // nothing to terminate
+    s.display = EGL_NO_DISPLAY;  // nothing to release
     throw_bad_input("OpenGL", "the EGL driver could not initialise a headless display (" + egl_error_name(code) +
                                   "): is Mesa's software rasteriser there? " + driver_hint);
   }
@@ -265,6 +265,14 @@ RenderContext::RenderContext() : state_(std::make_unique<State>()) {
 }
 
 RenderContext::~RenderContext() { destroy(*state_); }
+
+RenderContext::State& RenderContext::state() {
+  State& s = *state_;
+  // Another context may have been made current on this thread since.
+  if (eglGetCurrentContext() != s.context && !eglMakeCurrent(s.display, s.surface, s.surface, s.context))
+    throw_internal("OpenGL: could not make the context current (EGL error " + std::to_string(eglGetError()) + ")");
+  return s;
+}
 
 const std::string& RenderContext::renderer() const { return state_->renderer; }
 const std::string& RenderContext::version() const { return state_->version; }

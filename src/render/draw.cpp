@@ -87,7 +87,7 @@ void set_vec3(GLuint program, const char* name, const float3& v) {
 
 }  // namespace
 
-GpuMesh::GpuMesh(RenderContext& context, const Mesh& mesh, const std::string& name) {
+GpuMesh::GpuMesh(RenderContext& context, const Mesh& mesh, const std::string& name) : context_(&context) {
   validate(mesh, name);
   const RenderContext::State& s = context.state();
   std::vector<float3> computed;
@@ -116,20 +116,29 @@ GpuMesh::GpuMesh(RenderContext& context, const Mesh& mesh, const std::string& na
 }
 
 void GpuMesh::release() {
-  if (buffers_[0]) glDeleteBuffers(4, buffers_);
+  if (buffers_[0]) {
+    try {
+      context_->state();  // its context current, to free its buffers
+      glDeleteBuffers(4, buffers_);
+    } catch (const Error&) {
+      // The context cannot be made current: its buffers go with it.
+    }
+  }
   for (uint32_t& b : buffers_) b = 0;
 }
 
 GpuMesh::~GpuMesh() { release(); }
 
 GpuMesh::GpuMesh(GpuMesh&& other) noexcept
-    : triangles_(other.triangles_), has_colors_(other.has_colors_), bounds_(other.bounds_) {
+    : context_(other.context_),
+      triangles_(other.triangles_), has_colors_(other.has_colors_), bounds_(other.bounds_) {
   for (int k = 0; k < 4; ++k) buffers_[k] = std::exchange(other.buffers_[k], 0u);
 }
 
 GpuMesh& GpuMesh::operator=(GpuMesh&& other) noexcept {
   if (this != &other) {
     release();
+    context_ = other.context_;
     for (int k = 0; k < 4; ++k) buffers_[k] = std::exchange(other.buffers_[k], 0u);
     triangles_ = other.triangles_;
     has_colors_ = other.has_colors_;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 
 #include "core/shapes.h"
 #include "lodkit/error.h"
@@ -252,6 +253,27 @@ TEST(Render, DeterministicBytes) {
   }
   RenderContext gl;
   EXPECT_EQ(encode_png(render(gl, mesh, camera, options)), first);
+}
+
+// Contexts alive at once each draw their own meshes, and one outlives the other.
+TEST(Render, TwoContextsAtOnce) {
+  Mesh red, blue;
+  add_rectangle(red, -1, -1, 1, 1, 0, {1, 0, 0, 1});
+  add_rectangle(blue, -1, -1, 1, 1, 0, {0, 0, 1, 1});
+  auto first = std::make_unique<RenderContext>();
+  const GpuMesh red_mesh(*first, red);
+  {
+    RenderContext second;
+    const GpuMesh blue_mesh(second, blue);
+    const RenderOptions options{.width = 16, .height = 16};
+    expect_rgb(render(*first, red_mesh, front_ortho(4), options), 8, 8, 255, 0, 0);
+    expect_rgb(render(second, blue_mesh, front_ortho(4), options), 8, 8, 0, 0, 255);
+    expect_rgb(render(*first, red_mesh, front_ortho(4), options), 8, 8, 255, 0, 0);
+  }
+  expect_rgb(render(*first, red_mesh, front_ortho(4), {.width = 16, .height = 16}), 8, 8, 255, 0, 0);
+  RenderContext third;
+  expect_rgb(render(third, blue, front_ortho(4), {.width = 16, .height = 16}), 8, 8, 0, 0, 255);
+  expect_rgb(render(*first, red_mesh, front_ortho(4), {.width = 16, .height = 16}), 8, 8, 255, 0, 0);
 }
 
 TEST(Render, RejectsBadSizesAndCameras) {
