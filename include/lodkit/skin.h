@@ -95,9 +95,12 @@ class SkinnedGeomorph {
 
  private:
   const Mesh* finer_;
-  Mesh needed_;                     // the coarser vertices some moving vertex leads to
+  std::vector<float3> unit_normals_;  // the finer level's normals at unit length, for the blend
+  Mesh needed_;                       // the coarser vertices some moving vertex leads to
+  std::vector<float3> needed_unit_normals_;
   std::vector<uint32_t> slot_;      // per finer vertex: its target in needed_, or UINT32_MAX if it does not move
   size_t moving_ = 0;
+  size_t joints_used_ = 0;          // joint matrices both levels need (checked once, when built)
   SkinnedVertices needed_skinned_;  // scratch
 };
 

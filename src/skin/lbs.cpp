@@ -2,6 +2,7 @@
 // The streams (positions, normals, joints, weights) are separate arrays, read and written in order;
 // vertices are independent, so blocks of them run in parallel with identical results on any thread
 // count.
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -27,6 +28,16 @@ void skinning::check_influences(const Mesh& mesh, size_t joint_count, const char
         throw_usage(std::string(what) + ": vertex " + std::to_string(v) + " uses joint " +
                     std::to_string(mesh.joints[v][size_t(i)]) + " of " + std::to_string(joint_count) + " joint matrices");
   }
+}
+
+size_t skinning::joints_used(const Mesh& mesh) {
+  size_t used = 0;
+  for (size_t v = 0; v < mesh.weights.size() && v < mesh.joints.size(); ++v) {
+    const float w[4] = {mesh.weights[v].x, mesh.weights[v].y, mesh.weights[v].z, mesh.weights[v].w};
+    for (int i = 0; i < 4; ++i)
+      if (w[i] != 0) used = std::max(used, size_t(mesh.joints[v][size_t(i)]) + 1);
+  }
+  return used;
 }
 
 mat4 blend_matrix(std::span<const mat4> joints, const ushort4& joint, const float4& weight) {

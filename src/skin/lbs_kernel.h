@@ -2,6 +2,7 @@
 // skeletal geomorph (which skins and morphs in one pass).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 
@@ -39,12 +40,16 @@ inline float3 apply_linear(const Affine& a, const float3& q) {
 
 // Normals by the blended linear part: exact for rotations and uniform scale, the usual LBS
 // approximation otherwise. Renormalised because blending rotations shortens vectors.
-inline float3 apply_normal(const Affine& a, const float3& q) {
-  float3 r = apply_linear(a, q);
+inline float3 unit(float3 r) {
   const float len = std::sqrt(r.x * r.x + r.y * r.y + r.z * r.z);
   if (len > 0) r = {r.x / len, r.y / len, r.z / len};
   return r;
 }
+
+inline float3 apply_normal(const Affine& a, const float3& q) { return unit(apply_linear(a, q)); }
+
+// The number of joint matrices the mesh needs: one past its largest joint with a non-zero weight.
+size_t joints_used(const Mesh& mesh);
 
 // Throws lod::Error (usage) unless every vertex has joints and weights, and every joint with a
 // non-zero weight is below `joint_count`. `what` starts the message.

@@ -26,6 +26,7 @@ Mesh arm(uint32_t along = 60, uint32_t around = 20) {
       // A slight wobble so the surface is not trivially flat along x.
       const float r = 0.2f + 0.03f * std::sin(7 * x) * std::cos(3 * a);
       m.positions.push_back({x, r * std::cos(a), r * std::sin(a)});
+      m.normals.push_back({0, std::cos(a), std::sin(a)});  // radial (ignoring the wobble)
       const float s = std::clamp((x - 0.8f) / 0.4f, 0.0f, 1.0f), w1 = s * s * (3 - 2 * s);
       m.joints.push_back({0, 1, 0, 0});
       m.weights.push_back({1 - w1, w1, 0, 0});
@@ -241,14 +242,25 @@ TEST(SkinnedGeomorph, EndsAreTheSkinnedLevelsInAnyFrame) {
       morph.evaluate(pose, 0.0f, out);
       EXPECT_EQ(out.positions, fine.positions);
       morph.evaluate(pose, 1.0f, out);
-      for (size_t v = 0; v < finer.vertex_count(); ++v)
+      for (size_t v = 0; v < finer.vertex_count(); ++v) {
         ASSERT_EQ(out.positions[v], coarse.positions[chain.morphs[i].target[v]]) << "level " << i << " vertex " << v;
+        ASSERT_EQ(out.normals[v], coarse.normals[chain.morphs[i].target[v]]) << "level " << i << " vertex " << v;
+      }
       // Half way: the midpoint of the two skinned positions.
       morph.evaluate(pose, 0.5f, out);
       for (size_t v = 0; v < finer.vertex_count(); ++v) {
         const float3 &a = fine.positions[v], &b = coarse.positions[chain.morphs[i].target[v]];
         EXPECT_NEAR(out.positions[v].x, 0.5f * (a.x + b.x), 1e-6f);
         EXPECT_NEAR(out.positions[v].y, 0.5f * (a.y + b.y), 1e-6f);
+        // Normals: the normalised blend of the two skinned unit normals.
+        const float3 &n = fine.normals[v], &q = coarse.normals[chain.morphs[i].target[v]];
+        const float3 mid = {n.x + q.x, n.y + q.y, n.z + q.z};
+        const float len = std::sqrt(mid.x * mid.x + mid.y * mid.y + mid.z * mid.z);
+        if (len > 0.5f) {
+          EXPECT_NEAR(out.normals[v].x, mid.x / len, 1e-5f) << v;
+          EXPECT_NEAR(out.normals[v].y, mid.y / len, 1e-5f) << v;
+          EXPECT_NEAR(out.normals[v].z, mid.z / len, 1e-5f) << v;
+        }
       }
     }
   }
