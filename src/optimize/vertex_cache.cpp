@@ -10,7 +10,8 @@
 //   cache and by how few triangles still need it; the next triangle is the best-scoring one among the
 //   triangles of the cached vertices.
 // At a dead end each restarts from the most recently used vertex that still has triangles (it keeps
-// the walk local), and only then from the next triangle in input order.
+// the walk local), and only then from the next triangle in input order. On small inputs the fan
+// orderer also runs from a few other start vertices (the first fan sets the sweep that follows).
 #include <algorithm>
 #include <cmath>
 
@@ -301,10 +302,11 @@ std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t 
   // with_work[q]: how many of the q oldest entries still have triangles (they would be loaded again).
   std::vector<uint32_t> with_work(K + 1, 0);
 
-  // Start around the vertex with the fewest triangles (a border or a corner).
-  uint32_t focus = none;
-  for (uint32_t v = 0; v < V; ++v)
-    if (live[v] && (focus == none || live[v] < live[focus])) focus = v;
+  // Start around the given vertex, else the vertex with the fewest triangles (a border or a corner).
+  uint32_t focus = scoring.start < V && live[scoring.start] ? scoring.start : none;
+  if (focus == none)
+    for (uint32_t v = 0; v < V; ++v)
+      if (live[v] && (focus == none || live[v] < live[focus])) focus = v;
   while (focus != none) {
     // The fan, cheapest triangle first; on a tie, the one holding the oldest cached corner besides
     // the centre (use it before it leaves).
@@ -365,6 +367,11 @@ std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t 
 
 namespace {
 constexpr uint32_t max_cache = detail::max_cache_size;
+// Extra starts of the fan orderer on small inputs: at most `max_extra_starts` runs and at most
+// `extra_start_triangles` triangles of extra work in all, so the extra time is bounded by a constant
+// (one fan-orderer run over 8,192 triangles) and inputs over 8,192 triangles run each orderer once.
+constexpr uint32_t max_extra_starts = 3;
+constexpr uint32_t extra_start_triangles = 8192;
 
 // Cache misses of the triangles taken in `order` (the analyzer's simulation, without building the list).
 uint64_t cache_misses(std::span<const uint32_t> indices, std::span<const uint32_t> order, size_t vertex_count, const VertexCacheOptions& o) {
@@ -399,14 +406,21 @@ std::vector<uint32_t> vertex_cache_order(std::span<const uint32_t> indices, size
   std::vector<uint32_t> best(F);
   for (uint32_t t = 0; t < F; ++t) best[t] = t;
   uint64_t best_misses = cache_misses(indices, best, vertex_count, options);
-  for (int candidate = 0; candidate < 2; ++candidate) {
-    std::vector<uint32_t> order;
-    if (candidate == 1) order = detail::tipsify_order(indices, vertex_count, options.cache_size);
-    else if (options.policy == CachePolicy::fifo) order = detail::fan_cache_order(indices, vertex_count, {.cache_size = options.cache_size});
-    else order = detail::greedy_cache_order(indices, vertex_count, detail::default_scoring(options.cache_size));
+  auto consider = [&](std::vector<uint32_t> order) {
     const uint64_t misses = cache_misses(indices, order, vertex_count, options);
     if (misses < best_misses) best_misses = misses, best = std::move(order);
-  }
+  };
+  const bool fifo = options.policy == CachePolicy::fifo;
+  if (fifo) consider(detail::fan_cache_order(indices, vertex_count, {.cache_size = options.cache_size}));
+  else consider(detail::greedy_cache_order(indices, vertex_count, detail::default_scoring(options.cache_size)));
+  consider(detail::tipsify_order(indices, vertex_count, options.cache_size));
+  // On a small mesh the first fan decides the sweep that follows, and the fewest-triangle start is
+  // sometimes a poor one: the fan orderer also starts at the first corner of input triangles
+  // 0, F/n, ... (the input's own start first), as many runs as fit in extra_start_triangles.
+  const uint32_t extra_starts = fifo && F ? std::min(max_extra_starts, extra_start_triangles / F) : 0;
+  for (uint32_t i = 0; i < extra_starts; ++i)
+    consider(detail::fan_cache_order(indices, vertex_count,
+                                     {.cache_size = options.cache_size, .start = indices[3 * (size_t(i) * F / extra_starts)]}));
   return best;
 }
 

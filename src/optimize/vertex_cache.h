@@ -35,6 +35,7 @@ struct FanScoring {
   uint32_t cache_size = 16;
   float eviction_weight = -0.2f;
   float live_weight = 0.02f;
+  uint32_t start = 0xFFFFFFFFu;  // the first centre (when it has triangles); else one with the fewest triangles
 };
 std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t vertex_count, const FanScoring& scoring);
 

@@ -39,7 +39,9 @@ TEST(Optimize, EveryStepKeepsTheTriangles) {
         validate(r.mesh);
         // The cache order is never worse than the input's (strips follow their own order, and
         // materials split the mesh into ranges the input did not have).
-        if (!strips && input.materials.empty()) EXPECT_LE(r.cache_after.misses, r.cache_before.misses);
+        if (!strips && input.materials.empty()) {
+          EXPECT_LE(r.cache_after.misses, r.cache_before.misses);
+        }
         // Every output vertex carries the streams of some input vertex at the same position.
         EXPECT_EQ(r.mesh.normals.empty(), input.normals.empty());
         if (strips) {
