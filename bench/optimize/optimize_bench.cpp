@@ -11,6 +11,11 @@
 //              lodkit: lod::stripify, method best (its own vertex-cache order inside, FIFO 16);
 //              meshopt: meshopt_optimizeVertexCacheStrip then meshopt_stripify (both timed).
 //          sgi | sgi-restart: lodkit only, lod::stripify with the SGI method (the baseline).
+//          overdraw: vertex-cache order (FIFO 16) then the overdraw order (threshold 1.05), both timed.
+//              lodkit: lod::optimize_vertex_cache then lod::optimize_overdraw;
+//              meshopt: meshopt_optimizeVertexCache then meshopt_optimizeOverdraw.
+//          The overdraw op and vcache16 also report overdraw (lodkit's analyzer and
+//          meshopt_analyzeOverdraw).
 //   lodkit_bench_optimize make-input MESH OUT LEVEL: MESH subdivided 1->4 LEVEL times, binary PLY.
 //
 // IN is read with lodkit's reader; every tool gets the same index buffer (positions and triangles,
@@ -103,14 +108,30 @@ int run(const std::string& tool, const std::string& op, const std::string& input
   const bool is_strip = op.rfind("strip", 0) == 0 || op.rfind("sgi", 0) == 0;
   const bool restart = op.size() > 8 && op.compare(op.size() - 8, 8, "-restart") == 0;
   const uint32_t cache = op == "vcache32" ? 32 : 16;
-  if (!is_strip && op != "vcache16" && op != "vcache32") throw std::invalid_argument("unknown OP " + op);
+  const bool is_overdraw = op == "overdraw";
+  if (!is_strip && !is_overdraw && op != "vcache16" && op != "vcache32") throw std::invalid_argument("unknown OP " + op);
+  if (is_overdraw && tool == "meshopt-fifo") throw std::invalid_argument("overdraw is lodkit's or meshopt's");
   if (tool != "lodkit" && tool != "meshopt" && tool != "meshopt-fifo") throw std::invalid_argument("unknown TOOL " + tool);
   if (op.rfind("sgi", 0) == 0 && tool != "lodkit") throw std::invalid_argument("sgi is lodkit's only");
   if (is_strip && tool == "meshopt-fifo") throw std::invalid_argument("meshopt-fifo only orders for the cache");
 
   // The operation: returns the output buffer (a triangle list, or a strip buffer).
   std::function<std::vector<uint32_t>()> operation;
-  if (!is_strip) {
+  const std::vector<lod::float3>& positions = mesh.positions;
+  if (is_overdraw) {
+    if (tool == "lodkit")
+      operation = [&] {
+        const std::vector<uint32_t> ordered = lod::optimize_vertex_cache(in, V, {.cache_size = 16, .policy = lod::CachePolicy::fifo});
+        return lod::optimize_overdraw(ordered, positions, {.cache_size = 16, .threshold = 1.05f});
+      };
+    else
+      operation = [&] {
+        std::vector<uint32_t> ordered(in.size()), out(in.size());
+        meshopt_optimizeVertexCache(ordered.data(), in.data(), in.size(), V);
+        meshopt_optimizeOverdraw(out.data(), ordered.data(), in.size(), &positions[0].x, V, sizeof(lod::float3), 1.05f);
+        return out;
+      };
+  } else if (!is_strip) {
     if (tool == "lodkit")
       operation = [&] { return lod::optimize_vertex_cache(in, V, {.cache_size = cache, .policy = lod::CachePolicy::fifo}); };
     else if (tool == "meshopt")
@@ -168,6 +189,10 @@ int run(const std::string& tool, const std::string& op, const std::string& input
   }
   j["acmr_lru16"] = lod::analyze_vertex_cache(list, V, {.cache_size = 16, .policy = lod::CachePolicy::lru}).acmr;
   j["acmr_input_fifo16"] = lod::analyze_vertex_cache(in, V, {.cache_size = 16}).acmr;
+  if (is_overdraw || op == "vcache16") {
+    j["overdraw"] = lod::analyze_overdraw(list, positions).overdraw;
+    j["overdraw_meshopt_analyzer"] = meshopt_analyzeOverdraw(list.data(), list.size(), &positions[0].x, V, sizeof(lod::float3)).overdraw;
+  }
   if (is_strip) {
     const lod::StripStats s = lod::analyze_strips(out, restart, 0xFFFFFFFFu);
     j["strip_indices"] = s.indices;
@@ -195,7 +220,7 @@ int main(int argc, char** argv) {
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr,
                  "lodkit_bench_optimize: %s\nusage: lodkit_bench_optimize lodkit|meshopt|meshopt-fifo "
-                 "vcache16|vcache32|strip|strip-restart|sgi|sgi-restart IN RUNS [--min-seconds S] [--json]\n"
+                 "vcache16|vcache32|strip|strip-restart|sgi|sgi-restart|overdraw IN RUNS [--min-seconds S] [--json]\n"
                  "       lodkit_bench_optimize make-input MESH OUT LEVEL\n",
                  e.what());
     return 1;

@@ -126,6 +126,39 @@ def main():
               f"{ms(c['strip_s'][0])} / {ms(c['strip_s'][1])} |")
     print()
 
+    # ---- overdraw (optional in issue 5: information, no target) ---------------------------------------
+    for c in cases:
+        n = c["name"]
+        c["overdraw"] = {
+            "lodkit_cache": get(n, "lodkit", "vcache16", "overdraw"), "lodkit": get(n, "lodkit", "overdraw", "overdraw"),
+            "meshopt_cache": get(n, "meshopt", "vcache16", "overdraw"), "meshopt": get(n, "meshopt", "overdraw", "overdraw"),
+            "lodkit_meshopt_analyzer": get(n, "lodkit", "overdraw", "overdraw_meshopt_analyzer"),
+            "meshopt_meshopt_analyzer": get(n, "meshopt", "overdraw", "overdraw_meshopt_analyzer"),
+            "lodkit_acmr16": get(n, "lodkit", "overdraw", "acmr_fifo16"), "meshopt_acmr16": get(n, "meshopt", "overdraw", "acmr_fifo16"),
+            "lodkit_s": get(n, "lodkit", "overdraw", "median_s"), "meshopt_s": get(n, "meshopt", "overdraw", "median_s"),
+        }
+    print("### Overdraw (shaded ÷ covered pixels, 14 orthographic views, lodkit's analyzer; [meshoptimizer's analyzer]; "
+          "overdraw order = cache order (FIFO 16) then the overdraw pass at threshold 1.05)")
+    print()
+    print("| input | lodkit cache order | lodkit overdraw order | meshopt cache order | meshopt overdraw order | "
+          "ACMR 16 after, lodkit / meshopt | time (both passes) lodkit / meshopt ms |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    overdraw_rows = [("corpus (geometric mean)", [c for c in cases if c["group"] == "corpus"])] + \
+                    [(c["name"], [c]) for c in cases if c["group"] == "big"]
+    for label, group in overdraw_rows:
+        g = {k: geomean([c["overdraw"][k] for c in group]) for k in group[0]["overdraw"]} if group else {}
+        if label.startswith("corpus"):
+            summary["overdraw"] = g
+        print(f"| {label} | {fmt(g.get('lodkit_cache'))} | {fmt(g.get('lodkit'))} [{fmt(g.get('lodkit_meshopt_analyzer'))}] | "
+              f"{fmt(g.get('meshopt_cache'))} | {fmt(g.get('meshopt'))} [{fmt(g.get('meshopt_meshopt_analyzer'))}] | "
+              f"{fmt(g.get('lodkit_acmr16'))} / {fmt(g.get('meshopt_acmr16'))} | {ms(g.get('lodkit_s'))} / {ms(g.get('meshopt_s'))} |")
+    at_or_below = sum(1 for c in cases if c["group"] == "corpus" and c["overdraw"]["lodkit"] is not None and c["overdraw"]["meshopt"] is not None
+                      and c["overdraw"]["lodkit"] <= c["overdraw"]["meshopt"] + 1e-12)
+    print()
+    print(f"lodkit's overdraw order at or below meshoptimizer's on {at_or_below}/{len([c for c in cases if c['group'] == 'corpus'])} "
+          f"corpus meshes (lodkit's analyzer); times of corpus meshes are geometric means")
+    print()
+
     # ---- summary and targets -----------------------------------------------------------------------
     corpus_cases = [c for c in cases if c["group"] == "corpus"]
     summary = {"machine": machine, "runs": int(runs_asked), "corpus_meshes": len(corpus_cases), "failed_runs": len(failed)}

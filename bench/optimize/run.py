@@ -17,7 +17,8 @@ import time
 
 # Operations per tool. meshoptimizer's vertex-cache optimizer takes no cache size, so its one order
 # is measured at FIFO 16 and 32 (the program reports both); its Tipsify (meshopt-fifo) is told the
-# size and is shown for information.
+# size and is shown for information. overdraw: the cache order then the overdraw order, both tools
+# (information: the issue makes overdraw optional and sets no target).
 JOBS = (
     ("lodkit", "vcache16"), ("lodkit", "vcache32"),
     ("meshopt", "vcache16"),
@@ -25,6 +26,7 @@ JOBS = (
     ("lodkit", "strip"), ("lodkit", "strip-restart"),
     ("meshopt", "strip"), ("meshopt", "strip-restart"),
     ("lodkit", "sgi"), ("lodkit", "sgi-restart"),
+    ("lodkit", "overdraw"), ("meshopt", "overdraw"),
 )
 BIG_BASE, BIG_LEVEL = "armadillo.off", 3     # 52,000 x 64 = 3,328,000 triangles
 QUICK_MESHES = ("elephant.off", "fandisk.off", "bunny00.off")
