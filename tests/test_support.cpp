@@ -94,6 +94,21 @@ void write_bytes(const std::filesystem::path& path, const std::vector<uint8_t>& 
   f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
 }
 
+std::string base64(std::span<const uint8_t> bytes) {
+  static const char digits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    uint32_t v = uint32_t(bytes[i]) << 16;
+    if (i + 1 < bytes.size()) v |= uint32_t(bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) v |= bytes[i + 2];
+    out += digits[v >> 18];
+    out += digits[(v >> 12) & 63];
+    out += i + 1 < bytes.size() ? digits[(v >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? digits[v & 63] : '=';
+  }
+  return out;
+}
+
 namespace {
 template <class T>
 bool bits_equal(const std::vector<T>& a, const std::vector<T>& b) {
@@ -121,6 +136,8 @@ std::string mesh_difference(const Mesh& a, const Mesh& b) {
   check("colors", a.colors, b.colors);
   check("joints", a.joints, b.joints);
   check("weights", a.weights, b.weights);
+  check("second-set joints", a.joints1, b.joints1);
+  check("second-set weights", a.weights1, b.weights1);
   check("indices", a.indices, b.indices);
   check("materials", a.materials, b.materials);
   check("groups", a.groups, b.groups);

@@ -46,6 +46,9 @@ bool validator_available();
 ValidatorRun run_validator(const std::vector<std::filesystem::path>& files);
 void write_bytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes);
 
+// Standard base64 with '=' padding (for data: URIs in hand-written glTF files).
+std::string base64(std::span<const uint8_t> bytes);
+
 inline std::span<const uint8_t> bytes_of(const std::string& s) {
   return {reinterpret_cast<const uint8_t*>(s.data()), s.size()};
 }

@@ -34,8 +34,15 @@ struct Mesh {
   std::vector<float4> tangents;                      // xyz unit, w = handedness (+1 or -1)
   std::array<std::vector<float2>, max_uv_sets> uvs;  // texture coordinate sets, used in order 0, 1, ...
   std::vector<float4> colors;                        // linear RGBA in [0, 1]
-  std::vector<ushort4> joints;                       // skin: joint indices per vertex
-  std::vector<float4> weights;                       // skin: weights per vertex, summing to 1
+  // Skin influences: four (joint index, weight) pairs per vertex in joints/weights (glTF JOINTS_0 /
+  // WEIGHTS_0), and four more in joints1/weights1 (JOINTS_1 / WEIGHTS_1) for inputs with up to eight.
+  // joints1/weights1 are empty unless the input has a second set, and present only with the first.
+  // The weights of a vertex sum to 1 over all its sets; a slot of weight 0 is unused (its joint may be
+  // any index).
+  std::vector<ushort4> joints;
+  std::vector<float4> weights;
+  std::vector<ushort4> joints1;
+  std::vector<float4> weights1;
 
   std::vector<uint32_t> indices;    // 3 per triangle
   std::vector<uint32_t> materials;  // per triangle material id; empty means every triangle uses material 0
@@ -47,6 +54,8 @@ struct Mesh {
   size_t triangle_count() const { return indices.size() / 3; }
   size_t uv_set_count() const;  // number of leading non-empty uv sets
   uint32_t material(size_t triangle) const { return materials.empty() ? 0 : materials[triangle]; }
+  // Influence slots per vertex: 0 (no skin), 4 (joints/weights) or 8 (with joints1/weights1).
+  size_t influence_slots() const { return joints.empty() ? 0 : joints1.empty() ? 4 : 8; }
 
   friend bool operator==(const Mesh&, const Mesh&) = default;
 };
@@ -55,10 +64,11 @@ struct Mesh {
 void append_vertex(Mesh& dst, const Mesh& src, uint32_t from);
 
 // Throws lod::Error (bad_input) naming `source` if streams have mismatched sizes, indices are out of
-// range, values are not finite, weights do not sum to 1 (within weight_tolerance), or per-triangle
-// streams do not match the triangle count.
+// range, values are not finite, weights are negative or do not sum to 1 over both influence sets
+// (within weight_tolerance), a second influence set comes without the first, or per-triangle streams
+// do not match the triangle count.
 struct ValidateOptions {
-  float weight_tolerance = 1e-3f;  // |sum(weights) - 1| allowed per vertex
+  float weight_tolerance = 1e-3f;  // |sum(weights) + sum(weights1) - 1| allowed per vertex
 };
 void validate(const Mesh& mesh, const std::string& source = "mesh", const ValidateOptions& options = {});
 

@@ -66,15 +66,18 @@ struct SkinnedPrimitive {
 std::vector<SkinnedPrimitive> skinned_primitives(const Scene& scene);
 
 // ---- linear blend skinning ----------------------------------------------------------------------
-// p' = sum_i w_i J[j_i] p over a vertex's influences; normals by the blended linear part,
-// renormalised. Structure of arrays: positions, normals, joints and weights are separate streams.
+// p' = sum_i w_i J[j_i] p over a vertex's four or eight influences (Mesh::joints1/weights1 when
+// present); normals by the blended linear part, renormalised. Structure of arrays: positions,
+// normals, joints and weights are separate streams.
 struct SkinnedVertices {
   std::vector<float3> positions;
   std::vector<float3> normals;  // empty when the mesh has none
 };
 void skin_vertices(const Mesh& mesh, std::span<const mat4> joints, SkinnedVertices& out, unsigned threads = 1);
-// The blended matrix sum_i w_i J[j_i] of one vertex.
-mat4 blend_matrix(std::span<const mat4> joints, const ushort4& joint, const float4& weight);
+// The blended matrix sum_i w_i J[j_i] of one vertex: its first influence set, plus the second one
+// (joint1, weight1) for a vertex with up to eight; the default second set has weight 0.
+mat4 blend_matrix(std::span<const mat4> joints, const ushort4& joint, const float4& weight, const ushort4& joint1 = {},
+                  const float4& weight1 = {});
 
 // ---- skeletal geomorph ---------------------------------------------------------------------------
 // Houle's skinned geomorph: the finer and the coarser level are skinned in this frame, then morphed
@@ -142,7 +145,8 @@ struct SkinSimplifyOptions {
 
 // Simplifies a skinned mesh given in bind space (positions, normals, joints and weights) so that it
 // keeps playing the skeleton's clips. The result is in bind space, and every vertex has at most four
-// influences with valid joints and weights summing to 1 within 1e-6 (subset: the input's, untouched).
+// influences (eight, in joints1/weights1 too, when the input has a second set) with valid joints and
+// weights summing to 1 within 1e-6 (subset: the input's, untouched).
 // SimplifyResult::error is the engine's error: in poses[0] (houle), in the bind pose (subset), or the
 // root mean square over the poses (multipose). Throws lod::Error (usage) for a mesh without joints
 // and weights, joints outside the poses, or a mode without the poses it needs.

@@ -21,6 +21,8 @@ void append_vertex(Mesh& dst, const Mesh& src, uint32_t from) {
   if (!src.colors.empty()) dst.colors.push_back(src.colors[from]);
   if (!src.joints.empty()) dst.joints.push_back(src.joints[from]);
   if (!src.weights.empty()) dst.weights.push_back(src.weights[from]);
+  if (!src.joints1.empty()) dst.joints1.push_back(src.joints1[from]);
+  if (!src.weights1.empty()) dst.weights1.push_back(src.weights1[from]);
 }
 
 void bounding_box(const Mesh& mesh, float3& min, float3& max) {

@@ -30,12 +30,14 @@ uint32_t append_midpoint(Mesh& m, uint32_t a, uint32_t b) {
   if (!m.colors.empty()) m.colors.push_back(mid(m.colors[a], m.colors[b]));
   if (!m.joints.empty()) {
     // Weights can only be blended when both ends name the same joints; otherwise keep one end's.
-    if (m.joints[a] == m.joints[b]) {
-      m.joints.push_back(m.joints[a]);
-      m.weights.push_back(mid(m.weights[a], m.weights[b]));
-    } else {
-      m.joints.push_back(m.joints[std::min(a, b)]);
-      m.weights.push_back(m.weights[std::min(a, b)]);
+    const bool second = !m.joints1.empty();
+    const bool same = m.joints[a] == m.joints[b] && (!second || m.joints1[a] == m.joints1[b]);
+    const uint32_t from = same ? a : std::min(a, b);
+    m.joints.push_back(m.joints[from]);
+    m.weights.push_back(same ? mid(m.weights[a], m.weights[b]) : m.weights[from]);
+    if (second) {
+      m.joints1.push_back(m.joints1[from]);
+      m.weights1.push_back(same ? mid(m.weights1[a], m.weights1[b]) : m.weights1[from]);
     }
   }
   return uint32_t(m.positions.size() - 1);

@@ -32,12 +32,22 @@ void validate(const Mesh& mesh, const std::string& source, const ValidateOptions
   for (size_t k = 0; k < max_uv_sets; ++k) check_stream(mesh.uvs[k], n, source, "uv");
   check_stream(mesh.colors, n, source, "color");
   check_stream(mesh.weights, n, source, "weight");
+  check_stream(mesh.weights1, n, source, "second-set weight");
   if (!mesh.joints.empty() && mesh.joints.size() != n) throw_bad_input(source, "joints stream size does not match the vertex count");
+  if (!mesh.joints1.empty() && mesh.joints1.size() != n)
+    throw_bad_input(source, "second-set joints stream size does not match the vertex count");
   if (mesh.joints.empty() != mesh.weights.empty()) throw_bad_input(source, "joints and weights must come together");
+  if (mesh.joints1.empty() != mesh.weights1.empty())
+    throw_bad_input(source, "second-set joints and weights must come together");
+  if (!mesh.joints1.empty() && mesh.joints.empty())
+    throw_bad_input(source, "a second set of joints and weights needs the first");
+  const bool second = !mesh.weights1.empty();
+  auto negative = [](const float4& w) { return w.x < 0 || w.y < 0 || w.z < 0 || w.w < 0; };
   for (size_t v = 0; v < mesh.weights.size(); ++v) {
     const float4& w = mesh.weights[v];
-    if (w.x < 0 || w.y < 0 || w.z < 0 || w.w < 0) throw_bad_input(source, "negative skin weight at vertex " + std::to_string(v));
-    double sum = double(w.x) + w.y + w.z + w.w;
+    const float4 w1 = second ? mesh.weights1[v] : float4{};
+    if (negative(w) || negative(w1)) throw_bad_input(source, "negative skin weight at vertex " + std::to_string(v));
+    const double sum = double(w.x) + w.y + w.z + w.w + (double(w1.x) + w1.y + w1.z + w1.w);
     if (std::fabs(sum - 1.0) > options.weight_tolerance)
       throw_bad_input(source, "skin weights of vertex " + std::to_string(v) + " sum to " + std::to_string(sum) + ", expected 1");
   }

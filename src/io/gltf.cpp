@@ -675,16 +675,25 @@ class SceneBuilder {
       }
       check_finite(mesh.colors, where + " COLOR_0");
     }
-    if (int index = stream("JOINTS_0", {TINYGLTF_TYPE_VEC4}); index >= 0) {
-      const int type = doc_.accessor(index).componentType;
-      if (type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)
-        doc_.fail(where + " JOINTS_0 must be unsigned byte or unsigned short");
-      mesh.joints = doc_.decode_joints(index);
+    // Influence sets 0 and 1 (up to eight influences), by the same rules: JOINTS_n unsigned byte or
+    // short; WEIGHTS_n as floats, integer ones normalized.
+    std::vector<ushort4>* joint_sets[2] = {&mesh.joints, &mesh.joints1};
+    std::vector<float4>* weight_sets[2] = {&mesh.weights, &mesh.weights1};
+    for (size_t set = 0; set < 2; ++set) {
+      const std::string joints = "JOINTS_" + str(set), weights = "WEIGHTS_" + str(set);
+      if (int index = stream(joints, {TINYGLTF_TYPE_VEC4}); index >= 0) {
+        const int type = doc_.accessor(index).componentType;
+        if (type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)
+          doc_.fail(where + " " + joints + " must be unsigned byte or unsigned short");
+        *joint_sets[set] = doc_.decode_joints(index);
+      }
+      if (int index = stream(weights, {TINYGLTF_TYPE_VEC4}); index >= 0) {
+        *weight_sets[set] = doc_.decode_floats<float4>(index, true);
+        check_finite(*weight_sets[set], where + " " + weights);
+      }
     }
-    if (int index = stream("WEIGHTS_0", {TINYGLTF_TYPE_VEC4}); index >= 0) {
-      mesh.weights = doc_.decode_floats<float4>(index, true);
-      check_finite(mesh.weights, where + " WEIGHTS_0");
-    }
+    if ((!mesh.joints1.empty() || !mesh.weights1.empty()) && (mesh.joints.empty() || mesh.weights.empty()))
+      doc_.fail(where + " has JOINTS_1 or WEIGHTS_1 without JOINTS_0 and WEIGHTS_0");
 
     std::vector<uint32_t> corners;
     if (prim.indices >= 0) {
@@ -903,7 +912,7 @@ bool is_triangle_mode(int mode) {
 bool is_regenerated_semantic(const std::string& semantic) {
   return semantic == "POSITION" || semantic == "NORMAL" || semantic == "TANGENT" || semantic == "TEXCOORD_0" ||
          semantic == "TEXCOORD_1" || semantic == "TEXCOORD_2" || semantic == "TEXCOORD_3" || semantic == "COLOR_0" ||
-         semantic == "JOINTS_0" || semantic == "WEIGHTS_0";
+         semantic == "JOINTS_0" || semantic == "WEIGHTS_0" || semantic == "JOINTS_1" || semantic == "WEIGHTS_1";
 }
 
 struct Slot {
@@ -966,6 +975,11 @@ class BinWriter {
           add_accessor(mesh.joints, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4, array);
     if (!mesh.weights.empty())
       prim.attributes["WEIGHTS_0"] = add_accessor(mesh.weights, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
+    if (!mesh.joints1.empty())
+      prim.attributes["JOINTS_1"] =
+          add_accessor(mesh.joints1, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4, array);
+    if (!mesh.weights1.empty())
+      prim.attributes["WEIGHTS_1"] = add_accessor(mesh.weights1, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
     if (prim.targets.empty())
       for (const MorphTarget& target : targets) {
         std::map<std::string, int> attributes;
@@ -1018,6 +1032,9 @@ void check_writable(const Mesh& mesh, size_t primitive) {
   sized(mesh.colors.size(), "colors");
   sized(mesh.joints.size(), "joints");
   sized(mesh.weights.size(), "weights");
+  sized(mesh.joints1.size(), "second-set joints");
+  sized(mesh.weights1.size(), "second-set weights");
+  if (!mesh.joints1.empty() && mesh.joints.empty()) throw_usage(where + "a second set of joints needs the first");
   if (n > std::numeric_limits<uint32_t>::max()) throw_usage(where + "more than 2^32 vertices");
   if (mesh.indices.size() % 3 != 0) throw_usage(where + "index count is not a multiple of 3");
   for (uint32_t i : mesh.indices)
@@ -1054,7 +1071,8 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
       if (size_t(shared) >= i) throw_usage(where + " shares the vertices of a primitive that does not come before it");
       const Mesh& b = scene.primitives[size_t(shared)].mesh;
       if (a.positions != b.positions || a.normals != b.normals || a.tangents != b.tangents || a.uvs != b.uvs ||
-          a.colors != b.colors || a.joints != b.joints || a.weights != b.weights)
+          a.colors != b.colors || a.joints != b.joints || a.weights != b.weights || a.joints1 != b.joints1 ||
+          a.weights1 != b.weights1)
         throw_usage(where + " shares the vertices of primitive " + std::to_string(shared) + " but its streams differ");
     }
     for (const MorphTarget& target : scene.primitives[i].targets)

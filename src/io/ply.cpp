@@ -286,8 +286,12 @@ void bind_vertex_properties(Element& e, Mesh& mesh, const io::TextReader& in) {
     for (float4& c : mesh.colors) c.w = 1;
   bind(mesh.joints, 4, {{"joint0"}, {"joint1"}, {"joint2"}, {"joint3"}}, Target::joint);
   bind(mesh.weights, 4, {{"weight0"}, {"weight1"}, {"weight2"}, {"weight3"}}, Target::float_stream);
-  if (mesh.joints.empty() != mesh.weights.empty() && e.count > 0)
-    throw_bad_input_at_line(in.name(), e.line, "skin joints (joint0..3) and weights (weight0..3) must come together");
+  bind(mesh.joints1, 4, {{"joint4"}, {"joint5"}, {"joint6"}, {"joint7"}}, Target::joint);
+  bind(mesh.weights1, 4, {{"weight4"}, {"weight5"}, {"weight6"}, {"weight7"}}, Target::float_stream);
+  if (e.count > 0 && (mesh.joints.empty() != mesh.weights.empty() || mesh.joints1.empty() != mesh.weights1.empty()))
+    throw_bad_input_at_line(in.name(), e.line, "skin joints (joint0..7) and weights (weight0..7) must come together");
+  if (e.count > 0 && mesh.joints.empty() && !mesh.joints1.empty())
+    throw_bad_input_at_line(in.name(), e.line, "skin influences 4..7 need influences 0..3");
 }
 
 // Binary element without lists (vertices, nearly always): every record has the same size, so the
@@ -499,8 +503,16 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options) 
   // Float colours keep the values exact; integer colours would round them to 1/255.
   declare(mesh.colors, 4, {"red", "green", "blue", "alpha"});
   declare(mesh.weights, 4, {"weight0", "weight1", "weight2", "weight3"});
-  const bool joints = !mesh.joints.empty();
-  if (joints) out += "property ushort joint0\nproperty ushort joint1\nproperty ushort joint2\nproperty ushort joint3\n";
+  declare(mesh.weights1, 4, {"weight4", "weight5", "weight6", "weight7"});
+  // Joint indices last, as ushorts: joint0..3, then joint4..7 for a second influence set.
+  std::vector<const std::vector<ushort4>*> joint_sets;
+  for (const auto* set : {&mesh.joints, &mesh.joints1})
+    if (!set->empty()) joint_sets.push_back(set);
+  for (size_t k = 0; k < 4 * joint_sets.size(); ++k) {
+    out += "property ushort joint";
+    io::append_uint(out, k);
+    out += '\n';
+  }
   out += "element face ";
   io::append_uint(out, mesh.triangle_count());
   out += "\nproperty list uchar uint vertex_indices\n";
@@ -508,7 +520,7 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options) 
   if (materials) out += "property uint material_index\n";
   out += "end_header\n";
 
-  const size_t vertex_bytes = streams.size() * 4 + (joints ? 8 : 0);
+  const size_t vertex_bytes = streams.size() * 4 + 8 * joint_sets.size();
   out.reserve(out.size() + (binary ? mesh.vertex_count() * vertex_bytes + mesh.triangle_count() * (13 + 4 * materials)
                                    : mesh.vertex_count() * streams.size() * 12 + mesh.triangle_count() * 24));
   for (size_t v = 0; v < mesh.vertex_count(); ++v) {
@@ -521,9 +533,8 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options) 
         io::append_float(out, f);
       }
     }
-    if (joints) {
-      const ushort4& j = mesh.joints[v];
-      for (uint16_t value : j) {
+    for (const auto* set : joint_sets) {
+      for (uint16_t value : (*set)[v]) {
         if (binary) {
           io::append_binary(out, value);
         } else {

@@ -104,7 +104,8 @@ float3 normalized(double x, double y, double z, const float3& fallback) {
 // Streams: a vertex stream is kept only when every flattened primitive has it. Filling the gaps with
 // made-up values (zero UVs, arbitrary normals) would look like real data to later stages, which
 // would then preserve invented seams and measure errors against them; callers that need every
-// primitive's own streams use Scene::primitives directly.
+// primitive's own streams use Scene::primitives directly. (Padding a second influence set with
+// weights of 0 is not made up: those slots are unused, the skinning is the same.)
 Mesh flatten(const Scene& scene) {
   const std::vector<Instance> instances = collect_instances(scene);
   Mesh out;
@@ -122,6 +123,10 @@ Mesh flatten(const Scene& scene) {
   const bool colors = all_have([](const Mesh& m) -> const auto& { return m.colors; });
   const bool joints = all_have([](const Mesh& m) -> const auto& { return m.joints; });
   const bool weights = all_have([](const Mesh& m) -> const auto& { return m.weights; });
+  // A second influence set if any part has one; parts with four influences get four of weight 0.
+  bool second_set = false;
+  for (const Instance& inst : instances) second_set = second_set || !scene.primitives[inst.primitive].mesh.joints1.empty();
+  second_set = second_set && joints && weights;
   bool any_material = false;
   size_t vertices = 0, corners = 0;
   for (const Instance& inst : instances) {
@@ -191,6 +196,13 @@ Mesh flatten(const Scene& scene) {
     if (colors) out.colors.insert(out.colors.end(), mesh.colors.begin(), mesh.colors.end());
     if (joints) out.joints.insert(out.joints.end(), mesh.joints.begin(), mesh.joints.end());
     if (weights) out.weights.insert(out.weights.end(), mesh.weights.begin(), mesh.weights.end());
+    if (second_set && mesh.joints1.empty()) {
+      out.joints1.resize(out.joints1.size() + mesh.vertex_count());
+      out.weights1.resize(out.weights1.size() + mesh.vertex_count());
+    } else if (second_set) {
+      out.joints1.insert(out.joints1.end(), mesh.joints1.begin(), mesh.joints1.end());
+      out.weights1.insert(out.weights1.end(), mesh.weights1.begin(), mesh.weights1.end());
+    }
 
     // A mirroring transform turns counter-clockwise triangles clockwise: swap two corners back.
     for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {

@@ -66,8 +66,10 @@ const SimplifyRecord& ProgressiveMesh::record() const { return impl_->record; }
 
 // ---- .lpm ----------------------------------------------------------------------------------------
 //
-// header:  "LPM\x1a"  u32 version (1)  u64 payload size  u32 CRC-32 of the payload
+// header:  "LPM\x1a"  u32 version (2)  u64 payload size  u32 CRC-32 of the payload
 // payload: the mesh streams, then the record arrays; each array is a u64 count and its elements.
+// Version 2 added the second influence set (joints1, weights1) after the weights; version 1 files,
+// without it, still read.
 // All little-endian; the element layouts are the structs' fields in declaration order, 4 bytes each
 // (2 for joint indices).
 
@@ -75,7 +77,7 @@ namespace {
 
 static_assert(std::endian::native == std::endian::little, ".lpm is written by copying little-endian memory");
 constexpr char magic[4] = {'L', 'P', 'M', '\x1a'};
-constexpr uint32_t version = 1;
+constexpr uint32_t version = 2;
 constexpr size_t header_size = 4 + 4 + 8 + 4;
 
 // Plain structs of 4-byte fields (or arrays of u16) copy as they are.
@@ -146,15 +148,16 @@ struct Reader {
 void write_mesh_streams(Writer& w, const Mesh& m) {
   w.array(m.positions), w.array(m.normals), w.array(m.tangents);
   for (const auto& uv : m.uvs) w.array(uv);
-  w.array(m.colors), w.array(m.joints), w.array(m.weights);
+  w.array(m.colors), w.array(m.joints), w.array(m.weights), w.array(m.joints1), w.array(m.weights1);
   w.array(m.indices), w.array(m.materials), w.strings(m.material_names);
   w.array(m.groups), w.strings(m.group_names);
 }
 
-void read_mesh_streams(Reader& r, Mesh& m) {
+void read_mesh_streams(Reader& r, Mesh& m, uint32_t file_version) {
   r.array(m.positions, "positions"), r.array(m.normals, "normals"), r.array(m.tangents, "tangents");
   for (auto& uv : m.uvs) r.array(uv, "texture coordinates");
   r.array(m.colors, "colours"), r.array(m.joints, "joints"), r.array(m.weights, "weights");
+  if (file_version >= 2) r.array(m.joints1, "second-set joints"), r.array(m.weights1, "second-set weights");
   r.array(m.indices, "indices"), r.array(m.materials, "materials"), r.strings(m.material_names, "material names");
   r.array(m.groups, "groups"), r.strings(m.group_names, "group names");
 }
@@ -188,8 +191,8 @@ ProgressiveMesh decode_progressive_mesh(std::span<const uint8_t> bytes, const st
   if (std::memcmp(bytes.data(), magic, 4) != 0) r.fail("not a .lpm file (expected the magic \"LPM\\x1a\")");
   r.at = 4;
   const uint32_t file_version = r.value<uint32_t>("version");
-  if (file_version != version)
-    r.fail("unsupported .lpm version " + std::to_string(file_version) + " (this build reads version 1)");
+  if (file_version < 1 || file_version > version)
+    r.fail("unsupported .lpm version " + std::to_string(file_version) + " (this build reads versions 1 and 2)");
   const uint64_t payload_size = r.value<uint64_t>("payload size");
   const uint32_t crc = r.value<uint32_t>("checksum");
   if (payload_size != bytes.size() - header_size)
@@ -206,7 +209,7 @@ ProgressiveMesh decode_progressive_mesh(std::span<const uint8_t> bytes, const st
   if (uint32_t(actual) != crc) r.fail("checksum mismatch: the file is corrupt");
 
   Mesh mesh;
-  read_mesh_streams(r, mesh);
+  read_mesh_streams(r, mesh, file_version);
   validate(mesh, name);
   SimplifyRecord rec;
   rec.stride = r.value<uint32_t>("attribute stride");

@@ -56,6 +56,8 @@ Mesh remap_vertices(const Mesh& mesh, std::span<const uint32_t> remap, size_t ne
   remap_stream(out.colors, remap, new_vertex_count);
   remap_stream(out.joints, remap, new_vertex_count);
   remap_stream(out.weights, remap, new_vertex_count);
+  remap_stream(out.joints1, remap, new_vertex_count);
+  remap_stream(out.weights1, remap, new_vertex_count);
   for (uint32_t& i : out.indices) {
     i = remap[i];
     if (i == none) throw_usage("remap_vertices: a triangle uses a vertex the remap drops");

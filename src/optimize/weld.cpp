@@ -40,6 +40,8 @@ bool attributes_match(const Mesh& m, uint32_t v, uint32_t r, const WeldOptions& 
   if (!m.colors.empty() && !near(m.colors[v], m.colors[r], o.color_tolerance)) return false;
   if (!m.joints.empty() && m.joints[v] != m.joints[r]) return false;
   if (!m.weights.empty() && !near(m.weights[v], m.weights[r], o.weight_tolerance)) return false;
+  if (!m.joints1.empty() && m.joints1[v] != m.joints1[r]) return false;
+  if (!m.weights1.empty() && !near(m.weights1[v], m.weights1[r], o.weight_tolerance)) return false;
   return true;
 }
 

@@ -7,8 +7,8 @@
 // x_k = A_k(w) p + t_k(w) (the blended joint matrix), which is affine in p, so each pose's quadric
 // pulls back to a quadric in p and the optimum is one 3x3 solve, "optimal over all poses, solved in
 // bind space". The surviving vertex's weights are chosen among the two ends' weights and their blend
-// (top four, renormalised) by the same multi-pose error, and a bone-weight term makes collapses across
-// very different influences cost more.
+// (top four, or eight for a mesh with a second influence set, renormalised) by the same multi-pose
+// error, and a bone-weight term makes collapses across very different influences cost more.
 #pragma once
 
 #include <algorithm>
@@ -23,26 +23,30 @@
 
 namespace lod::collapse {
 
-// Up to four influences, heaviest first; unused slots have weight 0.
+// Up to eight influences (Mesh::joints/weights, then joints1/weights1), heaviest first; unused slots
+// have weight 0. A mesh with one influence set uses the first four slots only.
+inline constexpr int max_influences = 8;
 struct Influences {
-  uint16_t joint[4] = {0, 0, 0, 0};
-  float weight[4] = {0, 0, 0, 0};
+  uint16_t joint[max_influences] = {};
+  float weight[max_influences] = {};
   friend bool operator==(const Influences&, const Influences&) = default;
 };
 
-// Heaviest four of a sparse set (ties: lower joint first), renormalised to sum 1.
-inline Influences top_influences(std::span<const std::pair<uint16_t, float>> set) {
-  std::array<std::pair<uint16_t, float>, 8> sorted{};
+// Heaviest `slots` (4 or 8) of a sparse set of up to 2 * max_influences entries (ties: lower joint
+// first), renormalised to sum 1.
+inline Influences top_influences(std::span<const std::pair<uint16_t, float>> set, size_t slots = 4) {
+  std::array<std::pair<uint16_t, float>, 2 * max_influences> sorted{};
   const size_t n = std::min<size_t>(set.size(), sorted.size());
+  const size_t kept = std::min<size_t>({n, slots, max_influences});
   std::copy_n(set.begin(), n, sorted.begin());
   std::sort(sorted.begin(), sorted.begin() + n, [](const auto& a, const auto& b) {
     return a.second > b.second || (a.second == b.second && a.first < b.first);
   });
   Influences out;
   double sum = 0;
-  for (size_t i = 0; i < std::min<size_t>(n, 4); ++i) sum += sorted[i].second;
+  for (size_t i = 0; i < kept; ++i) sum += sorted[i].second;
   if (!(sum > 0)) return out;
-  for (size_t i = 0; i < std::min<size_t>(n, 4); ++i)
+  for (size_t i = 0; i < kept; ++i)
     if (sorted[i].second > 0) out.joint[i] = sorted[i].first, out.weight[i] = float(sorted[i].second / sum);
   return out;
 }
@@ -50,17 +54,17 @@ inline Influences top_influences(std::span<const std::pair<uint16_t, float>> set
 // Half the L1 distance between two weight vectors: 0 for the same influences, 1 for disjoint ones.
 inline double influence_distance(const Influences& a, const Influences& b) {
   double d = 0;
-  for (int i = 0; i < 4; ++i) {
+  for (int i = 0; i < max_influences; ++i) {
     if (a.weight[i] == 0) continue;
     float other = 0;
-    for (int j = 0; j < 4; ++j)
+    for (int j = 0; j < max_influences; ++j)
       if (b.weight[j] > 0 && b.joint[j] == a.joint[i]) other = b.weight[j];
     d += std::fabs(double(a.weight[i]) - other);
   }
-  for (int j = 0; j < 4; ++j) {
+  for (int j = 0; j < max_influences; ++j) {
     if (b.weight[j] == 0) continue;
     bool shared = false;
-    for (int i = 0; i < 4; ++i) shared |= a.weight[i] > 0 && a.joint[i] == b.joint[j];
+    for (int i = 0; i < max_influences; ++i) shared |= a.weight[i] > 0 && a.joint[i] == b.joint[j];
     if (!shared) d += b.weight[j];
   }
   return 0.5 * d;
@@ -96,6 +100,7 @@ class MultiposeMetric {
 
   void initialize(State& state) {
     const Mesh& mesh = state.mesh;
+    slots_ = mesh.influence_slots();
     influences_.assign(state.position_count, {});
     std::vector<uint8_t> set(state.position_count, 0);
     // A position's influences are those of its first wedge (wedges of one position normally agree).
@@ -103,10 +108,16 @@ class MultiposeMetric {
       const uint32_t u = state.position_of[v];
       if (set[u]) continue;
       set[u] = 1;
+      std::pair<uint16_t, float> raw[max_influences];
       const float4& w = mesh.weights[v];
-      const std::pair<uint16_t, float> raw[4] = {
-          {mesh.joints[v][0], w.x}, {mesh.joints[v][1], w.y}, {mesh.joints[v][2], w.z}, {mesh.joints[v][3], w.w}};
-      influences_[u] = merge(raw);
+      const ushort4& j = mesh.joints[v];
+      raw[0] = {j[0], w.x}, raw[1] = {j[1], w.y}, raw[2] = {j[2], w.z}, raw[3] = {j[3], w.w};
+      if (slots_ == 8) {
+        const float4& w1 = mesh.weights1[v];
+        const ushort4& j1 = mesh.joints1[v];
+        raw[4] = {j1[0], w1.x}, raw[5] = {j1[1], w1.y}, raw[6] = {j1[2], w1.z}, raw[7] = {j1[3], w1.w};
+      }
+      influences_[u] = top_influences({raw, slots_}, slots_);
     }
     // Each position in each pose, then each position's per-pose quadrics from its faces there.
     const uint32_t K = pose_count_;
@@ -166,12 +177,10 @@ class MultiposeMetric {
     Influences influences;
   };
 
-  static Influences merge(std::span<const std::pair<uint16_t, float>> raw) { return top_influences(raw); }
-
   // The blended joint matrix of `w` in pose k.
   Affine blend(uint32_t k, const Influences& w) const {
     Affine out{};
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < max_influences; ++i) {
       if (w.weight[i] == 0 || w.joint[i] >= joint_count_) continue;
       const Affine& a = joints_[size_t(k) * joint_count_ + w.joint[i]];
       for (int r = 0; r < 3; ++r)
@@ -224,18 +233,18 @@ class MultiposeMetric {
     int count = 1;
     if (!edge.fixed) {
       if (!(wr == wk)) candidates[count++] = wr;
-      std::pair<uint16_t, float> both[8];
+      std::pair<uint16_t, float> both[2 * max_influences];
       int n = 0;
-      for (int i = 0; i < 4; ++i)
+      for (int i = 0; i < max_influences; ++i)
         if (wk.weight[i] > 0) both[n++] = {wk.joint[i], 0.5f * wk.weight[i]};
-      for (int i = 0; i < 4; ++i) {
+      for (int i = 0; i < max_influences; ++i) {
         if (wr.weight[i] == 0) continue;
         bool found = false;
         for (int j = 0; j < n; ++j)
           if (both[j].first == wr.joint[i]) both[j].second += 0.5f * wr.weight[i], found = true;
         if (!found) both[n++] = {wr.joint[i], 0.5f * wr.weight[i]};
       }
-      const Influences blended = top_influences({both, size_t(n)});
+      const Influences blended = top_influences({both, size_t(n)}, slots_);
       if (!(blended == wk) && !(blended == wr)) candidates[count++] = blended;
     }
     const vec3d a = state.normalized(edge.kept), b = state.normalized(edge.removed);
@@ -267,6 +276,7 @@ class MultiposeMetric {
   }
 
   uint32_t pose_count_ = 0, joint_count_ = 0;
+  size_t slots_ = 4;                    // influence slots per vertex: 4, or 8 with a second set
   std::vector<double> pose_weight_;
   std::vector<Affine> joints_;          // pose-major
   std::vector<Influences> influences_;  // per position

@@ -1034,6 +1034,10 @@ SimplifyResult simplify_with(const Mesh& mesh, const SimplifyOptions& options, c
       const Influences& w = final_influences[result.vertex_origin[v]];
       result.mesh.joints[v] = {w.joint[0], w.joint[1], w.joint[2], w.joint[3]};
       result.mesh.weights[v] = {w.weight[0], w.weight[1], w.weight[2], w.weight[3]};
+      if (!result.mesh.joints1.empty()) {
+        result.mesh.joints1[v] = {w.joint[4], w.joint[5], w.joint[6], w.joint[7]};
+        result.mesh.weights1[v] = {w.weight[4], w.weight[5], w.weight[6], w.weight[7]};
+      }
     }
   result.relative_error = result.diagonal > 0 ? result.error / result.diagonal : 0;
   result.input_triangles = triangles;
@@ -1046,6 +1050,8 @@ SimplifyResult simplify_with(const Mesh& mesh, const SimplifyOptions& options, c
 
 SimplifyResult simplify_multipose(const Mesh& mesh, const SimplifyOptions& options, const MultiposeInput& input) {
   if (mesh.joints.empty() || mesh.weights.empty()) throw_usage("simplify: the multi-pose metric needs joints and weights");
+  if (mesh.joints1.size() != mesh.weights1.size() || (!mesh.joints1.empty() && mesh.joints1.size() != mesh.vertex_count()))
+    throw_usage("simplify: the second influence set needs one joint and one weight entry per vertex");
   if (input.poses.empty()) throw_usage("simplify: the multi-pose metric needs at least one pose");
   for (const auto& pose : input.poses)
     if (pose.size() != input.poses[0].size()) throw_usage("simplify: every pose needs the same joint count");

@@ -15,8 +15,8 @@ struct Affine {
   float m[12];  // column-major 3x4: m[3 * column + row]
 };
 
-inline Affine blend_affine(const mat4* joints, const ushort4& joint, const float4& weight) {
-  Affine r{};
+// r += sum_i w_i J[j_i] over one set of four influences.
+inline void add_influences(Affine& r, const mat4* joints, const ushort4& joint, const float4& weight) {
   const float w[4] = {weight.x, weight.y, weight.z, weight.w};
   for (int i = 0; i < 4; ++i) {
     if (w[i] == 0) continue;  // unused slots may hold any joint index
@@ -24,8 +24,36 @@ inline Affine blend_affine(const mat4* joints, const ushort4& joint, const float
     for (int col = 0; col < 4; ++col)
       for (int row = 0; row < 3; ++row) r.m[3 * col + row] += w[i] * J[size_t(4 * col + row)];
   }
+}
+
+inline Affine blend_affine(const mat4* joints, const ushort4& joint, const float4& weight) {
+  Affine r{};
+  add_influences(r, joints, joint, weight);
   return r;
 }
+
+// A mesh's influence streams as raw pointers for the hot loops; the second set is null when the mesh
+// has four influences per vertex. The sets are summed in order, so a four-influence mesh blends
+// exactly as with blend_affine.
+struct InfluenceStreams {
+  const ushort4* joint = nullptr;
+  const float4* weight = nullptr;
+  const ushort4* joint1 = nullptr;
+  const float4* weight1 = nullptr;
+
+  explicit InfluenceStreams(const Mesh& mesh)
+      : joint(mesh.joints.data()),
+        weight(mesh.weights.data()),
+        joint1(mesh.joints1.empty() ? nullptr : mesh.joints1.data()),
+        weight1(mesh.joints1.empty() ? nullptr : mesh.weights1.data()) {}
+
+  Affine blend(const mat4* joints, size_t v) const {
+    Affine r{};
+    add_influences(r, joints, joint[v], weight[v]);
+    if (joint1) add_influences(r, joints, joint1[v], weight1[v]);
+    return r;
+  }
+};
 
 inline float3 apply_point(const Affine& a, const float3& p) {
   const float* m = a.m;
@@ -51,8 +79,9 @@ inline float3 apply_normal(const Affine& a, const float3& q) { return unit(apply
 // The number of joint matrices the mesh needs: one past its largest joint with a non-zero weight.
 size_t joints_used(const Mesh& mesh);
 
-// Throws lod::Error (usage) unless every vertex has joints and weights, and every joint with a
-// non-zero weight is below `joint_count`. `what` starts the message.
+// Throws lod::Error (usage) unless every vertex has joints and weights (and the second set, if any,
+// has one entry per vertex too), and every joint with a non-zero weight is below `joint_count`.
+// `what` starts the message.
 void check_influences(const Mesh& mesh, size_t joint_count, const char* what);
 
 }  // namespace lod::skinning

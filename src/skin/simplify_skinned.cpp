@@ -16,26 +16,34 @@ namespace lod {
 
 namespace {
 
-// Weights summing to 1 within 1e-6: renormalised in double, the rounding left on the heaviest.
-void normalize_influences(ushort4& joint, float4& weight) {
-  float* w[4] = {&weight.x, &weight.y, &weight.z, &weight.w};
+// Weights summing to 1 within 1e-6 over vertex v's four or eight slots: renormalised in double, the
+// rounding left on the heaviest. Unused slots point at joint 0 (valid whatever the skin).
+void normalize_influences(Mesh& mesh, size_t v) {
+  const int n = int(mesh.influence_slots());
+  const float4 zero{};
+  const float4 &a = mesh.weights[v], &b = n == 8 ? mesh.weights1[v] : zero;
+  float w[8] = {a.x, a.y, a.z, a.w, b.x, b.y, b.z, b.w};
+  ushort4* joints[2] = {&mesh.joints[v], n == 8 ? &mesh.joints1[v] : nullptr};
   double sum = 0;
-  for (float* x : w) sum += std::max(0.0f, *x);
+  for (int i = 0; i < n; ++i) sum += std::max(0.0f, w[i]);
   if (!(sum > 0)) {
-    weight = {1, 0, 0, 0};
-    return;
+    std::fill(w, w + 8, 0.0f);
+    w[0] = 1;
+  } else {
+    int heaviest = 0;
+    for (int i = 0; i < n; ++i) {
+      w[i] = float(std::max(0.0f, w[i]) / sum);
+      if (w[i] > w[heaviest]) heaviest = i;
+    }
+    double rest = 0;
+    for (int i = 0; i < n; ++i)
+      if (i != heaviest) rest += w[i];
+    w[heaviest] = float(1.0 - rest);
+    for (int i = 0; i < n; ++i)
+      if (w[i] == 0) (*joints[i / 4])[size_t(i % 4)] = 0;
   }
-  int heaviest = 0;
-  for (int i = 0; i < 4; ++i) {
-    *w[i] = float(std::max(0.0f, *w[i]) / sum);
-    if (*w[i] > *w[heaviest]) heaviest = i;
-  }
-  double rest = 0;
-  for (int i = 0; i < 4; ++i)
-    if (i != heaviest) rest += *w[i];
-  *w[heaviest] = float(1.0 - rest);
-  for (int i = 0; i < 4; ++i)
-    if (*w[i] == 0) joint[size_t(i)] = 0;  // unused slots point at joint 0 (valid whatever the skin)
+  mesh.weights[v] = {w[0], w[1], w[2], w[3]};
+  if (n == 8) mesh.weights1[v] = {w[4], w[5], w[6], w[7]};
 }
 
 // The mesh with positions and normals skinned by `joints`.
@@ -77,7 +85,13 @@ SimplifyResult simplify_houle(const Mesh& mesh, const SkinSimplifyOptions& o) {
     const uint32_t origin = r.vertex_origin[v];
     out.joints[v] = mesh.joints[origin];
     out.weights[v] = mesh.weights[origin];
-    const mat4 blended = blend_matrix(pose, out.joints[v], out.weights[v]);
+    ushort4 joint1{};
+    float4 weight1{};  // weight 0: no second set
+    if (!out.joints1.empty()) {
+      joint1 = out.joints1[v] = mesh.joints1[origin];
+      weight1 = out.weights1[v] = mesh.weights1[origin];
+    }
+    const mat4 blended = blend_matrix(pose, out.joints[v], out.weights[v], joint1, weight1);
     out.positions[v] = transform_point(affine_inverse(blended), out.positions[v]);
     if (!out.normals.empty()) {
       // Normals go back by the transpose of the linear part (the inverse of the inverse transpose).
@@ -150,7 +164,7 @@ SimplifyResult simplify_skinned(const Mesh& mesh, const SkinSimplifyOptions& opt
       break;
     }
   }
-  for (size_t v = 0; v < r.mesh.vertex_count(); ++v) normalize_influences(r.mesh.joints[v], r.mesh.weights[v]);
+  for (size_t v = 0; v < r.mesh.vertex_count(); ++v) normalize_influences(r.mesh, v);
   return r;
 }
 
@@ -162,6 +176,9 @@ SkinnedGeomorph::SkinnedGeomorph(const Mesh& finer, const Mesh& coarser, const G
   skinning::check_influences(coarser, 65536, "SkinnedGeomorph (coarser level)");
   if (finer.normals.empty() != coarser.normals.empty())
     throw_usage("SkinnedGeomorph: both levels need normals, or neither");
+  if (finer.joints1.empty() != coarser.joints1.empty())
+    throw_usage("SkinnedGeomorph: both levels need a second influence set, or neither");
+  const bool second = !finer.joints1.empty();
   std::vector<uint32_t> slot_of(coarser.vertex_count(), UINT32_MAX);
   std::vector<uint32_t> needed;
   slot_.assign(finer.vertex_count(), UINT32_MAX);
@@ -169,7 +186,8 @@ SkinnedGeomorph::SkinnedGeomorph(const Mesh& finer, const Mesh& coarser, const G
     const uint32_t c = table.target[v];
     if (c >= coarser.vertex_count()) throw_usage("SkinnedGeomorph: a target is outside the coarser level");
     const bool same = finer.positions[v] == coarser.positions[c] && finer.joints[v] == coarser.joints[c] &&
-                      finer.weights[v] == coarser.weights[c] && (finer.normals.empty() || finer.normals[v] == coarser.normals[c]);
+                      finer.weights[v] == coarser.weights[c] && (finer.normals.empty() || finer.normals[v] == coarser.normals[c]) &&
+                      (!second || (finer.joints1[v] == coarser.joints1[c] && finer.weights1[v] == coarser.weights1[c]));
     if (same) continue;  // skins to the very same point (and normal) in every frame
     if (slot_of[c] == UINT32_MAX) slot_of[c] = uint32_t(needed.size()), needed.push_back(c);
     slot_[v] = slot_of[c];
@@ -185,6 +203,7 @@ SkinnedGeomorph::SkinnedGeomorph(const Mesh& finer, const Mesh& coarser, const G
     if (!coarser.normals.empty()) needed_unit_normals_.push_back(skinning::unit(coarser.normals[c]));
     needed_.joints.push_back(coarser.joints[c]);
     needed_.weights.push_back(coarser.weights[c]);
+    if (second) needed_.joints1.push_back(coarser.joints1[c]), needed_.weights1.push_back(coarser.weights1[c]);
   }
 }
 
@@ -209,6 +228,7 @@ void SkinnedGeomorph::evaluate(std::span<const mat4> joints, float t, SkinnedVer
   const size_t n = f.vertex_count(), m = needed_.vertex_count();
   const bool with_normals = !f.normals.empty();
   const mat4* J = joints.data();
+  const skinning::InfluenceStreams needed_influences(needed_);
   // The coarser vertices first; normals stay unnormalised until after the blend.
   needed_skinned_.positions.resize(m);
   needed_skinned_.normals.resize(with_normals ? m : 0);
@@ -216,7 +236,7 @@ void SkinnedGeomorph::evaluate(std::span<const mat4> joints, float t, SkinnedVer
   float3* nn = with_normals ? needed_skinned_.normals.data() : nullptr;
   core::parallel_blocks(m, 8192, threads, [&](size_t, size_t begin, size_t stop) {
     for (size_t k = begin; k < stop; ++k) {
-      const skinning::Affine a = skinning::blend_affine(J, needed_.joints[k], needed_.weights[k]);
+      const skinning::Affine a = needed_influences.blend(J, k);
       np[k] = skinning::apply_point(a, needed_.positions[k]);
       if (nn) nn[k] = rough_unit(skinning::apply_linear(a, needed_unit_normals_[k]));
     }
@@ -228,8 +248,7 @@ void SkinnedGeomorph::evaluate(std::span<const mat4> joints, float t, SkinnedVer
   const uint32_t* slots = slot_.data();
   const float3* positions = f.positions.data();
   const float3* normals = with_normals ? unit_normals_.data() : nullptr;
-  const ushort4* joint = f.joints.data();
-  const float4* weight = f.weights.data();
+  const skinning::InfluenceStreams influences(f);
   float3* out_p = out.positions.data();
   float3* out_n = with_normals ? out.normals.data() : nullptr;
   // One pass: skin each finer vertex and blend it with its skinned target right away. Branch-free:
@@ -242,7 +261,7 @@ void SkinnedGeomorph::evaluate(std::span<const mat4> joints, float t, SkinnedVer
       const bool moves = slot != UINT32_MAX;
       const float tv = moves ? t : 0.0f, sv = moves ? s : 1.0f;
       const uint32_t k = moves ? slot : 0;
-      const skinning::Affine a = skinning::blend_affine(J, joint[v], weight[v]);
+      const skinning::Affine a = influences.blend(J, v);
       const float3 p = skinning::apply_point(a, positions[v]);
       const float3& b = np[k];
       out_p[v] = {sv * p.x + tv * b.x, sv * p.y + tv * b.y, sv * p.z + tv * b.z};

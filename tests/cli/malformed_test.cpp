@@ -54,23 +54,7 @@ Bytes stl_binary(uint32_t declared, uint32_t actual, float value = 1.0f) {
 }
 
 // ---- glTF: one triangle in a data: URI buffer ----
-std::string base64(const Bytes& in) {
-  static const char* alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  size_t i = 0;
-  for (; i + 2 < in.size(); i += 3) {
-    uint32_t v = (uint32_t(in[i]) << 16) | (uint32_t(in[i + 1]) << 8) | in[i + 2];
-    for (int k = 3; k >= 0; --k) out += alphabet[(v >> (6 * k)) & 63];
-  }
-  if (i + 1 == in.size()) {
-    uint32_t v = uint32_t(in[i]) << 16;
-    out += alphabet[(v >> 18) & 63], out += alphabet[(v >> 12) & 63], out += "==";
-  } else if (i + 2 == in.size()) {
-    uint32_t v = (uint32_t(in[i]) << 16) | (uint32_t(in[i + 1]) << 8);
-    out += alphabet[(v >> 18) & 63], out += alphabet[(v >> 12) & 63], out += alphabet[(v >> 6) & 63], out += '=';
-  }
-  return out;
-}
+using test::base64;
 
 struct GltfParts {
   std::vector<float> positions = triangle_xyz;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <string>
 
 #include "lodkit/error.h"
 #include "lodkit/skin.h"
@@ -507,6 +508,110 @@ Scene rigged_man_scene(const std::filesystem::path& man_off) {
   std::vector<Animation> clips;
   clips.push_back(bend_clip());
   return rigged_scene("man", std::move(mesh), rig, std::move(clips));
+}
+
+Mesh arm(uint32_t along, uint32_t around) {
+  constexpr float pi = std::numbers::pi_v<float>;
+  Mesh m;
+  for (uint32_t i = 0; i <= along; ++i)
+    for (uint32_t j = 0; j < around; ++j) {
+      const float x = 2.0f * float(i) / float(along), a = 2 * pi * float(j) / float(around);
+      // A slight wobble so the surface is not trivially flat along x.
+      const float r = 0.2f + 0.03f * std::sin(7 * x) * std::cos(3 * a);
+      m.positions.push_back({x, r * std::cos(a), r * std::sin(a)});
+      m.normals.push_back({0, std::cos(a), std::sin(a)});  // radial (ignoring the wobble)
+      const float s = std::clamp((x - 0.8f) / 0.4f, 0.0f, 1.0f), w1 = s * s * (3 - 2 * s);
+      m.joints.push_back({0, 1, 0, 0});
+      m.weights.push_back({1 - w1, w1, 0, 0});
+    }
+  for (uint32_t i = 0; i < along; ++i)
+    for (uint32_t j = 0; j < around; ++j) {
+      const uint32_t a = i * around + j, b = i * around + (j + 1) % around, c = a + around, d = b + around;
+      m.indices.insert(m.indices.end(), {a, c, b, b, c, d});
+    }
+  return m;
+}
+
+std::vector<mat4> bent(float angle) {
+  const float c = std::cos(angle), s = std::sin(angle);
+  mat4 r = {c, s, 0, 0, -s, c, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  const mat4 to = compose_trs({1, 0, 0}, {0, 0, 0, 1}, {1, 1, 1}), back = compose_trs({-1, 0, 0}, {0, 0, 0, 1}, {1, 1, 1});
+  return {identity_matrix(), multiply(to, multiply(r, back))};
+}
+
+std::array<double, tentacle_bones> tentacle_weights(double x) {
+  std::array<double, tentacle_bones> w{};
+  double sum = 0;
+  for (uint32_t i = 0; i < tentacle_bones; ++i) {
+    const double d = (x - (i + 0.5)) / 2;
+    sum += w[i] = std::exp(-d * d);
+  }
+  for (double& v : w) v /= sum;
+  return w;
+}
+
+Mesh tentacle_mesh(uint32_t along, uint32_t around) {
+  constexpr double pi = std::numbers::pi;
+  Mesh m;
+  for (uint32_t i = 0; i <= along; ++i) {
+    const double x = 8.0 * i / along;
+    // Bones by weight, heaviest first (ties: lower bone), in floats whose sum is 1 within 1e-6.
+    const std::array<double, tentacle_bones> w = tentacle_weights(x);
+    std::array<uint16_t, tentacle_bones> order;
+    for (uint16_t b = 0; b < tentacle_bones; ++b) order[b] = b;
+    std::stable_sort(order.begin(), order.end(), [&](uint16_t a, uint16_t b) { return w[a] > w[b]; });
+    float slot[tentacle_bones];
+    double rest = 0;
+    for (uint32_t k = 1; k < tentacle_bones; ++k) rest += slot[k] = float(w[order[k]]);
+    slot[0] = float(1.0 - rest);
+    for (uint32_t j = 0; j < around; ++j) {
+      const double a = 2 * pi * j / around;
+      m.positions.push_back({float(x), float(0.3 * std::cos(a)), float(0.3 * std::sin(a))});
+      m.normals.push_back({0, float(std::cos(a)), float(std::sin(a))});
+      m.joints.push_back({order[0], order[1], order[2], order[3]});
+      m.weights.push_back({slot[0], slot[1], slot[2], slot[3]});
+      m.joints1.push_back({order[4], order[5], order[6], order[7]});
+      m.weights1.push_back({slot[4], slot[5], slot[6], slot[7]});
+    }
+  }
+  for (uint32_t i = 0; i < along; ++i)
+    for (uint32_t j = 0; j < around; ++j) {
+      const uint32_t a = i * around + j, b = i * around + (j + 1) % around, c = a + around, d = b + around;
+      m.indices.insert(m.indices.end(), {a, c, b, b, c, d});
+    }
+  return m;
+}
+
+Scene tentacle_scene(uint32_t along, uint32_t around) {
+  Scene scene;
+  scene.name = "tentacle";
+  scene.nodes.resize(tentacle_bones + 1);
+  Skin skin;
+  skin.name = "tentacle_skeleton";
+  skin.skeleton = 0;
+  Animation curl;
+  curl.name = "curl";
+  for (uint32_t j = 0; j < tentacle_bones; ++j) {
+    Node& node = scene.nodes[j];
+    node.name = "bone" + std::to_string(j);
+    node.parent = int32_t(j) - 1;
+    node.translation = {j ? 1.0f : 0.0f, 0, 0};
+    if (j + 1 < tentacle_bones) node.children = {int32_t(j + 1)};
+    skin.joints.push_back(int32_t(j));
+    skin.inverse_bind_matrices.push_back(compose_trs({-float(j), 0, 0}, {0, 0, 0, 1}, {1, 1, 1}));
+    curl.channels.push_back(bend_channel(j, {0, 1, 2}, {0, 0, 1}, {0, 20, 0}));
+  }
+  Node& mesh_node = scene.nodes[tentacle_bones];
+  mesh_node.name = "tentacle";
+  mesh_node.mesh = 0;
+  mesh_node.skin = 0;
+  scene.roots = {0, int32_t(tentacle_bones)};
+  scene.skins.push_back(std::move(skin));
+  Primitive primitive;
+  primitive.mesh = tentacle_mesh(along, around);
+  scene.primitives.push_back(std::move(primitive));
+  scene.animations.push_back(std::move(curl));
+  return scene;
 }
 
 std::vector<std::filesystem::path> write_fixtures(const std::filesystem::path& out_dir, const std::filesystem::path& man_off) {

@@ -8,12 +8,14 @@
 // with weight 0.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 #include "lodkit/io.h"
+#include "lodkit/skin.h"
 
 namespace lod::fixtures {
 
@@ -61,6 +63,25 @@ struct JointPlacement {
   float position[3];
 };
 extern const JointPlacement joint_positions_man[joint_count];
+
+// ---- small rigs for unit tests -----------------------------------------------------------------------
+
+// A tube along +x from 0 to 2 (radius 0.2, a slight wobble), bone 0 = upper arm, bone 1 = forearm from
+// the elbow at x = 1. Weights blend smoothly over x in [0.8, 1.2]; outside they are a single bone.
+Mesh arm(uint32_t along = 60, uint32_t around = 20);
+// The arm's joint matrices with the elbow bent by `angle` about +z: joint 1 = T(1,0,0) R_z(angle)
+// T(-1,0,0); joint 0 the identity.
+std::vector<mat4> bent(float angle);
+
+// Eight influences: an open tube along +x from 0 to 8 (radius 0.3) on a chain of 8 joints at x = 0..7
+// (node i the child of node i - 1, one unit along x; the skinned mesh node 8). Each vertex blends all
+// 8 bones by tentacle_weights(x): its heaviest four in joints/weights, the next four in
+// joints1/weights1. Clip 0 "curl" (2 s, linear): every joint turns about +z by 0, 20, 0 degrees.
+inline constexpr uint32_t tentacle_bones = 8;
+// The bones' weights at x: exp(-((x - (i + 0.5)) / 2)^2) for bone i, normalised to sum 1.
+std::array<double, tentacle_bones> tentacle_weights(double x);
+Mesh tentacle_mesh(uint32_t along = 64, uint32_t around = 12);
+Scene tentacle_scene(uint32_t along = 64, uint32_t around = 12);
 
 // Writes humanoid.glb, and man.glb when `man_off` names an existing file; returns the paths written.
 std::vector<std::filesystem::path> write_fixtures(const std::filesystem::path& out_dir, const std::filesystem::path& man_off = {});

@@ -10,72 +10,21 @@
 #include "lodkit/error.h"
 #include "lodkit/measure.h"
 #include "lodkit/skin.h"
+#include "skin/fixtures.h"
+#include "skin/skin_test_support.h"
 
 namespace lod {
 namespace {
 
 constexpr float pi = std::numbers::pi_v<float>;
 
-// A closed-ish tube along +x from 0 to 2 (radius 0.2), bone 0 = upper arm, bone 1 = forearm from the
-// elbow at x = 1. Weights blend smoothly over x in [0.8, 1.2]; outside they are a single bone.
-Mesh arm(uint32_t along = 60, uint32_t around = 20) {
-  Mesh m;
-  for (uint32_t i = 0; i <= along; ++i)
-    for (uint32_t j = 0; j < around; ++j) {
-      const float x = 2.0f * float(i) / float(along), a = 2 * pi * float(j) / float(around);
-      // A slight wobble so the surface is not trivially flat along x.
-      const float r = 0.2f + 0.03f * std::sin(7 * x) * std::cos(3 * a);
-      m.positions.push_back({x, r * std::cos(a), r * std::sin(a)});
-      m.normals.push_back({0, std::cos(a), std::sin(a)});  // radial (ignoring the wobble)
-      const float s = std::clamp((x - 0.8f) / 0.4f, 0.0f, 1.0f), w1 = s * s * (3 - 2 * s);
-      m.joints.push_back({0, 1, 0, 0});
-      m.weights.push_back({1 - w1, w1, 0, 0});
-    }
-  for (uint32_t i = 0; i < along; ++i)
-    for (uint32_t j = 0; j < around; ++j) {
-      const uint32_t a = i * around + j, b = i * around + (j + 1) % around, c = a + around, d = b + around;
-      m.indices.insert(m.indices.end(), {a, c, b, b, c, d});
-    }
-  return m;
-}
-
-// The elbow bent by `angle` about +z: joint 1 = T(1,0,0) R_z(angle) T(-1,0,0); joint 0 the identity.
-std::vector<mat4> bent(float angle) {
-  const float c = std::cos(angle), s = std::sin(angle);
-  mat4 r = {c, s, 0, 0, -s, c, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-  const mat4 to = compose_trs({1, 0, 0}, {0, 0, 0, 1}, {1, 1, 1}), back = compose_trs({-1, 0, 0}, {0, 0, 0, 1}, {1, 1, 1});
-  return {identity_matrix(), multiply(to, multiply(r, back))};
-}
-
-Mesh skinned(const Mesh& m, const std::vector<mat4>& pose) {
-  SkinnedVertices v;
-  skin_vertices(m, pose, v);
-  Mesh out = m;
-  out.positions = v.positions;
-  out.normals.clear();
-  return out;
-}
+using fixtures::arm;
+using fixtures::bent;
+using skin_test::expect_valid_influences;
+using skin_test::skinned;
 
 double length(const float3& a) { return std::sqrt(double(a.x) * a.x + double(a.y) * a.y + double(a.z) * a.z); }
 float3 sub(const float3& a, const float3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-
-void expect_valid_influences(const Mesh& m, size_t joints) {
-  ASSERT_EQ(m.joints.size(), m.vertex_count());
-  ASSERT_EQ(m.weights.size(), m.vertex_count());
-  for (size_t v = 0; v < m.vertex_count(); ++v) {
-    const float4& w = m.weights[v];
-    const float ws[4] = {w.x, w.y, w.z, w.w};
-    double sum = 0;
-    for (int i = 0; i < 4; ++i) {
-      EXPECT_GE(ws[i], 0.0f) << v;
-      if (ws[i] > 0) {
-        EXPECT_LT(m.joints[v][size_t(i)], joints) << v;
-      }
-      sum += ws[i];
-    }
-    EXPECT_NEAR(sum, 1.0, 1e-6) << "vertex " << v;
-  }
-}
 
 TEST(SimplifySkinned, HouleInItsPoseIsTheStaticSimplification) {
   const Mesh m = arm();
@@ -140,11 +89,7 @@ TEST(SimplifySkinned, EveryModeGivesValidInfluencesAndRigidSingleBoneRegions) {
   for (int k = 0; k < 8; ++k) poses.push_back(bent(pi * 0.75f * float(k) / 7));
   for (const SkinMode mode : {SkinMode::houle, SkinMode::subset, SkinMode::multipose}) {
     SCOPED_TRACE(skin_mode_name(mode));
-    SkinSimplifyOptions o;
-    o.mode = mode;
-    o.simplify.target_ratio = 0.15f;
-    o.poses = mode == SkinMode::houle ? std::vector<std::vector<mat4>>{poses[3]} : poses;
-    const SimplifyResult r = simplify_skinned(m, o);
+    const SimplifyResult r = skin_test::simplify_in_mode(m, mode, 0.15f, poses, 3);
     EXPECT_LE(r.mesh.triangle_count(), m.triangle_count() * 0.15 + 2);
     expect_valid_influences(r.mesh, 2);
     // Vertices bound to the forearm alone keep their distances in any pose.
@@ -213,56 +158,15 @@ TEST(SimplifySkinned, MultiposeIsBestOverTheRangeOfMotion) {
 // A skinned chain built with the multi-pose simplifier, then the skeletal geomorph in several frames:
 // t = 0 is the skinned finer level, t = 1 puts every vertex exactly on its skinned target.
 TEST(SkinnedGeomorph, EndsAreTheSkinnedLevelsInAnyFrame) {
-  const Mesh m = arm();
   std::vector<std::vector<mat4>> poses;
   for (int k = 0; k < 6; ++k) poses.push_back(bent(2.0f * float(k) / 5));
-  LodOptions lo;
-  lo.ratios = {1.0f, 0.4f, 0.1f};
-  lo.morph = true;
-  lo.measure = false;
-  lo.simplifier = [&](const Mesh& mesh, const SimplifyOptions& so) {
-    SkinSimplifyOptions o;
-    o.simplify = so;
-    o.poses = poses;
-    return simplify_skinned(mesh, o);
-  };
-  const LodChain chain = build_lod_chain(m, lo);
+  const LodChain chain = skin_test::multipose_chain(arm(), poses, {1.0f, 0.4f, 0.1f});
   ASSERT_EQ(chain.levels.size(), 3u);
   ASSERT_EQ(chain.morphs.size(), 2u);
   for (const LodLevel& level : chain.levels) expect_valid_influences(level.mesh, 2);
-  SkinnedVertices out, fine, coarse;
   for (const float angle : {0.0f, 0.7f, 1.9f}) {
-    const std::vector<mat4> pose = bent(angle);
-    for (size_t i = 0; i + 1 < chain.levels.size(); ++i) {
-      const Mesh &finer = chain.levels[i].mesh, &coarser = chain.levels[i + 1].mesh;
-      SkinnedGeomorph morph(finer, coarser, chain.morphs[i]);
-      EXPECT_GT(morph.moving_vertices(), 0u);
-      skin_vertices(finer, pose, fine);
-      skin_vertices(coarser, pose, coarse);
-      morph.evaluate(pose, 0.0f, out);
-      EXPECT_EQ(out.positions, fine.positions);
-      morph.evaluate(pose, 1.0f, out);
-      for (size_t v = 0; v < finer.vertex_count(); ++v) {
-        ASSERT_EQ(out.positions[v], coarse.positions[chain.morphs[i].target[v]]) << "level " << i << " vertex " << v;
-        ASSERT_EQ(out.normals[v], coarse.normals[chain.morphs[i].target[v]]) << "level " << i << " vertex " << v;
-      }
-      // Half way: the midpoint of the two skinned positions.
-      morph.evaluate(pose, 0.5f, out);
-      for (size_t v = 0; v < finer.vertex_count(); ++v) {
-        const float3 &a = fine.positions[v], &b = coarse.positions[chain.morphs[i].target[v]];
-        EXPECT_NEAR(out.positions[v].x, 0.5f * (a.x + b.x), 1e-6f);
-        EXPECT_NEAR(out.positions[v].y, 0.5f * (a.y + b.y), 1e-6f);
-        // Normals: the normalised blend of the two skinned unit normals.
-        const float3 &n = fine.normals[v], &q = coarse.normals[chain.morphs[i].target[v]];
-        const float3 mid = {n.x + q.x, n.y + q.y, n.z + q.z};
-        const float len = std::sqrt(mid.x * mid.x + mid.y * mid.y + mid.z * mid.z);
-        if (len > 0.5f) {
-          EXPECT_NEAR(out.normals[v].x, mid.x / len, 1e-5f) << v;
-          EXPECT_NEAR(out.normals[v].y, mid.y / len, 1e-5f) << v;
-          EXPECT_NEAR(out.normals[v].z, mid.z / len, 1e-5f) << v;
-        }
-      }
-    }
+    SCOPED_TRACE(angle);
+    skin_test::expect_geomorph_ends(chain, bent(angle), 1e-6f);
   }
 }
 
