@@ -55,6 +55,14 @@ inline std::vector<std::array<uint32_t, 3>> index_triangles(const std::vector<ui
   return out;
 }
 
+// The same without the rotation: each triangle's corners exactly as listed, sorted.
+inline std::vector<std::array<uint32_t, 3>> exact_triangles(const std::vector<uint32_t>& indices) {
+  std::vector<std::array<uint32_t, 3>> out;
+  for (size_t k = 0; k + 2 < indices.size(); k += 3) out.push_back({indices[k], indices[k + 1], indices[k + 2]});
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 // Every triangle gets its own three vertices (a "triangle soup"), all streams copied.
 inline Mesh triangle_soup(const Mesh& m) {
   Mesh out;
