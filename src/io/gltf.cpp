@@ -952,7 +952,6 @@ class BinWriter {
 
   // Appends the Mesh's streams and indices; returns nothing, fills the primitive's references.
   void add_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim) {
-    const size_t n = mesh.vertex_count();
     const int array = TINYGLTF_TARGET_ARRAY_BUFFER;
     const int position = add_accessor(mesh.positions, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
     float3 lo, hi;
@@ -984,14 +983,14 @@ class BinWriter {
       for (const MorphTarget& target : targets) {
         std::map<std::string, int> attributes;
         const int moved = add_accessor(target.positions, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
-        std::vector<double> lo(3, 0.0), hi(3, 0.0);  // glTF requires the bounds of a target's POSITION
+        std::vector<double> low(3, 0.0), high(3, 0.0);  // glTF requires the bounds of a target's POSITION
         for (size_t v = 0; v < target.positions.size(); ++v) {
           const float3& d = target.positions[v];
           const double c[3] = {d.x, d.y, d.z};
-          for (int k = 0; k < 3; ++k) lo[k] = v ? std::min(lo[k], c[k]) : c[k], hi[k] = v ? std::max(hi[k], c[k]) : c[k];
+          for (int k = 0; k < 3; ++k) low[k] = v ? std::min(low[k], c[k]) : c[k], high[k] = v ? std::max(high[k], c[k]) : c[k];
         }
-        model_.accessors[size_t(moved)].minValues = lo;
-        model_.accessors[size_t(moved)].maxValues = hi;
+        model_.accessors[size_t(moved)].minValues = low;
+        model_.accessors[size_t(moved)].maxValues = high;
         attributes["POSITION"] = moved;
         if (!target.normals.empty())
           attributes["NORMAL"] = add_accessor(target.normals, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
