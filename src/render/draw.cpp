@@ -37,11 +37,17 @@ std::vector<float3> vertex_normals(const Mesh& mesh) {
 }
 
 GLuint make_buffer(const void* data, size_t bytes) {
+  // A storage binding must name a non-empty buffer: short (or absent) streams are padded with zeros.
+  std::vector<uint8_t> padded;
+  if (bytes < 16) {
+    padded.assign(16, 0);
+    if (bytes) std::memcpy(padded.data(), data, bytes);
+    data = padded.data();
+    bytes = padded.size();
+  }
   GLuint buffer = 0;
   glCreateBuffers(1, &buffer);
-  // Empty streams still get a small buffer: a storage binding must name one.
-  glNamedBufferStorage(buffer, GLsizeiptr(std::max<size_t>(bytes, 16)), bytes ? data : nullptr,
-                       bytes ? 0 : GL_DYNAMIC_STORAGE_BIT);
+  glNamedBufferStorage(buffer, GLsizeiptr(bytes), data, 0);
   return buffer;
 }
 
