@@ -203,12 +203,19 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
     const std::string& old_extras = scene.nodes[sp.node].extras_json;
     nlohmann::json extras = old_extras.empty() ? nlohmann::json::object() : nlohmann::json::parse(old_extras);
     extras["MSFT_screencoverage"] = r.coverage;
-    nlohmann::json levels = nlohmann::json::array();
     for (size_t i = 0; i < r.chain.levels.size(); ++i) {
+      // Each level's node says what it is, as in a static chain (lodkit render --sheet reads it).
       const LodLevel& level = r.chain.levels[i];
-      levels.push_back({{"level", i}, {"triangles", level.mesh.triangle_count()}, {"error", level.error},
-                        {"error_bound", level.error_bound}, {"switch_distance", r.distances[i]}});
-      if (i == 0) continue;
+      const nlohmann::json about = {{"level", i},
+                                    {"triangles", level.mesh.triangle_count()},
+                                    {"error", level.error},
+                                    {"error_bound", level.error_bound},
+                                    {"relative_error", level.relative_error},
+                                    {"switch_distance", r.distances[i]}};
+      if (i == 0) {
+        extras["lodkit"] = about;
+        continue;
+      }
       Primitive prim;
       prim.mesh = level.mesh;
       prim.material = source.material;
@@ -219,10 +226,10 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
       node.name = fmt::format("{}_LOD{}", owner, i);
       node.mesh = int32_t(scene.primitives.back().gltf_mesh);
       node.skin = int32_t(sp.skin);
+      node.extras_json = nlohmann::json{{"lodkit", about}}.dump();
       scene.nodes.push_back(std::move(node));
       scene.nodes[sp.node].lod_ids.push_back(int32_t(scene.nodes.size() - 1));
     }
-    extras["lodkit"] = {{"levels", levels}};
     scene.nodes[sp.node].extras_json = extras.dump();
   }
   return scene;

@@ -13,6 +13,7 @@
 #include "lodkit/error.h"
 #include "lodkit/io.h"
 #include "lodkit/render.h"
+#include "lodkit/skin.h"
 #include "progress.h"
 
 namespace lod::cli {
@@ -24,7 +25,22 @@ struct RenderCommand {
   bool wire = false, heatmap = false, flat = false, ortho = false, sheet = false, json = false;
   double fov_degrees = 40, elevation_degrees = 20;
   uint32_t samples = 4, turntable = 0, columns = 0;
+  std::string clip;  // skinned levels: the animation (name or index) to pose them in
+  float time = 0;    // seconds into it
 };
+
+// The joint matrices of `skin` at `time` seconds into `clip` (a name, or an index).
+std::vector<mat4> clip_pose(const Scene& scene, const std::string& clip, float time, uint32_t skin) {
+  size_t index = scene.animations.size();
+  for (size_t a = 0; a < scene.animations.size(); ++a)
+    if (scene.animations[a].name == clip) index = a;
+  if (index == scene.animations.size() && !clip.empty() && clip.find_first_not_of("0123456789") == std::string::npos)
+    index = std::stoul(clip);
+  if (index >= scene.animations.size()) throw_usage("--clip: the file has no animation '" + clip + "'");
+  Pose pose = rest_pose(scene);
+  sample_animation(scene, index, time, pose);
+  return joint_matrices(scene, skin, world_matrices(scene, pose));
+}
 
 void parse_size(const std::string& text, uint32_t& width, uint32_t& height) {
   unsigned w = 0, h = 0;
@@ -71,7 +87,9 @@ struct ChainLevel {
 
 // The levels of a lodkit LOD chain: the node carrying MSFT_lod, then the nodes it lists, each with
 // the triangles and error its extras state (lodkit lod writes them).
-std::vector<ChainLevel> read_chain(const std::string& path) {
+// With `clip`, skinned levels are posed at `time` seconds into it (skinned by the CPU; a skinned
+// mesh ignores its node's transform, as glTF says).
+std::vector<ChainLevel> read_chain(const std::string& path, const std::string& clip, float time) {
   const FileFormat format = format_from_path(path);
   if (format != FileFormat::glb && format != FileFormat::gltf)
     throw_usage("--sheet reads a LOD chain written by lodkit lod (.glb or .gltf)");
@@ -109,6 +127,15 @@ std::vector<ChainLevel> read_chain(const std::string& path) {
     for (const Primitive& prim : scene.primitives)
       if (int32_t(prim.gltf_mesh) == node.mesh) level.primitives.push_back(prim);
     ChainLevel out{flatten(level), ""};
+    if (!clip.empty()) {
+      if (node.skin < 0) throw_usage(fmt::format("--clip: LOD node {} is not skinned", order[i]));
+      if (level.primitives.size() != 1) throw_usage("--clip: a skinned level must have one primitive");
+      SkinnedVertices posed;
+      skin_vertices(level.primitives[0].mesh, clip_pose(scene, clip, time, uint32_t(node.skin)), posed);
+      out.mesh = level.primitives[0].mesh;
+      out.mesh.positions = std::move(posed.positions);
+      out.mesh.normals = std::move(posed.normals);
+    }
     const nlohmann::json& extras = (*nodes)[size_t(order[i])].value("extras", nlohmann::json::object());
     const nlohmann::json lodkit = extras.is_object() ? extras.value("lodkit", nlohmann::json::object()) : nlohmann::json();
     out.label = fmt::format("LOD{}: {} triangles", i, thousands(out.mesh.triangle_count()));
@@ -159,12 +186,15 @@ Command register_render(CLI::App& root) {
   app->add_option("--columns", o->columns, "With --sheet: panels per row (default: the most square grid)");
   app->add_option("--turntable", o->turntable, "Write N frames around the model into the output folder (frame-000.png ...)");
   app->add_option("--elevation", o->elevation_degrees, "With --turntable: camera height above the horizon, degrees (default 20)");
+  app->add_option("--clip", o->clip, "With --sheet: pose skinned levels in this animation (name or index)");
+  app->add_option("--time", o->time, "With --clip: seconds into the animation (default 0)");
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
   return {app, [o] {
             const auto start = std::chrono::steady_clock::now();
             uint32_t width = 0, height = 0;
             parse_size(o->size, width, height);
             if (o->sheet && o->turntable) throw_usage("--sheet and --turntable do not go together");
+            if (!o->clip.empty() && !o->sheet) throw_usage("--clip poses the skinned levels of a --sheet");
             if (!(o->fov_degrees > 0 && o->fov_degrees < 180)) throw_usage("--fov must be in (0, 180) degrees");
             if (!(std::abs(o->elevation_degrees) < 90)) throw_usage("--elevation must be within (-90, 90) degrees");
             if (o->samples == 0) throw_usage("--samples must be at least 1");
@@ -184,7 +214,7 @@ Command register_render(CLI::App& root) {
             {
               ProgressBar bar("loading");
               if (o->sheet) {
-                levels = read_chain(o->input);
+                levels = read_chain(o->input, o->clip, o->time);
               } else {
                 levels.push_back({read_mesh(o->input, bar.read_options()), ""});
               }
