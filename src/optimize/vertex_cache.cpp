@@ -12,8 +12,12 @@
 // At a dead end each restarts from the most recently used vertex that still has triangles (it keeps
 // the walk local), and only then from the next triangle in input order. On small inputs the fan
 // orderer also runs from a few other start vertices (the first fan sets the sweep that follows).
+// One call shares its vertex -> triangle lists and scratch memory between the candidates, and stops
+// a candidate as soon as a lower bound on its misses shows it cannot win (see choose_order).
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <memory>
 
 #include "lodkit/error.h"
 #include "lodkit/optimize.h"
@@ -170,57 +174,316 @@ std::vector<uint32_t> greedy_cache_order(std::span<const uint32_t> indices, size
   return order;
 }
 
-// Tipsify (Sander, Nehab and Barczak, 2007): fan around one vertex at a time (emit all its remaining
-// triangles), then move to the neighbour that will still be cached after its own fan, the oldest such
-// first; at a dead end, back to the most recently used vertex with triangles left.
-std::vector<uint32_t> tipsify_order(std::span<const uint32_t> indices, size_t vertex_count, uint32_t cache_size) {
+namespace {
+
+constexpr uint64_t stopped = ~uint64_t(0);  // a bounded run that stopped: it could not beat its limit
+
+// Scratch memory for one call, handed out in order and freed when the call ends: the first 4 KiB
+// on the stack (a small input needs no allocation), then heap blocks, one per reserve() that does
+// not fit.
+class Workspace {
+ public:
+  Workspace() = default;
+  Workspace(const Workspace&) = delete;
+  Workspace& operator=(const Workspace&) = delete;
+  // The next `words` of take() come from one block.
+  void reserve(size_t words) {
+    if (size_ - used_ >= words) return;
+    blocks_.push_back(std::make_unique_for_overwrite<uint32_t[]>(words));
+    base_ = blocks_.back().get(), size_ = words, used_ = 0;
+  }
+  uint32_t* take(size_t words) {
+    reserve(words);
+    uint32_t* p = base_ + used_;
+    used_ += words;
+    return p;
+  }
+
+ private:
+  static constexpr size_t stack_words = 1024;
+  uint32_t stack_[stack_words];
+  std::vector<std::unique_ptr<uint32_t[]>> blocks_;
+  uint32_t* base_ = stack_;
+  size_t size_ = stack_words, used_ = 0;
+};
+
+// Vertex -> triangles (CSR). Every orderer starts from each vertex's triangles in ascending order
+// (the fan orderer reorders them as it removes triangles, so they are filled again before the next).
+struct Adjacency {
+  uint32_t* offset = nullptr;     // V + 1
+  uint32_t* triangles = nullptr;  // 3F
+  uint32_t max_triangles = 0;     // the most triangles around one vertex
+};
+
+void fill_triangles(std::span<const uint32_t> indices, uint32_t V, const Adjacency& a, uint32_t* cursor) {
+  std::fill_n(cursor, V, 0u);
   const uint32_t F = uint32_t(indices.size() / 3);
-  const uint32_t V = uint32_t(vertex_count);
-  std::vector<uint32_t> offset(V + 1, 0), live(V, 0);
-  for (const uint32_t i : indices) ++offset[i + 1];
-  for (uint32_t v = 0; v < V; ++v) offset[v + 1] += offset[v];
-  std::vector<uint32_t> triangles(indices.size());
   for (uint32_t t = 0; t < F; ++t)
     for (uint32_t k = 0; k < 3; ++k) {
-      const uint32_t v = indices[3 * t + k];
-      triangles[offset[v] + live[v]++] = t;
+      const uint32_t v = indices[3 * size_t(t) + k];
+      a.triangles[a.offset[v] + cursor[v]++] = t;
     }
-  std::vector<uint64_t> entered(V, 0);  // miss count when the vertex entered the FIFO (0: never)
-  uint64_t time = cache_size + 1;
-  std::vector<uint8_t> emitted(F, 0);
-  std::vector<uint32_t> dead_end, candidates, order;
-  dead_end.reserve(indices.size());
-  order.reserve(F);
-  uint32_t cursor = 0;
+}
+
+// offset[v + 1] must hold v's triangle count; makes the offsets.
+void make_offsets(uint32_t V, Adjacency& a) {
+  a.offset[0] = 0;
+  for (uint32_t v = 0; v < V; ++v) {
+    a.max_triangles = std::max(a.max_triangles, a.offset[v + 1]);
+    a.offset[v + 1] += a.offset[v];
+  }
+}
+
+Adjacency build_adjacency(std::span<const uint32_t> indices, uint32_t V, Workspace& ws) {
+  Adjacency a;
+  a.offset = ws.take(size_t(V) + 1);
+  a.triangles = ws.take(indices.size());
+  std::fill_n(a.offset, size_t(V) + 1, 0u);
+  for (const uint32_t i : indices) ++a.offset[i + 1];
+  make_offsets(V, a);
+  fill_triangles(indices, V, a, ws.take(V));
+  return a;
+}
+
+// The first centre by default: the vertex with the fewest triangles (a border or a corner).
+uint32_t fewest_triangles_vertex(const uint32_t* offset, uint32_t V) {
+  uint32_t best = none, best_count = 0;
+  for (uint32_t v = 0; v < V; ++v) {
+    const uint32_t count = offset[v + 1] - offset[v];
+    if (count && (best == none || count < best_count)) best = v, best_count = count;
+  }
+  return best;
+}
+
+// Lower bound used to stop a run early: a run that has made `misses` misses, with `pending` vertices
+// that still have triangles but are not cached, ends with at least misses + pending misses (each of
+// those vertices is loaded again). Once that reaches `limit` (the best order so far, which a later
+// candidate must beat strictly), the run cannot win and stops.
+
+// std::popcount is a library call without the popcnt instruction (not in the x86-64 baseline).
+inline uint32_t bit_count(uint64_t x) {
+  x = x - (x >> 1 & 0x5555555555555555u);
+  x = (x & 0x3333333333333333u) + (x >> 2 & 0x3333333333333333u);
+  x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Fu;
+  return uint32_t((x * 0x0101010101010101u) >> 56);
+}
+
+// The fan orderer's state of one vertex, kept together: the orderer reads them together.
+struct FanVertex {
+  uint32_t entered;        // the miss count when it entered the FIFO; 0 when not cached
+  uint32_t live;           // triangles left: the first `live` of its list
+  uint32_t corner_misses;  // over its live triangles, the corners not cached
+  uint32_t first;          // its list's offset
+};
+
+struct FanBuffers {
+  FanVertex* vertices;  // V
+  uint32_t *dead_end, *ring;  // 3F, K
+};
+
+// The fan orderer (see fan_cache_order) from `focus`, on fresh lists. Writes the order and returns
+// its FIFO misses (its simulated cache is the caller's), or `stopped`.
+uint64_t fan_run(std::span<const uint32_t> indices, uint32_t V, const Adjacency& adjacency, const FanScoring& scoring, uint32_t focus,
+                 const FanBuffers& b, uint64_t limit, uint32_t* order) {
+  const uint32_t K = scoring.cache_size;
+  uint32_t* const triangles = adjacency.triangles;
+  FanVertex* const vx = b.vertices;
+  uint32_t *const dead_end = b.dead_end, *const ring = b.ring;
+  // The FIFO: a ring of K entries (ring[head] is the oldest, overwritten by the next miss) and the
+  // miss count at which each cached vertex entered (0 when it is not cached: eviction clears it).
+  // Per vertex, the corner misses of its fan: over its live triangles, the corners not cached (a
+  // corner shared by two of them counts twice). Kept up to date as triangles leave and vertices enter
+  // or leave the cache. A centre's fan costs about that many misses, fewer where corners are shared;
+  // counting them all favours fans whose new corners are also needed by their neighbours' fans.
+  uint32_t pending = 0;
+  for (uint32_t v = 0; v < V; ++v) {
+    const uint32_t first = adjacency.offset[v], live = adjacency.offset[v + 1] - first;
+    vx[v] = {0, live, 3 * live, first};
+    pending += live != 0;
+  }
+  std::fill_n(ring, K, none);
+  // Bit s: ring[s] holds a vertex with triangles left.
+  uint64_t working = 0;
+  auto low_bits = [](uint32_t count) { return count >= 64 ? ~uint64_t(0) : (uint64_t(1) << count) - 1; };
+  uint32_t head = 0, time = 0, emitted = 0, dead_end_size = 0, cursor = 0;
+  auto slot_bit = [&](uint32_t v) {  // v is cached: it entered time - entered misses before the newest entry
+    const uint32_t back = time - vx[v].entered + 1;
+    return uint64_t(1) << (head >= back ? head - back : head + K - back);
+  };
+  if (uint64_t(time) + pending >= limit) return stopped;
+  auto cached = [&](uint32_t v) { return vx[v].entered != 0; };
+  auto add_to_corners = [&](const FanVertex& w, int32_t delta) {  // w entered (-1) or left (+1) the cache
+    for (uint32_t i = w.first, e = w.first + w.live; i < e; ++i) {
+      const uint32_t* c = &indices[3 * size_t(triangles[i])];
+      vx[c[0]].corner_misses += delta, vx[c[1]].corner_misses += delta, vx[c[2]].corner_misses += delta;
+    }
+  };
+  auto emit = [&](uint32_t t) {
+    order[emitted++] = t;
+    const uint32_t* c = &indices[3 * size_t(t)];
+    const uint32_t uncached = uint32_t(!cached(c[0])) + !cached(c[1]) + !cached(c[2]);
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t v = c[k];
+      FanVertex& x = vx[v];
+      x.corner_misses -= uncached;
+      uint32_t* list = triangles + x.first;
+      const uint32_t n = x.live;
+      uint32_t j = 0;
+      while (list[j] != t) ++j;  // t is live around each of its corners
+      list[j] = list[n - 1], list[n - 1] = t;
+      x.live = n - 1;
+      if (n == 1) {
+        if (x.entered) working &= ~slot_bit(v);
+        else --pending;
+      }
+    }
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t v = c[k];
+      dead_end[dead_end_size++] = v;
+      FanVertex& x = vx[v];
+      if (x.entered) continue;
+      const uint32_t evicted = ring[head];
+      if (evicted != none) {
+        FanVertex& y = vx[evicted];
+        y.entered = 0;
+        add_to_corners(y, +1);
+        pending += y.live != 0;
+      }
+      ring[head] = v;
+      working = x.live ? working | uint64_t(1) << head : working & ~(uint64_t(1) << head);
+      head = head + 1 == K ? 0 : head + 1;
+      x.entered = ++time;
+      add_to_corners(x, -1);
+      pending -= x.live != 0;
+    }
+  };
+  auto misses_of = [&](const uint32_t* c) { return uint32_t(!cached(c[0])) + !cached(c[1]) + !cached(c[2]); };
+
+  while (focus != none) {
+    // The fan, cheapest triangle first; on a tie, the one holding the oldest cached corner besides
+    // the centre (use it before it leaves).
+    while (vx[focus].live) {
+      const uint32_t* list = triangles + vx[focus].first;
+      const uint32_t live = vx[focus].live;
+      auto oldest_corner = [&](const uint32_t* c) {
+        uint32_t oldest = 0xFFFFFFFFu;
+        for (uint32_t k = 0; k < 3; ++k) {
+          const uint32_t w = c[k];
+          if (w != focus && cached(w)) oldest = std::min(oldest, vx[w].entered);
+        }
+        return oldest;
+      };
+      uint32_t best = list[0];
+      const uint32_t* c = &indices[3 * size_t(best)];
+      uint32_t best_misses = misses_of(c), best_oldest = oldest_corner(c);
+      for (uint32_t j = 1; j < live; ++j) {
+        c = &indices[3 * size_t(list[j])];
+        const uint32_t m = misses_of(c);
+        if (m > best_misses) continue;
+        const uint32_t oldest = oldest_corner(c);
+        if (m < best_misses || oldest < best_oldest) best = list[j], best_misses = m, best_oldest = oldest;
+      }
+      emit(best);
+      if (uint64_t(time) + pending >= limit) return stopped;
+    }
+    // The next centre: the cached vertex whose fan costs least, the oldest on ties. Its cost: corner
+    // misses per triangle, plus a weight per entry the fan would push out that still has triangles
+    // (not counting the centre), plus a weight per triangle.
+    // Only the entries with triangles left, oldest first: bit q of `by_age` is the q-th oldest entry.
+    const uint64_t by_age = head == 0 ? working : (working >> head | working << (K - head)) & low_bits(K);
+    focus = none;
+    float best_cost = 0;
+    for (uint64_t bits = by_age; bits; bits &= bits - 1) {
+      const uint32_t q = uint32_t(std::countr_zero(bits));
+      const uint32_t v = ring[head + q < K ? head + q : head + q - K];
+      const uint32_t n = vx[v].corner_misses, live = vx[v].live;
+      // About n / 2 distinct vertices enter (inner corners are shared by two triangles of the fan).
+      const uint32_t entering = std::min(n / 2, K);
+      const uint32_t pushed_out = bit_count(by_age & low_bits(entering)) - (q < entering ? 1u : 0u);
+      const float cost = (float(n) + scoring.eviction_weight * float(pushed_out)) / float(live) + scoring.live_weight * float(live);
+      if (focus == none || cost < best_cost) best_cost = cost, focus = v;
+    }
+    if (focus != none) continue;
+    // Dead end: the most recently used vertex with triangles left, else the next in input order.
+    while (dead_end_size && focus == none) {
+      const uint32_t v = dead_end[--dead_end_size];
+      if (vx[v].live) focus = v;
+    }
+    while (focus == none && cursor < V) {
+      if (vx[cursor].live) focus = cursor;
+      ++cursor;
+    }
+  }
+  return time;
+}
+
+struct TipsifyBuffers {
+  uint32_t *live, *entered, *dead_end, *candidates, *ring;  // V, V, 3F, 3 * max_triangles, K
+  uint8_t* emitted;                                         // F
+};
+
+// Tipsify (Sander, Nehab and Barczak, 2007) on fresh lists: fan around one vertex at a time (emit
+// all its remaining triangles), then move to the neighbour that will still be cached after its own
+// fan, the oldest such first; at a dead end, back to the most recently used vertex with triangles
+// left. Writes the order and returns its FIFO misses, or `stopped`.
+uint64_t tipsify_run(std::span<const uint32_t> indices, uint32_t V, const Adjacency& adjacency, uint32_t cache_size,
+                     const TipsifyBuffers& b, uint64_t limit, uint32_t* order) {
+  const uint32_t F = uint32_t(indices.size() / 3);
+  const uint32_t* offset = adjacency.offset;
+  const uint32_t* triangles = adjacency.triangles;
+  uint32_t *const live = b.live, *const entered = b.entered, *const dead_end = b.dead_end, *const candidates = b.candidates;
+  uint32_t* const ring = b.ring;  // the last cache_size vertices to enter, for the bound (ring[slot] leaves next)
+  uint8_t* const emitted = b.emitted;
+  uint32_t pending = 0;
+  for (uint32_t v = 0; v < V; ++v) {
+    live[v] = offset[v + 1] - offset[v];
+    entered[v] = 0;  // the clock when the vertex entered the FIFO (0: never)
+    pending += live[v] != 0;
+  }
+  std::fill_n(emitted, F, uint8_t(0));
+  std::fill_n(ring, cache_size, none);
+  // The clock counts misses from cache_size + 1, so a vertex that never entered is never cached.
+  // (32 bits: enough for inputs of up to 1.4 billion triangles.)
+  const uint32_t clock_start = cache_size + 1;
+  uint32_t time = clock_start, slot = 0, order_size = 0, dead_end_size = 0, cursor = 0;
+  if (uint64_t(time - clock_start) + pending >= limit) return stopped;
   uint32_t fan = F ? indices[0] : none;
   while (fan != none) {
-    candidates.clear();
+    uint32_t candidate_count = 0;
     for (uint32_t j = offset[fan]; j < offset[fan + 1]; ++j) {
       const uint32_t t = triangles[j];
       if (emitted[t]) continue;
       emitted[t] = 1;
-      order.push_back(t);
+      order[order_size++] = t;
       for (uint32_t k = 0; k < 3; ++k) {
-        const uint32_t v = indices[3 * t + k];
-        dead_end.push_back(v);
-        candidates.push_back(v);
+        const uint32_t v = indices[3 * size_t(t) + k];
+        dead_end[dead_end_size++] = v;
+        candidates[candidate_count++] = v;
         --live[v];
-        if (time - entered[v] > cache_size) entered[v] = time++;
+        if (time - entered[v] > cache_size) {
+          const uint32_t evicted = ring[slot];
+          if (evicted != none) pending += live[evicted] != 0;
+          ring[slot] = v;
+          slot = slot + 1 == cache_size ? 0 : slot + 1;
+          --pending;  // v had this triangle left and was not cached
+          entered[v] = time++;
+        }
       }
+      if (uint64_t(time - clock_start) + pending >= limit) return stopped;
     }
     // The next fan: a candidate that stays cached through its own fan (about two misses per
     // triangle), the oldest in the cache first.
     fan = none;
-    uint64_t best = 0;
-    for (const uint32_t v : candidates) {
+    uint32_t best = 0;
+    for (uint32_t i = 0; i < candidate_count; ++i) {
+      const uint32_t v = candidates[i];
       if (!live[v]) continue;
-      const uint64_t age = time - entered[v];
-      if (age + 2 * uint64_t(live[v]) <= cache_size && age > best) best = age, fan = v;
+      const uint32_t age = time - entered[v];
+      if (uint64_t(age) + 2 * uint64_t(live[v]) <= cache_size && age > best) best = age, fan = v;
     }
     if (fan != none) continue;
-    while (!dead_end.empty() && fan == none) {
-      const uint32_t v = dead_end.back();
-      dead_end.pop_back();
+    while (dead_end_size && fan == none) {
+      const uint32_t v = dead_end[--dead_end_size];
       if (live[v]) fan = v;
     }
     while (fan == none && cursor < V) {
@@ -228,138 +491,35 @@ std::vector<uint32_t> tipsify_order(std::span<const uint32_t> indices, size_t ve
       ++cursor;
     }
   }
+  return time - clock_start;
+}
+
+}  // namespace
+
+std::vector<uint32_t> tipsify_order(std::span<const uint32_t> indices, size_t vertex_count, uint32_t cache_size) {
+  const uint32_t F = uint32_t(indices.size() / 3), V = uint32_t(vertex_count);
+  Workspace ws;
+  ws.reserve(4 * size_t(V) + 1 + 6 * size_t(F) + cache_size + (size_t(F) + 3) / 4);
+  const Adjacency a = build_adjacency(indices, V, ws);
+  TipsifyBuffers b{ws.take(V), ws.take(V), ws.take(3 * size_t(F)), nullptr, ws.take(cache_size),
+                   reinterpret_cast<uint8_t*>(ws.take((size_t(F) + 3) / 4))};
+  b.candidates = ws.take(3 * size_t(a.max_triangles));
+  std::vector<uint32_t> order(F);
+  tipsify_run(indices, V, a, cache_size, b, stopped, order.data());
   return order;
 }
 
 std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t vertex_count, const FanScoring& scoring) {
-  const uint32_t F = uint32_t(indices.size() / 3);
-  const uint32_t V = uint32_t(vertex_count);
-  const uint32_t K = scoring.cache_size;
-  std::vector<uint32_t> offset(V + 1, 0), live(V, 0);
-  for (const uint32_t i : indices) ++offset[i + 1];
-  for (uint32_t v = 0; v < V; ++v) offset[v + 1] += offset[v];
-  std::vector<uint32_t> triangles(indices.size());
-  for (uint32_t t = 0; t < F; ++t)
-    for (uint32_t k = 0; k < 3; ++k) {
-      const uint32_t v = indices[3 * t + k];
-      triangles[offset[v] + live[v]++] = t;
-    }
-  // The FIFO: a ring of K entries (ring[head] is the oldest, overwritten by the next miss) and the
-  // miss count at which each cached vertex entered (0 when it is not cached: eviction clears it).
-  std::vector<uint32_t> ring(K, none), entered(V, 0);
-  uint32_t head = 0, time = 0;
-  auto cached = [&](uint32_t v) { return entered[v] != 0; };
-  // Per vertex, the corner misses of its fan: over its live triangles, the corners not cached (a
-  // corner shared by two of them counts twice). Kept up to date as triangles leave and vertices enter
-  // or leave the cache. A centre's fan costs about that many misses, fewer where corners are shared;
-  // counting them all favours fans whose new corners are also needed by their neighbours' fans.
-  std::vector<uint32_t> corner_misses(V, 0);
-  for (uint32_t v = 0; v < V; ++v) corner_misses[v] = 3 * live[v];
-  auto add_to_corners = [&](uint32_t w, int32_t delta) {  // w entered (-1) or left (+1) the cache
-    for (uint32_t i = offset[w], e = offset[w] + live[w]; i < e; ++i) {
-      const uint32_t* c = &indices[3 * size_t(triangles[i])];
-      corner_misses[c[0]] += delta, corner_misses[c[1]] += delta, corner_misses[c[2]] += delta;
-    }
-  };
-  std::vector<uint32_t> order, dead_end;
-  order.reserve(F);
-  dead_end.reserve(indices.size());
-  uint32_t cursor = 0;
-
-  auto emit = [&](uint32_t t) {
-    order.push_back(t);
-    const uint32_t* c = &indices[3 * size_t(t)];
-    const uint32_t uncached = uint32_t(!cached(c[0])) + !cached(c[1]) + !cached(c[2]);
-    for (uint32_t k = 0; k < 3; ++k) {
-      const uint32_t v = c[k];
-      corner_misses[v] -= uncached;
-      uint32_t* list = triangles.data() + offset[v];
-      for (uint32_t j = 0; j < live[v]; ++j)
-        if (list[j] == t) {
-          std::swap(list[j], list[live[v] - 1]);
-          --live[v];
-          break;
-        }
-    }
-    for (uint32_t k = 0; k < 3; ++k) {
-      const uint32_t v = c[k];
-      dead_end.push_back(v);
-      if (cached(v)) continue;
-      const uint32_t evicted = ring[head];
-      if (evicted != none) {
-        entered[evicted] = 0;
-        add_to_corners(evicted, +1);
-      }
-      ring[head] = v;
-      head = head + 1 == K ? 0 : head + 1;
-      entered[v] = ++time;
-      add_to_corners(v, -1);
-    }
-  };
-  auto misses_of = [&](uint32_t t) {
-    return uint32_t(!cached(indices[3 * t])) + !cached(indices[3 * t + 1]) + !cached(indices[3 * t + 2]);
-  };
-  // with_work[q]: how many of the q oldest entries still have triangles (they would be loaded again).
-  std::vector<uint32_t> with_work(K + 1, 0);
-
-  // Start around the given vertex, else the vertex with the fewest triangles (a border or a corner).
-  uint32_t focus = scoring.start < V && live[scoring.start] ? scoring.start : none;
-  if (focus == none)
-    for (uint32_t v = 0; v < V; ++v)
-      if (live[v] && (focus == none || live[v] < live[focus])) focus = v;
-  while (focus != none) {
-    // The fan, cheapest triangle first; on a tie, the one holding the oldest cached corner besides
-    // the centre (use it before it leaves).
-    while (live[focus]) {
-      const uint32_t* list = triangles.data() + offset[focus];
-      auto oldest_corner = [&](uint32_t t) {
-        uint32_t oldest = 0xFFFFFFFFu;
-        for (uint32_t k = 0; k < 3; ++k) {
-          const uint32_t w = indices[3 * size_t(t) + k];
-          if (w != focus && cached(w)) oldest = std::min(oldest, entered[w]);
-        }
-        return oldest;
-      };
-      uint32_t best = list[0], best_misses = misses_of(list[0]), best_oldest = oldest_corner(list[0]);
-      for (uint32_t j = 1; j < live[focus]; ++j) {
-        const uint32_t m = misses_of(list[j]);
-        if (m > best_misses) continue;
-        const uint32_t oldest = oldest_corner(list[j]);
-        if (m < best_misses || oldest < best_oldest) best = list[j], best_misses = m, best_oldest = oldest;
-      }
-      emit(best);
-    }
-    // The next centre: the cached vertex whose fan costs least, the oldest on ties. Its cost: corner
-    // misses per triangle, plus a weight per entry the fan would push out that still has triangles
-    // (not counting the centre), plus a weight per triangle.
-    for (uint32_t q = 0, slot = head; q < K; ++q, slot = slot + 1 == K ? 0 : slot + 1) {
-      const uint32_t u = ring[slot];
-      with_work[q + 1] = with_work[q] + (u != none && live[u] > 0);
-    }
-    focus = none;
-    float best_cost = 0;
-    for (uint32_t q = 0, slot = head; q < K; ++q, slot = slot + 1 == K ? 0 : slot + 1) {
-      const uint32_t v = ring[slot];
-      if (v == none || !live[v]) continue;
-      const uint32_t n = corner_misses[v];
-      // About n / 2 distinct vertices enter (inner corners are shared by two triangles of the fan).
-      const uint32_t entering = std::min(n / 2, K);
-      const uint32_t pushed_out = with_work[entering] - (q < entering ? 1u : 0u);
-      const float cost = (float(n) + scoring.eviction_weight * float(pushed_out)) / float(live[v]) + scoring.live_weight * float(live[v]);
-      if (focus == none || cost < best_cost) best_cost = cost, focus = v;
-    }
-    if (focus != none) continue;
-    // Dead end: the most recently used vertex with triangles left, else the next in input order.
-    while (!dead_end.empty() && focus == none) {
-      const uint32_t v = dead_end.back();
-      dead_end.pop_back();
-      if (live[v]) focus = v;
-    }
-    while (focus == none && cursor < V) {
-      if (live[cursor]) focus = cursor;
-      ++cursor;
-    }
-  }
+  const uint32_t F = uint32_t(indices.size() / 3), V = uint32_t(vertex_count), K = scoring.cache_size;
+  Workspace ws;
+  ws.reserve(6 * size_t(V) + 1 + 6 * size_t(F) + K);
+  const Adjacency a = build_adjacency(indices, V, ws);
+  const FanBuffers b{reinterpret_cast<FanVertex*>(ws.take(4 * size_t(V))), ws.take(3 * size_t(F)), ws.take(K)};
+  // Start around the given vertex, else the vertex with the fewest triangles.
+  const uint32_t focus = scoring.start < V && a.offset[scoring.start + 1] > a.offset[scoring.start] ? scoring.start
+                                                                                                    : fewest_triangles_vertex(a.offset, V);
+  std::vector<uint32_t> order(F);
+  fan_run(indices, V, a, scoring, focus, b, stopped, order.data());
   return order;
 }
 
@@ -373,62 +533,129 @@ constexpr uint32_t max_cache = detail::max_cache_size;
 constexpr uint32_t max_extra_starts = 3;
 constexpr uint32_t extra_start_triangles = 8192;
 
-// Cache misses of the triangles taken in `order` (the analyzer's simulation, without building the list).
-uint64_t cache_misses(std::span<const uint32_t> indices, std::span<const uint32_t> order, size_t vertex_count, const VertexCacheOptions& o) {
-  if (o.policy == CachePolicy::lru) {
-    std::vector<uint32_t> list(indices.size());
-    for (size_t k = 0; k < order.size(); ++k)
-      for (uint32_t c = 0; c < 3; ++c) list[3 * k + c] = indices[3 * size_t(order[k]) + c];
-    return analyze_vertex_cache(list, vertex_count, o).misses;
+// The chosen order, kept in the workspace; nullptr when it is the input order.
+//
+// Every candidate is scored by its misses on the caller's cache, and the first with the fewest wins:
+// the input order, then for a FIFO the fan orderer, Tipsify and the fan orderer's extra starts; for
+// an LRU the Forsyth-style walk and Tipsify. For a FIFO the orderers' own simulated caches are the
+// caller's, so their miss counts need no separate simulation, and a run stops as soon as its lower
+// bound (detail::fan_run) shows it cannot beat the best so far; when the best needs one miss per
+// referenced vertex nothing can beat it and no orderer runs. None of this changes which order wins.
+const uint32_t* choose_order(std::span<const uint32_t> indices, size_t vertex_count, const VertexCacheOptions& options,
+                             detail::Workspace& ws, std::vector<uint32_t>& lru_order) {
+  if (indices.size() % 3) throw_usage("optimize_vertex_cache: the index count is not a multiple of 3");
+  if (options.cache_size < 3 || options.cache_size > max_cache)
+    throw_usage("optimize_vertex_cache: cache size must be in [3, " + std::to_string(max_cache) + "]");
+  const uint32_t F = uint32_t(indices.size() / 3), K = options.cache_size;
+  auto check_index = [&](uint32_t i) {
+    if (i >= vertex_count) throw_usage("optimize_vertex_cache: index " + std::to_string(i) + " out of range");
+  };
+
+  if (options.policy == CachePolicy::lru) {
+    for (const uint32_t i : indices) check_index(i);
+    auto misses_of = [&](const std::vector<uint32_t>& order) {
+      std::vector<uint32_t> list(indices.size());
+      for (size_t k = 0; k < order.size(); ++k)
+        for (uint32_t c = 0; c < 3; ++c) list[3 * k + c] = indices[3 * size_t(order[k]) + c];
+      return analyze_vertex_cache(list, vertex_count, options).misses;
+    };
+    const VertexCacheStats input = analyze_vertex_cache(indices, vertex_count, options);
+    uint64_t best_misses = input.misses;
+    if (best_misses == input.referenced_vertices) return nullptr;  // one miss per vertex: nothing does better
+    bool input_best = true;
+    auto consider = [&](std::vector<uint32_t> order) {
+      const uint64_t misses = misses_of(order);
+      if (misses < best_misses) best_misses = misses, lru_order = std::move(order), input_best = false;
+    };
+    consider(detail::greedy_cache_order(indices, vertex_count, detail::default_scoring(K)));
+    consider(detail::tipsify_order(indices, vertex_count, K));
+    return input_best ? nullptr : lru_order.data();
   }
-  std::vector<uint32_t> entered(vertex_count, 0);
-  uint32_t misses = 0;
-  for (const uint32_t t : order)
-    for (uint32_t c = 0; c < 3; ++c) {
-      const uint32_t v = indices[3 * size_t(t) + c];
-      if (entered[v] && misses - entered[v] < o.cache_size) continue;
-      entered[v] = ++misses;
+
+  // FIFO. One pass checks the indices, counts each vertex's triangles and simulates the input order.
+  const uint32_t V = uint32_t(vertex_count);
+  ws.reserve(2 * size_t(V) + 1);
+  detail::Adjacency a;
+  a.offset = ws.take(size_t(V) + 1);
+  uint32_t* const stamp = ws.take(V);  // the input simulation's entry stamps, then scratch
+  std::fill_n(a.offset, size_t(V) + 1, 0u);
+  std::fill_n(stamp, V, 0u);
+  uint32_t misses = 0, referenced = 0;
+  for (const uint32_t v : indices) {
+    check_index(v);
+    ++a.offset[v + 1];
+    if (stamp[v] && misses - stamp[v] < K) continue;
+    referenced += stamp[v] == 0;
+    stamp[v] = ++misses;
+  }
+  uint64_t best_misses = misses;
+  if (best_misses == referenced) return nullptr;  // one miss per vertex: no order does better
+
+  detail::make_offsets(V, a);
+  // The lists (and a spare copy on small inputs), two orders, the fan orderer's and Tipsify's buffers.
+  ws.reserve(3 * size_t(F) + (F <= extra_start_triangles ? 3 * size_t(F) : 0) + 2 * size_t(F) + 4 * size_t(V) + 3 * size_t(F) + K + V +
+             3 * size_t(a.max_triangles) + (size_t(F) + 3) / 4);
+  a.triangles = ws.take(indices.size());
+  detail::fill_triangles(indices, V, a, stamp);
+  uint32_t* buffers[2] = {ws.take(F), ws.take(F)};
+  int best = -1;  // index into buffers, -1: the input order
+  const detail::FanBuffers fan{reinterpret_cast<detail::FanVertex*>(ws.take(4 * size_t(V))), ws.take(3 * size_t(F)), ws.take(K)};
+  const detail::TipsifyBuffers tipsify{ws.take(V), stamp, fan.dead_end, ws.take(3 * size_t(a.max_triangles)), fan.ring,
+                                       reinterpret_cast<uint8_t*>(ws.take((size_t(F) + 3) / 4))};
+  // Each orderer starts from the lists in ascending order, which the fan orderer reorders: with the
+  // extra starts (small inputs) they are copied back from a spare copy, else filled again.
+  const uint32_t extra_starts = std::min(max_extra_starts, extra_start_triangles / F);
+  uint32_t* const pristine = extra_starts ? ws.take(indices.size()) : nullptr;
+  if (pristine) std::copy_n(a.triangles, indices.size(), pristine);
+  bool fresh = true;
+  auto run = [&](auto&& orderer) {
+    if (!fresh) {
+      if (pristine) std::copy_n(pristine, indices.size(), a.triangles);
+      else detail::fill_triangles(indices, V, a, tipsify.live);
     }
-  return misses;
+    fresh = false;
+    uint32_t* const candidate = buffers[best == 0 ? 1 : 0];
+    const uint64_t m = orderer(candidate);
+    if (m < best_misses) best_misses = m, best = candidate == buffers[0] ? 0 : 1;
+  };
+  const detail::FanScoring scoring{.cache_size = K};
+  const uint32_t first_start = detail::fewest_triangles_vertex(a.offset, V);
+  run([&](uint32_t* order) { return detail::fan_run(indices, V, a, scoring, first_start, fan, best_misses, order); });
+  run([&](uint32_t* order) { return detail::tipsify_run(indices, V, a, K, tipsify, best_misses, order); });
+  // On a small mesh the first fan decides the sweep that follows, and the fewest-triangle start is
+  // sometimes a poor one: the fan orderer also starts at the first corner of input triangles
+  // 0, F/n, ... (the input's own start first), as many runs as fit in extra_start_triangles. A start
+  // already tried gives the same order again, which cannot win, and is skipped.
+  uint32_t tried[max_extra_starts + 1] = {first_start};
+  uint32_t tried_count = 1;
+  for (uint32_t i = 0; i < extra_starts; ++i) {
+    const uint32_t start = indices[3 * (size_t(i) * F / extra_starts)];
+    if (std::find(tried, tried + tried_count, start) != tried + tried_count) continue;
+    tried[tried_count++] = start;
+    run([&](uint32_t* order) { return detail::fan_run(indices, V, a, scoring, start, fan, best_misses, order); });
+  }
+  return best < 0 ? nullptr : buffers[best];
 }
 }  // namespace
 
 std::vector<uint32_t> vertex_cache_order(std::span<const uint32_t> indices, size_t vertex_count, const VertexCacheOptions& options) {
-  if (indices.size() % 3) throw_usage("optimize_vertex_cache: the index count is not a multiple of 3");
-  if (options.cache_size < 3 || options.cache_size > max_cache)
-    throw_usage("optimize_vertex_cache: cache size must be in [3, " + std::to_string(max_cache) + "]");
-  for (const uint32_t i : indices)
-    if (i >= vertex_count) throw_usage("optimize_vertex_cache: index " + std::to_string(i) + " out of range");
-  // Two orderers with different strengths, the analyzer deciding on the caller's cache: for a FIFO,
-  // lodkit's fan orderer (exact fan costs) and Tipsify; for an LRU, the Forsyth-style walk (its cache
-  // model is an LRU) and Tipsify. The input order is a candidate too, so the result is never worse.
+  detail::Workspace ws;
+  std::vector<uint32_t> lru_order;
+  const uint32_t* chosen = choose_order(indices, vertex_count, options, ws, lru_order);
   const uint32_t F = uint32_t(indices.size() / 3);
-  std::vector<uint32_t> best(F);
-  for (uint32_t t = 0; t < F; ++t) best[t] = t;
-  uint64_t best_misses = cache_misses(indices, best, vertex_count, options);
-  auto consider = [&](std::vector<uint32_t> order) {
-    const uint64_t misses = cache_misses(indices, order, vertex_count, options);
-    if (misses < best_misses) best_misses = misses, best = std::move(order);
-  };
-  const bool fifo = options.policy == CachePolicy::fifo;
-  if (fifo) consider(detail::fan_cache_order(indices, vertex_count, {.cache_size = options.cache_size}));
-  else consider(detail::greedy_cache_order(indices, vertex_count, detail::default_scoring(options.cache_size)));
-  consider(detail::tipsify_order(indices, vertex_count, options.cache_size));
-  // On a small mesh the first fan decides the sweep that follows, and the fewest-triangle start is
-  // sometimes a poor one: the fan orderer also starts at the first corner of input triangles
-  // 0, F/n, ... (the input's own start first), as many runs as fit in extra_start_triangles.
-  const uint32_t extra_starts = fifo && F ? std::min(max_extra_starts, extra_start_triangles / F) : 0;
-  for (uint32_t i = 0; i < extra_starts; ++i)
-    consider(detail::fan_cache_order(indices, vertex_count,
-                                     {.cache_size = options.cache_size, .start = indices[3 * (size_t(i) * F / extra_starts)]}));
-  return best;
+  std::vector<uint32_t> order(F);
+  for (uint32_t t = 0; t < F; ++t) order[t] = chosen ? chosen[t] : t;
+  return order;
 }
 
 std::vector<uint32_t> optimize_vertex_cache(std::span<const uint32_t> indices, size_t vertex_count, const VertexCacheOptions& options) {
-  const std::vector<uint32_t> order = vertex_cache_order(indices, vertex_count, options);
+  detail::Workspace ws;
+  std::vector<uint32_t> lru_order;
+  const uint32_t* chosen = choose_order(indices, vertex_count, options, ws, lru_order);
+  if (!chosen) return std::vector<uint32_t>(indices.begin(), indices.end());
   std::vector<uint32_t> out(indices.size());
-  for (size_t k = 0; k < order.size(); ++k)
-    for (uint32_t c = 0; c < 3; ++c) out[3 * k + c] = indices[3 * size_t(order[k]) + c];
+  for (size_t k = 0; k < out.size() / 3; ++k)
+    for (uint32_t c = 0; c < 3; ++c) out[3 * k + c] = indices[3 * size_t(chosen[k]) + c];
   return out;
 }
 

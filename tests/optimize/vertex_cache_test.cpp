@@ -151,6 +151,50 @@ TEST(VertexCache, SmallFifoInputsNeverWorseThanAnyStartTried) {
     }
 }
 
+TEST(VertexCache, FifoPicksTheFirstOfTheFullPortfolioWithTheFewestMisses) {
+  // vertex_cache_order stops a candidate as soon as it cannot beat the best so far, shares buffers
+  // between candidates and skips a start already tried; none of that may change the order chosen:
+  // it is the first, in the order input, fan orderer, Tipsify, extra starts, of the fully run
+  // candidates with the fewest misses on the caller's FIFO.
+  const Mesh grid = shapes::grid(12, 9), torus = shapes::torus(1.0f, 0.3f, 24, 12), sphere = shapes::icosphere(2), fin = shapes::fin(),
+             cylinder = shapes::cylinder();
+  for (const Mesh* m : {&grid, &torus, &sphere, &fin, &cylinder})
+    for (const uint32_t seed : {0u, 7u}) {
+      const std::vector<uint32_t> in = seed ? test::shuffled_triangles(m->indices, seed) : m->indices;
+      const size_t V = m->vertex_count();
+      const uint32_t F = uint32_t(in.size() / 3);
+      for (const uint32_t size : {3u, 8u, 16u, 32u, 64u}) {
+        const VertexCacheOptions o{.cache_size = size};
+        std::vector<uint32_t> expected(F);
+        for (uint32_t t = 0; t < F; ++t) expected[t] = t;
+        uint64_t fewest = misses_in_order(in, expected, V, o);
+        auto consider = [&](std::vector<uint32_t> order) {
+          const uint64_t misses = misses_in_order(in, order, V, o);
+          if (misses < fewest) fewest = misses, expected = std::move(order);
+        };
+        consider(detail::fan_cache_order(in, V, {.cache_size = size}));
+        consider(detail::tipsify_order(in, V, size));
+        const uint32_t n = std::min(3u, 8192u / F);
+        for (uint32_t i = 0; i < n; ++i) consider(detail::fan_cache_order(in, V, {.cache_size = size, .start = in[3 * (size_t(i) * F / n)]}));
+        EXPECT_EQ(vertex_cache_order(in, V, o), expected) << "seed " << seed << " cache " << size;
+        EXPECT_EQ(analyze_vertex_cache(optimize_vertex_cache(in, V, o), V, o).misses, fewest);
+      }
+    }
+}
+
+TEST(VertexCache, InputWithOneMissPerVertexIsKept) {
+  // No order needs fewer misses than the vertices it references: an input that already loads each
+  // vertex once comes back unchanged (an orderer could only tie with it).
+  const Mesh sphere = shapes::icosphere(0);  // 12 vertices: any order fits a FIFO of 16
+  const VertexCacheOptions fifo16{.cache_size = 16};
+  EXPECT_EQ(analyze_vertex_cache(sphere.indices, sphere.vertex_count(), fifo16).misses, 12u);
+  for (const uint32_t seed : {0u, 3u}) {
+    const std::vector<uint32_t> in = seed ? test::shuffled_triangles(sphere.indices, seed) : sphere.indices;
+    EXPECT_EQ(optimize_vertex_cache(in, sphere.vertex_count(), fifo16), in);
+    EXPECT_EQ(optimize_vertex_cache(in, sphere.vertex_count(), {.cache_size = 16, .policy = CachePolicy::lru}), in);
+  }
+}
+
 TEST(VertexCache, FanOrdererStartsWithTheWholeFanOfTheGivenVertex) {
   // The first fan is every triangle around the start vertex, before any other triangle.
   const Mesh m = shapes::torus(1.0f, 0.3f, 24, 12);
