@@ -86,9 +86,9 @@ struct VertexCacheOptions {
 // are made and the best on that cache kept (so never worse than the input): the input's own; Tipsify
 // (Sander et al. 2007); and for a FIFO lodkit's fan orderer (fans around one vertex at a time, the
 // next centre being the cached vertex whose fan costs fewest misses per triangle in the simulated
-// FIFO), for an LRU a Forsyth-style greedy walk. For a FIFO and an input of at most 8,192 triangles,
-// the fan orderer also starts from the first corner of input triangles 0, F/n, ... (n = 1 to 3 runs,
-// at most 8,192 triangles of extra work). Linear time; the same input gives the same order.
+// FIFO), for an LRU a Forsyth-style greedy walk. For a FIFO and an input of at most 1,024 triangles,
+// the fan orderer also starts from the input's first vertex. Linear time; the same input gives the
+// same order.
 // Returns the new index buffer.
 std::vector<uint32_t> optimize_vertex_cache(std::span<const uint32_t> indices, size_t vertex_count,
                                             const VertexCacheOptions& options = {});

@@ -39,6 +39,14 @@ struct FanScoring {
 };
 std::vector<uint32_t> fan_cache_order(std::span<const uint32_t> indices, size_t vertex_count, const FanScoring& scoring);
 
+// Extra starts of the fan orderer on small FIFO inputs (lod::vertex_cache_order): n =
+// min(max_extra_starts, extra_start_triangles / F) more runs, from the first corner of input
+// triangles 0, F/n, ...; at most `extra_start_triangles` triangles of extra work, so inputs of more
+// than that run each orderer once. One start (the input's own) on at most 1,024 triangles: each
+// fan-orderer run costs 0.5-1x meshoptimizer's whole optimiser, and the target is 2x.
+inline constexpr uint32_t max_extra_starts = 1;
+inline constexpr uint32_t extra_start_triangles = 1024;
+
 // Tipsify for a FIFO cache of `cache_size`; returns the triangle order.
 std::vector<uint32_t> tipsify_order(std::span<const uint32_t> indices, size_t vertex_count, uint32_t cache_size);
 

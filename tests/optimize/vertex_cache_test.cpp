@@ -122,16 +122,17 @@ uint64_t misses_in_order(const std::vector<uint32_t>& indices, const std::vector
 }
 
 TEST(VertexCache, SmallFifoInputsNeverWorseThanAnyStartTried) {
-  // Inputs of at most 8,192 triangles also run the fan orderer from the first corner of input
-  // triangles 0, F/n, ... (n = min(3, 8192 / F)): the result is at most each of those orders, as well
-  // as the input, Tipsify and the fan orderer's own start.
-  const Mesh grid = shapes::grid(10, 10), torus = shapes::torus(1.0f, 0.3f, 40, 20), sphere = shapes::icosphere(2), fin = shapes::fin();
+  // Small inputs also run the fan orderer from the first corner of input triangles 0, F/n, ...
+  // (n = min(detail::max_extra_starts, detail::extra_start_triangles / F): the input's own start on at
+  // most 1,024 triangles): the result is at most each of those orders, as well as the input, Tipsify
+  // and the fan orderer's own start.
+  const Mesh grid = shapes::grid(10, 10), torus = shapes::torus(1.0f, 0.3f, 24, 20), sphere = shapes::icosphere(2), fin = shapes::fin();
   for (const Mesh* m : {&grid, &torus, &sphere, &fin})
     for (const uint32_t seed : {4u, 5u}) {
       const std::vector<uint32_t> in = test::shuffled_triangles(m->indices, seed);
       const size_t V = m->vertex_count();
       const uint32_t F = uint32_t(in.size() / 3);
-      ASSERT_LE(F, 8192u);
+      ASSERT_LE(F, detail::extra_start_triangles);
       for (const uint32_t size : {8u, 16u, 32u}) {
         const VertexCacheOptions o{.cache_size = size};
         const std::vector<uint32_t> chosen = vertex_cache_order(in, V, o);
@@ -141,7 +142,7 @@ TEST(VertexCache, SmallFifoInputsNeverWorseThanAnyStartTried) {
         EXPECT_LE(misses, misses_in_order(in, identity, V, o));
         EXPECT_LE(misses, misses_in_order(in, detail::tipsify_order(in, V, size), V, o));
         EXPECT_LE(misses, misses_in_order(in, detail::fan_cache_order(in, V, {.cache_size = size}), V, o));
-        const uint32_t n = std::min(3u, 8192u / F);
+        const uint32_t n = std::min(detail::max_extra_starts, detail::extra_start_triangles / F);
         for (uint32_t i = 0; i < n; ++i) {
           const uint32_t start = in[3 * (size_t(i) * F / n)];
           EXPECT_LE(misses, misses_in_order(in, detail::fan_cache_order(in, V, {.cache_size = size, .start = start}), V, o))
@@ -157,8 +158,8 @@ TEST(VertexCache, FifoPicksTheFirstOfTheFullPortfolioWithTheFewestMisses) {
   // it is the first, in the order input, fan orderer, Tipsify, extra starts, of the fully run
   // candidates with the fewest misses on the caller's FIFO.
   const Mesh grid = shapes::grid(12, 9), torus = shapes::torus(1.0f, 0.3f, 24, 12), sphere = shapes::icosphere(2), fin = shapes::fin(),
-             cylinder = shapes::cylinder();
-  for (const Mesh* m : {&grid, &torus, &sphere, &fin, &cylinder})
+             cylinder = shapes::cylinder(), big_grid = shapes::grid(30, 20);  // 1,200 triangles: no extra start
+  for (const Mesh* m : {&grid, &torus, &sphere, &fin, &cylinder, &big_grid})
     for (const uint32_t seed : {0u, 7u}) {
       const std::vector<uint32_t> in = seed ? test::shuffled_triangles(m->indices, seed) : m->indices;
       const size_t V = m->vertex_count();
@@ -174,7 +175,7 @@ TEST(VertexCache, FifoPicksTheFirstOfTheFullPortfolioWithTheFewestMisses) {
         };
         consider(detail::fan_cache_order(in, V, {.cache_size = size}));
         consider(detail::tipsify_order(in, V, size));
-        const uint32_t n = std::min(3u, 8192u / F);
+        const uint32_t n = std::min(detail::max_extra_starts, detail::extra_start_triangles / F);
         for (uint32_t i = 0; i < n; ++i) consider(detail::fan_cache_order(in, V, {.cache_size = size, .start = in[3 * (size_t(i) * F / n)]}));
         EXPECT_EQ(vertex_cache_order(in, V, o), expected) << "seed " << seed << " cache " << size;
         EXPECT_EQ(analyze_vertex_cache(optimize_vertex_cache(in, V, o), V, o).misses, fewest);
