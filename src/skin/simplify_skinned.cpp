@@ -69,11 +69,6 @@ inline float3 rough_unit(const float3& v) {
   return {v.x * r, v.y * r, v.z * r};
 }
 
-float3 normalized3(const float3& v) {
-  const double l = std::sqrt(double(v.x) * v.x + double(v.y) * v.y + double(v.z) * v.z);
-  return l > 0 ? float3{float(v.x / l), float(v.y / l), float(v.z / l)} : v;
-}
-
 // Houle: simplify in the pose, then bring each survivor back to bind space through its own blended
 // matrix B: p = B^-1 P. Skinned again in that pose it lands exactly at P; in any other pose the
 // displacement follows the survivor's bones (it is applied in their frame, not in world space).
@@ -98,7 +93,7 @@ SimplifyResult simplify_houle(const Mesh& mesh, const SkinSimplifyOptions& o) {
       mat4 transposed = identity_matrix();
       for (int r3 = 0; r3 < 3; ++r3)
         for (int c = 0; c < 3; ++c) transposed[size_t(4 * c + r3)] = blended[size_t(4 * r3 + c)];
-      out.normals[v] = normalized3(transform_vector(transposed, out.normals[v]));
+      out.normals[v] = skinning::unit(transform_vector(transposed, out.normals[v]));
     }
   });
   return r;
