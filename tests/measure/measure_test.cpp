@@ -195,6 +195,27 @@ TEST(MeasureCompare, AttributeDifferencesAtTheClosestPoint) {
   EXPECT_TRUE(e.a_to_b.attributes.uvs);
 }
 
+// The largest distance from a's first triangle to b, by brute force: the points w a0 + u a1 + v a2
+// at u, v = i / n, j / n (i + j <= n) against every triangle of b.
+double dense_max_distance(const Mesh& a, const Mesh& b, int n) {
+  const float3 &a0 = a.positions[a.indices[0]], &a1 = a.positions[a.indices[1]], &a2 = a.positions[a.indices[2]];
+  double dense = 0;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; i + j <= n; ++j) {
+      const float u = float(i) / n, v = float(j) / n, w = 1 - u - v;
+      const measure::vec3f p{w * a0.x + u * a1.x + v * a2.x, w * a0.y + u * a1.y + v * a2.y,
+                             w * a0.z + u * a1.z + v * a2.z};
+      float best = 1e30f;
+      for (size_t t = 0; t < b.triangle_count(); ++t)
+        best = std::min(best, measure::closest_on_triangle(p, b.positions[b.indices[3 * t]],
+                                                           b.positions[b.indices[3 * t + 1]],
+                                                           b.positions[b.indices[3 * t + 2]])
+                                  .distance_squared);
+      dense = std::max(dense, double(std::sqrt(best)));
+    }
+  return dense;
+}
+
 // A bowl under a flat triangle: the largest distance is inside the triangle, off every sample.
 TEST(MeasureRefine, BoundHoldsAgainstADenseBruteForceScan) {
   Mesh a;
@@ -209,20 +230,7 @@ TEST(MeasureRefine, BoundHoldsAgainstADenseBruteForceScan) {
   const Deviation d = compare(a, b, {.samples = 3, .edge_samples = false, .refine = true,
                                      .refine_tolerance = 1e-4f, .refine_budget = 200'000});
   // The distance over a dense grid of a's points, by brute force over b's triangles.
-  double dense = 0;
-  const int n = 200;
-  for (int i = 0; i <= n; ++i)
-    for (int j = 0; i + j <= n; ++j) {
-      const float u = float(i) / n, v = float(j) / n;
-      const measure::vec3f p{u * 1.0f + v * 0.3f, v * 0.9f, 0};
-      float best = 1e30f;
-      for (size_t t = 0; t < b.triangle_count(); ++t)
-        best = std::min(best, measure::closest_on_triangle(p, b.positions[b.indices[3 * t]],
-                                                           b.positions[b.indices[3 * t + 1]],
-                                                           b.positions[b.indices[3 * t + 2]])
-                                  .distance_squared);
-      dense = std::max(dense, double(std::sqrt(best)));
-    }
+  const double dense = dense_max_distance(a, b, 200);
   const OneSidedDeviation& r = d.a_to_b;
   EXPECT_TRUE(r.refined);
   EXPECT_GT(r.refine_samples, 0u);
@@ -252,21 +260,7 @@ TEST(MeasureRefine, FoldedSurfaceIsBoundedTightlyAndSafely) {
   b.normals.clear();
   const Deviation d = compare(a, b, {.samples = 3, .edge_samples = false, .refine = true,
                                      .refine_tolerance = 1e-5f, .refine_budget = 30'000});
-  double dense = 0;
-  const int n = 240;
-  for (int i = 0; i <= n; ++i)
-    for (int j = 0; i + j <= n; ++j) {
-      const float u = float(i) / n, v = float(j) / n, w = 1 - u - v;
-      const measure::vec3f p{w * 0.05f + u * 0.95f + v * 0.4f, w * 0.05f + u * 0.1f + v * 0.9f,
-                             w * 0.005f + u * 0.005f + v * 0.0055f};
-      float best = 1e30f;
-      for (size_t t = 0; t < b.triangle_count(); ++t)
-        best = std::min(best, measure::closest_on_triangle(p, b.positions[b.indices[3 * t]],
-                                                           b.positions[b.indices[3 * t + 1]],
-                                                           b.positions[b.indices[3 * t + 2]])
-                                  .distance_squared);
-      dense = std::max(dense, double(std::sqrt(best)));
-    }
+  const double dense = dense_max_distance(a, b, 240);
   const OneSidedDeviation& r = d.a_to_b;
   EXPECT_GE(r.max_bound, dense - 1e-6);
   EXPECT_LE(r.max_bound - r.max, 1e-5 * d.diagonal);
