@@ -151,12 +151,7 @@ int main(int argc, char** argv) {
     lo_options.ratios = {1.0f, 0.5f};
     lo_options.morph = true;
     lo_options.measure = false;
-    lo_options.simplifier = [&](const Mesh& m, const SimplifyOptions& so) {
-      SkinSimplifyOptions o;
-      o.simplify = so;
-      o.poses = poses;
-      return simplify_skinned(m, o);
-    };
+    lo_options.simplifier = skinned_simplifier({.poses = poses});
     const LodChain chain = build_lod_chain(mesh, lo_options);
     const Mesh &fine = chain.levels[0].mesh, &coarse = chain.levels[1].mesh;
     SkinnedVertices out;

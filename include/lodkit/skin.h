@@ -13,6 +13,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -152,5 +153,10 @@ struct SkinSimplifyOptions {
 // root mean square over the poses (multipose). Throws lod::Error (usage) for a mesh without joints
 // and weights, joints outside the poses, or a mode without the poses it needs.
 SimplifyResult simplify_skinned(const Mesh& mesh, const SkinSimplifyOptions& options);
+
+// A LodOptions::simplifier for a skinned chain: simplify_skinned with `options` (mode, poses, pose
+// weights, bone weight), each level's SimplifyOptions in place of options.simplify.
+//   lod_options.simplifier = lod::skinned_simplifier({.poses = lod::sample_poses(scene, 0, 16)});
+std::function<SimplifyResult(const Mesh&, const SimplifyOptions&)> skinned_simplifier(SkinSimplifyOptions options);
 
 }  // namespace lod

@@ -163,6 +163,14 @@ SimplifyResult simplify_skinned(const Mesh& mesh, const SkinSimplifyOptions& opt
   return r;
 }
 
+std::function<SimplifyResult(const Mesh&, const SimplifyOptions&)> skinned_simplifier(SkinSimplifyOptions options) {
+  return [options = std::move(options)](const Mesh& mesh, const SimplifyOptions& simplify) {
+    SkinSimplifyOptions o = options;
+    o.simplify = simplify;
+    return simplify_skinned(mesh, o);
+  };
+}
+
 SkinnedGeomorph::SkinnedGeomorph(const Mesh& finer, const Mesh& coarser, const Geomorph& table) : finer_(&finer) {
   if (table.target.size() != finer.vertex_count())
     throw_usage("SkinnedGeomorph: the table has " + std::to_string(table.target.size()) + " entries for " +

@@ -73,12 +73,7 @@ inline LodChain multipose_chain(const Mesh& m, const std::vector<std::vector<mat
   lo.ratios = std::move(ratios);
   lo.morph = true;
   lo.measure = false;
-  lo.simplifier = [&](const Mesh& mesh, const SimplifyOptions& so) {
-    SkinSimplifyOptions o;
-    o.simplify = so;
-    o.poses = poses;
-    return simplify_skinned(mesh, o);
-  };
+  lo.simplifier = skinned_simplifier({.poses = poses});
   return build_lod_chain(m, lo);
 }
 

@@ -168,11 +168,7 @@ std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<Ski
       so.poses = sample_poses(scene, sp.skin, pose_count);
     }
     LodOptions options = base;
-    options.simplifier = [so](const Mesh& mesh, const SimplifyOptions& simplify) {
-      SkinSimplifyOptions o = so;
-      o.simplify = simplify;
-      return simplify_skinned(mesh, o);
-    };
+    options.simplifier = skinned_simplifier(std::move(so));
     options.progress = [&](double f) { progress((double(k) + f) / double(skinned.size())); };
     const Mesh& mesh = scene.primitives[sp.primitive].mesh;
     validate(mesh, scene.name);
