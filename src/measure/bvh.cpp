@@ -23,6 +23,8 @@ constexpr uint32_t max_depth = 128;        // traversal stack: 3 entries per lev
 // grown by a few ulps of the scene's extent and the comparison has a relative slack, so a box that
 // holds the closest triangle is never skipped (the result must equal a brute-force scan).
 constexpr float prune_slack = 1.0f + 1.0f / (1 << 18);
+// closest_group gives up on a group whose candidates outnumber this (the points are too far apart).
+constexpr size_t max_group_candidates = 128;
 
 struct Box {
   float lo[3] = {inf, inf, inf}, hi[3] = {-inf, -inf, -inf};
@@ -182,6 +184,12 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
   for (const float3& p : mesh.positions)
     magnitude = std::max({magnitude, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
   const float grow = magnitude * 1e-6f + std::numeric_limits<float>::min();
+  triangle_box_.resize(6 * triangles);
+  for (size_t s = 0; s < triangles; ++s) {
+    Box b;
+    for (int k = 0; k < 3; ++k) b.grow(&corners_[3 * s + k].x);
+    for (int k = 0; k < 3; ++k) triangle_box_[6 * s + k] = b.lo[k] - grow, triangle_box_[6 * s + 3 + k] = b.hi[k] + grow;
+  }
 
   // Collapse: each 4-wide node takes a binary node's children and opens the largest inner ones until
   // it has four.
@@ -319,6 +327,138 @@ ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint) const {
     for (int k = 0; k < hits; ++k) stack[top] = refs[k], stack_distance[top] = dist[k], ++top;
   }
   return best;
+}
+
+void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hint, ClosestHit* out,
+                                GroupScratch& scratch) const {
+  if (count == 0) return;
+  // The closest triangle of the point nearest the group's centre bounds every point's distance: the
+  // candidates are the triangles whose boxes come that close to the points' box.
+  float lo[3] = {points[0].x, points[0].y, points[0].z}, hi[3] = {lo[0], lo[1], lo[2]};
+  for (uint32_t i = 1; i < count; ++i) {
+    const float* p = &points[i].x;
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  }
+  const vec3f centre{(lo[0] + hi[0]) * 0.5f, (lo[1] + hi[1]) * 0.5f, (lo[2] + hi[2]) * 0.5f};
+  uint32_t middle = 0;
+  for (uint32_t i = 1; i < count; ++i)
+    if (length_squared(points[i] - centre) < length_squared(points[middle] - centre)) middle = i;
+  out[middle] = closest(points[middle], hint);
+  const uint32_t seed = out[middle].triangle;
+  float upper = out[middle].distance_squared;
+  for (uint32_t i = 0; i < count; ++i) {
+    if (i == middle) continue;
+    out[i] = to_triangle(points[i], seed);
+    upper = std::max(upper, out[i].distance_squared);
+  }
+  if (count == 1) return;
+
+  std::vector<uint32_t>& slots = scratch.slots;
+  slots.clear();
+  bool spread = false;
+  {
+    const float limit = upper * prune_slack;
+    uint32_t stack[3 * max_depth + 4];
+    int top = 0;
+    stack[top++] = 0;
+#if defined(__SSE2__)
+    const __m128 zero = _mm_setzero_ps(), lx = _mm_set1_ps(lo[0]), ly = _mm_set1_ps(lo[1]), lz = _mm_set1_ps(lo[2]),
+                 hx = _mm_set1_ps(hi[0]), hy = _mm_set1_ps(hi[1]), hz = _mm_set1_ps(hi[2]), lim = _mm_set1_ps(limit);
+#endif
+    while (top > 0 && !spread) {
+      const Node& n = nodes_[stack[--top]];
+#if defined(__SSE2__)
+      // Box-to-box distance: never more than any one point's distance to the child box.
+      const __m128 dx = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(n.min_x), hx), _mm_sub_ps(lx, _mm_load_ps(n.max_x))), zero);
+      const __m128 dy = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(n.min_y), hy), _mm_sub_ps(ly, _mm_load_ps(n.max_y))), zero);
+      const __m128 dz = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(n.min_z), hz), _mm_sub_ps(lz, _mm_load_ps(n.max_z))), zero);
+      const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+      const int mask = _mm_movemask_ps(_mm_cmple_ps(d2, lim));
+#else
+      int mask = 0;
+      for (int k = 0; k < 4; ++k) {
+        const float dx = std::max({n.min_x[k] - hi[0], lo[0] - n.max_x[k], 0.0f});
+        const float dy = std::max({n.min_y[k] - hi[1], lo[1] - n.max_y[k], 0.0f});
+        const float dz = std::max({n.min_z[k] - hi[2], lo[2] - n.max_z[k], 0.0f});
+        if (dx * dx + dy * dy + dz * dz <= limit) mask |= 1 << k;
+      }
+#endif
+      for (int k = 0; k < 4; ++k) {
+        if (!(mask >> k & 1) || n.child[k] == empty_child) continue;
+        const uint32_t ref = n.child[k];
+        if (!(ref & leaf_bit)) {
+          stack[top++] = ref;
+          continue;
+        }
+        const uint32_t first = (ref & ~leaf_bit) >> 4, leaf_count = (ref & 15) + 1;
+        if (slots.size() + leaf_count > max_group_candidates) {
+          spread = true;
+          break;
+        }
+        for (uint32_t s = first; s < first + leaf_count; ++s) slots.push_back(s);
+      }
+    }
+  }
+  if (spread) {
+    for (uint32_t i = 0; i < count; ++i)
+      if (i != middle) out[i] = closest(points[i], seed);
+    return;
+  }
+
+  // Candidate boxes, four per block of 24 floats (min x, y, z, max x, y, z; four lanes each); the
+  // padding lanes are empty boxes, which no point comes near.
+  const size_t blocks = (slots.size() + 3) / 4;
+  std::vector<float>& box = scratch.box;
+  box.resize(24 * blocks);
+  for (size_t c = 0; c < 4 * blocks; ++c) {
+    float* b = &box[24 * (c / 4) + c % 4];
+    if (c < slots.size()) {
+      const float* t = &triangle_box_[6 * size_t(slots[c])];
+      for (int k = 0; k < 6; ++k) b[4 * k] = t[k];
+    } else {
+      for (int k = 0; k < 3; ++k) b[4 * k] = inf, b[4 * (k + 3)] = -inf;
+    }
+  }
+  for (uint32_t i = 0; i < count; ++i) {
+    if (i == middle) continue;
+    const vec3f& p = points[i];
+    ClosestHit& best = out[i];
+    float limit = best.distance_squared * prune_slack;
+#if defined(__SSE2__)
+    const __m128 px = _mm_set1_ps(p.x), py = _mm_set1_ps(p.y), pz = _mm_set1_ps(p.z), zero = _mm_setzero_ps();
+#endif
+    for (size_t g = 0; g < blocks; ++g) {
+      const float* b = &box[24 * g];
+#if defined(__SSE2__)
+      const __m128 dx = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(b), px), _mm_sub_ps(px, _mm_loadu_ps(b + 12))), zero);
+      const __m128 dy = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(b + 4), py), _mm_sub_ps(py, _mm_loadu_ps(b + 16))), zero);
+      const __m128 dz = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(b + 8), pz), _mm_sub_ps(pz, _mm_loadu_ps(b + 20))), zero);
+      const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+      int mask = _mm_movemask_ps(_mm_cmple_ps(d2, _mm_set1_ps(limit)));
+#else
+      int mask = 0;
+      for (int k = 0; k < 4; ++k) {
+        const float dx = std::max({b[k] - p.x, p.x - b[12 + k], 0.0f});
+        const float dy = std::max({b[4 + k] - p.y, p.y - b[16 + k], 0.0f});
+        const float dz = std::max({b[8 + k] - p.z, p.z - b[20 + k], 0.0f});
+        if (dx * dx + dy * dy + dz * dz <= limit) mask |= 1 << k;
+      }
+#endif
+      for (; mask; mask &= mask - 1) {
+        const uint32_t s = slots[4 * g + size_t(__builtin_ctz(unsigned(mask)))];
+        const vec3f* c = &corners_[3 * size_t(s)];
+        const TrianglePoint tp = closest_on_triangle(p, c[0], c[1], c[2]);
+        if (tp.distance_squared > best.distance_squared) continue;
+        const uint32_t triangle = original_[s];
+        if (tp.distance_squared == best.distance_squared && triangle >= best.triangle) continue;
+        best.distance_squared = tp.distance_squared;
+        best.triangle = triangle;
+        best.point = tp.point;
+        best.v = tp.v, best.w = tp.w;
+        limit = best.distance_squared * prune_slack;
+      }
+    }
+  }
 }
 
 }  // namespace lod::measure

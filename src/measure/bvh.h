@@ -32,6 +32,18 @@ class TriangleBvh {
   // The exact closest point on one triangle (mesh index).
   ClosestHit to_triangle(const vec3f& p, uint32_t triangle) const;
 
+  // Reusable memory for closest_group (one per thread).
+  struct GroupScratch {
+    std::vector<uint32_t> slots;  // candidate triangles (leaf order)
+    std::vector<float> box;       // their boxes, 6 floats per group of 4 candidates (SoA by 4)
+    std::vector<uint32_t> stack;
+  };
+  // closest() for each of `count` points, with identical answers, for points close together (the
+  // samples of one small patch): one traversal with the points' box collects every triangle that can
+  // be the closest to any of them, then each point scans those candidates' boxes four at a time.
+  // Points spread too far for that fall back to closest(), one by one. `hint` as for closest().
+  void closest_group(const vec3f* points, uint32_t count, uint32_t hint, ClosestHit* out, GroupScratch& scratch) const;
+
   uint32_t triangle_count() const { return uint32_t(original_.size()); }
   size_t node_count() const { return nodes_.size(); }
   uint32_t depth() const { return depth_; }
@@ -51,6 +63,7 @@ class TriangleBvh {
   std::vector<vec3f> corners_;     // 3 per triangle, in leaf order
   std::vector<uint32_t> original_;  // leaf order -> mesh triangle
   std::vector<uint32_t> slot_;      // mesh triangle -> leaf order
+  std::vector<float> triangle_box_;  // per leaf-order triangle: grown min x, y, z, max x, y, z
   uint32_t depth_ = 0;              // of the 4-wide tree
 };
 

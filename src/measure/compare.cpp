@@ -26,6 +26,7 @@ using measure::vec3f;
 
 constexpr size_t block_size = 1024;       // samples per block
 constexpr size_t blocks_per_slice = 256;  // progress is reported between slices
+constexpr uint32_t group_size = 16;       // samples per closest_group query
 
 uint64_t splitmix64(uint64_t x) {
   x += 0x9E3779B97F4A7C15ull;
@@ -193,6 +194,41 @@ float4 interpolate(const std::vector<float4>& s, const uint32_t* c, float w0, fl
           s[c[0]].z * w0 + s[c[1]].z * w1 + s[c[2]].z * w2, s[c[0]].w * w0 + s[c[1]].w * w1 + s[c[2]].w * w2};
 }
 
+// Samples of one block, queried in groups of nearby points (TriangleBvh::closest_group); the hits
+// come back per offset in the block, so the caller reduces them in sample order.
+struct BlockQueries {
+  std::vector<vec3f> points;         // in query order
+  std::vector<uint32_t> offset;      // query order -> offset in the block
+  std::vector<uint32_t> group_end;   // query order positions where a group ends
+  std::vector<ClosestHit> hits;      // per offset in the block
+
+  void add(const vec3f& p, uint32_t block_offset) {
+    points.push_back(p);
+    offset.push_back(block_offset);
+  }
+  // Ends the current group (if it has any points).
+  void cut() {
+    if (points.size() > (group_end.empty() ? 0 : group_end.back())) group_end.push_back(uint32_t(points.size()));
+  }
+  // Groups not cut by the caller are runs of `group_size` consecutive points.
+  void run(const TriangleBvh& bvh, uint32_t size, uint32_t& hint) {
+    cut();
+    std::vector<ClosestHit> in_order(points.size());
+    TriangleBvh::GroupScratch scratch;
+    uint32_t first = 0;
+    for (const uint32_t last : group_end) {
+      for (uint32_t g = first; g < last; g += size) {
+        const uint32_t n = std::min(size, last - g);
+        bvh.closest_group(&points[g], n, hint, &in_order[g], scratch);
+        hint = in_order[g + n - 1].triangle;
+      }
+      first = last;
+    }
+    hits.resize(points.size());
+    for (size_t q = 0; q < points.size(); ++q) hits[offset[q]] = in_order[q];
+  }
+};
+
 struct Direction {
   OneSidedDeviation result;
   std::vector<float> position_distance;     // per position id of `from`
@@ -255,10 +291,12 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
 
   // Vertices: every position (a vertex used by no triangle is measured for the field but is not a sample).
   run_stream(positions, options.threads, progress, total, [&](uint64_t begin, uint64_t end, Accumulator& acc, uint32_t& hint) {
+    BlockQueries block;
+    for (uint64_t p = begin; p < end; ++p) block.add(from.position(uint32_t(p)), uint32_t(p - begin));
+    block.run(bvh, group_size, hint);
     for (uint64_t p = begin; p < end; ++p) {
       const vec3f q = from.position(uint32_t(p));
-      const ClosestHit h = bvh.closest(q, hint);
-      hint = h.triangle;
+      const ClosestHit& h = block.hits[p - begin];
       const float d = std::sqrt(h.distance_squared);
       out.position_distance[p] = d;
       out.position_closest[p] = h.triangle;
@@ -271,16 +309,25 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
   // Edge points, evenly spaced; each belongs to the nearer end.
   const uint64_t edge_samples = plan.edge_start.back();
   run_stream(edge_samples, options.threads, progress, total, [&](uint64_t begin, uint64_t end, Accumulator& acc, uint32_t& hint) {
-    size_t e = size_t(std::upper_bound(plan.edge_start.begin(), plan.edge_start.end(), begin) - plan.edge_start.begin()) - 1;
-    for (uint64_t j = begin; j < end; ++j) {
+    const size_t first_edge =
+        size_t(std::upper_bound(plan.edge_start.begin(), plan.edge_start.end(), begin) - plan.edge_start.begin()) - 1;
+    auto sample = [&](size_t& e, uint64_t j) {
       while (plan.edge_start[e + 1] <= j) ++e;
       const Surface::Edge& edge = from.edges[e];
       const uint64_t n = plan.edge_start[e + 1] - plan.edge_start[e];
       const float t = float(double(j - plan.edge_start[e] + 1) / double(n + 1));
       const vec3f a = from.position(edge.lo), b = from.position(edge.hi);
-      const vec3f q = a + (b - a) * t;
-      const ClosestHit h = bvh.closest(q, hint);
-      hint = h.triangle;
+      return a + (b - a) * t;
+    };
+    BlockQueries block;
+    size_t e = first_edge;
+    for (uint64_t j = begin; j < end; ++j) block.add(sample(e, j), uint32_t(j - begin));
+    block.run(bvh, group_size, hint);
+    e = first_edge;
+    for (uint64_t j = begin; j < end; ++j) {
+      const vec3f q = sample(e, j);
+      const Surface::Edge& edge = from.edges[e];
+      const ClosestHit& h = block.hits[j - begin];
       const float d = std::sqrt(h.distance_squared);
       acc.take(d, {q, h.point, edge.triangle, h.triangle});
       if (want_field) raise(out.field, nearest_corner_position(from, edge.triangle, q), d);
@@ -293,18 +340,69 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
   const bool uvs = options.attributes && !fm.uvs[0].empty() && !tm.uvs[0].empty();
   const bool colors = options.attributes && !fm.colors.empty() && !tm.colors.empty();
   run_stream(plan.area_samples, options.threads, progress, total, [&](uint64_t begin, uint64_t end, Accumulator& acc, uint32_t& hint) {
-    size_t t = size_t(std::upper_bound(plan.area_start.begin(), plan.area_start.end(), begin) - plan.area_start.begin()) - 1;
-    for (uint64_t j = begin; j < end; ++j) {
-      while (plan.area_start[t + 1] <= j) ++t;
-      // Uniform in the triangle: s = sqrt(r1) picks the distance from corner 0 with density ~ s.
+    const size_t first_triangle =
+        size_t(std::upper_bound(plan.area_start.begin(), plan.area_start.end(), begin) - plan.area_start.begin()) - 1;
+    // Uniform in the triangle: s = sqrt(r1) picks the distance from corner 0 with density ~ s.
+    struct Sample {
+      float s, r2;
+    };
+    auto sample = [&](uint64_t j) {
       const uint64_t bits = splitmix64(stream_seed + j);
       const float r1 = float(bits >> 40) * 0x1p-24f, r2 = float((bits >> 16) & 0xFFFFFF) * 0x1p-24f;
-      const float s = std::sqrt(r1);
-      const float w0 = 1 - s, w1 = s * (1 - r2), w2 = s * r2;
-      const vec3f c0 = from.corner(t, 0), c1 = from.corner(t, 1), c2 = from.corner(t, 2);
-      const vec3f q = c0 * w0 + c1 * w1 + c2 * w2;
-      const ClosestHit h = bvh.closest(q, hint);
-      hint = h.triangle;
+      return Sample{std::sqrt(r1), r2};
+    };
+    auto point = [&](size_t t, const Sample& u) {
+      const float w0 = 1 - u.s, w1 = u.s * (1 - u.r2), w2 = u.s * u.r2;
+      return from.corner(t, 0) * w0 + from.corner(t, 1) * w1 + from.corner(t, 2) * w2;
+    };
+    // Each sample drawn once per block.
+    const size_t n = size_t(end - begin);
+    std::vector<Sample> drawn(n);
+    std::vector<vec3f> at(n);
+    for (size_t t = first_triangle, o = 0; o < n; ++o) {
+      while (plan.area_start[t + 1] <= begin + o) ++t;
+      drawn[o] = sample(begin + o);
+      at[o] = point(t, drawn[o]);
+    }
+    // Queries go a triangle at a time; a triangle with many samples is cut into patches (cells of its
+    // (s, r2) square in serpentine order, by a counting sort) so each group of queries stays close together.
+    BlockQueries block;
+    std::vector<uint32_t> cell, cell_start, sorted;
+    for (size_t t = first_triangle; plan.area_start[t] < end; ++t) {
+      const uint32_t a = uint32_t(std::max(begin, plan.area_start[t]) - begin);
+      const uint32_t b = uint32_t(std::min(end, plan.area_start[t + 1]) - begin);
+      if (a >= b) continue;
+      if (b - a <= group_size) {
+        for (uint32_t o = a; o < b; ++o) block.add(at[o], o);
+        block.cut();
+        continue;
+      }
+      const uint32_t k = uint32_t(std::ceil(std::sqrt(double(b - a) / double(group_size / 2))));
+      cell.resize(b - a);
+      cell_start.assign(size_t(k) * k + 1, 0);
+      for (uint32_t o = a; o < b; ++o) {
+        const uint32_t row = std::min(k - 1, uint32_t(drawn[o].s * float(k)));
+        const uint32_t col = std::min(k - 1, uint32_t(drawn[o].r2 * float(k)));
+        cell[o - a] = row * k + (row & 1 ? k - 1 - col : col);
+        ++cell_start[cell[o - a] + 1];
+      }
+      for (size_t c = 1; c < cell_start.size(); ++c) cell_start[c] += cell_start[c - 1];
+      sorted.resize(b - a);
+      for (uint32_t o = a; o < b; ++o) sorted[cell_start[cell[o - a]]++] = o;
+      for (uint32_t i = 0; i < b - a; ++i) {
+        block.add(at[sorted[i]], sorted[i]);
+        if ((i + 1) % group_size == 0) block.cut();
+      }
+      block.cut();
+    }
+    block.run(bvh, group_size, hint);
+    size_t t = first_triangle;
+    for (uint64_t j = begin; j < end; ++j) {
+      while (plan.area_start[t + 1] <= j) ++t;
+      const Sample u = drawn[j - begin];
+      const float w0 = 1 - u.s, w1 = u.s * (1 - u.r2), w2 = u.s * u.r2;
+      const vec3f q = at[j - begin];
+      const ClosestHit& h = block.hits[j - begin];
       const float d = std::sqrt(h.distance_squared);
       acc.sum += d;
       acc.sum_squares += double(d) * d;
@@ -431,6 +529,7 @@ Deviation compare(const Mesh& a, const Mesh& b, const CompareOptions& options) {
 
   Direction ab = measure_direction(sa, sb, bvh_b, plan_a, seed_ab, true, options, progress);
   Direction ba = measure_direction(sb, sa, bvh_a, plan_b, seed_ba, false, options, progress);
+
   dev.queries = sa.ids.count + plan_a.edge_start.back() + plan_a.area_samples + sb.ids.count +
                 plan_b.edge_start.back() + plan_b.area_samples;
   if (options.refine) {

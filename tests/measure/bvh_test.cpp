@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <vector>
 
 #include "core/shapes.h"
 #include "measure/triangle_distance.h"
@@ -94,6 +96,29 @@ void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed) {
     ASSERT_EQ(got.distance_squared, expected.distance_squared) << "point " << i;
     ASSERT_EQ(got.triangle, expected.triangle) << "point " << i;
     ASSERT_EQ(got.point, expected.point) << "point " << i;
+  }
+
+  // Groups: tight clusters (one traversal serves them all) up to clusters spread over the whole mesh
+  // (too many candidates: each point falls back to its own query); the answers may not change.
+  TriangleBvh::GroupScratch scratch;
+  const float extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+  const float spreads[] = {1e-4f, 1e-2f, 0.1f, 1.0f};
+  std::uniform_int_distribution<uint32_t> size(1, 24);
+  for (uint32_t g = 0; g < points / 8; ++g) {
+    const float3 c = m.positions[vertex(rng)];
+    const float r = spreads[g % 4] * extent;
+    std::vector<vec3f> group(size(rng));
+    for (vec3f& p : group) p = {c.x + r * jitter(rng) * 100, c.y + r * jitter(rng) * 100, c.z + r * jitter(rng) * 100};
+    std::vector<ClosestHit> got(group.size());
+    bvh.closest_group(group.data(), uint32_t(group.size()), g % 3 ? triangle(rng) : 0, got.data(), scratch);
+    for (size_t i = 0; i < group.size(); ++i) {
+      const ClosestHit expected = brute_force(m, group[i]);
+      ASSERT_EQ(got[i].distance_squared, expected.distance_squared) << "group " << g << " point " << i;
+      ASSERT_EQ(got[i].triangle, expected.triangle) << "group " << g << " point " << i;
+      ASSERT_EQ(got[i].point, expected.point) << "group " << g << " point " << i;
+      ASSERT_EQ(got[i].v, expected.v) << "group " << g << " point " << i;
+      ASSERT_EQ(got[i].w, expected.w) << "group " << g << " point " << i;
+    }
   }
 }
 
