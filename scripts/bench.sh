@@ -76,6 +76,16 @@ build_targets() {
   cmake --build "$build" --target "${available[@]}" >"$log" 2>&1 || { cat "$log" >&2; rm -f "$log"; exit 1; }
   rm -f "$log"
 }
+# Runs a command under /usr/bin/time -v (its stderr goes with time's report), then prints its peak
+# memory; returns the command's status.
+with_peak_memory() {
+  local log status=0
+  log=$(mktemp)
+  /usr/bin/time -v "$@" 2>"$log" || status=$?
+  echo "peak memory: $(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); printf "%.1f MiB", $2 / 1024}' "$log")"
+  rm -f "$log"
+  return $status
+}
 machine_line() {
   machine="$(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
   echo "machine: $machine, $(date -u +%Y-%m-%dT%H:%MZ), load average $(cut -d' ' -f1-3 /proc/loadavg)"
@@ -186,12 +196,9 @@ area_lod() {
   echo
   machine_line
   echo
-  local log status=0
-  log=$(mktemp)
+  local status=0
   echo "## geomorph throughput"
-  /usr/bin/time -v "$build/bench/lodkit_bench_morph" data/corpus/bunny00.off "$runs" 2>"$log"
-  echo "peak memory: $(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); printf "%.1f MiB", $2 / 1024}' "$log")"
-  rm -f "$log"
+  with_peak_memory "$build/bench/lodkit_bench_morph" data/corpus/bunny00.off "$runs"
   echo
   echo "## popping: hard switches against geomorphs"
   "$build/bench/lodkit_bench_popping" data/corpus/bunny00.off data/corpus/fandisk.off data/corpus/armadillo.off || status=1
@@ -246,11 +253,8 @@ area_skin() {
   echo
   machine_line
   echo
-  local log status=0
-  log=$(mktemp)
-  /usr/bin/time -v "$build/bench/lodkit_bench_skin" data/corpus/man.off "$runs" 2>"$log" || status=1
-  echo "peak memory: $(awk -F: '/Maximum resident set size/ {gsub(/ /, "", $2); printf "%.1f MiB", $2 / 1024}' "$log")"
-  rm -f "$log"
+  local status=0
+  with_peak_memory "$build/bench/lodkit_bench_skin" data/corpus/man.off "$runs" || status=1
   return $status
 }
 
