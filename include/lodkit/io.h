@@ -71,8 +71,9 @@ struct Node {
   float3 translation;
   float4 rotation = {0, 0, 0, 1};  // unit quaternion x, y, z, w
   float3 scale = {1, 1, 1};
-  // Written only for scenes built without a glTF source (lodkit lod): the MSFT_lod extension's
-  // coarser-level node ids, and the node's extras as a JSON object text ("" for none).
+  // The MSFT_lod extension's coarser-level node ids (lodkit lod's chains), and the node's extras as
+  // JSON text ("" for none). The glTF reader fills both; the writer writes them, and leaves a source
+  // node's own MSFT_lod and extras as they were where they are empty.
   std::vector<int32_t> lod_ids;
   std::string extras_json;
 };

@@ -56,6 +56,35 @@ constexpr uint64_t max_zero_accessor_count = uint64_t(1) << 24;
 
 std::string str(uint64_t value) { return std::to_string(value); }
 
+// tinygltf::Value -> nlohmann::json (a node's extras, read into Node::extras_json). tinygltf has
+// already dropped nulls and empty objects and arrays; binary values do not occur in JSON.
+Json value_to_json(const tg::Value& v) {
+  switch (v.Type()) {
+    case tg::OBJECT_TYPE: {
+      Json object = Json::object();
+      for (const auto& [key, value] : v.Get<tg::Value::Object>()) object[key] = value_to_json(value);
+      return object;
+    }
+    case tg::ARRAY_TYPE: {
+      Json array = Json::array();
+      for (const tg::Value& value : v.Get<tg::Value::Array>()) array.push_back(value_to_json(value));
+      return array;
+    }
+    case tg::STRING_TYPE: return v.Get<std::string>();
+    case tg::BOOL_TYPE: return v.Get<bool>();
+    case tg::INT_TYPE: return v.Get<int>();
+    case tg::REAL_TYPE: return v.Get<double>();
+    default: return nullptr;
+  }
+}
+
+// The MSFT_lod extension of a node: its ids array (null when the node has none, or an empty one).
+const tg::Value& msft_lod_ids(const tg::Node& node) {
+  static const tg::Value none;
+  const auto lod = node.extensions.find("MSFT_lod");
+  return lod != node.extensions.end() && lod->second.IsObject() ? lod->second.Get("ids") : none;
+}
+
 // ---- accessor layout -----------------------------------------------------------------------------
 
 size_t component_bytes(int component_type) {
@@ -539,6 +568,13 @@ class Document {
       check_index(node.skin, m.skins.size(), where, "skins");
       check_index(node.camera, m.cameras.size(), where, "cameras");
       for (int child : node.children) check_index(child, m.nodes.size(), where + " child", "nodes", false);
+      const tg::Value& lod_ids = msft_lod_ids(node);
+      if (lod_ids.Type() != tg::NULL_TYPE && !lod_ids.IsArray()) fail(where + " MSFT_lod ids is not an array");
+      for (size_t k = 0; k < lod_ids.ArrayLen(); ++k) {
+        const tg::Value& id = lod_ids.Get(int(k));
+        if (!id.IsInt()) fail(where + " MSFT_lod ids[" + str(k) + "] is not a node index");
+        check_index(id.Get<int>(), m.nodes.size(), where + " MSFT_lod", "nodes", false);
+      }
     }
     for (size_t i = 0; i < m.skins.size(); ++i) {
       const std::string where = "skins[" + str(i) + "]";
@@ -755,6 +791,9 @@ class SceneBuilder {
       out.mesh = in.mesh;
       out.skin = in.skin;
       out.children.assign(in.children.begin(), in.children.end());
+      const tg::Value& lod_ids = msft_lod_ids(in);
+      for (size_t k = 0; k < lod_ids.ArrayLen(); ++k) out.lod_ids.push_back(lod_ids.Get(int(k)).Get<int>());
+      if (in.extras.Type() != tg::NULL_TYPE) out.extras_json = value_to_json(in.extras).dump();
       for (int child : in.children) {
         if (size_t(child) == i) doc_.fail(where + " is its own child");
         if (scene.nodes[size_t(child)].parent != -1)
@@ -1432,12 +1471,15 @@ class SkinAnimationWriter {
   tg::Model& model_;
 };
 
-// The MSFT_lod ids and the extras a lodkit-built node carries (none: the node is left as it is).
+// The MSFT_lod ids and the extras of a node (none: the node is left as it is). Other members of a
+// source node's MSFT_lod object are kept.
 void set_lod_and_extras(tg::Model& model, const Node& in, tg::Node& node) {
   if (!in.lod_ids.empty()) {
     tg::Value::Array ids;
     for (const int32_t id : in.lod_ids) ids.emplace_back(int(id));
-    tg::Value::Object lod;
+    const auto old = node.extensions.find("MSFT_lod");
+    tg::Value::Object lod = old != node.extensions.end() && old->second.IsObject() ? old->second.Get<tg::Value::Object>()
+                                                                                     : tg::Value::Object{};
     lod["ids"] = tg::Value(std::move(ids));
     node.extensions["MSFT_lod"] = tg::Value(std::move(lod));
     if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), "MSFT_lod") == model.extensionsUsed.end())

@@ -898,6 +898,14 @@ TEST(GltfMalformed, References) {
   expect_bad_input(f.glb(), "skin.glb", "MAT4");
 
   f = valid_triangle();
+  f.doc["nodes"][0]["extensions"] = {{"MSFT_lod", {{"ids", {1}}}}};
+  expect_bad_input(f.glb(), "lod.glb", "MSFT_lod refers to nodes[1]");
+
+  f = valid_triangle();
+  f.doc["nodes"][0]["extensions"] = {{"MSFT_lod", {{"ids", 0}}}};
+  expect_bad_input(f.glb(), "lodids.glb", "MSFT_lod ids is not an array");
+
+  f = valid_triangle();
   f.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
   expect_bad_input(f.glb(), "draco.glb", "KHR_draco_mesh_compression");
 }
@@ -922,6 +930,52 @@ TEST(GltfWrite, SceneFromMeshWritesMaterialsNodesAndPrimitives) {
   EXPECT_EQ(scene.roots, (std::vector<int32_t>{0}));
   ASSERT_EQ(scene.nodes.size(), 1u);
   EXPECT_EQ(scene.nodes[0].mesh, 0);
+}
+
+// A chain as lodkit lod writes one: MSFT_lod on the first node, lodkit extras on every node. The
+// reader gives back the ids and the extras, and writing the read scene again keeps them (and any
+// other member of a source node's MSFT_lod).
+TEST(GltfWrite, LodChainReadsBackItsLodIdsAndExtras) {
+  Scene chain;
+  const char* extras[3] = {R"({"lodkit":{"error":0,"level":0},"MSFT_screencoverage":[0.5,0.25,0.125]})",
+                           R"({"lodkit":{"error":0.0125,"level":1}})", ""};
+  for (uint32_t i = 0; i < 3; ++i) {
+    Primitive prim;
+    prim.mesh = shapes::icosphere(3 - i);
+    prim.gltf_mesh = i;
+    chain.primitives.push_back(std::move(prim));
+    Node node;
+    node.mesh = int32_t(i);
+    node.extras_json = extras[i];
+    if (i == 0) node.lod_ids = {1, 2};
+    chain.nodes.push_back(std::move(node));
+  }
+  chain.roots = {0};
+  TempDir dir;
+  write_scene(chain, dir / "chain.glb");
+  const Scene scene = read_scene(dir / "chain.glb");
+  ASSERT_EQ(scene.nodes.size(), 3u);
+  EXPECT_EQ(scene.nodes[0].lod_ids, (std::vector<int32_t>{1, 2}));
+  EXPECT_TRUE(scene.nodes[1].lod_ids.empty());
+  EXPECT_TRUE(scene.nodes[2].lod_ids.empty());
+  EXPECT_EQ(Json::parse(scene.nodes[0].extras_json), Json::parse(extras[0]));
+  EXPECT_EQ(Json::parse(scene.nodes[1].extras_json), Json::parse(extras[1]));
+  EXPECT_EQ(scene.nodes[2].extras_json, "");
+
+  write_scene(scene, dir / "again.glb");
+  const Written w = load_written(dir / "again.glb");
+  EXPECT_EQ(w.doc["nodes"], load_written(dir / "chain.glb").doc["nodes"]);
+  const Scene again = read_scene(dir / "again.glb");
+  EXPECT_EQ(again.nodes[0].lod_ids, scene.nodes[0].lod_ids);
+  EXPECT_EQ(again.nodes[0].extras_json, scene.nodes[0].extras_json);
+
+  HandBuilt f = valid_triangle();
+  f.doc["nodes"] = Json::array({{{"mesh", 0}, {"extensions", {{"MSFT_lod", {{"ids", {1}}, {"note", "kept"}}}}}}, {{"mesh", 0}}});
+  test::write_bytes(dir / "hand.glb", f.glb());
+  const Scene hand = read_scene(dir / "hand.glb");
+  EXPECT_EQ(hand.nodes[0].lod_ids, (std::vector<int32_t>{1}));
+  write_scene(hand, dir / "hand-again.glb");
+  EXPECT_EQ(load_written(dir / "hand-again.glb").doc["nodes"], f.doc["nodes"]);
 }
 
 TEST(GltfWrite, EmptyMeshWritesAValidEmptyScene) {

@@ -196,8 +196,11 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
     const Primitive source = scene.primitives[sp.primitive];
     scene.primitives[sp.primitive].mesh = r.chain.levels[0].mesh;
     const std::string owner = scene.nodes[sp.node].name;  // a copy: scene.nodes grows below
+    // The source node's own extras are kept; its MSFT_lod (an earlier chain's) gives way to this one.
     const std::string& old_extras = scene.nodes[sp.node].extras_json;
     nlohmann::json extras = old_extras.empty() ? nlohmann::json::object() : nlohmann::json::parse(old_extras);
+    if (!extras.is_object()) extras = nlohmann::json::object();
+    scene.nodes[sp.node].lod_ids.clear();
     extras["MSFT_screencoverage"] = r.coverage;
     for (size_t i = 0; i < r.chain.levels.size(); ++i) {
       // Each level's node says what it is, as in a static chain (lodkit render --sheet reads it).

@@ -4,7 +4,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -60,26 +59,6 @@ std::string thousands(uint64_t n) {
   return out;
 }
 
-// The JSON document of a .gltf or .glb file (the GLB's first chunk).
-nlohmann::json gltf_json(const std::string& path) {
-  const FileBytes bytes = read_file_bytes(path);
-  std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
-  if (bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0) {
-    auto u32 = [&](size_t at) {
-      uint32_t v = 0;
-      std::memcpy(&v, bytes.data() + at, 4);
-      return v;
-    };
-    if (bytes.size() < 20) throw_bad_input_at_byte(path, bytes.size(), "GLB header cut short");
-    if (u32(16) != 0x4E4F534A) throw_bad_input_at_byte(path, 16, "the first GLB chunk is not JSON");
-    if (u32(12) > bytes.size() - 20) throw_bad_input_at_byte(path, 12, "the JSON chunk runs past the end of the file");
-    text = text.substr(20, u32(12));
-  }
-  nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
-  if (j.is_discarded() || !j.is_object()) throw_bad_input(path, "the glTF JSON does not parse");
-  return j;
-}
-
 struct ChainLevel {
   Mesh mesh;
   std::string label;
@@ -94,25 +73,14 @@ std::vector<ChainLevel> read_chain(const std::string& path, const std::string& c
   if (format != FileFormat::glb && format != FileFormat::gltf)
     throw_usage("--sheet reads a LOD chain written by lodkit lod (.glb or .gltf)");
   const Scene scene = read_scene(path);
-  const nlohmann::json doc = gltf_json(path);
-  const nlohmann::json* nodes = doc.contains("nodes") && doc["nodes"].is_array() ? &doc["nodes"] : nullptr;
+  // The first node with MSFT_lod ids (the reader checked they name nodes), then the nodes it lists.
   std::vector<int64_t> order;
-  for (size_t n = 0; nodes && n < nodes->size() && order.empty(); ++n) {
-    const nlohmann::json& node = (*nodes)[n];
-    if (!node.is_object() || !node.contains("extensions") || !node["extensions"].is_object() ||
-        !node["extensions"].contains("MSFT_lod"))
-      continue;
+  for (size_t n = 0; n < scene.nodes.size() && order.empty(); ++n) {
+    if (scene.nodes[n].lod_ids.empty()) continue;
     order.push_back(int64_t(n));
-    const nlohmann::json& ids = node["extensions"]["MSFT_lod"]["ids"];
-    if (!ids.is_array()) throw_bad_input(path, fmt::format("node {}: MSFT_lod has no ids array", n));
-    for (const auto& id : ids) {
-      if (!id.is_number_integer() || id.get<int64_t>() < 0 || size_t(id.get<int64_t>()) >= nodes->size())
-        throw_bad_input(path, fmt::format("node {}: MSFT_lod lists a node that does not exist", n));
-      order.push_back(id.get<int64_t>());
-    }
+    order.insert(order.end(), scene.nodes[n].lod_ids.begin(), scene.nodes[n].lod_ids.end());
   }
   if (order.empty()) throw_bad_input(path, "no LOD chain: no node has the MSFT_lod extension (make one with lodkit lod)");
-  if (scene.nodes.size() != nodes->size()) throw_bad_input(path, "the node list does not match the scene");
 
   std::vector<ChainLevel> levels;
   for (size_t i = 0; i < order.size(); ++i) {
@@ -136,7 +104,7 @@ std::vector<ChainLevel> read_chain(const std::string& path, const std::string& c
       out.mesh.positions = std::move(posed.positions);
       out.mesh.normals = std::move(posed.normals);
     }
-    const nlohmann::json& extras = (*nodes)[size_t(order[i])].value("extras", nlohmann::json::object());
+    const nlohmann::json extras = nlohmann::json::parse(node.extras_json.empty() ? "{}" : node.extras_json);
     const nlohmann::json lodkit = extras.is_object() ? extras.value("lodkit", nlohmann::json::object()) : nlohmann::json();
     out.label = fmt::format("LOD{}: {} triangles", i, thousands(out.mesh.triangle_count()));
     if (lodkit.is_object() && lodkit.contains("error") && lodkit["error"].is_number()) {
