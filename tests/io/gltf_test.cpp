@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/shapes.h"
+#include "io/lod_chain_scene.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
 #include "test_support.h"
@@ -936,21 +937,10 @@ TEST(GltfWrite, SceneFromMeshWritesMaterialsNodesAndPrimitives) {
 // reader gives back the ids and the extras, and writing the read scene again keeps them (and any
 // other member of a source node's MSFT_lod).
 TEST(GltfWrite, LodChainReadsBackItsLodIdsAndExtras) {
-  Scene chain;
-  const char* extras[3] = {R"({"lodkit":{"error":0,"level":0},"MSFT_screencoverage":[0.5,0.25,0.125]})",
-                           R"({"lodkit":{"error":0.0125,"level":1}})", ""};
-  for (uint32_t i = 0; i < 3; ++i) {
-    Primitive prim;
-    prim.mesh = shapes::icosphere(3 - i);
-    prim.gltf_mesh = i;
-    chain.primitives.push_back(std::move(prim));
-    Node node;
-    node.mesh = int32_t(i);
-    node.extras_json = extras[i];
-    if (i == 0) node.lod_ids = {1, 2};
-    chain.nodes.push_back(std::move(node));
-  }
-  chain.roots = {0};
+  const std::vector<std::string> extras = {
+      R"({"lodkit":{"error":0,"level":0},"MSFT_screencoverage":[0.5,0.25,0.125]})",
+      R"({"lodkit":{"error":0.0125,"level":1}})", ""};
+  const Scene chain = test::lod_chain_scene({shapes::icosphere(3), shapes::icosphere(2), shapes::icosphere(1)}, extras);
   TempDir dir;
   write_scene(chain, dir / "chain.glb");
   const Scene scene = read_scene(dir / "chain.glb");

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/shapes.h"
+#include "io/lod_chain_scene.h"
 #include "lodkit/io.h"
 #include "lodkit/render.h"
 #include "render/render_support.h"
@@ -97,23 +98,10 @@ TEST(RenderCli, HeatmapFromCompareReadsBackAtTheExpectedPixels) {
 // relative_error in each node's extras), built by hand so the labels' numbers are known.
 TEST(RenderCli, ContactSheetOfALodChain) {
   test::TempDir dir;
-  Scene chain;
-  const uint32_t subdivisions[3] = {3, 2, 1};
-  const char* extras[3] = {R"({"lodkit":{"error":0,"relative_error":0}})",
-                           R"({"lodkit":{"error":0.0125,"relative_error":0.0036}})",
-                           R"({"lodkit":{"error":0.05,"relative_error":0.0144}})"};
-  for (uint32_t i = 0; i < 3; ++i) {
-    Primitive prim;
-    prim.mesh = shapes::icosphere(subdivisions[i]);
-    prim.gltf_mesh = i;
-    chain.primitives.push_back(std::move(prim));
-    Node node;
-    node.mesh = int32_t(i);
-    node.extras_json = extras[i];
-    if (i == 0) node.lod_ids = {1, 2};
-    chain.nodes.push_back(std::move(node));
-  }
-  chain.roots = {0};
+  const Scene chain = test::lod_chain_scene({shapes::icosphere(3), shapes::icosphere(2), shapes::icosphere(1)},
+                                            {R"({"lodkit":{"error":0,"relative_error":0}})",
+                                             R"({"lodkit":{"error":0.0125,"relative_error":0.0036}})",
+                                             R"({"lodkit":{"error":0.05,"relative_error":0.0144}})"});
   write_scene(chain, dir / "chain.glb");
   auto r = run_cli({"render", (dir / "chain.glb").string(), "--sheet", "-o", (dir / "sheet.png").string(), "--size",
                     "600x300", "--columns", "3", "--json"});
