@@ -41,6 +41,56 @@ struct Box {
   }
 };
 
+// A box [lo, hi] (a point when lo == hi) measured against four boxes at once.
+class Probe {
+ public:
+  Probe(const float* lo, const float* hi) {
+    for (int k = 0; k < 3; ++k) {
+      lo_[k] = lo[k], hi_[k] = hi[k];
+#if defined(__SSE2__)
+      vlo_[k] = _mm_set1_ps(lo[k]), vhi_[k] = _mm_set1_ps(hi[k]);
+#endif
+    }
+  }
+  explicit Probe(const vec3f& p) : Probe(&p.x, &p.x) {}
+
+  // Squared distances to four boxes stored as 24 floats (min x, y, z, max x, y, z; four lanes each),
+  // into d when given; returns the lanes within `limit` as a bit mask. A box-to-box distance is never
+  // more than any one point's distance.
+  int within(const float* b, float limit, float* d = nullptr) const {
+#if defined(__SSE2__)
+    const __m128 zero = _mm_setzero_ps();
+    __m128 d2 = zero;
+    for (int k = 0; k < 3; ++k) {
+      const __m128 gap = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(b + 4 * k), vhi_[k]),
+                                               _mm_sub_ps(vlo_[k], _mm_loadu_ps(b + 4 * (k + 3)))),
+                                    zero);
+      d2 = _mm_add_ps(d2, _mm_mul_ps(gap, gap));
+    }
+    if (d) _mm_storeu_ps(d, d2);
+    return _mm_movemask_ps(_mm_cmple_ps(d2, _mm_set1_ps(limit)));
+#else
+    int mask = 0;
+    for (int lane = 0; lane < 4; ++lane) {
+      float d2 = 0;
+      for (int k = 0; k < 3; ++k) {
+        const float gap = std::max({b[4 * k + lane] - hi_[k], lo_[k] - b[4 * (k + 3) + lane], 0.0f});
+        d2 += gap * gap;
+      }
+      if (d) d[lane] = d2;
+      if (d2 <= limit) mask |= 1 << lane;
+    }
+    return mask;
+#endif
+  }
+
+ private:
+  float lo_[3], hi_[3];
+#if defined(__SSE2__)
+  __m128 vlo_[3], vhi_[3];
+#endif
+};
+
 struct BinaryNode {
   Box box;
   uint32_t left = 0;          // inner: children at left and left + 1
@@ -203,14 +253,13 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
     for (int lane = 0; lane < 4; ++lane) {
       Node& n = nodes_[node];
       if (lane >= count) {
-        n.min_x[lane] = n.min_y[lane] = n.min_z[lane] = inf;
-        n.max_x[lane] = n.max_y[lane] = n.max_z[lane] = -inf;
+        for (int k = 0; k < 3; ++k) n.box[4 * k + lane] = inf, n.box[4 * (k + 3) + lane] = -inf;
         n.child[lane] = empty_child;
         continue;
       }
       const BinaryNode& b = binary[children[lane]];
-      n.min_x[lane] = b.box.lo[0] - grow, n.min_y[lane] = b.box.lo[1] - grow, n.min_z[lane] = b.box.lo[2] - grow;
-      n.max_x[lane] = b.box.hi[0] + grow, n.max_y[lane] = b.box.hi[1] + grow, n.max_z[lane] = b.box.hi[2] + grow;
+      for (int k = 0; k < 3; ++k)
+        n.box[4 * k + lane] = b.box.lo[k] - grow, n.box[4 * (k + 3) + lane] = b.box.hi[k] + grow;
       if (b.count > 0) {
         n.child[lane] = leaf_bit | b.begin << 4 | (b.count - 1);
       } else {
@@ -263,6 +312,19 @@ ClosestHit TriangleBvh::to_triangle(const vec3f& p, uint32_t triangle) const {
   return hit;
 }
 
+bool TriangleBvh::consider(const vec3f& p, uint32_t slot, ClosestHit& best) const {
+  const vec3f* c = &corners_[3 * size_t(slot)];
+  const TrianglePoint tp = closest_on_triangle(p, c[0], c[1], c[2]);
+  if (tp.distance_squared > best.distance_squared) return false;
+  const uint32_t triangle = original_[slot];
+  if (tp.distance_squared == best.distance_squared && triangle >= best.triangle) return false;
+  best.distance_squared = tp.distance_squared;
+  best.triangle = triangle;
+  best.point = tp.point;
+  best.v = tp.v, best.w = tp.w;
+  return true;
+}
+
 ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint) const {
   ClosestHit best = to_triangle(p, hint < original_.size() ? hint : 0);
   float limit = best.distance_squared * prune_slack;
@@ -270,50 +332,21 @@ ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint) const {
   float stack_distance[3 * max_depth + 4];
   int top = 0;
   stack[top] = 0, stack_distance[top] = 0, ++top;
-#if defined(__SSE2__)
-  const __m128 px = _mm_set1_ps(p.x), py = _mm_set1_ps(p.y), pz = _mm_set1_ps(p.z), zero = _mm_setzero_ps();
-#endif
+  const Probe probe(p);
   while (top > 0) {
     --top;
     if (stack_distance[top] > limit) continue;
     const uint32_t ref = stack[top];
     if (ref & leaf_bit) {
       const uint32_t first = (ref & ~leaf_bit) >> 4, count = (ref & 15) + 1;
-      for (uint32_t s = first; s < first + count; ++s) {
-        const vec3f* c = &corners_[3 * size_t(s)];
-        const TrianglePoint tp = closest_on_triangle(p, c[0], c[1], c[2]);
-        if (tp.distance_squared > best.distance_squared) continue;
-        const uint32_t triangle = original_[s];
-        if (tp.distance_squared == best.distance_squared && triangle >= best.triangle) continue;
-        best.distance_squared = tp.distance_squared;
-        best.triangle = triangle;
-        best.point = tp.point;
-        best.v = tp.v, best.w = tp.w;
-        limit = best.distance_squared * prune_slack;
-      }
+      for (uint32_t s = first; s < first + count; ++s)
+        if (consider(p, s, best)) limit = best.distance_squared * prune_slack;
       continue;
     }
     const Node& n = nodes_[ref];
-    alignas(16) float d[4];
-#if defined(__SSE2__)
-    const __m128 dx = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(n.min_x), px), _mm_sub_ps(px, _mm_load_ps(n.max_x))), zero);
-    const __m128 dy = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(n.min_y), py), _mm_sub_ps(py, _mm_load_ps(n.max_y))), zero);
-    const __m128 dz = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(n.min_z), pz), _mm_sub_ps(pz, _mm_load_ps(n.max_z))), zero);
-    const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-    const int mask = _mm_movemask_ps(_mm_cmple_ps(d2, _mm_set1_ps(limit)));
+    float d[4];
+    const int mask = probe.within(n.box, limit, d);
     if (!mask) continue;
-    _mm_store_ps(d, d2);
-#else
-    int mask = 0;
-    for (int k = 0; k < 4; ++k) {
-      const float dx = std::max({n.min_x[k] - p.x, p.x - n.max_x[k], 0.0f});
-      const float dy = std::max({n.min_y[k] - p.y, p.y - n.max_y[k], 0.0f});
-      const float dz = std::max({n.min_z[k] - p.z, p.z - n.max_z[k], 0.0f});
-      d[k] = dx * dx + dy * dy + dz * dz;
-      if (d[k] <= limit) mask |= 1 << k;
-    }
-    if (!mask) continue;
-#endif
     // Push the hits farthest first, so the nearest is popped next.
     uint32_t refs[4];
     float dist[4];
@@ -361,28 +394,10 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
     uint32_t stack[3 * max_depth + 4];
     int top = 0;
     stack[top++] = 0;
-#if defined(__SSE2__)
-    const __m128 zero = _mm_setzero_ps(), lx = _mm_set1_ps(lo[0]), ly = _mm_set1_ps(lo[1]), lz = _mm_set1_ps(lo[2]),
-                 hx = _mm_set1_ps(hi[0]), hy = _mm_set1_ps(hi[1]), hz = _mm_set1_ps(hi[2]), lim = _mm_set1_ps(limit);
-#endif
+    const Probe probe(lo, hi);
     while (top > 0 && !spread) {
       const Node& n = nodes_[stack[--top]];
-#if defined(__SSE2__)
-      // Box-to-box distance: never more than any one point's distance to the child box.
-      const __m128 dx = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(n.min_x), hx), _mm_sub_ps(lx, _mm_load_ps(n.max_x))), zero);
-      const __m128 dy = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(n.min_y), hy), _mm_sub_ps(ly, _mm_load_ps(n.max_y))), zero);
-      const __m128 dz = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_load_ps(n.min_z), hz), _mm_sub_ps(lz, _mm_load_ps(n.max_z))), zero);
-      const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-      const int mask = _mm_movemask_ps(_mm_cmple_ps(d2, lim));
-#else
-      int mask = 0;
-      for (int k = 0; k < 4; ++k) {
-        const float dx = std::max({n.min_x[k] - hi[0], lo[0] - n.max_x[k], 0.0f});
-        const float dy = std::max({n.min_y[k] - hi[1], lo[1] - n.max_y[k], 0.0f});
-        const float dz = std::max({n.min_z[k] - hi[2], lo[2] - n.max_z[k], 0.0f});
-        if (dx * dx + dy * dy + dz * dz <= limit) mask |= 1 << k;
-      }
-#endif
+      const int mask = probe.within(n.box, limit);
       for (int k = 0; k < 4; ++k) {
         if (!(mask >> k & 1) || n.child[k] == empty_child) continue;
         const uint32_t ref = n.child[k];
@@ -424,39 +439,12 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
     const vec3f& p = points[i];
     ClosestHit& best = out[i];
     float limit = best.distance_squared * prune_slack;
-#if defined(__SSE2__)
-    const __m128 px = _mm_set1_ps(p.x), py = _mm_set1_ps(p.y), pz = _mm_set1_ps(p.z), zero = _mm_setzero_ps();
-#endif
+    const Probe probe(p);
     for (size_t g = 0; g < blocks; ++g) {
-      const float* b = &box[24 * g];
-#if defined(__SSE2__)
-      const __m128 dx = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(b), px), _mm_sub_ps(px, _mm_loadu_ps(b + 12))), zero);
-      const __m128 dy = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(b + 4), py), _mm_sub_ps(py, _mm_loadu_ps(b + 16))), zero);
-      const __m128 dz = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(b + 8), pz), _mm_sub_ps(pz, _mm_loadu_ps(b + 20))), zero);
-      const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-      int mask = _mm_movemask_ps(_mm_cmple_ps(d2, _mm_set1_ps(limit)));
-#else
-      int mask = 0;
-      for (int k = 0; k < 4; ++k) {
-        const float dx = std::max({b[k] - p.x, p.x - b[12 + k], 0.0f});
-        const float dy = std::max({b[4 + k] - p.y, p.y - b[16 + k], 0.0f});
-        const float dz = std::max({b[8 + k] - p.z, p.z - b[20 + k], 0.0f});
-        if (dx * dx + dy * dy + dz * dz <= limit) mask |= 1 << k;
-      }
-#endif
-      for (; mask; mask &= mask - 1) {
-        const uint32_t s = slots[4 * g + size_t(__builtin_ctz(unsigned(mask)))];
-        const vec3f* c = &corners_[3 * size_t(s)];
-        const TrianglePoint tp = closest_on_triangle(p, c[0], c[1], c[2]);
-        if (tp.distance_squared > best.distance_squared) continue;
-        const uint32_t triangle = original_[s];
-        if (tp.distance_squared == best.distance_squared && triangle >= best.triangle) continue;
-        best.distance_squared = tp.distance_squared;
-        best.triangle = triangle;
-        best.point = tp.point;
-        best.v = tp.v, best.w = tp.w;
-        limit = best.distance_squared * prune_slack;
-      }
+      int mask = probe.within(&box[24 * g], limit);
+      for (; mask; mask &= mask - 1)
+        if (consider(p, slots[4 * g + size_t(__builtin_ctz(unsigned(mask)))], best))
+          limit = best.distance_squared * prune_slack;
     }
   }
 }

@@ -49,9 +49,14 @@ class TriangleBvh {
   uint32_t depth() const { return depth_; }
 
  private:
+  // Takes leaf-order triangle `slot` into `best` when it is closer to p (ties: the lower mesh index wins,
+  // as in a brute-force scan); true when it did.
+  bool consider(const vec3f& p, uint32_t slot, ClosestHit& best) const;
+
   struct alignas(64) Node {
-    // Child boxes, one lane per child; an empty lane has min = +inf, max = -inf.
-    float min_x[4], min_y[4], min_z[4], max_x[4], max_y[4], max_z[4];
+    // Child boxes, one lane per child: min x, y, z then max x, y, z, four lanes each (the layout
+    // boxes_within reads); an empty lane has min = +inf, max = -inf.
+    float box[24];
     // Inner child: node index. Leaf: leaf_bit | first << 4 | (count - 1), first into corners_/3.
     uint32_t child[4];
   };
