@@ -11,13 +11,18 @@
 //   triangles of the cached vertices.
 // At a dead end each restarts from the most recently used vertex that still has triangles (it keeps
 // the walk local), and only then from the next triangle in input order. On small inputs the fan
-// orderer also runs from the input's own first vertex (the first fan sets the sweep that follows).
+// orderer also runs from the input's own first vertex (the first fan sets the sweep that follows),
+// in Tipsify's place.
 // One call shares its vertex -> triangle lists and scratch memory between the candidates, and stops
 // a candidate as soon as a lower bound on its misses shows it cannot win (see choose_order).
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <memory>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "lodkit/error.h"
 #include "lodkit/optimize.h"
@@ -260,13 +265,13 @@ uint32_t fewest_triangles_vertex(const uint32_t* offset, uint32_t V) {
 // those vertices is loaded again). Once that reaches `limit` (the best order so far, which a later
 // candidate must beat strictly), the run cannot win and stops.
 
-// std::popcount is a library call without the popcnt instruction (not in the x86-64 baseline).
-inline uint32_t bit_count(uint64_t x) {
-  x = x - (x >> 1 & 0x5555555555555555u);
-  x = (x & 0x3333333333333333u) + (x >> 2 & 0x3333333333333333u);
-  x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Fu;
-  return uint32_t((x * 0x0101010101010101u) >> 56);
-}
+// Set bits per byte value (std::popcount is a library call without the popcnt instruction, which is
+// not in the x86-64 baseline).
+constexpr auto byte_bit_count = [] {
+  std::array<uint8_t, 256> table{};
+  for (uint32_t b = 1; b < 256; ++b) table[b] = uint8_t((b & 1) + table[b >> 1]);
+  return table;
+}();
 
 // The fan orderer's state of one vertex, kept together: the orderer reads them together.
 struct FanVertex {
@@ -288,7 +293,9 @@ uint64_t fan_run(std::span<const uint32_t> indices, uint32_t V, const Adjacency&
   const uint32_t K = scoring.cache_size;
   uint32_t* const triangles = adjacency.triangles;
   FanVertex* const vx = b.vertices;
-  uint32_t *const dead_end = b.dead_end, *const ring = b.ring;
+  uint32_t* const dead_end = b.dead_end;
+  // The ring twice over (entry s also at s + K), so the q-th oldest is ring[head + q] without a wrap.
+  uint32_t ring[2 * max_cache_size];
   // The FIFO: a ring of K entries (ring[head] is the oldest, overwritten by the next miss) and the
   // miss count at which each cached vertex entered (0 when it is not cached: eviction clears it).
   // Per vertex, the corner misses of its fan: over its live triangles, the corners not cached (a
@@ -301,7 +308,7 @@ uint64_t fan_run(std::span<const uint32_t> indices, uint32_t V, const Adjacency&
     vx[v] = {0, live, 3 * live, first};
     pending += live != 0;
   }
-  std::fill_n(ring, K, none);
+  std::fill_n(ring, 2 * K, none);
   // Bit s: ring[s] holds a vertex with triangles left.
   uint64_t working = 0;
   auto low_bits = [](uint32_t count) { return count >= 64 ? ~uint64_t(0) : (uint64_t(1) << count) - 1; };
@@ -311,6 +318,10 @@ uint64_t fan_run(std::span<const uint32_t> indices, uint32_t V, const Adjacency&
     return uint64_t(1) << (head >= back ? head - back : head + K - back);
   };
   if (uint64_t(time) + pending >= limit) return stopped;
+  // The next centre's candidates (the cached entries with triangles left).
+  uint32_t candidate_vertex[max_cache_size];
+  int32_t candidate_misses[max_cache_size + 3], candidate_live[max_cache_size + 3], candidate_pushed[max_cache_size + 3];
+  float candidate_cost[max_cache_size + 3];
   auto cached = [&](uint32_t v) { return vx[v].entered != 0; };
   auto add_to_corners = [&](const FanVertex& w, int32_t delta) {  // w entered (-1) or left (+1) the cache
     for (uint32_t i = w.first, e = w.first + w.live; i < e; ++i) {
@@ -349,7 +360,7 @@ uint64_t fan_run(std::span<const uint32_t> indices, uint32_t V, const Adjacency&
         add_to_corners(y, +1);
         pending += y.live != 0;
       }
-      ring[head] = v;
+      ring[head] = ring[head + K] = v;
       working = x.live ? working | uint64_t(1) << head : working & ~(uint64_t(1) << head);
       head = head + 1 == K ? 0 : head + 1;
       x.entered = ++time;
@@ -374,14 +385,16 @@ uint64_t fan_run(std::span<const uint32_t> indices, uint32_t V, const Adjacency&
         return oldest;
       };
       uint32_t best = list[0];
-      const uint32_t* c = &indices[3 * size_t(best)];
-      uint32_t best_misses = misses_of(c), best_oldest = oldest_corner(c);
-      for (uint32_t j = 1; j < live; ++j) {
-        c = &indices[3 * size_t(list[j])];
-        const uint32_t m = misses_of(c);
-        if (m > best_misses) continue;
-        const uint32_t oldest = oldest_corner(c);
-        if (m < best_misses || oldest < best_oldest) best = list[j], best_misses = m, best_oldest = oldest;
+      if (live > 1) {  // (the last triangle of a fan, the common case, needs no choice)
+        const uint32_t* c = &indices[3 * size_t(best)];
+        uint32_t best_misses = misses_of(c), best_oldest = oldest_corner(c);
+        for (uint32_t j = 1; j < live; ++j) {
+          c = &indices[3 * size_t(list[j])];
+          const uint32_t m = misses_of(c);
+          if (m > best_misses) continue;
+          const uint32_t oldest = oldest_corner(c);
+          if (m < best_misses || oldest < best_oldest) best = list[j], best_misses = m, best_oldest = oldest;
+        }
       }
       emit(best);
       if (uint64_t(time) + pending >= limit) return stopped;
@@ -391,17 +404,53 @@ uint64_t fan_run(std::span<const uint32_t> indices, uint32_t V, const Adjacency&
     // (not counting the centre), plus a weight per triangle.
     // Only the entries with triangles left, oldest first: bit q of `by_age` is the q-th oldest entry.
     const uint64_t by_age = head == 0 ? working : (working >> head | working << (K - head)) & low_bits(K);
-    focus = none;
-    float best_cost = 0;
+    // The entries with triangles among the e oldest: whole bytes of by_age counted once per fan, the
+    // last partial byte by table.
+    uint32_t before_byte[max_cache_size / 8 + 1];
+    before_byte[0] = 0;
+    for (uint32_t i = 0; 8 * i < K; ++i) before_byte[i + 1] = before_byte[i] + byte_bit_count[by_age >> 8 * i & 0xFF];
+    auto older_working = [&](uint32_t e) {
+      const uint32_t partial = e & 7;
+      return before_byte[e >> 3] + (partial ? byte_bit_count[by_age >> (e - partial) & ((1u << partial) - 1)] : 0u);
+    };
+    // The entries' counts first, then their costs in one loop the compiler vectorises, then the
+    // first (oldest) of the cheapest.
+    uint32_t candidate_count = 0;
     for (uint64_t bits = by_age; bits; bits &= bits - 1) {
       const uint32_t q = uint32_t(std::countr_zero(bits));
-      const uint32_t v = ring[head + q < K ? head + q : head + q - K];
-      const uint32_t n = vx[v].corner_misses, live = vx[v].live;
+      const uint32_t v = ring[head + q];
+      const uint32_t n = vx[v].corner_misses;
       // About n / 2 distinct vertices enter (inner corners are shared by two triangles of the fan).
       const uint32_t entering = std::min(n / 2, K);
-      const uint32_t pushed_out = bit_count(by_age & low_bits(entering)) - (q < entering ? 1u : 0u);
-      const float cost = (float(n) + scoring.eviction_weight * float(pushed_out)) / float(live) + scoring.live_weight * float(live);
-      if (focus == none || cost < best_cost) best_cost = cost, focus = v;
+      candidate_vertex[candidate_count] = v;
+      candidate_misses[candidate_count] = int32_t(n);
+      candidate_live[candidate_count] = int32_t(vx[v].live);
+      candidate_pushed[candidate_count] = int32_t(older_working(entering) - (q < entering ? 1u : 0u));
+      ++candidate_count;
+    }
+#if defined(__SSE2__)
+    // Four at a time, the same operations in the same order as the scalar form (so the same costs);
+    // the last group is padded with harmless values.
+    for (uint32_t i = candidate_count; i % 4; ++i) candidate_misses[i] = 0, candidate_live[i] = 1, candidate_pushed[i] = 0;
+    const __m128 eviction_weight = _mm_set1_ps(scoring.eviction_weight), live_weight = _mm_set1_ps(scoring.live_weight);
+    for (uint32_t i = 0; i < candidate_count; i += 4) {
+      const __m128 n = _mm_cvtepi32_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(candidate_misses + i)));
+      const __m128 live = _mm_cvtepi32_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(candidate_live + i)));
+      const __m128 pushed = _mm_cvtepi32_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(candidate_pushed + i)));
+      const __m128 cost = _mm_add_ps(_mm_div_ps(_mm_add_ps(n, _mm_mul_ps(eviction_weight, pushed)), live), _mm_mul_ps(live_weight, live));
+      _mm_storeu_ps(candidate_cost + i, cost);
+    }
+#else
+    for (uint32_t i = 0; i < candidate_count; ++i)
+      candidate_cost[i] = (float(candidate_misses[i]) + scoring.eviction_weight * float(candidate_pushed[i])) / float(candidate_live[i]) +
+                          scoring.live_weight * float(candidate_live[i]);
+#endif
+    focus = none;
+    float best_cost = INFINITY;  // every cost is finite (live >= 1): the first entry always beats it
+    for (uint32_t i = 0; i < candidate_count; ++i) {
+      const bool better = candidate_cost[i] < best_cost;
+      best_cost = better ? candidate_cost[i] : best_cost;
+      focus = better ? candidate_vertex[i] : focus;
     }
     if (focus != none) continue;
     // Dead end: the most recently used vertex with triangles left, else the next in input order.
@@ -532,12 +581,13 @@ using detail::max_extra_starts;
 
 // The chosen order, kept in the workspace; nullptr when it is the input order.
 //
-// Every candidate is scored by its misses on the caller's cache, and the first with the fewest wins:
-// the input order, then for a FIFO the fan orderer, Tipsify and the fan orderer's extra starts; for
-// an LRU the Forsyth-style walk and Tipsify. For a FIFO the orderers' own simulated caches are the
-// caller's, so their miss counts need no separate simulation, and a run stops as soon as its lower
-// bound (detail::fan_run) shows it cannot beat the best so far; when the best needs one miss per
-// referenced vertex nothing can beat it and no orderer runs. None of this changes which order wins.
+// Every candidate is scored by its misses on the caller's cache, and the first with the fewest
+// wins: the input order, then for a FIFO the fan orderer and its extra starts (small inputs) or
+// else Tipsify; for an LRU the Forsyth-style walk and Tipsify. For a FIFO the orderers' own
+// simulated caches are the caller's, so their miss counts need no separate simulation, and a run
+// stops as soon as its lower bound (detail::fan_run) shows it cannot beat the best so far; when the
+// best needs one miss per referenced vertex nothing can beat it and no orderer runs. None of this
+// changes which order wins.
 const uint32_t* choose_order(std::span<const uint32_t> indices, size_t vertex_count, const VertexCacheOptions& options,
                              detail::Workspace& ws, std::vector<uint32_t>& lru_order) {
   if (indices.size() % 3) throw_usage("optimize_vertex_cache: the index count is not a multiple of 3");
@@ -618,13 +668,14 @@ const uint32_t* choose_order(std::span<const uint32_t> indices, size_t vertex_co
   const detail::FanScoring scoring{.cache_size = K};
   const uint32_t first_start = detail::fewest_triangles_vertex(a.offset, V);
   run([&](uint32_t* order) { return detail::fan_run(indices, V, a, scoring, first_start, fan, best_misses, order); });
-  run([&](uint32_t* order) { return detail::tipsify_run(indices, V, a, K, tipsify, best_misses, order); });
   // On a small mesh the first fan decides the sweep that follows, and the fewest-triangle start is
   // sometimes a poor one: the fan orderer also starts at the first corner of input triangles
   // 0, F/n, ... (the input's own start first), as many runs as fit in extra_start_triangles (one run,
   // from the input's start, on inputs of at most 1,024 triangles: more starts gained 0.7% fewer
   // misses on the corpus and cost up to twice meshoptimizer's whole time). A start already tried
-  // gives the same order again, which cannot win, and is skipped.
+  // gives the same order again, which cannot win, and is skipped. The extra starts take Tipsify's
+  // place (with one, Tipsify never gave the fewest misses on a corpus mesh), so Tipsify runs only
+  // when no extra start did.
   uint32_t tried[max_extra_starts + 1] = {first_start};
   uint32_t tried_count = 1;
   for (uint32_t i = 0; i < extra_starts; ++i) {
@@ -633,6 +684,7 @@ const uint32_t* choose_order(std::span<const uint32_t> indices, size_t vertex_co
     tried[tried_count++] = start;
     run([&](uint32_t* order) { return detail::fan_run(indices, V, a, scoring, start, fan, best_misses, order); });
   }
+  if (tried_count == 1) run([&](uint32_t* order) { return detail::tipsify_run(indices, V, a, K, tipsify, best_misses, order); });
   return best < 0 ? nullptr : buffers[best];
 }
 }  // namespace
