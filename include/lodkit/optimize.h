@@ -87,8 +87,8 @@ struct VertexCacheOptions {
 // (Sander et al. 2007); and for a FIFO lodkit's fan orderer (fans around one vertex at a time, the
 // next centre being the cached vertex whose fan costs fewest misses per triangle in the simulated
 // FIFO), for an LRU a Forsyth-style greedy walk. For a FIFO and an input of at most 1,024 triangles,
-// the fan orderer also starts from the input's first vertex. Linear time; the same input gives the
-// same order.
+// the fan orderer also starts from the input's first vertex, in Tipsify's place. Linear time; the
+// same input gives the same order.
 // Returns the new index buffer.
 std::vector<uint32_t> optimize_vertex_cache(std::span<const uint32_t> indices, size_t vertex_count,
                                             const VertexCacheOptions& options = {});
@@ -112,6 +112,9 @@ struct OverdrawOrderOptions {
 };
 std::vector<uint32_t> optimize_overdraw(std::span<const uint32_t> indices, std::span<const float3> positions,
                                         const OverdrawOrderOptions& options = {});
+// The same order as a triangle permutation: result[k] = input triangle drawn k-th.
+std::vector<uint32_t> overdraw_order(std::span<const uint32_t> indices, std::span<const float3> positions,
+                                     const OverdrawOrderOptions& options = {});
 
 // ---- vertex fetch ---------------------------------------------------------------------------------
 // Renumbers vertices in order of first use by the index buffer, so the vertex shader reads memory
@@ -220,6 +223,10 @@ struct OptimizeOptions {
   VertexCacheOptions cache;  // triangles are always reordered for this cache
   bool strips = false;       // also build strips; the mesh's triangles then follow the strip order
   StripOptions strip_options;
+  // After the cache order, the overdraw order (optimize_overdraw, per material, its miss bound on a
+  // FIFO of cache.cache_size entries); not with strips.
+  bool overdraw = false;
+  float overdraw_threshold = 1.05f;  // allowed FIFO misses relative to the cache order (1: no more)
   bool vertex_fetch = true;  // renumber vertices by first use
 };
 
@@ -230,7 +237,8 @@ struct OptimizeResult {
   Strips strips;        // when strips were built, over the output mesh's vertices
   VertexCacheStats cache_before, cache_after;  // on options.cache
   // Wall-clock seconds per step (0 for a step not run); `order` is the cache order or the strips.
-  double weld_seconds = 0, orient_seconds = 0, order_seconds = 0, fetch_seconds = 0;
+  // `overdraw` is the overdraw pass alone (also counted in `order`).
+  double weld_seconds = 0, orient_seconds = 0, order_seconds = 0, fetch_seconds = 0, overdraw_seconds = 0;
 };
 // Triangles of different materials are kept apart: they are sorted by material (stably) and each
 // material's range is ordered on its own, since each is drawn by its own call.

@@ -1,5 +1,5 @@
 // The whole consolidation on a Mesh: weld, orient, order triangles per material for the vertex cache
-// (or as strips), then vertices by first use.
+// (or as strips; optionally then for overdraw), then vertices by first use.
 #include <algorithm>
 #include <chrono>
 
@@ -15,6 +15,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 OptimizeResult optimize(const Mesh& mesh, const OptimizeOptions& options) {
+  if (options.overdraw && options.strips) throw_usage("optimize: the overdraw order and strips exclude each other");
   OptimizeResult r;
   Mesh m = mesh;
   auto start = std::chrono::steady_clock::now();
@@ -63,7 +64,20 @@ OptimizeResult optimize(const Mesh& mesh, const OptimizeOptions& options) {
         if (!in_strip[k - begin]) order.push_back(by_material[k]);
       append_strips(r.strips, s);
     } else {
-      for (const uint32_t t : vertex_cache_order(range_indices, m.vertex_count(), options.cache)) order.push_back(by_material[begin + t]);
+      const std::vector<uint32_t> cache_order = vertex_cache_order(range_indices, m.vertex_count(), options.cache);
+      if (options.overdraw) {
+        // The overdraw pass reorders clusters of the cache order (meshoptimizer's recommended sequence).
+        const auto overdraw_start = std::chrono::steady_clock::now();
+        std::vector<uint32_t> ordered(range_indices.size());
+        for (size_t k = 0; k < cache_order.size(); ++k)
+          for (uint32_t c = 0; c < 3; ++c) ordered[3 * k + c] = range_indices[3 * size_t(cache_order[k]) + c];
+        for (const uint32_t k : overdraw_order(ordered, m.positions,
+                                               {.cache_size = options.cache.cache_size, .threshold = options.overdraw_threshold}))
+          order.push_back(by_material[begin + cache_order[k]]);
+        r.overdraw_seconds += seconds_since(overdraw_start);
+      } else {
+        for (const uint32_t t : cache_order) order.push_back(by_material[begin + t]);
+      }
     }
     begin = end;
   }

@@ -33,15 +33,16 @@ std::vector<uint8_t> misses_per_triangle(std::span<const uint32_t> indices, size
 
 }  // namespace
 
-std::vector<uint32_t> optimize_overdraw(std::span<const uint32_t> indices, std::span<const float3> positions,
-                                        const OverdrawOrderOptions& options) {
+std::vector<uint32_t> overdraw_order(std::span<const uint32_t> indices, std::span<const float3> positions,
+                                     const OverdrawOrderOptions& options) {
   if (indices.size() % 3) throw_usage("optimize_overdraw: the index count is not a multiple of 3");
   if (options.cache_size < 3) throw_usage("optimize_overdraw: cache size must be at least 3");
   if (!(options.threshold >= 1)) throw_usage("optimize_overdraw: threshold must be at least 1");
   for (const uint32_t i : indices)
     if (i >= positions.size()) throw_usage("optimize_overdraw: index " + std::to_string(i) + " out of range");
   const size_t F = indices.size() / 3;
-  std::vector<uint32_t> out(indices.begin(), indices.end());
+  std::vector<uint32_t> out(F);
+  for (uint32_t t = 0; t < F; ++t) out[t] = t;
   if (F < 2) return out;
 
   // Per triangle: twice its area times its unit normal (the cross product) and its centroid; the
@@ -69,7 +70,7 @@ std::vector<uint32_t> optimize_overdraw(std::span<const uint32_t> indices, std::
     double potential;
   };
   std::vector<Cluster> clusters;
-  std::vector<uint32_t> candidate(indices.size());
+  std::vector<uint32_t> candidate(indices.size()), candidate_order(F);
   for (size_t min_cluster = 16; min_cluster < F; min_cluster *= 2) {
     clusters.clear();
     for (uint32_t begin = 0; begin < F;) {
@@ -94,15 +95,27 @@ std::vector<uint32_t> optimize_overdraw(std::span<const uint32_t> indices, std::
     std::stable_sort(clusters.begin(), clusters.end(), [](const Cluster& a, const Cluster& b) { return a.potential > b.potential; });
     size_t k = 0;
     for (const Cluster& c : clusters)
-      for (uint32_t t = c.begin; t < c.end; ++t)
-        for (uint32_t j = 0; j < 3; ++j) candidate[k++] = indices[3 * size_t(t) + j];
+      for (uint32_t t = c.begin; t < c.end; ++t) {
+        candidate_order[k] = t;
+        for (uint32_t j = 0; j < 3; ++j) candidate[3 * k + j] = indices[3 * size_t(t) + j];
+        ++k;
+      }
     uint64_t candidate_misses = 0;
     for (const uint8_t m : misses_per_triangle(candidate, positions.size(), options.cache_size)) candidate_misses += m;
     if (double(candidate_misses) <= limit) {
-      out = std::move(candidate);
+      out = std::move(candidate_order);
       break;
     }
   }
+  return out;
+}
+
+std::vector<uint32_t> optimize_overdraw(std::span<const uint32_t> indices, std::span<const float3> positions,
+                                        const OverdrawOrderOptions& options) {
+  const std::vector<uint32_t> order = overdraw_order(indices, positions, options);
+  std::vector<uint32_t> out(indices.size());
+  for (size_t k = 0; k < order.size(); ++k)
+    for (uint32_t c = 0; c < 3; ++c) out[3 * k + c] = indices[3 * size_t(order[k]) + c];
   return out;
 }
 

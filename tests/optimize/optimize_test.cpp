@@ -5,6 +5,7 @@
 #include <tuple>
 
 #include "core/shapes.h"
+#include "lodkit/error.h"
 #include "lodkit/optimize.h"
 #include "optimize_test_support.h"
 
@@ -67,6 +68,39 @@ TEST(Optimize, MaterialsStayContiguousAndOrdered) {
   ASSERT_EQ(r.mesh.materials.size(), input.triangle_count());
   EXPECT_TRUE(std::is_sorted(r.mesh.materials.begin(), r.mesh.materials.end()));
   EXPECT_EQ(r.mesh.material_names, input.material_names);
+}
+
+TEST(Optimize, OverdrawPassReordersEachMaterialsCacheOrder) {
+  // With .overdraw the triangles of each material are the cache order put through overdraw_order:
+  // the same triangles and streams, materials still contiguous, and on nested spheres (inner drawn
+  // first) less overdraw than the cache order alone, within the threshold's misses.
+  const Mesh nested = test::nested_spheres();
+  const Mesh three_materials = with_materials(nested);  // the same spheres split into three materials
+  for (const Mesh* input : {&nested, &three_materials}) {
+    const OptimizeResult cache_only = optimize(*input, {.vertex_fetch = false});
+    const OptimizeResult r = optimize(*input, {.overdraw = true, .overdraw_threshold = 1.05f, .vertex_fetch = false});
+    EXPECT_EQ(tagged_triangles(r.mesh), tagged_triangles(*input));
+    EXPECT_TRUE(std::is_sorted(r.mesh.materials.begin(), r.mesh.materials.end()));
+    if (input == &nested) {
+      EXPECT_LE(double(r.cache_after.misses), 1.05 * double(cache_only.cache_after.misses));
+    }
+    // By hand: each material range of the cache order, reordered by overdraw_order.
+    std::vector<uint32_t> expected;
+    for (size_t begin = 0; begin < cache_only.mesh.triangle_count();) {
+      size_t end = begin + 1;
+      while (end < cache_only.mesh.triangle_count() && cache_only.mesh.material(end) == cache_only.mesh.material(begin)) ++end;
+      const std::vector<uint32_t> range(cache_only.mesh.indices.begin() + long(3 * begin), cache_only.mesh.indices.begin() + long(3 * end));
+      for (const uint32_t t : overdraw_order(range, cache_only.mesh.positions, {.cache_size = 16, .threshold = 1.05f}))
+        expected.insert(expected.end(), {range[3 * t], range[3 * t + 1], range[3 * t + 2]});
+      begin = end;
+    }
+    EXPECT_EQ(r.mesh.indices, expected);
+    EXPECT_GT(r.overdraw_seconds, 0.0);
+  }
+  const OptimizeResult cache_only = optimize(nested), r = optimize(nested, {.overdraw = true});
+  EXPECT_LT(analyze_overdraw(r.mesh.indices, r.mesh.positions).overdraw,
+            analyze_overdraw(cache_only.mesh.indices, cache_only.mesh.positions).overdraw - 0.05);
+  EXPECT_THROW(optimize(nested, {.strips = true, .overdraw = true}), Error);
 }
 
 TEST(Optimize, WeldAndOrientRepairASoup) {

@@ -11,7 +11,9 @@
 #include <tuple>
 #include <vector>
 
+#include "core/shapes.h"
 #include "lodkit/mesh.h"
+#include "lodkit/optimize.h"
 
 namespace lod::test {
 
@@ -128,6 +130,21 @@ inline std::vector<uint32_t> shuffled_triangles(const std::vector<uint32_t>& ind
   std::vector<uint32_t> out;
   for (const uint32_t t : order) out.insert(out.end(), {indices[3 * t], indices[3 * t + 1], indices[3 * t + 2]});
   return out;
+}
+
+// Two icospheres (subdivision 3) about the origin, radius 0.5 inside radius 1, each in its own
+// vertex-cache order, the inner one first: drawn in that order, the inner sphere is shaded and then
+// covered again from every view.
+inline Mesh nested_spheres() {
+  const Mesh inner = shapes::icosphere(3), outer = shapes::icosphere(3);
+  Mesh m;
+  for (const Mesh* s : {&inner, &outer}) {
+    const float scale = s == &inner ? 0.5f : 1.0f;
+    const uint32_t base = uint32_t(m.positions.size());
+    for (const float3& p : s->positions) m.positions.push_back({p.x * scale, p.y * scale, p.z * scale});
+    for (const uint32_t i : optimize_vertex_cache(s->indices, s->vertex_count())) m.indices.push_back(base + i);
+  }
+  return m;
 }
 
 }  // namespace lod::test

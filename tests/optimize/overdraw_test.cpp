@@ -2,6 +2,8 @@
 // exactness and miss bound, and nested spheres drawn inside-out.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "core/shapes.h"
 #include "lodkit/error.h"
 #include "lodkit/optimize.h"
@@ -61,21 +63,8 @@ TEST(AnalyzeOverdraw, ConvexMeshIsShadedOnceFromEveryView) {
   EXPECT_THROW(analyze_overdraw(sphere.indices, sphere.positions, {.resolution = 0}), Error);
 }
 
-// Two concentric spheres, the inner (radius 0.5) first: each in vertex-cache order.
-Mesh nested_spheres() {
-  const Mesh inner = shapes::icosphere(3), outer = shapes::icosphere(3);
-  Mesh m;
-  for (const Mesh* s : {&inner, &outer}) {
-    const float scale = s == &inner ? 0.5f : 1.0f;
-    const uint32_t base = uint32_t(m.positions.size());
-    for (const float3& p : s->positions) m.positions.push_back({p.x * scale, p.y * scale, p.z * scale});
-    for (const uint32_t i : optimize_vertex_cache(s->indices, s->vertex_count())) m.indices.push_back(base + i);
-  }
-  return m;
-}
-
 TEST(OverdrawOrder, KeepsTrianglesAndStaysWithinTheMissBound) {
-  const Mesh torus = shapes::torus(1.0f, 0.4f, 48, 24), grid = shapes::grid(30, 30), nested = nested_spheres();
+  const Mesh torus = shapes::torus(1.0f, 0.4f, 48, 24), grid = shapes::grid(30, 30), nested = test::nested_spheres();
   for (const Mesh* m : {&torus, &grid, &nested})
     for (const float threshold : {1.0f, 1.05f, 1.5f})
       for (const uint32_t size : {16u, 32u}) {
@@ -95,7 +84,7 @@ TEST(OverdrawOrder, OuterSphereDrawnBeforeTheOneItHides) {
   // Inner sphere first: from every view its front half is shaded, then the outer sphere covers it
   // all again (overdraw about 1 + 0.5^2). The outer sphere's clusters lie out twice as far along their
   // normals, so they go first and the inner sphere fails the depth test almost everywhere.
-  const Mesh m = nested_spheres();
+  const Mesh m = test::nested_spheres();
   const OverdrawStats before = analyze_overdraw(m.indices, m.positions);
   EXPECT_GT(before.overdraw, 1.2);
   const std::vector<uint32_t> out = optimize_overdraw(m.indices, m.positions, {.threshold = 1.05f});
@@ -104,6 +93,22 @@ TEST(OverdrawOrder, OuterSphereDrawnBeforeTheOneItHides) {
   EXPECT_LT(after.overdraw, 1.05);
   // The same output for the same input.
   EXPECT_EQ(optimize_overdraw(m.indices, m.positions, {.threshold = 1.05f}), out);
+}
+
+TEST(OverdrawOrder, PermutationGivesTheIndexBuffer) {
+  // overdraw_order is optimize_overdraw's order as a permutation of the input triangles.
+  const Mesh nested = test::nested_spheres(), torus = shapes::torus(1.0f, 0.4f, 48, 24);
+  for (const Mesh* m : {&nested, &torus}) {
+    const std::vector<uint32_t> order = overdraw_order(m->indices, m->positions);
+    std::vector<uint32_t> sorted = order, identity(order.size());
+    std::sort(sorted.begin(), sorted.end());
+    for (uint32_t t = 0; t < identity.size(); ++t) identity[t] = t;
+    ASSERT_EQ(sorted, identity);
+    std::vector<uint32_t> applied;
+    for (const uint32_t t : order) applied.insert(applied.end(), {m->indices[3 * t], m->indices[3 * t + 1], m->indices[3 * t + 2]});
+    EXPECT_EQ(applied, optimize_overdraw(m->indices, m->positions));
+  }
+  EXPECT_NE(overdraw_order(nested.indices, nested.positions)[0], 0u);  // the outer sphere goes first
 }
 
 }  // namespace

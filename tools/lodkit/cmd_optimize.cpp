@@ -1,6 +1,6 @@
 // lodkit optimize IN -o OUT: consolidate a mesh for the GPU. Optionally weld duplicate vertices and
-// repair the winding; always order triangles for the vertex cache (or as strips) and vertices by
-// first use. A glTF written from a glTF keeps everything else; each primitive is optimized on its own.
+// repair the winding; always order triangles for the vertex cache (or as strips), optionally then for
+// overdraw, and vertices by first use. A glTF written from a glTF keeps everything else; each primitive is optimized on its own.
 #include <fmt/format.h>
 
 #include <chrono>
@@ -21,6 +21,7 @@ namespace {
 struct OptimizeCommand {
   std::string input, output, strips, strip_indices;
   float weld = -1;  // -1: no weld; 0: exact; > 0: tolerance (object space)
+  double overdraw = -1;  // -1: no overdraw pass; else its threshold (misses relative to the cache order)
   float attribute_tolerance = 0;
   bool weld_positions = false, orient = false, lru = false, restart = false, no_fetch = false, json = false, force = false;
   uint32_t cache = 16;
@@ -53,6 +54,11 @@ Command register_optimize(CLI::App& root) {
   app->add_option("--strips", o->strips, "Also build triangle strips: sgi (the course's baseline) or best");
   app->add_flag("--restart", o->restart, "Join strips with a restart index (0xFFFFFFFF) instead of degenerate triangles");
   app->add_option("--strip-indices", o->strip_indices, "With --strips: write the strip index buffer here (little-endian uint32)");
+  app->add_option("--overdraw", o->overdraw,
+                  "After the cache order, order for overdraw: --overdraw=T allows T times the cache order's FIFO misses "
+                  "(default 1.05)")
+      ->expected(0, 1)
+      ->default_str("1.05");
   app->add_option("--cache", o->cache, "Vertex cache entries to optimize for (default 16)");
   app->add_flag("--lru", o->lru, "Optimize for an LRU cache (default FIFO)");
   app->add_flag("--no-fetch", o->no_fetch, "Keep the vertex order (no renumbering by first use)");
@@ -62,6 +68,9 @@ Command register_optimize(CLI::App& root) {
             const bool weld_given = app->count("--weld") > 0;
             if (weld_given && !(o->weld >= 0)) throw_usage("--weld=EPS needs EPS >= 0");
             if (!weld_given) o->weld = -1;
+            const bool overdraw = app->count("--overdraw") > 0;
+            if (overdraw && !(o->overdraw >= 1)) throw_usage("--overdraw=T needs T >= 1");
+            if (overdraw && !o->strips.empty()) throw_usage("--overdraw and --strips exclude each other (both set the triangle order)");
             if (o->strips != "" && o->strips != "sgi" && o->strips != "best")
               throw_usage("--strips must be sgi or best (got '" + o->strips + "')");
             if (!o->strip_indices.empty() && o->strips.empty()) throw_usage("--strip-indices needs --strips");
@@ -79,7 +88,16 @@ Command register_optimize(CLI::App& root) {
                 .cache = {.cache_size = o->cache, .policy = o->lru ? CachePolicy::lru : CachePolicy::fifo},
                 .strips = !o->strips.empty(),
                 .strip_options = {.method = o->strips == "sgi" ? StripMethod::sgi : StripMethod::best, .use_restart = o->restart},
+                .overdraw = overdraw,
+                .overdraw_threshold = overdraw ? float(o->overdraw) : 1.05f,
                 .vertex_fetch = !o->no_fetch,
+            };
+            // Overdraw (shaded / covered pixels, lod::analyze_overdraw's 14 views), summed over primitives.
+            OverdrawStats overdraw_before, overdraw_after;
+            auto add_overdraw = [](OverdrawStats& total, const Mesh& m) {
+              const OverdrawStats s = analyze_overdraw(m.indices, m.positions);
+              total.pixels_covered += s.pixels_covered, total.pixels_shaded += s.pixels_shaded;
+              total.overdraw = total.pixels_covered ? double(total.pixels_shaded) / double(total.pixels_covered) : 0;
             };
 
             auto start = std::chrono::steady_clock::now();
@@ -94,11 +112,12 @@ Command register_optimize(CLI::App& root) {
             uint64_t degenerate = 0, flipped = 0, parts = 0, closed = 0, outward = 0, non_orientable = 0, non_manifold = 0;
             VertexCacheStats before, after;
             StripStats strip_stats;
-            double seconds[4] = {};
+            double seconds[5] = {};
             std::vector<uint32_t> strip_buffer;
             for (Mesh* m : meshes) {
               validate(*m, o->input);
               in_triangles += m->triangle_count(), in_vertices += m->vertex_count();
+              if (overdraw) add_overdraw(overdraw_before, *m);
               OptimizeResult r = optimize(*m, options);
               welded_vertices += options.weld ? r.weld.output_vertices : m->vertex_count();
               degenerate += r.weld.degenerate_triangles;
@@ -115,8 +134,10 @@ Command register_optimize(CLI::App& root) {
                 strip_stats.degenerate_triangles += s.degenerate_triangles;
                 strip_buffer = std::move(r.strips.indices);
               }
-              seconds[0] += r.weld_seconds, seconds[1] += r.orient_seconds, seconds[2] += r.order_seconds, seconds[3] += r.fetch_seconds;
+              seconds[0] += r.weld_seconds, seconds[1] += r.orient_seconds, seconds[2] += r.order_seconds - r.overdraw_seconds;
+              seconds[3] += r.fetch_seconds, seconds[4] += r.overdraw_seconds;
               *m = std::move(r.mesh);
+              if (overdraw) add_overdraw(overdraw_after, *m);
               out_triangles += m->triangle_count(), out_vertices += m->vertex_count();
             }
             for (VertexCacheStats* s : {&before, &after}) {
@@ -145,6 +166,9 @@ Command register_optimize(CLI::App& root) {
                                   {"atvr_before", before.atvr}, {"atvr_after", after.atvr},
                                   {"load_seconds", load_seconds}, {"write_seconds", write_seconds},
                                   {"order_seconds", seconds[2]}, {"fetch_seconds", seconds[3]}};
+              if (overdraw)
+                j["overdraw"] = {{"threshold", o->overdraw}, {"before", overdraw_before.overdraw}, {"after", overdraw_after.overdraw},
+                                 {"seconds", seconds[4]}};
               if (options.weld)
                 j["weld"] = {{"tolerance", options.weld_options.position_tolerance}, {"positions_only", o->weld_positions},
                              {"vertices", welded_vertices}, {"degenerate_triangles", degenerate}, {"seconds", seconds[0]}};
@@ -175,9 +199,16 @@ Command register_optimize(CLI::App& root) {
                            "strips", out_triangles, welded_vertices, after.acmr, seconds[2], strip_stats.strips,
                            strip_stats.indices, strip_stats.indices_per_triangle,
                            fmt::format("{}, {}", o->strips, o->restart ? "restart index" : "degenerate joins"));
+              else if (overdraw)
+                fmt::print("{:<10}{:>12}{:>12}{:>10}{:>9.3f}s  {}\n", "cache", out_triangles, welded_vertices, "", seconds[2],
+                           "(ACMR after the overdraw order below)");
               else
                 fmt::print("{:<10}{:>12}{:>12}{:>10.3f}{:>9.3f}s  ATVR {:.3f} -> {:.3f}\n", "cache", out_triangles,
                            welded_vertices, after.acmr, seconds[2], before.atvr, after.atvr);
+              if (overdraw)
+                fmt::print("{:<10}{:>12}{:>12}{:>10.3f}{:>9.3f}s  overdraw {:.3f} -> {:.3f} (threshold {:g}), ATVR {:.3f} -> {:.3f}\n",
+                           "overdraw", out_triangles, welded_vertices, after.acmr, seconds[4], overdraw_before.overdraw,
+                           overdraw_after.overdraw, o->overdraw, before.atvr, after.atvr);
               if (options.vertex_fetch)
                 fmt::print("{:<10}{:>12}{:>12}{:>10.3f}{:>9.3f}s  vertices by first use\n", "fetch", out_triangles,
                            out_vertices, after.acmr, seconds[3]);
