@@ -417,6 +417,8 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
       if (i != middle) out[i] = closest(points[i], seed);
     return;
   }
+  // Every point already holds its distance to the seed: no need to measure it again.
+  slots.erase(std::remove(slots.begin(), slots.end(), slot_[seed]), slots.end());
 
   // Candidate boxes, four per block of 24 floats (min x, y, z, max x, y, z; four lanes each); the
   // padding lanes are empty boxes, which no point comes near.
