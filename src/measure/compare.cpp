@@ -365,7 +365,8 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       at[o] = point(t, drawn[o]);
     }
     // Queries go a triangle at a time; a triangle with many samples is cut into patches (cells of its
-    // (s, r2) square in serpentine order, by a counting sort) so each group of queries stays close together.
+    // (s, r2) square of about 8 samples, in serpentine order, by a counting sort), each a group of
+    // queries close together.
     BlockQueries block;
     std::vector<uint32_t> cell, cell_start, sorted;
     for (size_t t = first_triangle; plan.area_start[t] < end; ++t) {
@@ -377,7 +378,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
         block.cut();
         continue;
       }
-      const uint32_t k = uint32_t(std::ceil(std::sqrt(double(b - a) / double(group_size / 2))));
+      const uint32_t k = uint32_t(std::ceil(std::sqrt(double(b - a) / 8.0)));
       cell.resize(b - a);
       cell_start.assign(size_t(k) * k + 1, 0);
       for (uint32_t o = a; o < b; ++o) {
@@ -391,7 +392,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       for (uint32_t o = a; o < b; ++o) sorted[cell_start[cell[o - a]]++] = o;
       for (uint32_t i = 0; i < b - a; ++i) {
         block.add(at[sorted[i]], sorted[i]);
-        if ((i + 1) % group_size == 0) block.cut();
+        if (i + 1 < b - a && cell[sorted[i + 1] - a] != cell[sorted[i] - a]) block.cut();
       }
       block.cut();
     }
