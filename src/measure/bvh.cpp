@@ -84,6 +84,28 @@ class Probe {
 #endif
   }
 
+  // For a point probe: the lanes whose planes (unit normal x, y, z, offset; four lanes each) lie
+  // within sqrt(limit) of the point, less `slack` for rounding. A triangle is never nearer than its
+  // plane, so this prunes candidates whose boxes the point is inside (large or tilted triangles).
+  int planes_within(const float* plane, float slack, float limit) const {
+#if defined(__SSE2__)
+    const __m128 dot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(plane), vlo_[0]), _mm_mul_ps(_mm_loadu_ps(plane + 4), vlo_[1])),
+                                  _mm_mul_ps(_mm_loadu_ps(plane + 8), vlo_[2]));
+    const __m128 diff = _mm_sub_ps(dot, _mm_loadu_ps(plane + 12));
+    const __m128 abs = _mm_max_ps(diff, _mm_sub_ps(_mm_setzero_ps(), diff));
+    const __m128 gap = _mm_max_ps(_mm_sub_ps(abs, _mm_set1_ps(slack)), _mm_setzero_ps());
+    return _mm_movemask_ps(_mm_cmple_ps(_mm_mul_ps(gap, gap), _mm_set1_ps(limit)));
+#else
+    int mask = 0;
+    for (int lane = 0; lane < 4; ++lane) {
+      const float dot = plane[lane] * lo_[0] + plane[4 + lane] * lo_[1] + plane[8 + lane] * lo_[2];
+      const float gap = std::max(std::fabs(dot - plane[12 + lane]) - slack, 0.0f);
+      if (gap * gap <= limit) mask |= 1 << lane;
+    }
+    return mask;
+#endif
+  }
+
  private:
   float lo_[3], hi_[3];
 #if defined(__SSE2__)
@@ -232,6 +254,22 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
   for (const float3& p : mesh.positions)
     magnitude = std::max({magnitude, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
   const float grow = magnitude * 1e-6f + std::numeric_limits<float>::min();
+  plane_slack_ = 4 * grow;
+  triangle_plane_.assign(4 * triangles, 0.0f);
+  for (size_t s = 0; s < triangles; ++s) {
+    // In double, then rounded: the rounding is within plane_slack_ (a degenerate triangle keeps a zero
+    // plane, which prunes nothing).
+    const vec3f* c = &corners_[3 * s];
+    const double ux = double(c[1].x) - c[0].x, uy = double(c[1].y) - c[0].y, uz = double(c[1].z) - c[0].z;
+    const double vx = double(c[2].x) - c[0].x, vy = double(c[2].y) - c[0].y, vz = double(c[2].z) - c[0].z;
+    const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+    const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
+    const double scale = std::max({std::fabs(ux), std::fabs(uy), std::fabs(uz), std::fabs(vx), std::fabs(vy), std::fabs(vz)});
+    if (!(length > 1e-6 * scale * scale)) continue;
+    float* plane = &triangle_plane_[4 * s];
+    plane[0] = float(nx / length), plane[1] = float(ny / length), plane[2] = float(nz / length);
+    plane[3] = float((nx * c[0].x + ny * c[0].y + nz * c[0].z) / length);
+  }
   triangle_box_.resize(6 * triangles);
   for (size_t s = 0; s < triangles; ++s) {
     Box b;
@@ -337,8 +375,13 @@ ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint) const {
     const uint32_t ref = stack[top];
     if (ref & leaf_bit) {
       const uint32_t first = (ref & ~leaf_bit) >> 4, count = (ref & 15) + 1;
-      for (uint32_t s = first; s < first + count; ++s)
+      for (uint32_t s = first; s < first + count; ++s) {
+        // A triangle is never nearer than its plane: a cheap test before the exact one.
+        const float* plane = &triangle_plane_[4 * size_t(s)];
+        const float gap = std::max(std::fabs(plane[0] * p.x + plane[1] * p.y + plane[2] * p.z - plane[3]) - plane_slack_, 0.0f);
+        if (gap * gap > limit) continue;
         if (consider(p, s, best)) limit = best.distance_squared * prune_slack;
+      }
       continue;
     }
     const Node& n = nodes_[ref];
@@ -420,18 +463,22 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
   // Every point already holds its distance to the seed: no need to measure it again.
   slots.erase(std::remove(slots.begin(), slots.end(), slot_[seed]), slots.end());
 
-  // Candidate boxes, four per block of 24 floats (min x, y, z, max x, y, z; four lanes each); the
-  // padding lanes are empty boxes, which no point comes near.
+  // Candidates four per block of 40 floats: boxes (min x, y, z, max x, y, z) then planes (normal x,
+  // y, z, offset), four lanes each; the padding lanes are empty boxes, which no point comes near.
+  constexpr size_t stride = 40;
   const size_t blocks = (slots.size() + 3) / 4;
   std::vector<float>& box = scratch.box;
-  box.resize(24 * blocks);
+  box.resize(stride * blocks);
   for (size_t c = 0; c < 4 * blocks; ++c) {
-    float* b = &box[24 * (c / 4) + c % 4];
+    float* b = &box[stride * (c / 4) + c % 4];
     if (c < slots.size()) {
       const float* t = &triangle_box_[6 * size_t(slots[c])];
       for (int k = 0; k < 6; ++k) b[4 * k] = t[k];
+      const float* plane = &triangle_plane_[4 * size_t(slots[c])];
+      for (int k = 0; k < 4; ++k) b[4 * (6 + k)] = plane[k];
     } else {
       for (int k = 0; k < 3; ++k) b[4 * k] = inf, b[4 * (k + 3)] = -inf;
+      for (int k = 0; k < 4; ++k) b[4 * (6 + k)] = 0;
     }
   }
   for (uint32_t i = 0; i < count; ++i) {
@@ -441,7 +488,9 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
     float limit = best.distance_squared * prune_slack;
     const Probe probe(p);
     for (size_t g = 0; g < blocks; ++g) {
-      int mask = probe.within(&box[24 * g], limit);
+      const float* b = &box[stride * g];
+      int mask = probe.within(b, limit);
+      if (mask) mask &= probe.planes_within(b + 24, plane_slack_, limit);
       for (; mask; mask &= mask - 1)
         if (consider(p, slots[4 * g + size_t(__builtin_ctz(unsigned(mask)))], best))
           limit = best.distance_squared * prune_slack;

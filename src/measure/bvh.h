@@ -35,7 +35,7 @@ class TriangleBvh {
   // Reusable memory for closest_group (one per thread).
   struct GroupScratch {
     std::vector<uint32_t> slots;  // candidate triangles (leaf order)
-    std::vector<float> box;       // their boxes, 6 floats per group of 4 candidates (SoA by 4)
+    std::vector<float> box;       // their boxes and planes, 40 floats per 4 candidates (SoA by 4)
     std::vector<uint32_t> stack;
   };
   // closest() for each of `count` points, with identical answers, for points close together (the
@@ -69,6 +69,8 @@ class TriangleBvh {
   std::vector<uint32_t> original_;  // leaf order -> mesh triangle
   std::vector<uint32_t> slot_;      // mesh triangle -> leaf order
   std::vector<float> triangle_box_;  // per leaf-order triangle: grown min x, y, z, max x, y, z
+  std::vector<float> triangle_plane_;  // per leaf-order triangle: unit normal x, y, z, offset (0 when degenerate)
+  float plane_slack_ = 0;              // rounding allowance of a plane distance
   uint32_t depth_ = 0;              // of the 4-wide tree
 };
 
