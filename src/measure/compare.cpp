@@ -35,15 +35,29 @@ uint64_t splitmix64(uint64_t x) {
   return x ^ (x >> 31);
 }
 
+// Spreads the low 10 bits of x to every third bit (Morton code helper).
+uint32_t spread_bits(uint32_t x) {
+  x &= 0x3FF;
+  x = (x | x << 16) & 0x030000FF;
+  x = (x | x << 8) & 0x0300F00F;
+  x = (x | x << 4) & 0x030C30C3;
+  x = (x | x << 2) & 0x09249249;
+  return x;
+}
+
 // One mesh, ready to be sampled.
 struct Surface {
   const Mesh* mesh = nullptr;
   PositionIds ids;
   std::vector<uint32_t> position_vertex;    // per position id: its first vertex
   std::vector<uint32_t> position_triangle;  // per position id: first triangle using it, or UINT32_MAX
+  // Position ids along a Z curve through their bounding box: neighbours in this order are mostly
+  // neighbours in space, so the vertex and edge samples are queried in groups that share a search.
+  std::vector<uint32_t> position_order;
   std::vector<double> area_before;          // per triangle + 1: total area of the triangles before it
   double area = 0;
-  // Unique edges (position ids lo < hi) with a triangle holding them, in (lo, hi) order.
+  // Unique edges (position ids lo < hi) with a triangle holding them, grouped by lo in position_order,
+  // each group in hi order.
   struct Edge {
     uint32_t lo, hi, triangle;
   };
@@ -60,6 +74,26 @@ struct Surface {
         uint32_t& first = position_triangle[ids.id[m.indices[3 * t + k]]];
         if (first == UINT32_MAX) first = uint32_t(t);
       }
+    constexpr float inf = std::numeric_limits<float>::infinity();
+    float lo[3] = {inf, inf, inf}, hi[3] = {-inf, -inf, -inf};
+    for (uint32_t p = 0; p < ids.count; ++p) {
+      const vec3f q = position(p);
+      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], (&q.x)[k]), hi[k] = std::max(hi[k], (&q.x)[k]);
+    }
+    std::vector<std::pair<uint32_t, uint32_t>> keyed(ids.count);  // (Morton code, id)
+    for (uint32_t p = 0; p < ids.count; ++p) {
+      const vec3f q = position(p);
+      uint32_t code = 0;
+      for (int k = 0; k < 3; ++k) {
+        const float extent = hi[k] - lo[k];
+        const float t = extent > 0 ? ((&q.x)[k] - lo[k]) / extent : 0.0f;
+        code |= spread_bits(uint32_t(std::clamp(t, 0.0f, 1.0f) * 1023.0f)) << k;
+      }
+      keyed[p] = {code, p};
+    }
+    std::sort(keyed.begin(), keyed.end());
+    position_order.resize(ids.count);
+    for (uint32_t i = 0; i < ids.count; ++i) position_order[i] = keyed[i].second;
     area_before.resize(triangles + 1);
     double sum = 0;
     for (size_t t = 0; t < triangles; ++t) {
@@ -102,7 +136,7 @@ struct Surface {
       for (int k = 0; k < 3; ++k)
         if (edge(t, k, lo, hi)) bucket[fill[lo]++] = {hi, uint32_t(t)};
     edges.clear();
-    for (uint32_t p = 0; p < ids.count; ++p) {
+    for (const uint32_t p : position_order) {
       auto first = bucket.begin() + start[p], last = bucket.begin() + start[p + 1];
       std::sort(first, last);  // a handful of entries; equal hi keep the lowest triangle first
       for (auto it = first; it != last; ++it)
@@ -292,11 +326,12 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
   // Vertices: every position (a vertex used by no triangle is measured for the field but is not a sample).
   run_stream(positions, options.threads, progress, total, [&](uint64_t begin, uint64_t end, Accumulator& acc, uint32_t& hint) {
     BlockQueries block;
-    for (uint64_t p = begin; p < end; ++p) block.add(from.position(uint32_t(p)), uint32_t(p - begin));
+    for (uint64_t k = begin; k < end; ++k) block.add(from.position(from.position_order[k]), uint32_t(k - begin));
     block.run(bvh, group_size, hint);
-    for (uint64_t p = begin; p < end; ++p) {
-      const vec3f q = from.position(uint32_t(p));
-      const ClosestHit& h = block.hits[p - begin];
+    for (uint64_t k = begin; k < end; ++k) {
+      const uint32_t p = from.position_order[k];
+      const vec3f q = from.position(p);
+      const ClosestHit& h = block.hits[k - begin];
       const float d = std::sqrt(h.distance_squared);
       out.position_distance[p] = d;
       out.position_closest[p] = h.triangle;
@@ -319,10 +354,16 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       const vec3f a = from.position(edge.lo), b = from.position(edge.hi);
       return a + (b - a) * t;
     };
+    // A group never spans two edges (they part at their shared end): runs along one edge, 8 at most.
     BlockQueries block;
     size_t e = first_edge;
-    for (uint64_t j = begin; j < end; ++j) block.add(sample(e, j), uint32_t(j - begin));
-    block.run(bvh, group_size, hint);
+    for (uint64_t j = begin; j < end; ++j) {
+      const size_t before = e;
+      const vec3f q = sample(e, j);
+      if (e != before) block.cut();
+      block.add(q, uint32_t(j - begin));
+    }
+    block.run(bvh, group_size / 2, hint);
     e = first_edge;
     for (uint64_t j = begin; j < end; ++j) {
       const vec3f q = sample(e, j);
