@@ -17,6 +17,7 @@ namespace {
 
 constexpr float inf = std::numeric_limits<float>::infinity();
 constexpr int bin_count = 16;
+constexpr uint32_t max_leaf = 8;  // triangles per leaf (a node's leaf link can count up to 16)
 constexpr uint32_t max_binned_depth = 64;  // deeper than this, split at the median: depth stays bounded
 constexpr uint32_t max_depth = 128;        // traversal stack: 3 entries per level plus one
 // Pruning compares a box's float distance with a triangle's float distance; both round. Boxes are
@@ -124,19 +125,26 @@ struct Bin {
   uint32_t count = 0;
 };
 
-// Binned SAH over triangle centroids, building a binary tree whose leaves are ranges of `order`.
+struct BuildTask {
+  uint32_t node, begin, end, depth;
+};
+
+// Binned SAH over triangle centroids, building a binary tree (root at index 0) whose leaves are ranges
+// of `order`, over order[begin, end). Nodes at `defer_depth` are left empty and listed in `deferred`.
 std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::vector<vec3f>& centroids,
-                                     std::vector<uint32_t>& order, int max_leaf) {
+                                     std::vector<uint32_t>& order, uint32_t begin, uint32_t end, uint32_t depth,
+                                     uint32_t defer_depth, std::vector<BuildTask>& deferred) {
   std::vector<BinaryNode> nodes;
-  nodes.reserve(order.size());  // about 2 / 3 of a node per triangle with leaves of ~3
+  nodes.reserve(end - begin);  // about 2 / 3 of a node per triangle with leaves of ~3
   nodes.emplace_back();
-  struct Task {
-    uint32_t node, begin, end, depth;
-  };
-  std::vector<Task> tasks{{0, 0, uint32_t(order.size()), 0}};
+  std::vector<BuildTask> tasks{{0, begin, end, depth}};
   while (!tasks.empty()) {
-    const Task task = tasks.back();
+    const BuildTask task = tasks.back();
     tasks.pop_back();
+    if (task.depth == defer_depth && task.end - task.begin > max_leaf) {
+      deferred.push_back(task);
+      continue;
+    }
     const uint32_t n = task.end - task.begin;
     Box box, centroid_box;
     for (uint32_t i = task.begin; i < task.end; ++i) {
@@ -197,7 +205,7 @@ std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::v
     // SAH with traversal cost 1 and triangle cost 1, relative to this node's area.
     const float area = box.half_area();
     const float split_cost = 1.0f + (area > 0 ? best_cost / area : float(n));
-    if (n <= uint32_t(max_leaf) && (best_axis < 0 || float(n) <= split_cost)) {
+    if (n <= max_leaf && (best_axis < 0 || float(n) <= split_cost)) {
       make_leaf();
       continue;
     }
@@ -222,6 +230,33 @@ std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::v
   return nodes;
 }
 
+// The same tree built in parts: the top levels first, then the subtrees below `split_depth` side by
+// side (they own disjoint ranges of `order`), spliced in list order. The split depth is fixed, so the
+// layout does not depend on the thread count.
+std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::vector<vec3f>& centroids,
+                                     std::vector<uint32_t>& order, unsigned threads) {
+  constexpr uint32_t split_depth = 3;  // up to 8 subtrees
+  std::vector<BuildTask> deferred, none;
+  std::vector<BinaryNode> nodes =
+      build_binary(boxes, centroids, order, 0, uint32_t(order.size()), 0, split_depth, deferred);
+  std::vector<std::vector<BinaryNode>> parts(deferred.size());
+  core::parallel_blocks(deferred.size(), 1, threads, [&](size_t k, size_t, size_t) {
+    const BuildTask& t = deferred[k];
+    parts[k] = build_binary(boxes, centroids, order, t.begin, t.end, t.depth, UINT32_MAX, none);
+  });
+  for (size_t k = 0; k < deferred.size(); ++k) {
+    // The part's root takes the deferred node's place; its other nodes follow, their child links moved.
+    const uint32_t offset = uint32_t(nodes.size()) - 1;
+    auto moved = [&](BinaryNode n) {
+      if (n.count == 0) n.left += offset;
+      return n;
+    };
+    nodes[deferred[k].node] = moved(parts[k][0]);
+    for (size_t i = 1; i < parts[k].size(); ++i) nodes.push_back(moved(parts[k][i]));
+  }
+  return nodes;
+}
+
 }  // namespace
 
 TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
@@ -239,7 +274,7 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
   });
   std::vector<uint32_t> order(triangles);
   for (uint32_t t = 0; t < triangles; ++t) order[t] = t;
-  const std::vector<BinaryNode> binary = build_binary(boxes, centroids, order, max_leaf);
+  const std::vector<BinaryNode> binary = build_binary(boxes, centroids, order, threads);
 
   original_ = order;
   slot_.resize(triangles);

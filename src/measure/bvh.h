@@ -62,7 +62,6 @@ class TriangleBvh {
   };
   static constexpr uint32_t leaf_bit = 0x80000000u;
   static constexpr uint32_t empty_child = 0xFFFFFFFFu;
-  static constexpr int max_leaf = 8;
 
   std::vector<Node> nodes_;        // nodes_[0] is the root
   std::vector<vec3f> corners_;     // 3 per triangle, in leaf order
