@@ -373,13 +373,8 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
 }
 
 ClosestHit TriangleBvh::to_triangle(const vec3f& p, uint32_t triangle) const {
-  const vec3f* c = &corners_[3 * size_t(slot_[triangle])];
-  const TrianglePoint tp = closest_on_triangle(p, c[0], c[1], c[2]);
-  ClosestHit hit;
-  hit.distance_squared = tp.distance_squared;
-  hit.triangle = triangle;
-  hit.point = tp.point;
-  hit.v = tp.v, hit.w = tp.w;
+  ClosestHit hit;  // no triangle yet: the first one considered is taken
+  consider(p, slot_[triangle], hit);
   return hit;
 }
 

@@ -36,11 +36,11 @@ class TriangleBvh {
   struct GroupScratch {
     std::vector<uint32_t> slots;  // candidate triangles (leaf order)
     std::vector<float> box;       // their boxes and planes, 40 floats per 4 candidates (SoA by 4)
-    std::vector<uint32_t> stack;
   };
   // closest() for each of `count` points, with identical answers, for points close together (the
   // samples of one small patch): one traversal with the points' box collects every triangle that can
-  // be the closest to any of them, then each point scans those candidates' boxes four at a time.
+  // be the closest to any of them, then each point scans those candidates' boxes and planes four at a
+  // time before any exact distance.
   // Points spread too far for that fall back to closest(), one by one. `hint` as for closest().
   void closest_group(const vec3f* points, uint32_t count, uint32_t hint, ClosestHit* out, GroupScratch& scratch) const;
 
@@ -55,7 +55,7 @@ class TriangleBvh {
 
   struct alignas(64) Node {
     // Child boxes, one lane per child: min x, y, z then max x, y, z, four lanes each (the layout
-    // boxes_within reads); an empty lane has min = +inf, max = -inf.
+    // Probe::within reads); an empty lane has min = +inf, max = -inf.
     float box[24];
     // Inner child: node index. Leaf: leaf_bit | first << 4 | (count - 1), first into corners_/3.
     uint32_t child[4];

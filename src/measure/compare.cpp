@@ -74,19 +74,15 @@ struct Surface {
         uint32_t& first = position_triangle[ids.id[m.indices[3 * t + k]]];
         if (first == UINT32_MAX) first = uint32_t(t);
       }
-    constexpr float inf = std::numeric_limits<float>::infinity();
-    float lo[3] = {inf, inf, inf}, hi[3] = {-inf, -inf, -inf};
-    for (uint32_t p = 0; p < ids.count; ++p) {
-      const vec3f q = position(p);
-      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], (&q.x)[k]), hi[k] = std::max(hi[k], (&q.x)[k]);
-    }
+    float3 lo, hi;
+    bounding_box(m, lo, hi);
     std::vector<std::pair<uint32_t, uint32_t>> keyed(ids.count);  // (Morton code, id)
     for (uint32_t p = 0; p < ids.count; ++p) {
       const vec3f q = position(p);
       uint32_t code = 0;
       for (int k = 0; k < 3; ++k) {
-        const float extent = hi[k] - lo[k];
-        const float t = extent > 0 ? ((&q.x)[k] - lo[k]) / extent : 0.0f;
+        const float extent = (&hi.x)[k] - (&lo.x)[k];
+        const float t = extent > 0 ? ((&q.x)[k] - (&lo.x)[k]) / extent : 0.0f;
         code |= spread_bits(uint32_t(std::clamp(t, 0.0f, 1.0f) * 1023.0f)) << k;
       }
       keyed[p] = {code, p};
@@ -244,7 +240,7 @@ struct BlockQueries {
   void cut() {
     if (points.size() > (group_end.empty() ? 0 : group_end.back())) group_end.push_back(uint32_t(points.size()));
   }
-  // Groups not cut by the caller are runs of `group_size` consecutive points.
+  // Groups not cut by the caller are runs of `size` consecutive points.
   void run(const TriangleBvh& bvh, uint32_t size, uint32_t& hint) {
     cut();
     std::vector<ClosestHit> in_order(points.size());
@@ -386,6 +382,8 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
     // Uniform in the triangle: s = sqrt(r1) picks the distance from corner 0 with density ~ s.
     struct Sample {
       float s, r2;
+      float w1() const { return s * (1 - r2); }  // barycentric weights; w0 = 1 - s
+      float w2() const { return s * r2; }
     };
     auto sample = [&](uint64_t j) {
       const uint64_t bits = splitmix64(stream_seed + j);
@@ -393,8 +391,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       return Sample{std::sqrt(r1), r2};
     };
     auto point = [&](size_t t, const Sample& u) {
-      const float w0 = 1 - u.s, w1 = u.s * (1 - u.r2), w2 = u.s * u.r2;
-      return from.corner(t, 0) * w0 + from.corner(t, 1) * w1 + from.corner(t, 2) * w2;
+      return from.corner(t, 0) * (1 - u.s) + from.corner(t, 1) * u.w1() + from.corner(t, 2) * u.w2();
     };
     // Each sample drawn once per block.
     const size_t n = size_t(end - begin);
@@ -442,7 +439,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
     for (uint64_t j = begin; j < end; ++j) {
       while (plan.area_start[t + 1] <= j) ++t;
       const Sample u = drawn[j - begin];
-      const float w0 = 1 - u.s, w1 = u.s * (1 - u.r2), w2 = u.s * u.r2;
+      const float w0 = 1 - u.s, w1 = u.w1(), w2 = u.w2();
       const vec3f q = at[j - begin];
       const ClosestHit& h = block.hits[j - begin];
       const float d = std::sqrt(h.distance_squared);
@@ -571,7 +568,6 @@ Deviation compare(const Mesh& a, const Mesh& b, const CompareOptions& options) {
 
   Direction ab = measure_direction(sa, sb, bvh_b, plan_a, seed_ab, true, options, progress);
   Direction ba = measure_direction(sb, sa, bvh_a, plan_b, seed_ba, false, options, progress);
-
   dev.queries = sa.ids.count + plan_a.edge_start.back() + plan_a.area_samples + sb.ids.count +
                 plan_b.edge_start.back() + plan_b.area_samples;
   if (options.refine) {
