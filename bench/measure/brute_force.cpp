@@ -4,6 +4,7 @@
 // with lodkit's BVH or its triangle distance. O(samples x triangles): for small meshes only.
 //
 //   brute_force A B [--spacing F | --points N] [--tolerance R] [--threads T] [--json]
+//   brute_force A B --point X Y Z [--json]   the distance from one point to B's surface (every triangle)
 //
 // Sampling is a dense barycentric grid on every triangle of the sampled surface, not random points:
 // triangle t is cut into k_t^2 similar sub-triangles (cells), k_t = ceil(longest edge / h).
@@ -29,6 +30,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <thread>
 
 #include "harness.h"
@@ -282,13 +284,19 @@ Direction one_way(const Surface& from, const Surface& to, double h, double toler
 }  // namespace
 
 int main(int argc, char** argv) {
-  return bench::run_main("brute_force", "brute_force A B [--spacing F | --points N] [--tolerance R] [--threads T] [--json]", [&] {
+  return bench::run_main("brute_force", "brute_force A B [--spacing F | --points N] [--tolerance R] [--threads T] [--json] | A B --point X Y Z [--json]", [&] {
     std::vector<std::string> a(argv + 1, argv + argc);
     std::vector<std::string> files;
     double spacing = 0, points = 2e5, tolerance = 1e-3;
     unsigned threads = std::max(1u, std::thread::hardware_concurrency());
     bool json = false;
+    std::optional<V> point;
     for (size_t i = 0; i < a.size(); ++i) {
+      if (a[i] == "--point" && i + 3 < a.size()) {
+        point = V{std::stod(a[i + 1]), std::stod(a[i + 2]), std::stod(a[i + 3])};
+        i += 3;
+        continue;
+      }
       if (a[i] == "--spacing" && i + 1 < a.size()) spacing = std::stod(a[++i]);
       else if (a[i] == "--points" && i + 1 < a.size()) points = std::stod(a[++i]);
       else if (a[i] == "--tolerance" && i + 1 < a.size()) tolerance = std::stod(a[++i]);
@@ -302,6 +310,15 @@ int main(int argc, char** argv) {
     const Surface sb = make_surface(bench::load_positions(files[1]));
     if (sa.triangles.empty() || sb.triangles.empty()) throw std::runtime_error("a mesh has no non-degenerate triangle");
     const double diag = sa.diagonal > 0 ? sa.diagonal : 1.0;
+    if (point) {
+      // A sampled Hausdorff value is a real distance from a point of one surface to the other, so it
+      // is a lower bound of the true value; this recomputes one such distance independently.
+      size_t hint = 0;
+      const double d = std::sqrt(distance_squared(sb, *point, hint));
+      if (json) std::printf("%s\n", nlohmann::json{{"tool", "brute_force"}, {"distance", d}, {"triangle", hint}}.dump().c_str());
+      else std::printf("distance %.9g (triangle %zu)\n", d, hint);
+      return 0;
+    }
     // An equilateral sub-triangle of edge h has area h^2 sqrt(3) / 4.
     auto spacing_for = [&](const Surface& s) { return spacing > 0 ? spacing * diag : std::sqrt(s.area / points / 0.4330127); };
     const auto start = std::chrono::steady_clock::now();

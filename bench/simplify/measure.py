@@ -14,8 +14,14 @@ refinement pushes the maximum towards the true one.
 Brute force (only when both meshes have <= BRUTE_MAX triangles): a dense grid on every triangle
 against every triangle of the other mesh, then certified refinement of the maximum, so the true
 Hausdorff distance lies in [brute H, brute bound]; RMS by the midpoint rule on the grid.
-Agreement (2%): "lodkit =" Hausdorff and RMS against CGAL's (same scheme, different random points), and
-lodkit (refined) Hausdorff and lodkit RMS against brute force. Speed at equal sample counts: CGAL seconds /
+Agreement (2%): lodkit's Hausdorff (its default call) and RMS against CGAL's, and lodkit (refined) Hausdorff
+and lodkit RMS against brute force. Every sampled Hausdorff value is the distance from one point of a
+surface to the other, so it is a lower bound of the true value: where lodkit's exceeds CGAL's by more
+than 2%, the point lodkit reports is measured again by brute force (lodkit_bench_brute_force --point);
+if that certified distance is more than 2% above CGAL's value, CGAL's sample missed the maximum by more
+than 2% of the truth, which no exact tool can agree with: the pair counts as "CGAL low (certified)",
+not as a failure. A lodkit value more than 2% below CGAL's always fails. The same-sampling comparison
+("lodkit =" against CGAL) is reported beside it. Speed at equal sample counts: CGAL seconds /
 "lodkit =" seconds (target 10x), with all threads and with one."""
 import datetime
 import json
@@ -60,9 +66,9 @@ def fmt(x, spec=".4e"):
 
 rows = []
 print("| pair | triangles | samples / dir | lodkit H | lodkit = H | lodkit ref. H | CGAL H | brute H [bound] "
-      "| H lodkit =/CGAL | H ref./brute | lodkit = RMS | CGAL RMS | brute RMS | RMS lodkit =/CGAL | RMS lodkit/brute "
+      "| H lodkit =/CGAL | H lodkit/CGAL | certified H | CGAL verdict | H ref./brute | lodkit = RMS | CGAL RMS | brute RMS | RMS lodkit =/CGAL | RMS lodkit/brute "
       "| lodkit s | lodkit = s | lodkit = 1t s | CGAL s | CGAL/lodkit = | CGAL/lodkit = 1t |")
-print("|" + "---|" * 21)
+print("|" + "---|" * 24)
 for name, fraction in cases:
     source = os.path.join("data/corpus", name)
     info = run_json([lodkit_cli, "info", source, "--json"])
@@ -82,7 +88,7 @@ for name, fraction in cases:
         if triangles <= BRUTE_MAX:
             brute = run_json([os.path.join(bench_dir, "lodkit_bench_brute_force"), source, simplified, "--json"])
     except (RuntimeError, subprocess.TimeoutExpired) as e:
-        print(f"| {name} {fraction:.0%} | failed: {e} |" + " |" * 19)
+        print(f"| {name} {fraction:.0%} | failed: {e} |" + " |" * 22)
         rows.append({"pair": f"{name} {fraction:.0%}", "failed": str(e)})
         continue
     row = {"pair": f"{name} {fraction:.0%}", "mesh": name, "fraction": fraction, "triangles": triangles, "target": target,
@@ -99,6 +105,21 @@ for name, fraction in cases:
     row["hausdorff_diff"] = rel(same["hausdorff_relative"], row["cgal"]["hausdorff_relative"])
     row["rms_diff"] = rel(same["rms_relative"], row["cgal"]["rms_relative"])
     row["hausdorff_diff_default"] = rel(row["lodkit"]["hausdorff_relative"], row["cgal"]["hausdorff_relative"])
+    row["rms_diff_default"] = rel(row["lodkit"]["rms_relative"], row["cgal"]["rms_relative"])
+    row["cgal_verdict"] = "agree" if row["hausdorff_diff_default"] <= AGREEMENT else "lodkit low"
+    if row["lodkit"]["hausdorff_relative"] > row["cgal"]["hausdorff_relative"] * (1 + AGREEMENT):
+        # Certify lodkit's maximum: the brute-force distance from the point it reports to the other surface.
+        forward = lod["a_to_b"]["hausdorff"] >= lod["b_to_a"]["hausdorff"]
+        worst = lod["a_to_b" if forward else "b_to_a"]["worst"]
+        files = [source, simplified] if forward else [simplified, source]
+        check = run_json([os.path.join(bench_dir, "lodkit_bench_brute_force"), *files, "--point", *map(repr, worst), "--json"])
+        certified = check["distance"] / lod["diagonal"]
+        row["certified_hausdorff_relative"] = certified
+        row["cgal_verdict"] = ("CGAL low (certified)"
+                               if certified >= row["cgal"]["hausdorff_relative"] * (1 + AGREEMENT)
+                               and rel(row["lodkit"]["hausdorff_relative"], certified) <= AGREEMENT else "lodkit high")
+    if row["rms_diff_default"] > AGREEMENT:
+        row["cgal_verdict"] = "RMS differs"
     if brute:
         row["brute"] = {"hausdorff_relative": brute["hausdorff_relative"], "bound_relative": brute["hausdorff_bound_relative"],
                         "rms_relative": brute["rms_relative"], "seconds": brute["seconds"]}
@@ -115,6 +136,7 @@ for name, fraction in cases:
           f"| {fmt(same['hausdorff_relative'])} | {fmt(row['lodkit']['refined_hausdorff_relative'])} "
           f"| {fmt(row['cgal']['hausdorff_relative'])} "
           f"| {fmt(b and b['hausdorff_relative'])} [{fmt(b and b['bound_relative'])}] | {row['hausdorff_diff']:.2%} "
+          f"| {row['hausdorff_diff_default']:.2%} | {fmt(row.get('certified_hausdorff_relative'))} | {row['cgal_verdict']} "
           f"| {fmt(row.get('hausdorff_diff_brute'), '.2%')} | {fmt(same['rms_relative'])} "
           f"| {fmt(row['cgal']['rms_relative'])} | {fmt(b and b['rms_relative'])} | {row['rms_diff']:.2%} "
           f"| {fmt(row.get('rms_diff_brute'), '.2%')} | {lod['seconds']:.3f} | {same['seconds']:.3f} "
@@ -126,9 +148,15 @@ summary = {}
 verdicts = []
 if good:
     brute_rows = [r for r in good if "brute" in r]
-    agree = [r for r in good if r["hausdorff_diff"] <= AGREEMENT and r["rms_diff"] <= AGREEMENT]
+    agree = [r for r in good if r["cgal_verdict"] == "agree"]
+    certified = [r for r in good if r["cgal_verdict"] == "CGAL low (certified)"]
+    agree_same = [r for r in good if r["hausdorff_diff"] <= AGREEMENT and r["rms_diff"] <= AGREEMENT]
     agree_brute = [r for r in brute_rows if r["hausdorff_diff_brute"] <= AGREEMENT and r["rms_diff_brute"] <= AGREEMENT]
-    summary = {"pairs": len(good), "agree_cgal_within_2pct": len(agree),
+    summary = {"pairs": len(good), "agree_cgal_within_2pct": len(agree), "cgal_low_certified": len(certified),
+               "cgal_failed": [r["pair"] + ": " + r["cgal_verdict"] for r in good if r not in agree + certified],
+               "agree_cgal_same_sampling_within_2pct": len(agree_same),
+               "max_hausdorff_diff_default": max(r["hausdorff_diff_default"] for r in good),
+               "max_rms_diff_default": max(r["rms_diff_default"] for r in good),
                "max_hausdorff_diff": max(r["hausdorff_diff"] for r in good),
                "max_rms_diff": max(r["rms_diff"] for r in good),
                "brute_pairs": len(brute_rows), "agree_brute_within_2pct": len(agree_brute),
@@ -141,11 +169,15 @@ if good:
                "median_speedup_1t": statistics.median(r["speedup_1t"] for r in good),
                "median_speedup_default": statistics.median(r["speedup_default"] for r in good),
                "min_speedup_1t": min(r["speedup_1t"] for r in good)}
-    ok_cgal = len(agree) == len(good)
+    ok_cgal = len(agree) + len(certified) == len(good)
     ok_brute = bool(brute_rows) and len(agree_brute) == len(brute_rows)
     ok_speed = summary["median_speedup"] >= 10 and summary["min_speedup"] >= 10
-    print(f"\nagreement with CGAL at the same sampling (lodkit =): Hausdorff and RMS within {AGREEMENT:.0%} on {len(agree)} of {len(good)} pairs "
-          f"(largest: Hausdorff {summary['max_hausdorff_diff']:.2%}, RMS {summary['max_rms_diff']:.2%})")
+    print(f"\nagreement with CGAL: lodkit's Hausdorff and RMS within {AGREEMENT:.0%} on {len(agree)} of {len(good)} pairs; "
+          f"CGAL's Hausdorff certified more than {AGREEMENT:.0%} below the true value on {len(certified)} "
+          f"({', '.join(r['pair'] for r in certified) or 'none'}); failed: {', '.join(summary['cgal_failed']) or 'none'} "
+          f"(largest differences: Hausdorff {summary['max_hausdorff_diff_default']:.2%}, RMS {summary['max_rms_diff_default']:.2%})")
+    print(f"at the same sampling (lodkit =, CGAL's scheme, different random points): within {AGREEMENT:.0%} on {len(agree_same)} "
+          f"of {len(good)} (largest: Hausdorff {summary['max_hausdorff_diff']:.2%}, RMS {summary['max_rms_diff']:.2%})")
     if brute_rows:
         print(f"agreement with brute force: refined Hausdorff and RMS within {AGREEMENT:.0%} on {len(agree_brute)} of "
               f"{len(brute_rows)} pairs (largest: refined H {summary['max_hausdorff_diff_brute']:.2%}, unrefined H "
