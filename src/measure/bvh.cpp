@@ -1,6 +1,7 @@
 #include "measure/bvh.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 
@@ -10,6 +11,10 @@
 
 #include "core/parallel.h"
 #include "lodkit/error.h"
+
+// Eight-lane vectors are passed only to inlined functions: no ABI concerns (GCC warns at the end of
+// the file, so this cannot be scoped).
+#pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace lod::measure {
 
@@ -257,6 +262,140 @@ std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::v
   return nodes;
 }
 
+// closest_group's points in lanes: per point (padded to whole batches) x, y, z, the squared distance
+// to its best triangle so far, that triangle's s and t (closest_on_triangle_lanes), its mesh index and
+// its region.
+struct LaneArrays {
+  float* floats;
+  int32_t* ints;
+  uint32_t n;
+  float* x() const { return floats; }
+  float* y() const { return floats + n; }
+  float* z() const { return floats + 2 * size_t(n); }
+  float* distance_squared() const { return floats + 3 * size_t(n); }
+  float* s() const { return floats + 4 * size_t(n); }
+  float* t() const { return floats + 5 * size_t(n); }
+  int32_t* triangle() const { return ints; }
+  int32_t* region() const { return ints + n; }
+};
+
+// closest_group's candidates (leaf order) and the tree's per-triangle arrays.
+struct GroupCandidates {
+  const uint32_t* slots;
+  size_t count;
+  const float* box;     // 6 per triangle
+  const float* plane;   // 4 per triangle
+  const vec3f* corners;  // 3 per triangle
+  const uint32_t* original;
+  float plane_slack;
+};
+
+template <class V>
+[[gnu::always_inline]] inline V load_lanes(const void* p) {
+  V v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+template <class V>
+[[gnu::always_inline]] inline void store_lanes(void* p, const V& v) {
+  std::memcpy(p, &v, sizeof v);
+}
+
+// Every point against the seed triangle; returns the largest squared distance.
+template <int W>
+[[gnu::always_inline]] inline float seed_lanes(const LaneArrays& l, const vec3f* corners, uint32_t seed) {
+  using F = typename Lanes<W>::F;
+  using I = typename Lanes<W>::I;
+  F upper{};
+  for (uint32_t i = 0; i < l.n; i += W) {
+    const LanePoints<W> r = closest_on_triangle_lanes<W>(load_lanes<F>(l.x() + i), load_lanes<F>(l.y() + i),
+                                                         load_lanes<F>(l.z() + i), corners[0], corners[1], corners[2]);
+    store_lanes(l.distance_squared() + i, r.distance_squared);
+    store_lanes(l.s() + i, r.s);
+    store_lanes(l.t() + i, r.t);
+    store_lanes(l.region() + i, r.region);
+    store_lanes(l.triangle() + i, I{} + int32_t(seed));
+    upper = upper > r.distance_squared ? upper : r.distance_squared;
+  }
+  float m = 0;
+  for (int k = 0; k < W; ++k) m = std::max(m, upper[k]);
+  return m;
+}
+
+// Each batch of points scans the candidates: box, then plane, then the exact distance of every lane.
+// A lane takes a triangle when it is nearer, or as near with a lower index (as a brute-force scan
+// would); a lane the box or the plane ruled out is never nearer, so taking it or not changes nothing.
+template <int W>
+[[gnu::always_inline]] inline void scan_lanes(const LaneArrays& l, const GroupCandidates& c) {
+  using F = typename Lanes<W>::F;
+  using I = typename Lanes<W>::I;
+  const F zero{};
+  for (uint32_t i = 0; i < l.n; i += W) {
+    const F px = load_lanes<F>(l.x() + i), py = load_lanes<F>(l.y() + i), pz = load_lanes<F>(l.z() + i);
+    F best = load_lanes<F>(l.distance_squared() + i), s = load_lanes<F>(l.s() + i), t = load_lanes<F>(l.t() + i);
+    I triangle = load_lanes<I>(l.triangle() + i), region = load_lanes<I>(l.region() + i);
+    F limit = best * prune_slack;
+    for (size_t k = 0; k < c.count; ++k) {
+      const uint32_t slot = c.slots[k];
+      const float* b = c.box + 6 * size_t(slot);
+      auto gap = [&](const F& p, float lo, float hi) {
+        const F below = lo - p, above = p - hi;
+        const F g = below > above ? below : above;
+        return g > zero ? g : zero;
+      };
+      const F gx = gap(px, b[0], b[3]), gy = gap(py, b[1], b[4]), gz = gap(pz, b[2], b[5]);
+      const I near_box = gx * gx + gy * gy + gz * gz <= limit;
+      if (!any_lane<W>(near_box)) continue;
+      const float* plane = c.plane + 4 * size_t(slot);
+      const F offset = plane[0] * px + plane[1] * py + plane[2] * pz - plane[3];
+      const F size = (offset < zero ? -offset : offset) - c.plane_slack;
+      const F plane_gap = size > zero ? size : zero;
+      if (!any_lane<W>(near_box & (plane_gap * plane_gap <= limit))) continue;
+      const vec3f* corner = c.corners + 3 * size_t(slot);
+      const LanePoints<W> r = closest_on_triangle_lanes<W>(px, py, pz, corner[0], corner[1], corner[2]);
+      const I index = I{} + int32_t(c.original[slot]);
+      const I take = (r.distance_squared < best) | ((r.distance_squared == best) & (index < triangle));
+      best = take ? r.distance_squared : best;
+      triangle = take ? index : triangle;
+      region = take ? r.region : region;
+      s = take ? r.s : s;
+      t = take ? r.t : t;
+      limit = best * prune_slack;
+    }
+    store_lanes(l.distance_squared() + i, best);
+    store_lanes(l.s() + i, s);
+    store_lanes(l.t() + i, t);
+    store_lanes(l.triangle() + i, triangle);
+    store_lanes(l.region() + i, region);
+  }
+}
+
+// Four lanes (SSE2, NEON), or eight with AVX2 when the CPU has it (chosen at run time, so a default
+// build uses it too). Both give the same bits: AVX2 alone has no fused multiply-add to contract to.
+[[gnu::noinline]] float seed_lanes_narrow(const LaneArrays& l, const vec3f* corners, uint32_t seed) {
+  return seed_lanes<4>(l, corners, seed);
+}
+[[gnu::noinline]] void scan_lanes_narrow(const LaneArrays& l, const GroupCandidates& c) { scan_lanes<4>(l, c); }
+#if defined(__x86_64__) && defined(__GNUC__)
+[[gnu::noinline, gnu::target("avx2")]] float seed_lanes_wide(const LaneArrays& l, const vec3f* corners, uint32_t seed) {
+  return seed_lanes<8>(l, corners, seed);
+}
+[[gnu::noinline, gnu::target("avx2")]] void scan_lanes_wide(const LaneArrays& l, const GroupCandidates& c) {
+  scan_lanes<8>(l, c);
+}
+std::atomic<unsigned> lane_width{0};
+bool use_wide_lanes() {
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  const unsigned w = lane_width.load(std::memory_order_relaxed);
+  return w ? w == 8 && avx2 : avx2;
+}
+#else
+float seed_lanes_wide(const LaneArrays& l, const vec3f* corners, uint32_t seed) { return seed_lanes_narrow(l, corners, seed); }
+void scan_lanes_wide(const LaneArrays& l, const GroupCandidates& c) { scan_lanes_narrow(l, c); }
+std::atomic<unsigned> lane_width{0};
+bool use_wide_lanes() { return false; }
+#endif
+
 }  // namespace
 
 TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
@@ -372,6 +511,8 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
   if (depth_ > max_depth) throw_internal("TriangleBvh: tree deeper than the traversal stack");
 }
 
+void TriangleBvh::set_lane_width(unsigned width) { lane_width.store(width, std::memory_order_relaxed); }
+
 ClosestHit TriangleBvh::to_triangle(const vec3f& p, uint32_t triangle) const {
   ClosestHit hit;  // no triangle yet: the first one considered is taken
   consider(p, slot_[triangle], hit);
@@ -449,13 +590,22 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
     if (length_squared(points[i] - centre) < length_squared(points[middle] - centre)) middle = i;
   out[middle] = closest(points[middle], hint);
   const uint32_t seed = out[middle].triangle;
-  float upper = out[middle].distance_squared;
-  for (uint32_t i = 0; i < count; ++i) {
-    if (i == middle) continue;
-    out[i] = to_triangle(points[i], seed);
-    upper = std::max(upper, out[i].distance_squared);
-  }
   if (count == 1) return;
+
+  // The points a lane each, in batches (the last padded with copies of the last point), all measured
+  // against the seed first.
+  const bool wide = use_wide_lanes();
+  const uint32_t width = wide ? 8 : 4;
+  const uint32_t padded = (count + width - 1) / width * width;
+  scratch.lane_floats.resize(6 * size_t(padded));
+  scratch.lane_ints.resize(2 * size_t(padded));
+  LaneArrays lanes{scratch.lane_floats.data(), scratch.lane_ints.data(), padded};
+  for (uint32_t i = 0; i < padded; ++i) {
+    const vec3f& p = points[std::min(i, count - 1)];
+    lanes.x()[i] = p.x, lanes.y()[i] = p.y, lanes.z()[i] = p.z;
+  }
+  const vec3f* seed_corners = &corners_[3 * size_t(slot_[seed])];
+  const float upper = wide ? seed_lanes_wide(lanes, seed_corners, seed) : seed_lanes_narrow(lanes, seed_corners, seed);
 
   std::vector<uint32_t>& slots = scratch.slots;
   slots.clear();
@@ -493,38 +643,23 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
   // Every point already holds its distance to the seed: no need to measure it again.
   slots.erase(std::remove(slots.begin(), slots.end(), slot_[seed]), slots.end());
 
-  // Candidates four per block of 40 floats: boxes (min x, y, z, max x, y, z) then planes (normal x,
-  // y, z, offset), four lanes each; the padding lanes are empty boxes, which no point comes near.
-  constexpr size_t stride = 40;
-  const size_t blocks = (slots.size() + 3) / 4;
-  std::vector<float>& box = scratch.box;
-  box.resize(stride * blocks);
-  for (size_t c = 0; c < 4 * blocks; ++c) {
-    float* b = &box[stride * (c / 4) + c % 4];
-    if (c < slots.size()) {
-      const float* t = &triangle_box_[6 * size_t(slots[c])];
-      for (int k = 0; k < 6; ++k) b[4 * k] = t[k];
-      const float* plane = &triangle_plane_[4 * size_t(slots[c])];
-      for (int k = 0; k < 4; ++k) b[4 * (6 + k)] = plane[k];
-    } else {
-      for (int k = 0; k < 3; ++k) b[4 * k] = inf, b[4 * (k + 3)] = -inf;
-      for (int k = 0; k < 4; ++k) b[4 * (6 + k)] = 0;
-    }
-  }
+  const GroupCandidates candidates{slots.data(), slots.size(), triangle_box_.data(), triangle_plane_.data(),
+                                   corners_.data(), original_.data(), plane_slack_};
+  if (wide)
+    scan_lanes_wide(lanes, candidates);
+  else
+    scan_lanes_narrow(lanes, candidates);
   for (uint32_t i = 0; i < count; ++i) {
     if (i == middle) continue;
-    const vec3f& p = points[i];
-    ClosestHit& best = out[i];
-    float limit = best.distance_squared * prune_slack;
-    const Probe probe(p);
-    for (size_t g = 0; g < blocks; ++g) {
-      const float* b = &box[stride * g];
-      int mask = probe.within(b, limit);
-      if (mask) mask &= probe.planes_within(b + 24, plane_slack_, limit);
-      for (; mask; mask &= mask - 1)
-        if (consider(p, slots[4 * g + size_t(__builtin_ctz(unsigned(mask)))], best))
-          limit = best.distance_squared * prune_slack;
-    }
+    const uint32_t triangle = uint32_t(lanes.triangle()[i]);
+    const vec3f* c = &corners_[3 * size_t(slot_[triangle])];
+    const TrianglePoint tp = triangle_point_at(points[i], c[0], c[1], c[2], lanes.region()[i], lanes.s()[i],
+                                               lanes.t()[i], lanes.distance_squared()[i]);
+    ClosestHit& h = out[i];
+    h.distance_squared = tp.distance_squared;
+    h.triangle = triangle;
+    h.point = tp.point;
+    h.v = tp.v, h.w = tp.w;
   }
 }
 

@@ -35,7 +35,10 @@ class TriangleBvh {
   // Reusable memory for closest_group (one per thread).
   struct GroupScratch {
     std::vector<uint32_t> slots;  // candidate triangles (leaf order)
-    std::vector<float> box;       // their boxes and planes, 40 floats per 4 candidates (SoA by 4)
+    // Per point, padded to whole batches of lanes: x, y, z, squared distance, s, t (floats), then the
+    // triangle (mesh index) and region (ints); see closest_on_triangle_lanes.
+    std::vector<float> lane_floats;
+    std::vector<int32_t> lane_ints;
   };
   // closest() for each of `count` points, with identical answers, for points close together (the
   // samples of one small patch): one traversal with the points' box collects every triangle that can
@@ -43,6 +46,10 @@ class TriangleBvh {
   // time before any exact distance.
   // Points spread too far for that fall back to closest(), one by one. `hint` as for closest().
   void closest_group(const vec3f* points, uint32_t count, uint32_t hint, ClosestHit* out, GroupScratch& scratch) const;
+
+  // closest_group's lane width: 0 picks 8 when the CPU has AVX2, else 4 (the default); tests force
+  // 4 or 8 to check both. Process-wide; the results never depend on it.
+  static void set_lane_width(unsigned width);
 
   uint32_t triangle_count() const { return uint32_t(original_.size()); }
   size_t node_count() const { return nodes_.size(); }

@@ -10,6 +10,8 @@
 #include "core/shapes.h"
 #include "measure/triangle_distance.h"
 
+#pragma GCC diagnostic ignored "-Wpsabi"  // eight-lane vectors, in inlined calls only
+
 namespace lod::measure {
 namespace {
 
@@ -58,6 +60,55 @@ TEST(MeasureTriangle, DegenerateTrianglesGiveFiniteAnswers) {
   EXPECT_FLOAT_EQ(r.distance_squared, 2.0f);
 }
 
+// The lane version gives closest_on_triangle's squared distance bit for bit, and triangle_point_at
+// its point and weights, in every region, on degenerate triangles and on points placed on region
+// boundaries (where rounding decides).
+template <int W>
+void expect_lanes_match_scalar(uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> kind(0, 5);
+  auto random_point = [&] { return vec3f{unit(rng), unit(rng), unit(rng)}; };
+  for (int trial = 0; trial < 4000; ++trial) {
+    vec3f a = random_point(), b = random_point(), c = random_point();
+    switch (kind(rng)) {
+      case 0: c = a + (b - a) * 0.5f; break;  // collinear
+      case 1: b = a; break;                   // two corners equal
+      case 2: b = c = a; break;               // a point
+      case 3: c = {b.x, b.y, a.z}; break;     // axis-aligned pieces
+      default: break;
+    }
+    typename Lanes<W>::F px, py, pz;
+    vec3f p[W];
+    for (int k = 0; k < W; ++k) {
+      // Anywhere, on a corner, on an edge, in the plane, and just off an edge.
+      const float t = unit(rng) * 0.5f + 0.5f;
+      switch ((trial + k) % 5) {
+        case 0: p[k] = random_point() * 2.0f; break;
+        case 1: p[k] = k % 2 ? a : c; break;
+        case 2: p[k] = a + (b - a) * t; break;
+        case 3: p[k] = a + (b - a) * t + (c - a) * (1 - t) * 0.5f; break;
+        default: p[k] = b + (c - b) * t + vec3f{1e-7f, -1e-7f, 1e-7f}; break;
+      }
+      px[k] = p[k].x, py[k] = p[k].y, pz[k] = p[k].z;
+    }
+    const LanePoints<W> r = closest_on_triangle_lanes<W>(px, py, pz, a, b, c);
+    for (int k = 0; k < W; ++k) {
+      const TrianglePoint expected = closest_on_triangle(p[k], a, b, c);
+      ASSERT_EQ(r.distance_squared[k], expected.distance_squared) << "trial " << trial << " lane " << k;
+      const TrianglePoint got = triangle_point_at(p[k], a, b, c, r.region[k], r.s[k], r.t[k], r.distance_squared[k]);
+      ASSERT_EQ(got.point, expected.point) << "trial " << trial << " lane " << k;
+      ASSERT_EQ(got.v, expected.v) << "trial " << trial << " lane " << k;
+      ASSERT_EQ(got.w, expected.w) << "trial " << trial << " lane " << k;
+    }
+  }
+}
+
+TEST(MeasureTriangle, LanesMatchTheScalarFunction) {
+  expect_lanes_match_scalar<4>(17);
+  expect_lanes_match_scalar<8>(19);
+}
+
 // The lowest-index triangle among the closest ones, by scanning them all.
 ClosestHit brute_force(const Mesh& m, const vec3f& p) {
   ClosestHit best;
@@ -72,6 +123,18 @@ ClosestHit brute_force(const Mesh& m, const vec3f& p) {
     }
   }
   return best;
+}
+
+void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed);
+
+// closest_group at both lane widths (8 falls back to 4 without AVX2).
+void expect_matches_brute_force_both_widths(const Mesh& m, uint32_t points, uint32_t seed) {
+  for (const unsigned width : {4u, 8u}) {
+    SCOPED_TRACE(width);
+    TriangleBvh::set_lane_width(width);
+    expect_matches_brute_force(m, points, seed);
+  }
+  TriangleBvh::set_lane_width(0);
 }
 
 void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed) {
@@ -123,7 +186,7 @@ void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed) {
 }
 
 TEST(MeasureBvh, MatchesBruteForceOnATorus) {
-  expect_matches_brute_force(shapes::torus(1.0f, 0.3f, 48, 24), 3000, 7);
+  expect_matches_brute_force_both_widths(shapes::torus(1.0f, 0.3f, 48, 24), 3000, 7);
 }
 
 TEST(MeasureBvh, MatchesBruteForceWithTiesAndDegenerateTriangles) {
@@ -140,7 +203,7 @@ TEST(MeasureBvh, MatchesBruteForceWithTiesAndDegenerateTriangles) {
   m.uvs[0].resize(m.positions.size());
   const uint32_t v = uint32_t(m.positions.size());
   m.indices.insert(m.indices.end(), {v - 3, v - 2, v - 1});
-  expect_matches_brute_force(m, 2000, 11);
+  expect_matches_brute_force_both_widths(m, 2000, 11);
 }
 
 TEST(MeasureBvh, SingleTriangleAndSmallMeshes) {
@@ -151,8 +214,8 @@ TEST(MeasureBvh, SingleTriangleAndSmallMeshes) {
   const ClosestHit h = bvh.closest({0.25f, 0.25f, 1});
   EXPECT_EQ(h.triangle, 0u);
   EXPECT_FLOAT_EQ(h.distance_squared, 1.0f);
-  expect_matches_brute_force(shapes::icosphere(0), 500, 3);
-  expect_matches_brute_force(shapes::cube(), 500, 5);
+  expect_matches_brute_force_both_widths(shapes::icosphere(0), 500, 3);
+  expect_matches_brute_force_both_widths(shapes::cube(), 500, 5);
 }
 
 TEST(MeasureBvh, LargeMeshStaysShallowAndExact) {
@@ -165,7 +228,7 @@ TEST(MeasureBvh, LargeMeshStaysShallowAndExact) {
   EXPECT_EQ(four.node_count(), bvh.node_count());
   EXPECT_EQ(one.depth(), four.depth());
   EXPECT_GE(bvh.node_count(), sphere.triangle_count() / (4 * 8));
-  expect_matches_brute_force(sphere, 300, 13);
+  expect_matches_brute_force_both_widths(sphere, 300, 13);
 }
 
 }  // namespace
