@@ -563,8 +563,9 @@ ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint) const {
     uint32_t refs[4];
     float dist[4];
     int hits = 0;
-    for (int k = 0; k < 4; ++k) {
-      if (!(mask >> k & 1) || n.child[k] == empty_child) continue;
+    for (unsigned m = unsigned(mask); m; m &= m - 1) {
+      const int k = __builtin_ctz(m);
+      if (n.child[k] == empty_child) continue;
       int j = hits++;
       for (; j > 0 && dist[j - 1] < d[k]; --j) refs[j] = refs[j - 1], dist[j] = dist[j - 1];
       refs[j] = n.child[k], dist[j] = d[k];
@@ -618,10 +619,9 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
     const Probe probe(lo, hi);
     while (top > 0 && !spread) {
       const Node& n = nodes_[stack[--top]];
-      const int mask = probe.within(n.box, limit);
-      for (int k = 0; k < 4; ++k) {
-        if (!(mask >> k & 1) || n.child[k] == empty_child) continue;
-        const uint32_t ref = n.child[k];
+      for (unsigned m = unsigned(probe.within(n.box, limit)); m; m &= m - 1) {
+        const uint32_t ref = n.child[__builtin_ctz(m)];
+        if (ref == empty_child) continue;
         if (!(ref & leaf_bit)) {
           stack[top++] = ref;
           continue;
