@@ -26,7 +26,7 @@ using measure::vec3f;
 
 constexpr size_t block_size = 1024;       // samples per block
 constexpr size_t blocks_per_slice = 256;  // progress is reported between slices
-constexpr uint32_t group_size = 16;       // samples per closest_group query
+constexpr uint32_t group_size = 32;       // samples per closest_group query
 
 uint64_t splitmix64(uint64_t x) {
   x += 0x9E3779B97F4A7C15ull;
