@@ -559,18 +559,15 @@ ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint) const {
     float d[4];
     const int mask = probe.within(n.box, limit, d);
     if (!mask) continue;
-    // Push the hits farthest first, so the nearest is popped next.
-    uint32_t refs[4];
-    float dist[4];
-    int hits = 0;
+    // Push the hits farthest first, so the nearest is popped next (sorted in place on the stack).
+    const int base = top;
     for (unsigned m = unsigned(mask); m; m &= m - 1) {
       const int k = __builtin_ctz(m);
       if (n.child[k] == empty_child) continue;
-      int j = hits++;
-      for (; j > 0 && dist[j - 1] < d[k]; --j) refs[j] = refs[j - 1], dist[j] = dist[j - 1];
-      refs[j] = n.child[k], dist[j] = d[k];
+      int j = top++;
+      for (; j > base && stack_distance[j - 1] < d[k]; --j) stack[j] = stack[j - 1], stack_distance[j] = stack_distance[j - 1];
+      stack[j] = n.child[k], stack_distance[j] = d[k];
     }
-    for (int k = 0; k < hits; ++k) stack[top] = refs[k], stack_distance[top] = dist[k], ++top;
   }
   return best;
 }
