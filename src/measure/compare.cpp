@@ -405,17 +405,44 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
     // Queries go a triangle at a time; a triangle with many samples is cut into patches (cells of its
     // (s, r2) square of about 8 samples, in serpentine order, by a counting sort), each a group of
     // queries close together.
+    // Consecutive small triangles share a group while it has room and their boxes stay about as
+    // large as the two together (neighbours, in a mesh whose order is mostly spatial).
     BlockQueries block;
     std::vector<uint32_t> cell, cell_start, sorted;
+    uint32_t open = 0;  // points in the current group of small triangles
+    float open_lo[3] = {}, open_hi[3] = {};
+    auto diagonal = [](const float* lo, const float* hi) {
+      const float x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2];
+      return std::sqrt(x * x + y * y + z * z);
+    };
     for (size_t t = first_triangle; plan.area_start[t] < end; ++t) {
       const uint32_t a = uint32_t(std::max(begin, plan.area_start[t]) - begin);
       const uint32_t b = uint32_t(std::min(end, plan.area_start[t + 1]) - begin);
       if (a >= b) continue;
       if (b - a <= group_size) {
+        const vec3f c0 = from.corner(t, 0), c1 = from.corner(t, 1), c2 = from.corner(t, 2);
+        float lo[3], hi[3];
+        for (int k = 0; k < 3; ++k) {
+          lo[k] = std::min({(&c0.x)[k], (&c1.x)[k], (&c2.x)[k]});
+          hi[k] = std::max({(&c0.x)[k], (&c1.x)[k], (&c2.x)[k]});
+        }
+        if (open) {
+          float ulo[3], uhi[3];
+          for (int k = 0; k < 3; ++k) ulo[k] = std::min(lo[k], open_lo[k]), uhi[k] = std::max(hi[k], open_hi[k]);
+          if (open + (b - a) > group_size || diagonal(ulo, uhi) > diagonal(lo, hi) + diagonal(open_lo, open_hi)) {
+            block.cut();
+            open = 0;
+          } else {
+            std::copy(ulo, ulo + 3, lo), std::copy(uhi, uhi + 3, hi);
+          }
+        }
+        std::copy(lo, lo + 3, open_lo), std::copy(hi, hi + 3, open_hi);
         for (uint32_t o = a; o < b; ++o) block.add(at[o], o);
-        block.cut();
+        open += b - a;
         continue;
       }
+      block.cut();
+      open = 0;
       const uint32_t k = uint32_t(std::ceil(std::sqrt(double(b - a) / 8.0)));
       cell.resize(b - a);
       cell_start.assign(size_t(k) * k + 1, 0);
