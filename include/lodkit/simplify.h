@@ -71,6 +71,12 @@ struct SimplifyOptions {
   // the collapses: the record (and replay) describe the mesh before pruning.
   bool prune = false;
 
+  // After the collapses, fit the surviving positions to the input surface by this many least-squares
+  // iterations (Hoppe et al. 1993's vertex step; see src/simplify/fit.h). 0 keeps the collapse
+  // placements. Not done with keep_vertices (positions are input vertices there) or on locked
+  // positions.
+  uint32_t fit_iterations = 3;
+
   // Record every collapse in SimplifyResult::record (needed for replay, undo and progressive meshes).
   bool record = true;
 
@@ -108,8 +114,17 @@ struct WedgeChange {
   uint32_t values_begin = 0;  // into SimplifyRecord::old_values / new_values
 };
 
+// A position moved by the final fit (SimplifyOptions::fit_iterations), after every collapse.
+struct FittedPosition {
+  uint32_t position = 0;  // position id (lod::position_ids of the input)
+  float3 old_position, new_position;
+};
+
 struct SimplifyRecord {
   std::vector<Collapse> collapses;  // in the order they were applied
+  // Applied after the last collapse (replay of all collapses ends with them; undo starts with them).
+  // Progressive meshes play collapses only: their coarsest level is the mesh before the fit.
+  std::vector<FittedPosition> fitted;
   std::vector<uint32_t> removed_faces;
   std::vector<Relink> relinks;
   std::vector<WedgeChange> wedges;
@@ -136,6 +151,7 @@ struct SimplifyResult {
   uint64_t virtual_pairs = 0;  // collapses that joined two positions without a shared face (aggregation)
   uint64_t rejected_topology = 0, rejected_flip = 0, rejected_seam = 0, rejected_shape = 0;
   uint64_t pruned_triangles = 0;
+  uint64_t fitted_positions = 0;  // positions the final fit moved
   uint32_t passes = 0;
   double seconds_setup = 0, seconds_collapse = 0, seconds_total = 0;
 };

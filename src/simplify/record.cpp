@@ -202,6 +202,15 @@ void Replay::undo(const SimplifyRecord& record, const Collapse& c) {
   for (uint32_t i = 0; i < c.removed_face_count; ++i) alive[record.removed_faces[c.faces_begin + i]] = 1;
 }
 
+void Replay::fit(const SimplifyRecord& record, bool forwards) {
+  for (const FittedPosition& f : record.fitted)
+    if (f.position >= position.size()) throw_usage("replay: the collapse record does not belong to this mesh");
+  for (const FittedPosition& f : record.fitted) {
+    position[f.position] = forwards ? f.new_position : f.old_position;
+    moves[f.position] += forwards ? 1 : -1;
+  }
+}
+
 void Replay::set_values(const SimplifyRecord& record, const Collapse& c, const std::vector<float>& values) {
   for (uint32_t i = 0; i < c.wedge_count; ++i) {
     const WedgeChange& w = record.wedges[c.wedges_begin + i];
@@ -215,12 +224,15 @@ Mesh replay(const Mesh& mesh, const SimplifyRecord& record, size_t count) {
   if (count > record.collapses.size()) throw_usage("replay: asked for more collapses than the record holds");
   collapse::Replay state(mesh);
   for (size_t i = 0; i < count; ++i) state.apply(record, record.collapses[i]);
+  if (count == record.collapses.size()) state.fit(record, true);
   return collapse::compact(mesh, state.snapshot(), nullptr, nullptr);
 }
 
 Mesh replay_and_undo(const Mesh& mesh, const SimplifyRecord& record) {
   collapse::Replay state(mesh);
   for (const Collapse& c : record.collapses) state.apply(record, c);
+  state.fit(record, true);
+  state.fit(record, false);
   for (size_t i = record.collapses.size(); i-- > 0;) state.undo(record, record.collapses[i]);
   return collapse::materialize(mesh, state.snapshot());
 }

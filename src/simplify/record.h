@@ -46,6 +46,8 @@ class Replay {
   // so that undo restores this state bit for bit; false (state unspecified) otherwise.
   bool apply_consistent(const SimplifyRecord& record, const Collapse& c);
   void undo(const SimplifyRecord& record, const Collapse& c);
+  // The final fit's moves (after the last collapse), forwards or taken back.
+  void fit(const SimplifyRecord& record, bool forwards);
 
  private:
   void set_values(const SimplifyRecord& record, const Collapse& c, const std::vector<float>& values);

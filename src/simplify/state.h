@@ -56,6 +56,7 @@ struct State {
   std::vector<uint32_t> external;     // per internal position: public position id
   std::vector<float3> position;       // per position, object space
   std::vector<uint32_t> moves;        // per position: collapses that moved it (0: input positions)
+  std::vector<uint32_t> successor;    // per position: the position it collapsed into (~0u while live)
   std::vector<uint8_t> flags;         // per position
   std::vector<float> importance;      // per position (largest of its wedges'); empty: all 1
   std::vector<uint32_t> corners;      // 3 wedges per triangle

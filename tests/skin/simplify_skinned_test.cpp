@@ -126,6 +126,7 @@ TEST(SimplifySkinned, MultiposeWithTheIdentityPoseIsConstrainedQem) {
   const SimplifyResult r = simplify_skinned(m, o);
   SimplifyOptions plain = o.simplify;
   plain.metric = Metric::constrained_qem;
+  plain.fit_iterations = 0;  // the multi-pose metric is not followed by the rest-pose fit
   const SimplifyResult s = simplify(m, plain);
   EXPECT_EQ(r.mesh.indices, s.mesh.indices);
   EXPECT_EQ(r.mesh.positions, s.mesh.positions);

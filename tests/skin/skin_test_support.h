@@ -100,15 +100,16 @@ inline void expect_geomorph_ends(const LodChain& chain, const std::vector<mat4>&
       const float3 &a = fine.positions[v], &b = coarse.positions[chain.morphs[i].target[v]];
       EXPECT_NEAR(out.positions[v].x, 0.5f * (a.x + b.x), tolerance);
       EXPECT_NEAR(out.positions[v].y, 0.5f * (a.y + b.y), tolerance);
-      // Normals: the normalised blend of the two skinned unit normals, within 1.5 degrees (the morph
-      // blends the skinned normals before normalising them; where rotations blend they are shorter).
+      // Normals: the normalised blend of the two skinned unit normals, within 2 degrees (the morph
+      // blends the skinned normals before normalising them; where rotations blend they are shorter,
+      // by an amount that grows with the angle between the two levels' normals).
       const float3 &n = fine.normals[v], &q = coarse.normals[chain.morphs[i].target[v]];
       const float3 mid = {n.x + q.x, n.y + q.y, n.z + q.z};
       const float len = std::sqrt(mid.x * mid.x + mid.y * mid.y + mid.z * mid.z);
       if (len > 0.5f) {
-        EXPECT_NEAR(out.normals[v].x, mid.x / len, 0.026f) << v;
-        EXPECT_NEAR(out.normals[v].y, mid.y / len, 0.026f) << v;
-        EXPECT_NEAR(out.normals[v].z, mid.z / len, 0.026f) << v;
+        EXPECT_NEAR(out.normals[v].x, mid.x / len, 0.035f) << v;
+        EXPECT_NEAR(out.normals[v].y, mid.y / len, 0.035f) << v;
+        EXPECT_NEAR(out.normals[v].z, mid.z / len, 0.035f) << v;
       }
     }
   }

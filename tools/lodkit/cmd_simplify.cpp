@@ -24,6 +24,7 @@ struct SimplifyCommand {
   std::string metric = "cqem", attributes;
   bool keep_vertices = false, lock_border = false, prune = false, json = false, force = false;
   unsigned threads = 0;
+  uint32_t fit = SimplifyOptions{}.fit_iterations;
 };
 
 }  // namespace
@@ -76,6 +77,8 @@ Command register_simplify(CLI::App& root) {
   app->add_flag("--lock-border", o->lock_border, "Never move border vertices");
   app->add_option("--aggregate", o->aggregate, "Also merge positions closer than this distance (object space)");
   app->add_flag("--prune", o->prune, "Drop components smaller than the error reached");
+  app->add_option("--fit", o->fit, "Iterations fitting the result's vertices to the input after the collapses (0: none)")
+      ->capture_default_str();
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
@@ -93,6 +96,7 @@ Command register_simplify(CLI::App& root) {
                 .lock_border = o->lock_border,
                 .aggregate_distance = o->aggregate,
                 .prune = o->prune,
+                .fit_iterations = o->fit,
                 .record = false,
                 .threads = o->threads,
             };
@@ -108,7 +112,7 @@ Command register_simplify(CLI::App& root) {
             for (Mesh* m : meshes) validate(*m, o->input), total += m->triangle_count();
             uint64_t in_triangles = 0, out_triangles = 0, in_vertices = 0, out_vertices = 0;
             float error = 0, relative_error = 0;
-            uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, rejected[4] = {};
+            uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, fitted = 0, rejected[4] = {};
             start = std::chrono::steady_clock::now();
             {
               ProgressBar bar("simplifying");
@@ -127,6 +131,7 @@ Command register_simplify(CLI::App& root) {
                 in_vertices += r.input_vertices, out_vertices += r.output_vertices;
                 error = std::max(error, r.error);
                 passes += r.passes, collapses += r.collapses, virtual_pairs += r.virtual_pairs, pruned += r.pruned_triangles;
+                fitted += r.fitted_positions;
                 rejected[0] += r.rejected_topology, rejected[1] += r.rejected_seam;
                 rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape;
                 relative_error = std::max(relative_error, r.relative_error);
@@ -144,6 +149,7 @@ Command register_simplify(CLI::App& root) {
                                   {"input_vertices", in_vertices}, {"output_vertices", out_vertices},
                                   {"error", error}, {"relative_error", relative_error},
                                   {"passes", passes}, {"collapses", collapses}, {"virtual_pairs", virtual_pairs}, {"pruned_triangles", pruned},
+                                  {"fitted_positions", fitted},
                                   {"rejected", {{"topology", rejected[0]}, {"seam", rejected[1]},
                                                 {"flip", rejected[2]}, {"shape", rejected[3]}}},
                                   {"load_seconds", load_seconds}, {"simplify_seconds", simplify_seconds},

@@ -1,0 +1,28 @@
+// Internal: fitting the surviving positions to the input surface after the collapses (the vertex
+// step of Hoppe et al. 1993, "Mesh optimization").
+//
+// Collapses place each position once, from quadrics, and never revisit it; far down (1% of the
+// input) the result is then noticeably off the input in places. The fit moves every live position
+// x_j by d_j to minimise, in the least-squares sense,
+//   sum over input vertices i of a_i |S at i's foot - p_i|^2    (the input onto the result)
+// + weight * sum over positions j of m_j |x_j + d_j - c_j|^2     (the result onto the input)
+// where a_i is i's share of the input's area, i's foot its closest point on the current result,
+// m_j the area of the input vertices that ended in position j and c_j the closest point of x_j on
+// the input. Each iteration fixes the feet and closest points, moves every position by its own
+// normal equation (Jacobi), then takes back the moves around any face that would turn by more than
+// the flip limit or degenerate. Corpus meshes (10% and 1%, with the finer late passes): Hausdorff
+// distance about -8%, RMS about -20% (10%) and -25% (1%), geometric means. Exact closest points
+// come from measure's BVH; the result does not depend on the thread count.
+#pragma once
+
+#include <vector>
+
+#include "simplify/state.h"
+
+namespace lod::collapse {
+
+// Moves state.position of live positions (never locked ones), counts each moved position in
+// state.moves and appends it to `fitted` (public ids), if given.
+void fit_positions(State& state, uint32_t iterations, double weight, std::vector<FittedPosition>* fitted);
+
+}  // namespace lod::collapse
