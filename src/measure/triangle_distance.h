@@ -129,6 +129,11 @@ struct Lanes<8> {
 // triangle left no region (the scalar function is run for that lane).
 enum TriangleRegion : int32_t { region_a, region_b, region_ab, region_c, region_ac, region_bc, region_face, region_none };
 
+// closest_on_triangle's squared distance, out of line: the lanes' rare fallback.
+[[gnu::noinline]] inline float closest_on_triangle_distance(const vec3f& p, const vec3f& a, const vec3f& b, const vec3f& c) {
+  return closest_on_triangle(p, a, b, c).distance_squared;
+}
+
 template <int W>
 struct LanePoints {
   typename Lanes<W>::F distance_squared;
@@ -210,7 +215,7 @@ template <int W>
   const I none = r.region == int32_t(region_none);
   if (any_lane<W>(none)) [[unlikely]] {
     for (int k = 0; k < W; ++k)
-      if (none[k]) r.distance_squared[k] = closest_on_triangle({px[k], py[k], pz[k]}, a, b, c).distance_squared;
+      if (none[k]) r.distance_squared[k] = closest_on_triangle_distance({px[k], py[k], pz[k]}, a, b, c);
   }
   return r;
 }
