@@ -22,12 +22,27 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
     const double third = length(cross(p[1] - p[0], p[2] - p[0])) / 6;
     for (uint32_t k = 0; k < 3; ++k) share[input.indices[3 * t + k]] += third;
   }
+  // The live position each position ended in: its collapse chain, shortened as it is walked.
+  std::vector<uint32_t> end = s.successor;
+  const auto last = [&](uint32_t p) {
+    uint32_t r = p;
+    while (end[r] != ~0u) r = end[r];
+    while (p != r) {  // point the walked chain at r
+      const uint32_t next = end[p];
+      end[p] = r;
+      p = next;
+    }
+    return r;
+  };
   std::vector<double> mass(n, 0.0);
-  for (size_t v = 0; v < input.vertex_count(); ++v) {
-    uint32_t p = s.position_of[v];
-    while (s.successor[p] != ~0u) p = s.successor[p];
-    mass[p] += share[v];
-  }
+  for (size_t v = 0; v < input.vertex_count(); ++v) mass[last(s.position_of[v])] += share[v];
+  // Far down, the input has many vertices per surviving position; 16 per position fix it as well
+  // (every k-th input vertex, weighted k times) at a fraction of the closest-point searches.
+  uint32_t live_positions = 0;
+  for (uint32_t j = 0; j < n; ++j) live_positions += mass[j] > 0;
+  const size_t stride = std::max<size_t>(1, input.vertex_count() / (16 * size_t(std::max(1u, live_positions))));
+  if (stride > 1)
+    for (size_t v = 0; v < input.vertex_count(); ++v) share[v] = v % stride ? 0.0 : share[v] * double(stride);
   const measure::TriangleBvh input_bvh(input, s.threads);
 
   // Per input vertex: its closest point on the current surface (a live triangle and the barycentric
