@@ -7,111 +7,150 @@
 #include "measure/bvh.h"
 
 namespace lod::collapse {
+namespace {
+
+constexpr uint32_t none = ~0u;
+
+// An input vertex's closest point on the current result: the result's triangle, the barycentric
+// weights of its corners 1 and 2, and the residual input - surface point (normalised frame).
+struct Foot {
+  uint32_t triangle = none;
+  float v = 0, w = 0;
+  float residual[3] = {};
+};
+
+}  // namespace
 
 void fit_positions(State& s, uint32_t iterations, double weight, std::vector<FittedPosition>* fitted) {
   const Mesh& input = s.mesh;
-  const uint32_t n = s.position_count;
   const size_t triangles = s.alive.size();
 
-  // Each input corner stands for a third of its triangle's area (normalised frame): the weight of
-  // its vertex as a sample, and of the position that vertex ended in ("mass", for the pull below).
-  std::vector<double> share(input.vertex_count(), 0.0);
-  for (size_t t = 0; t < triangles; ++t) {
-    vec3d p[3];
-    for (uint32_t k = 0; k < 3; ++k) p[k] = s.normalized_input(input.positions[input.indices[3 * t + k]]);
-    const double third = length(cross(p[1] - p[0], p[2] - p[0])) / 6;
-    for (uint32_t k = 0; k < 3; ++k) share[input.indices[3 * t + k]] += third;
-  }
   // The live position each position ended in: its collapse chain, shortened as it is walked.
   std::vector<uint32_t> end = s.successor;
   const auto last = [&](uint32_t p) {
     uint32_t r = p;
-    while (end[r] != ~0u) r = end[r];
-    while (p != r) {  // point the walked chain at r
+    while (end[r] != none) r = end[r];
+    while (p != r) {
       const uint32_t next = end[p];
       end[p] = r;
       p = next;
     }
     return r;
   };
-  std::vector<double> mass(n, 0.0);
-  for (size_t v = 0; v < input.vertex_count(); ++v) mass[last(s.position_of[v])] += share[v];
+
+  // The result with its own compact numbering: live positions in order of first use.
+  std::vector<uint32_t> slot(s.position_count, none), position;  // position id -> slot, and back
+  Mesh result;
+  for (size_t t = 0; t < triangles; ++t) {
+    if (!s.alive[t]) continue;
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t p = s.corner_pos[3 * t + k];
+      if (slot[p] == none) slot[p] = uint32_t(position.size()), position.push_back(p);
+      result.indices.push_back(slot[p]);
+    }
+  }
+  const size_t m = position.size();
+  if (m == 0) return;
+  result.positions.resize(m);
+  for (size_t j = 0; j < m; ++j) result.positions[j] = s.position[position[j]];
+  const size_t result_triangles = result.indices.size() / 3;
+
+  // Each input corner stands for a third of its triangle's area (normalised frame): the weight of
+  // its vertex as a sample, and of the position that vertex ended in ("mass", for the pull below).
+  // The pull's candidates are the input triangles with a corner that ended in the position.
+  std::vector<double> share(input.vertex_count(), 0.0), mass(m, 0.0);
+  std::vector<uint32_t> candidates_first(m + 1, 0), candidates;
+  const auto final_slot = [&](uint32_t corner) { return slot[last(s.position_of[input.indices[corner]])]; };
+  for (int fill = 0; fill < 2; ++fill) {
+    for (size_t t = 0; t < triangles; ++t) {
+      uint32_t j[3];
+      for (uint32_t k = 0; k < 3; ++k) j[k] = final_slot(uint32_t(3 * t + k));
+      for (uint32_t k = 0; k < 3; ++k) {
+        if (j[k] == none || (k > 0 && j[k] == j[0]) || (k > 1 && j[k] == j[1])) continue;
+        if (fill) candidates[candidates_first[j[k]]++] = uint32_t(t);
+        else ++candidates_first[j[k] + 1];
+      }
+    }
+    if (fill) break;
+    for (size_t j = 0; j < m; ++j) candidates_first[j + 1] += candidates_first[j];
+    candidates.resize(candidates_first[m]);
+  }
+  std::rotate(candidates_first.rbegin(), candidates_first.rbegin() + 1, candidates_first.rend());  // back to starts
+  candidates_first[0] = 0;
+  for (size_t t = 0; t < triangles; ++t) {
+    vec3d p[3];
+    for (uint32_t k = 0; k < 3; ++k) p[k] = s.normalized_input(input.positions[input.indices[3 * t + k]]);
+    const double third = length(cross(p[1] - p[0], p[2] - p[0])) / 6;
+    for (uint32_t k = 0; k < 3; ++k) share[input.indices[3 * t + k]] += third;
+  }
+  for (size_t v = 0; v < input.vertex_count(); ++v) {
+    const uint32_t j = slot[last(s.position_of[v])];
+    if (j != none) mass[j] += share[v];
+  }
   // Far down, the input has many vertices per surviving position; 16 per position fix it as well
   // (every k-th input vertex, weighted k times) at a fraction of the closest-point searches.
-  uint32_t live_positions = 0;
-  for (uint32_t j = 0; j < n; ++j) live_positions += mass[j] > 0;
-  const size_t stride = std::max<size_t>(1, input.vertex_count() / (16 * size_t(std::max(1u, live_positions))));
-  if (stride > 1)
-    for (size_t v = 0; v < input.vertex_count(); ++v) share[v] = v % stride ? 0.0 : share[v] * double(stride);
-  const measure::TriangleBvh input_bvh(input, s.threads);
+  const size_t stride = std::max<size_t>(1, input.vertex_count() / (16 * m));
+  std::vector<uint32_t> samples;
+  for (size_t v = 0; v < input.vertex_count(); v += stride)
+    if (share[v] > 0) samples.push_back(uint32_t(v));
 
-  // Per input vertex: its closest point on the current surface (a live triangle and the barycentric
-  // weights of its corners) and the residual input - surface point, normalised frame.
-  struct Foot {
-    uint32_t triangle = ~0u;
-    double beta[3] = {};
-    vec3d residual;
-  };
-  std::vector<Foot> foot(input.vertex_count());
-  std::vector<vec3d> num(n);
-  std::vector<double> den(n);
-  std::vector<uint8_t> moved(n), revert(n);
+  std::vector<Foot> foot(samples.size());
+  std::vector<vec3d> num(m);
+  std::vector<double> den(m);
+  std::vector<uint8_t> moved(m), revert(m);
   std::vector<float3> before;
-  const std::vector<float3> start = s.position;
-  Mesh current;
-  std::vector<uint32_t> live, index_of;  // current's triangle -> state triangle, and back
+  const std::vector<float3> start = result.positions;
+  const auto normalized = [&](size_t j) { return s.normalized_input(result.positions[j]); };
   for (uint32_t iteration = 0; iteration < iterations; ++iteration) {
-    current.positions = s.position;
-    current.indices.clear(), live.clear();
-    for (size_t t = 0; t < triangles; ++t)
-      if (s.alive[t]) {
-        live.push_back(uint32_t(t));
-        current.indices.insert(current.indices.end(), &s.corner_pos[3 * t], &s.corner_pos[3 * t] + 3);
-      }
-    if (live.empty()) return;
-    const measure::TriangleBvh current_bvh(current, s.threads);
-    // The previous foot's triangle starts each search (it is usually still the answer).
-    index_of.assign(triangles, 0);
-    for (uint32_t i = 0; i < live.size(); ++i) index_of[live[i]] = i;
-    core::parallel_for(input.vertex_count(), s.threads, [&](size_t v) {
-      Foot& f = foot[v];
-      const uint32_t hint = f.triangle == ~0u ? 0 : index_of[f.triangle];
-      f = Foot{};
-      if (!(share[v] > 0)) return;
-      const measure::ClosestHit hit = current_bvh.closest(input.positions[v], hint);
-      f.triangle = live[hit.triangle];
-      f.beta[0] = 1.0 - double(hit.v) - double(hit.w), f.beta[1] = hit.v, f.beta[2] = hit.w;
-      const uint32_t* c = &s.corner_pos[3 * size_t(f.triangle)];
-      const vec3d q = s.normalized(c[0]) * f.beta[0] + s.normalized(c[1]) * f.beta[1] + s.normalized(c[2]) * f.beta[2];
-      f.residual = s.normalized_input(input.positions[v]) - q;
+    const measure::TriangleBvh bvh(result, s.threads);
+    core::parallel_for(samples.size(), s.threads, [&](size_t i) {
+      Foot& f = foot[i];
+      const uint32_t v = samples[i];
+      const measure::ClosestHit hit = bvh.closest(input.positions[v], f.triangle == none ? 0 : f.triangle);
+      f.triangle = hit.triangle, f.v = hit.v, f.w = hit.w;
+      const uint32_t* c = &result.indices[3 * size_t(hit.triangle)];
+      const vec3d q = normalized(c[0]) * (1.0 - double(hit.v) - double(hit.w)) + normalized(c[1]) * double(hit.v) +
+                      normalized(c[2]) * double(hit.w);
+      const vec3d r = s.normalized_input(input.positions[v]) - q;
+      f.residual[0] = float(r.x), f.residual[1] = float(r.y), f.residual[2] = float(r.z);
     });
-    // Each position's normal equations with its neighbours held still, summed in input order (so
+    // Each position's normal equation with its neighbours held still, summed in sample order (so
     // the sums do not depend on the thread count).
     std::fill(num.begin(), num.end(), vec3d{});
     std::fill(den.begin(), den.end(), 0.0);
-    for (size_t v = 0; v < input.vertex_count(); ++v) {
-      const Foot& f = foot[v];
-      if (f.triangle == ~0u) continue;
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const Foot& f = foot[i];
+      const double a = share[samples[i]] * double(stride);
+      const double beta[3] = {1.0 - double(f.v) - double(f.w), f.v, f.w};
+      const vec3d r{f.residual[0], f.residual[1], f.residual[2]};
       for (uint32_t k = 0; k < 3; ++k) {
-        const uint32_t j = s.corner_pos[3 * size_t(f.triangle) + k];
-        num[j] = num[j] + f.residual * (share[v] * f.beta[k]);
-        den[j] += share[v] * f.beta[k] * f.beta[k];
+        const uint32_t j = result.indices[3 * size_t(f.triangle) + k];
+        num[j] = num[j] + r * (a * beta[k]);
+        den[j] += a * beta[k] * beta[k];
       }
     }
-    before = s.position;
-    core::parallel_for(n, s.threads, [&](size_t j) {
+    before = result.positions;
+    core::parallel_for(m, s.threads, [&](size_t j) {
       moved[j] = 0;
-      if (!(den[j] > 0) || (s.flags[j] & (flag_locked | flag_dead))) return;
+      if (!(den[j] > 0) || (s.flags[position[j]] & flag_locked)) return;
       // Minimise sum a |r - beta d|^2 + weight mass |x + d - c|^2 over the move d, c being the
-      // position's closest point on the input.
-      const measure::ClosestHit hit = input_bvh.closest(before[j]);
-      const vec3d x = s.normalized(uint32_t(j));
-      const vec3d c = s.normalized_input(float3{hit.point.x, hit.point.y, hit.point.z});
+      // position's closest point on the input (among the input triangles it stands for).
+      const measure::vec3f x(before[j]);
+      measure::vec3f c = x;
+      float best = std::numeric_limits<float>::infinity();
+      for (uint32_t i = candidates_first[j]; i < candidates_first[j + 1]; ++i) {
+        const uint32_t* corner = &input.indices[3 * size_t(candidates[i])];
+        const measure::TrianglePoint hit = measure::closest_on_triangle(
+            x, input.positions[corner[0]], input.positions[corner[1]], input.positions[corner[2]]);
+        const float d = measure::length_squared(x - hit.point);
+        if (d < best) best = d, c = hit.point;
+      }
       const double pull = weight * mass[j];
-      const vec3d d = (num[j] - (x - c) * pull) * (1.0 / (den[j] + pull));
-      const float3 to = s.object(x + d);
+      const vec3d here = normalized(j);
+      const vec3d d = (num[j] - (here - s.normalized_input(float3{c.x, c.y, c.z})) * pull) * (1.0 / (den[j] + pull));
+      const float3 to = s.object(here + d);
       if (!std::isfinite(to.x) || !std::isfinite(to.y) || !std::isfinite(to.z) || to == before[j]) return;
-      s.position[j] = to;
+      result.positions[j] = to;
       moved[j] = 1;
     });
     // Take back every move around a face that would turn by more than the flip limit or degenerate,
@@ -120,30 +159,32 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
     for (bool changed = true; changed;) {
       changed = false;
       std::fill(revert.begin(), revert.end(), 0);
-      for (const uint32_t t : live) {
-        const uint32_t* c = &s.corner_pos[3 * size_t(t)];
+      for (size_t t = 0; t < result_triangles; ++t) {
+        const uint32_t* c = &result.indices[3 * t];
         if (!(moved[c[0]] | moved[c[1]] | moved[c[2]])) continue;
         const auto corner = [&](const std::vector<float3>& from, uint32_t k) {
           const float3& p = from[c[k]];
           return vec3d{p.x, p.y, p.z};
         };
         const vec3d a0 = corner(before, 0), b0 = corner(before, 1), c0 = corner(before, 2);
-        const vec3d a1 = corner(s.position, 0), b1 = corner(s.position, 1), c1 = corner(s.position, 2);
+        const vec3d a1 = corner(result.positions, 0), b1 = corner(result.positions, 1), c1 = corner(result.positions, 2);
         const vec3d n0 = cross(b0 - a0, c0 - a0), n1 = cross(b1 - a1, c1 - a1);
         const double l0 = length(n0), l1 = length(n1);
         const double longest = std::max({length_squared(b1 - a1), length_squared(c1 - b1), length_squared(a1 - c1)});
         if (!(l1 > 1e-12 * longest) || (l0 > 0 && dot(n0, n1) < min_dot * l0 * l1))
           for (uint32_t k = 0; k < 3; ++k) revert[c[k]] |= moved[c[k]];
       }
-      for (uint32_t j = 0; j < n; ++j)
-        if (revert[j]) s.position[j] = before[j], moved[j] = 0, changed = true;
+      for (size_t j = 0; j < m; ++j)
+        if (revert[j]) result.positions[j] = before[j], moved[j] = 0, changed = true;
     }
   }
 
-  for (uint32_t j = 0; j < n; ++j) {
-    if (s.position[j] == start[j]) continue;
-    ++s.moves[j];
-    if (fitted) fitted->push_back({s.external[j], start[j], s.position[j]});
+  for (size_t j = 0; j < m; ++j) {
+    if (result.positions[j] == start[j]) continue;
+    const uint32_t p = position[j];
+    s.position[p] = result.positions[j];
+    ++s.moves[p];
+    if (fitted) fitted->push_back({s.external[p], start[j], result.positions[j]});
   }
 }
 
