@@ -8,6 +8,7 @@
 // adjacency is updated (or allocated) per collapse.
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -47,6 +48,10 @@ double seconds(clock::time_point a, clock::time_point b) { return std::chrono::d
 struct Scratch {
   std::vector<uint32_t> removed_faces, neighbours_u, neighbours_v, kept_wedges, candidates, extra;
   std::vector<WedgePair> pairs[2];
+  // The removed faces of the edge being evaluated (at most two get that far) and per face its
+  // corner that is neither end.
+  uint32_t face[2] = {}, face_count = 0, opposite[2] = {};
+  std::span<const uint32_t> faces() const { return {face, face_count}; }
 };
 
 // What the engine decided for one edge.
@@ -82,9 +87,12 @@ class Engine {
       ++result_.passes;
       evaluate_all(first);
       first = false;
-      std::vector<uint32_t> order;
+      // Candidates as (cost, position) keys: sorting the integers orders them by cost, then position,
+      // without an indirection per comparison (NaN costs never pass the limit test).
+      std::vector<uint64_t>& order = order_;
+      order.clear();
       for (uint32_t u = 0; u < s_.position_count; ++u)
-        if (best_[u].other != none && best_[u].cost <= cost_limit) order.push_back(u);
+        if (best_[u].other != none && best_[u].cost <= cost_limit) order.push_back(sort_key(best_[u].cost, u));
       if (order.empty()) break;
 
       // This pass applies at most a third of the live positions' worth of collapses (finer passes
@@ -93,12 +101,9 @@ class Engine {
       const uint64_t live_positions = std::max<uint64_t>(1, s_.live_triangles / 2);
       const size_t goal = size_t(std::clamp<uint64_t>(std::min(needed, live_positions / 3), 1, order.size()));
       const size_t considered = std::min(order.size(), goal * 2);
-      const auto cheaper = [&](uint32_t a, uint32_t b) {
-        return best_[a].cost < best_[b].cost || (best_[a].cost == best_[b].cost && a < b);
-      };
-      if (considered < order.size()) std::nth_element(order.begin(), order.begin() + considered, order.end(), cheaper);
+      if (considered < order.size()) std::nth_element(order.begin(), order.begin() + considered, order.end());
       order.resize(considered);
-      std::sort(order.begin(), order.end(), cheaper);
+      std::sort(order.begin(), order.end());
 
       // Full checks run in parallel on chunks of the candidates still free, then the chunk is
       // applied in cost order. A candidate is applied only if none of its positions was locked by
@@ -113,7 +118,7 @@ class Engine {
       for (size_t next = 0; next < order.size() && s_.live_triangles > target_triangles;) {
         batch.clear();
         for (; next < order.size() && batch.size() < chunk; ++next) {
-          const uint32_t u = order[next], v = best_[u].other;  // none: u died in this pass
+          const uint32_t u = uint32_t(order[next]), v = best_[u].other;  // none: u died in this pass
           if (v != none && !((s_.flags[u] | s_.flags[v]) & flag_pass_locked)) batch.push_back(u);
         }
         decisions_.resize(batch.size());
@@ -155,6 +160,12 @@ class Engine {
     float cost = std::numeric_limits<float>::infinity();
     uint32_t other = none;
   };
+
+  // Orders like (cost, u) compared as (float, uint32), for any cost but NaN (-0 counts as 0).
+  static uint64_t sort_key(float cost, uint32_t u) {
+    const uint32_t bits = std::bit_cast<uint32_t>(cost + 0.0f);
+    return uint64_t(bits & 0x80000000u ? ~bits : bits | 0x80000000u) << 32 | u;
+  }
 
   void build_star() {
     s_.first.assign(s_.position_count + 1, 0);
@@ -276,8 +287,7 @@ class Engine {
         best_[u] = Best{};
         continue;
       }
-      neighbours(u, none, scratch.candidates);
-      for (const uint32_t v : scratch.candidates) {
+      for (const uint32_t v : neighbours(u, none, scratch.candidates)) {
         if (v <= u || (s_.flags[v] & (flag_dead | flag_complex))) continue;
         if (!full && !(mark_[v] & mark_kept)) continue;
         Decision decision;
@@ -344,11 +354,11 @@ class Engine {
               }
             }
         std::sort(near.begin(), near.end());
-        neighbours(e.p, none, ring);
+        const auto around = neighbours(e.p, none, ring);
         uint32_t kept = 0;
         for (const auto& [d2, other] : near) {
           if (kept == k_nearest) break;
-          if (std::find(ring.begin(), ring.end(), other) != ring.end()) continue;  // an edge already
+          if (std::find(around.begin(), around.end(), other) != around.end()) continue;  // an edge already
           found[b].push_back({std::min(e.p, other), std::max(e.p, other)});
           ++kept;
         }
@@ -399,23 +409,27 @@ class Engine {
   }
 
   // The distinct positions around x, except `skip`.
-  void neighbours(uint32_t x, uint32_t skip, std::vector<uint32_t>& out) const {
-    out.clear();
+  // `storage` only holds them: written in place, since appending one by one costs a call each.
+  std::span<const uint32_t> neighbours(uint32_t x, uint32_t skip, std::vector<uint32_t>& storage) const {
     const auto wings = s_.wings_of(x);
+    if (storage.size() < 2 * wings.size()) storage.resize(4 * wings.size());
+    uint32_t* const begin = storage.data();
+    uint32_t* end = begin;
     // In a manifold fan every neighbour follows the centre in exactly one triangle, and only a
     // border fan's last neighbour does not: `next` needs no de-duplication there.
     const bool simple = !(s_.flags[x] & (flag_complex | flag_border));
     for (const Wing& w : wings)
-      if (w.next != skip && (simple || std::find(out.begin(), out.end(), w.next) == out.end())) out.push_back(w.next);
-    if (simple) return;
-    for (const Wing& w : wings)
-      if (w.prev != skip && std::find(out.begin(), out.end(), w.prev) == out.end()) out.push_back(w.prev);
+      if (w.next != skip && (simple || std::find(begin, end, w.next) == end)) *end++ = w.next;
+    if (!simple)
+      for (const Wing& w : wings)
+        if (w.prev != skip && std::find(begin, end, w.prev) == end) *end++ = w.prev;
+    return {begin, end};
   }
 
   // Wedge pairs for collapsing `removed` into `kept`: every (wedge, material) of removed must meet
   // one of kept's in a removed face, consistently, and distinct wedges must stay distinct. This is
   // what keeps seams and material borders: they can only collapse along themselves.
-  bool map_wedges(uint32_t kept, uint32_t removed, const std::vector<uint32_t>& faces,
+  bool map_wedges(uint32_t kept, uint32_t removed, std::span<const uint32_t> faces,
                   std::vector<WedgePair>& pairs) const {
     pairs.clear();
     if (!((s_.flags[kept] | s_.flags[removed]) & flag_seam)) {
@@ -503,17 +517,21 @@ class Engine {
     if ((fu & flag_locked) && (fv & flag_locked)) return Reject::topology;
     if (!aggregate_ && ((fu | fv) & flag_complex)) return Reject::topology;
 
-    auto& faces = scratch.removed_faces;
-    faces.clear();
     const auto wings = s_.wings_of(u);
-    for (size_t i = 0; i < wings.size(); ++i)
-      if (wings[i].next == v || wings[i].prev == v) faces.push_back(s_.star[s_.first[u] + i]);
+    const auto star = s_.triangles_of(u);
+    uint32_t shared = 0;
+    for (uint32_t i = 0; i < wings.size(); ++i)
+      if (wings[i].next == v || wings[i].prev == v) {
+        if (shared < 2) scratch.face[shared] = star[i], scratch.opposite[shared] = wings[i].next == v ? wings[i].prev : wings[i].next;
+        ++shared;
+      }
+    scratch.face_count = std::min<uint32_t>(shared, 2);
     // No shared face: a virtual pair (only ranked when aggregating).
-    if (faces.empty()) return aggregate_ ? evaluate_virtual(u, v, scratch, decision, checked) : Reject::topology;
+    if (shared == 0) return aggregate_ ? evaluate_virtual(u, v, scratch, decision, checked) : Reject::topology;
     if ((fu | fv) & flag_complex) return Reject::topology;
-    if (faces.size() > 2) return Reject::topology;
+    if (shared > 2) return Reject::topology;
     // An interior edge between two border positions would pinch the surface.
-    if ((fu & flag_border) && (fv & flag_border) && faces.size() != 1) return Reject::topology;
+    if ((fu & flag_border) && (fv & flag_border) && shared != 1) return Reject::topology;
     if (checked) {
       const Reject link = link_condition(u, v, scratch);
       if (link != Reject::ok) return link;
@@ -527,10 +545,10 @@ class Engine {
   Reject evaluate_virtual(uint32_t u, uint32_t v, Scratch& scratch, Decision& decision, bool checked) {
     const uint8_t fu = s_.flags[u], fv = s_.flags[v];
     if (checked) {
-      neighbours(u, none, scratch.neighbours_u);
-      neighbours(v, none, scratch.neighbours_v);
-      for (const uint32_t a : scratch.neighbours_u)
-        if (std::find(scratch.neighbours_v.begin(), scratch.neighbours_v.end(), a) != scratch.neighbours_v.end())
+      const auto around_u = neighbours(u, none, scratch.neighbours_u);
+      const auto around_v = neighbours(v, none, scratch.neighbours_v);
+      for (const uint32_t a : around_u)
+        if (std::find(around_v.begin(), around_v.end(), a) != around_v.end())
           return Reject::topology;
     }
     const bool fixed = s_.options.keep_vertices || ((fu | fv) & flag_locked);
@@ -541,7 +559,7 @@ class Engine {
       if (s_.flags[removed] & flag_locked) continue;
       if (!fixed && decision.kept != none) break;
       virtual_wedges(kept, removed, scratch);
-      const EdgeQuery query{kept, removed, fixed, scratch.pairs[d], scratch.kept_wedges, scratch.removed_faces};
+      const EdgeQuery query{kept, removed, fixed, scratch.pairs[d], scratch.kept_wedges, scratch.faces()};
       const Placement placement = metric_.place(s_, query);
       if (decision.kept == none || placement.cost < decision.placement.cost)
         decision = {kept, removed, fixed, placement, d};
@@ -561,20 +579,16 @@ class Engine {
   }
 
   Reject link_condition(uint32_t u, uint32_t v, Scratch& scratch) const {
-    const auto& faces = scratch.removed_faces;
-    // Link condition: the positions next to both u and v are exactly the opposite corners.
-    uint32_t opposite[2] = {none, none};
-    for (size_t i = 0; i < faces.size(); ++i)
-      for (uint32_t k = 0; k < 3; ++k) {
-        const uint32_t c = s_.corner_position(faces[i], k);
-        if (c != u && c != v) opposite[i] = c;
-      }
+    const auto faces = scratch.faces();
+    // Link condition: the positions next to both u and v are exactly the opposite corners (of
+    // non-degenerate faces: complex positions never get here).
+    const uint32_t opposite[2] = {scratch.opposite[0], faces.size() == 2 ? scratch.opposite[1] : none};
     if (faces.size() == 2 && opposite[0] == opposite[1]) return Reject::topology;
-    neighbours(u, v, scratch.neighbours_u);
-    neighbours(v, u, scratch.neighbours_v);
+    const auto around_u = neighbours(u, v, scratch.neighbours_u);
+    const auto around_v = neighbours(v, u, scratch.neighbours_v);
     size_t common = 0;
-    for (const uint32_t a : scratch.neighbours_u)
-      if (std::find(scratch.neighbours_v.begin(), scratch.neighbours_v.end(), a) != scratch.neighbours_v.end()) {
+    for (const uint32_t a : around_u)
+      if (std::find(around_v.begin(), around_v.end(), a) != around_v.end()) {
         if (a != opposite[0] && a != opposite[1]) return Reject::topology;
         ++common;
       }
@@ -598,7 +612,7 @@ class Engine {
 
   Reject place(uint32_t u, uint32_t v, Scratch& scratch, Decision& decision, bool checked) {
     const uint8_t fu = s_.flags[u], fv = s_.flags[v];
-    const auto& faces = scratch.removed_faces;
+    const auto faces = scratch.faces();
     // Directions allowed by locks and wedges. Without seams, attributes or checks, wedges do not
     // matter: each side has one wedge.
     const bool wedges = checked || channel_floats_ || ((fu | fv) & flag_seam);
@@ -652,8 +666,7 @@ class Engine {
   Best best_checked(uint32_t u, Scratch& scratch) {
     Best best;
     Decision decision;
-    neighbours(u, none, scratch.candidates);
-    for (const uint32_t v : scratch.candidates) {
+    for (const uint32_t v : neighbours(u, none, scratch.candidates)) {
       // Stars of positions locked in this pass are stale until the next rebuild.
       if (v <= u || (s_.flags[v] & (flag_dead | flag_complex | flag_pass_locked))) continue;
       if (evaluate(u, v, scratch, decision, true) != Reject::ok) continue;
@@ -668,10 +681,10 @@ class Engine {
     // The removed faces, wedge pairs and kept wedges, as the (parallel) checks found them.
     auto& faces = scratch.removed_faces;
     faces.clear();
-    for (const uint32_t t : s_.triangles_of(d.kept))
-      if (s_.corner_position(t, 0) == d.removed || s_.corner_position(t, 1) == d.removed ||
-          s_.corner_position(t, 2) == d.removed)
-        faces.push_back(t);
+    const auto kept_star = s_.triangles_of(d.kept);
+    const auto kept_wings = s_.wings_of(d.kept);
+    for (size_t i = 0; i < kept_star.size(); ++i)
+      if (kept_wings[i].next == d.removed || kept_wings[i].prev == d.removed) faces.push_back(kept_star[i]);
     auto& pairs = scratch.pairs[0];
     const bool virtual_pair = faces.empty();
     if (virtual_pair) {
@@ -844,6 +857,7 @@ class Engine {
     return scratch;
   }
   std::vector<uint32_t> fill_;
+  std::vector<uint64_t> order_;  // the pass's candidates, cheapest first (sort_key)
   std::vector<Decision> decisions_;  // per candidate of the pass
   std::vector<Reject> verdicts_;
   std::vector<Best> fallback_;
