@@ -124,15 +124,7 @@ class Engine {
         decisions_.resize(batch.size());
         verdicts_.resize(batch.size());
         fallback_.resize(batch.size());
-        core::parallel_blocks(batch.size(), 32, s_.threads, [&](size_t, size_t begin, size_t end) {
-          Scratch& scratch = block_scratch();
-          for (size_t i = begin; i < end; ++i) {
-            const uint32_t u = batch[i];
-            verdicts_[i] = evaluate(u, best_[u].other, scratch, decisions_[i], true);
-            // Ranked but not allowed: u waits for the next pass with its cheapest allowed edge.
-            if (verdicts_[i] != Reject::ok) fallback_[i] = best_checked(u, scratch);
-          }
-        });
+        check_batch(batch);
         for (size_t i = 0; i < batch.size(); ++i) {
           if (s_.live_triangles <= target_triangles) break;
           const uint32_t u = batch[i], v = best_[u].other;
@@ -183,6 +175,67 @@ class Engine {
         s_.wings[slot] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k]};
       }
     }
+  }
+
+  // Checks the candidates of a chunk, all on the state before any of them is applied, but only those
+  // the applying loop will reach unlocked (about half of a chunk's candidates get locked by an
+  // earlier one in it). Whether it does depends on the earlier verdicts: on one thread they are
+  // known in order; on more, checks go in rounds, each taking the candidates that no undecided
+  // earlier one could lock (their positions are outside its star's ring). Each round is a
+  // sequential scan and a join, so the last round takes every candidate not surely locked.
+  void check_batch(const std::vector<uint32_t>& batch) {
+    const size_t n = batch.size();
+    checked_.assign(n, 0);
+    const bool sequential = core::parallel_workers(n, 32, s_.threads) <= 1;
+    const uint32_t chunk = ++stamp_;  // will_lock_: locked by a candidate that will be applied
+    const auto lock = [&](std::vector<uint32_t>& marks, uint32_t u, uint32_t v, uint32_t stamp) {
+      for (const uint32_t x : {u, v}) {
+        marks[x] = stamp;
+        for (const Wing& w : s_.wings_of(x)) marks[w.next] = stamp, marks[w.prev] = stamp;
+      }
+    };
+    std::vector<uint32_t>& todo = todo_;
+    for (size_t frontier = 0, rounds = 0;; ++rounds) {
+      // Everything before the frontier is decided.
+      for (; frontier < n; ++frontier) {
+        const uint32_t i = uint32_t(frontier), u = batch[i], v = best_[u].other;
+        if (will_lock_[u] == chunk || will_lock_[v] == chunk) continue;
+        if (!checked_[i]) {
+          if (!sequential) break;
+          check_candidate(batch, i, scratch_);
+        }
+        if (verdicts_[i] == Reject::ok) lock(will_lock_, u, v, chunk);
+      }
+      if (frontier == n) break;
+      const uint32_t round = ++stamp_;  // may_lock_: locked if an undecided candidate is applied
+      todo.clear();
+      for (uint32_t i = uint32_t(frontier); i < n; ++i) {
+        const uint32_t u = batch[i], v = best_[u].other;
+        if (will_lock_[u] == chunk || will_lock_[v] == chunk) continue;
+        if (checked_[i]) {
+          if (verdicts_[i] == Reject::ok) lock(will_lock_, u, v, chunk);
+          continue;
+        }
+        if (rounds + 1 >= max_check_rounds) {
+          todo.push_back(i);
+          continue;
+        }
+        if (may_lock_[u] != round && may_lock_[v] != round) todo.push_back(i);
+        lock(may_lock_, u, v, round);
+      }
+      core::parallel_blocks(todo.size(), 32, s_.threads, [&](size_t, size_t begin, size_t end) {
+        Scratch& scratch = block_scratch();
+        for (size_t j = begin; j < end; ++j) check_candidate(batch, todo[j], scratch);
+      });
+    }
+  }
+
+  void check_candidate(const std::vector<uint32_t>& batch, uint32_t i, Scratch& scratch) {
+    const uint32_t u = batch[i];
+    verdicts_[i] = evaluate(u, best_[u].other, scratch, decisions_[i], true);
+    // Ranked but not allowed: u waits for the next pass with its cheapest allowed edge.
+    if (verdicts_[i] != Reject::ok) fallback_[i] = best_checked(u, scratch);
+    checked_[i] = 1;
   }
 
   // A position whose star a collapse touched (it was locked) needs its edges ranked again; the pass
@@ -261,6 +314,8 @@ class Engine {
   void evaluate_all(bool first) {
     best_.resize(s_.position_count);
     mark_.resize(s_.position_count);
+    will_lock_.resize(s_.position_count);
+    may_lock_.resize(s_.position_count);
     const bool wide = first || metric_.reads_neighbourhood();
     core::parallel_blocks(s_.position_count, 4096, s_.threads, [&](size_t, size_t begin, size_t end) {
      Scratch& scratch = block_scratch();
@@ -861,6 +916,12 @@ class Engine {
   std::vector<Decision> decisions_;  // per candidate of the pass
   std::vector<Reject> verdicts_;
   std::vector<Best> fallback_;
+  // check_batch: which candidates are checked, and per position the round (stamp_) in which an
+  // applied (will_lock_) or undecided (may_lock_) candidate of the chunk locks it.
+  std::vector<uint8_t> checked_;
+  std::vector<uint32_t> todo_, will_lock_, may_lock_;
+  uint32_t stamp_ = 0;
+  static constexpr size_t max_check_rounds = 3;
 };
 
 template <class MetricT>
