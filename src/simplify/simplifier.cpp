@@ -488,15 +488,8 @@ class Engine {
                   std::vector<WedgePair>& pairs) const {
     pairs.clear();
     if (!((s_.flags[kept] | s_.flags[removed]) & flag_seam)) {
-      // One wedge and material at each end: they pair up, as any removed face shows.
-      const uint32_t t = faces[0];
-      uint32_t from = none, to = none;
-      for (uint32_t k = 0; k < 3; ++k) {
-        const uint32_t p = s_.corner_position(t, k);
-        if (p == removed) from = s_.corners[3 * t + k];
-        if (p == kept) to = s_.corners[3 * t + k];
-      }
-      pairs.push_back({from, to, s_.material(t)});
+      // One wedge and material at each end (every corner of its star has it): they pair up.
+      pairs.push_back({s_.wings[s_.first[removed]].wedge, s_.wings[s_.first[kept]].wedge, s_.material(faces[0])});
       return true;
     }
     for (const uint32_t t : faces) {
