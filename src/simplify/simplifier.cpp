@@ -160,6 +160,9 @@ class Engine {
   }
 
   void build_star() {
+    const size_t live = s_.live.size();
+    const size_t workers = core::parallel_workers(live, size_t(1) << 16, s_.threads);
+    if (workers > 1) return build_star_parallel(workers);
     s_.first.assign(s_.position_count + 1, 0);
     for (const uint32_t t : s_.live)
       for (uint32_t k = 0; k < 3; ++k) ++s_.first[s_.corner_position(t, k) + 1];
@@ -175,6 +178,46 @@ class Engine {
         s_.wings[slot] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k]};
       }
     }
+  }
+
+  // build_star on several threads, with the same result: each worker counts and then files one
+  // range of the live triangles, its slots in a star following those of the ranges before it.
+  void build_star_parallel(size_t workers) {
+    const size_t live = s_.live.size(), block = (live + workers - 1) / workers;
+    const size_t blocks = (live + block - 1) / block;
+    const uint32_t positions = s_.position_count;
+    star_slots_.resize(blocks);
+    core::parallel_blocks(live, block, s_.threads, [&](size_t b, size_t begin, size_t end) {
+      std::vector<uint32_t>& count = star_slots_[b];
+      count.assign(positions, 0);
+      for (size_t i = begin; i < end; ++i)
+        for (uint32_t k = 0; k < 3; ++k) ++count[s_.corner_position(s_.live[i], k)];
+    });
+    s_.first.resize(size_t(positions) + 1);
+    uint32_t slot = 0;
+    for (uint32_t p = 0; p < positions; ++p) {
+      s_.first[p] = slot;
+      for (std::vector<uint32_t>& count : star_slots_) {
+        const uint32_t c = count[p];
+        count[p] = slot;  // where the block's first triangle at p goes
+        slot += c;
+      }
+    }
+    s_.first[positions] = slot;
+    s_.star.resize(slot);
+    s_.wings.resize(slot);
+    core::parallel_blocks(live, block, s_.threads, [&](size_t b, size_t begin, size_t end) {
+      std::vector<uint32_t>& fill = star_slots_[b];
+      for (size_t i = begin; i < end; ++i) {
+        const uint32_t t = s_.live[i];
+        const uint32_t* c = &s_.corner_pos[3 * size_t(t)];
+        for (uint32_t k = 0; k < 3; ++k) {
+          const uint32_t at = fill[c[k]]++;
+          s_.star[at] = t;
+          s_.wings[at] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k]};
+        }
+      }
+    });
   }
 
   // Checks the candidates of a chunk, all on the state before any of them is applied, but only those
@@ -905,6 +948,7 @@ class Engine {
     return scratch;
   }
   std::vector<uint32_t> fill_;
+  std::vector<std::vector<uint32_t>> star_slots_;  // build_star_parallel: per block, per position
   std::vector<uint64_t> order_;  // the pass's candidates, cheapest first (sort_key)
   std::vector<Decision> decisions_;  // per candidate of the pass
   std::vector<Reject> verdicts_;
