@@ -153,6 +153,40 @@ class Engine {
     uint32_t other = none;
   };
 
+  // A position's cheapest edges (to higher positions), by (cost, other): the `count` first of
+  // them, or all if `complete`. Every edge cheaper than the last listed one is listed, so after
+  // dropping changed edges the first left is the cheapest of the unchanged ones.
+  struct EdgeList {
+    static constexpr uint32_t capacity = 4;
+    Best edge[capacity];
+    uint8_t count = 0;
+    bool complete = true;
+
+    static bool before(const Best& a, const Best& b) {
+      return a.cost < b.cost || (a.cost == b.cost && a.other < b.other);
+    }
+    void insert(const Best& e) {
+      uint32_t n = count;
+      if (!complete && (n == 0 || !before(e, edge[n - 1]))) return;  // past the listed range
+      if (n == capacity) {
+        complete = false;  // e or the last one drops out
+        if (!before(e, edge[n - 1])) return;
+        --n;
+      }
+      uint32_t i = n;
+      for (; i > 0 && before(e, edge[i - 1]); --i) edge[i] = edge[i - 1];
+      edge[i] = e;
+      count = uint8_t(n + 1);
+    }
+    template <class Changed>
+    void remove_if(Changed changed) {
+      uint32_t n = 0;
+      for (uint32_t i = 0; i < count; ++i)
+        if (!changed(edge[i].other)) edge[n++] = edge[i];
+      count = uint8_t(n);
+    }
+  };
+
   // Orders like (cost, u) compared as (float, uint32), for any cost but NaN (-0 counts as 0).
   static uint64_t sort_key(float cost, uint32_t u) {
     const uint32_t bits = std::bit_cast<uint32_t>(cost + 0.0f);
@@ -360,6 +394,9 @@ class Engine {
     will_lock_.resize(s_.position_count);
     may_lock_.resize(s_.position_count);
     const bool wide = first || metric_.reads_neighbourhood();
+    // Cheapest-edge lists are kept where a collapse changes only the edges at its kept position.
+    const bool lists = !aggregate_ && !metric_.reads_neighbourhood();
+    if (lists) edges_.resize(s_.position_count);
     core::parallel_blocks(s_.position_count, 4096, s_.threads, [&](size_t, size_t begin, size_t end) {
      Scratch& scratch = block_scratch();
      for (size_t i = begin; i < end; ++i) {
@@ -385,14 +422,37 @@ class Engine {
         best_[u] = Best{};
         continue;
       }
-      for (const uint32_t v : neighbours(u, none, scratch.candidates)) {
+      const auto candidates = neighbours(u, none, scratch.candidates);
+      if (lists && !wide && !(mark_[u] & mark_kept)) {
+        // Only u's edges to kept positions changed (or vanished): update its cheapest edges. A full
+        // ranking (best pointed at a changed edge) is needed only if none of those are left.
+        EdgeList& list = edges_[u];
+        list.remove_if([&](uint32_t v) { return (s_.flags[v] & (flag_dead | flag_complex)) || (mark_[v] & mark_kept); });
+        for (const uint32_t v : candidates) {
+          if (v <= u || (s_.flags[v] & (flag_dead | flag_complex)) || !(mark_[v] & mark_kept)) continue;
+          Decision decision;
+          if (evaluate(u, v, scratch, decision, false) != Reject::ok) continue;
+          const float cost = float(decision.placement.cost);
+          list.insert({cost, v});
+          if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
+        }
+        if (!full) continue;
+        if (list.count > 0 || list.complete) {
+          best_[u] = list.count > 0 ? list.edge[0] : Best{};
+          continue;
+        }
+      }
+      EdgeList ranked;
+      for (const uint32_t v : candidates) {
         if (v <= u || (s_.flags[v] & (flag_dead | flag_complex))) continue;
         if (!full && !(mark_[v] & mark_kept)) continue;
         Decision decision;
         if (evaluate(u, v, scratch, decision, false) != Reject::ok) continue;
         const float cost = float(decision.placement.cost);
         if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
+        ranked.insert({cost, v});
       }
+      if (lists && full) edges_[u] = ranked;
       if (aggregate_)
         for (uint32_t j = virtual_first_[u]; j < virtual_first_[u + 1]; ++j) {
           const uint32_t v = virtual_partner_[j];
@@ -935,6 +995,7 @@ class Engine {
   // Per position: which of its edges to rank again next pass (mark_changed_edges).
   enum : uint8_t { mark_full = 1, mark_partial = 2, mark_kept = 4, mark_fallback = 8 };
   std::vector<uint8_t> mark_;
+  std::vector<EdgeList> edges_;  // per position, when the metric allows (evaluate_all)
 
   // Aggregation: virtual pairs, as found at the start, and per pass the pairs between the positions
   // they have become (merged_into_), at the lower position (CSR, like the star).
