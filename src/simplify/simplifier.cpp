@@ -395,7 +395,7 @@ class Engine {
     may_lock_.resize(s_.position_count);
     const bool wide = first || metric_.reads_neighbourhood();
     // Cheapest-edge lists are kept where a collapse changes only the edges at its kept position.
-    const bool lists = !aggregate_ && !metric_.reads_neighbourhood();
+    const bool lists = lists_ = !aggregate_ && !metric_.reads_neighbourhood();
     if (lists) edges_.resize(s_.position_count);
     core::parallel_blocks(s_.position_count, 4096, s_.threads, [&](size_t, size_t begin, size_t end) {
      Scratch& scratch = block_scratch();
@@ -817,6 +817,18 @@ class Engine {
   Best best_checked(uint32_t u, Scratch& scratch) {
     Best best;
     Decision decision;
+    if (lists_) {
+      // Checks only add rejections to the ranking's (with the same costs): the first of u's
+      // cheapest edges that passes them is the answer, if the list has one. best_[u] just failed
+      // on this state.
+      const EdgeList& list = edges_[u];
+      for (uint32_t i = 0; i < list.count; ++i) {
+        const uint32_t v = list.edge[i].other;
+        if (v == best_[u].other || (s_.flags[v] & (flag_dead | flag_complex | flag_pass_locked))) continue;
+        if (evaluate(u, v, scratch, decision, true) == Reject::ok) return {float(decision.placement.cost), v};
+      }
+      if (list.complete) return best;
+    }
     for (const uint32_t v : neighbours(u, none, scratch.candidates)) {
       // Stars of positions locked in this pass are stale until the next rebuild.
       if (v <= u || (s_.flags[v] & (flag_dead | flag_complex | flag_pass_locked))) continue;
@@ -996,6 +1008,7 @@ class Engine {
   enum : uint8_t { mark_full = 1, mark_partial = 2, mark_kept = 4, mark_fallback = 8 };
   std::vector<uint8_t> mark_;
   std::vector<EdgeList> edges_;  // per position, when the metric allows (evaluate_all)
+  bool lists_ = false;
 
   // Aggregation: virtual pairs, as found at the start, and per pass the pairs between the positions
   // they have become (merged_into_), at the lower position (CSR, like the star).
