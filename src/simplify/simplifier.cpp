@@ -352,17 +352,16 @@ class Engine {
       uint32_t starts = 0, start = 0;
       bool border = false;
       for (size_t i = 0; i < star.size() && !complex; ++i) {
-        uint32_t as_next = 0, as_prev = 0, n_as_prev = 0;
+        uint32_t as_next = 0, as_prev = 0, n_as_prev = 0, p_as_next = 0;
         for (size_t j = 0; j < star.size(); ++j) {
           as_next += next[j] == next[i];
           as_prev += prev[j] == prev[i];
           n_as_prev += prev[j] == next[i];
+          p_as_next += next[j] == prev[i];
         }
         complex |= as_next > 1 || as_prev > 1;
         if (n_as_prev == 0) border = true;  // edge u-next[i] has one triangle
         // Triangle i starts a fan if no triangle continues into it (its prev is nobody's next).
-        uint32_t p_as_next = 0;
-        for (size_t j = 0; j < star.size(); ++j) p_as_next += next[j] == prev[i];
         if (p_as_next == 0) ++starts, start = uint32_t(i);
       }
       if (!complex) {
