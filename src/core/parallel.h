@@ -22,15 +22,21 @@ inline unsigned thread_count(unsigned requested) {
   return hardware ? hardware : 1;
 }
 
+// The number of threads parallel_blocks uses: more workers than cores only adds switching (and
+// oneTBB warns), and the result is the same anyway.
+inline size_t parallel_workers(size_t count, size_t block_size, unsigned threads) {
+  const size_t blocks = (count + block_size - 1) / block_size;
+  const size_t cores = size_t(std::max(1, tbb::info::default_concurrency()));
+  return std::min({size_t(thread_count(threads)), blocks, cores});
+}
+
 // Calls fn(block, begin, end) for every block of `block_size` items of [0, count), on up to
 // `threads` threads. Blocks are claimed dynamically; fn must only write block-owned outputs.
 // Runs inline (no task overhead) when one thread or one block is enough.
 template <class Fn>
 void parallel_blocks(size_t count, size_t block_size, unsigned threads, Fn&& fn) {
   const size_t blocks = (count + block_size - 1) / block_size;
-  // More workers than cores only adds switching (and oneTBB warns): the result is the same anyway.
-  const size_t cores = size_t(std::max(1, tbb::info::default_concurrency()));
-  const size_t workers = std::min({size_t(thread_count(threads)), blocks, cores});
+  const size_t workers = parallel_workers(count, block_size, threads);
   if (workers <= 1) {
     for (size_t b = 0; b < blocks; ++b) fn(b, b * block_size, std::min(count, (b + 1) * block_size));
     return;

@@ -52,7 +52,9 @@ inline void add_face_quadric(const State& state, uint32_t u, uint32_t t, const v
   QuadricD face = core::plane_quadric(unit, -dot(unit, p[0]), 0.5 * double_area * importance);
   face.w = 0.5 * double_area;  // the normalising area is not scaled by importance
   q += face;
-  if (constrained) add_border_planes(state, u, t, p, unit, importance, q);
+  // Only a position flagged border (or complex, which classify may leave unflagged) has border
+  // edges: the flags are set before the first quadrics and kept as supersets after collapses.
+  if (constrained && (state.flags[u] & (flag_border | flag_complex))) add_border_planes(state, u, t, p, unit, importance, q);
 }
 
 class QuadricMetric {

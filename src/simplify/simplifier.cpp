@@ -8,6 +8,7 @@
 // adjacency is updated (or allocated) per collapse.
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -48,6 +49,10 @@ double seconds(clock::time_point a, clock::time_point b) { return std::chrono::d
 struct Scratch {
   std::vector<uint32_t> removed_faces, neighbours_u, neighbours_v, kept_wedges, candidates, extra;
   std::vector<WedgePair> pairs[2];
+  // The removed faces of the edge being evaluated (at most two get that far) and per face its
+  // corner that is neither end.
+  uint32_t face[2] = {}, face_count = 0, opposite[2] = {};
+  std::span<const uint32_t> faces() const { return {face, face_count}; }
 };
 
 // What the engine decided for one edge.
@@ -83,9 +88,12 @@ class Engine {
       ++result_.passes;
       evaluate_all(first);
       first = false;
-      std::vector<uint32_t> order;
+      // Candidates as (cost, position) keys: sorting the integers orders them by cost, then position,
+      // without an indirection per comparison (NaN costs never pass the limit test).
+      std::vector<uint64_t>& order = order_;
+      order.clear();
       for (uint32_t u = 0; u < s_.position_count; ++u)
-        if (best_[u].other != none && best_[u].cost <= cost_limit) order.push_back(u);
+        if (best_[u].other != none && best_[u].cost <= cost_limit) order.push_back(sort_key(best_[u].cost, u));
       if (order.empty()) break;
 
       // This pass applies at most a third of the live positions' worth of collapses, fewer as the
@@ -98,12 +106,9 @@ class Engine {
       const double share = 3 + 30 * double(target_triangles) / double(s_.live_triangles);
       const size_t goal = size_t(std::clamp<uint64_t>(std::min(needed, uint64_t(double(live_positions) / share)), 1, order.size()));
       const size_t considered = std::min(order.size(), goal * 2);
-      const auto cheaper = [&](uint32_t a, uint32_t b) {
-        return best_[a].cost < best_[b].cost || (best_[a].cost == best_[b].cost && a < b);
-      };
-      if (considered < order.size()) std::nth_element(order.begin(), order.begin() + considered, order.end(), cheaper);
+      if (considered < order.size()) std::nth_element(order.begin(), order.begin() + considered, order.end());
       order.resize(considered);
-      std::sort(order.begin(), order.end(), cheaper);
+      std::sort(order.begin(), order.end());
 
       // Full checks run in parallel on chunks of the candidates still free, then the chunk is
       // applied in cost order. A candidate is applied only if none of its positions was locked by
@@ -118,21 +123,13 @@ class Engine {
       for (size_t next = 0; next < order.size() && s_.live_triangles > target_triangles;) {
         batch.clear();
         for (; next < order.size() && batch.size() < chunk; ++next) {
-          const uint32_t u = order[next], v = best_[u].other;  // none: u died in this pass
+          const uint32_t u = uint32_t(order[next]), v = best_[u].other;  // none: u died in this pass
           if (v != none && !((s_.flags[u] | s_.flags[v]) & flag_pass_locked)) batch.push_back(u);
         }
         decisions_.resize(batch.size());
         verdicts_.resize(batch.size());
         fallback_.resize(batch.size());
-        core::parallel_blocks(batch.size(), 32, s_.threads, [&](size_t, size_t begin, size_t end) {
-          Scratch& scratch = block_scratch();
-          for (size_t i = begin; i < end; ++i) {
-            const uint32_t u = batch[i];
-            verdicts_[i] = evaluate(u, best_[u].other, scratch, decisions_[i], true);
-            // Ranked but not allowed: u waits for the next pass with its cheapest allowed edge.
-            if (verdicts_[i] != Reject::ok) fallback_[i] = best_checked(u, scratch);
-          }
-        });
+        check_batch(batch);
         for (size_t i = 0; i < batch.size(); ++i) {
           if (s_.live_triangles <= target_triangles) break;
           const uint32_t u = batch[i], v = best_[u].other;
@@ -161,7 +158,50 @@ class Engine {
     uint32_t other = none;
   };
 
+  // A position's cheapest edges (to higher positions), by (cost, other): the `count` first of
+  // them, or all if `complete`. Every edge cheaper than the last listed one is listed, so after
+  // dropping changed edges the first left is the cheapest of the unchanged ones.
+  struct EdgeList {
+    static constexpr uint32_t capacity = 4;
+    Best edge[capacity];
+    uint8_t count = 0;
+    bool complete = true;
+
+    static bool before(const Best& a, const Best& b) {
+      return a.cost < b.cost || (a.cost == b.cost && a.other < b.other);
+    }
+    void insert(const Best& e) {
+      uint32_t n = count;
+      if (!complete && (n == 0 || !before(e, edge[n - 1]))) return;  // past the listed range
+      if (n == capacity) {
+        complete = false;  // e or the last one drops out
+        if (!before(e, edge[n - 1])) return;
+        --n;
+      }
+      uint32_t i = n;
+      for (; i > 0 && before(e, edge[i - 1]); --i) edge[i] = edge[i - 1];
+      edge[i] = e;
+      count = uint8_t(n + 1);
+    }
+    template <class Changed>
+    void remove_if(Changed changed) {
+      uint32_t n = 0;
+      for (uint32_t i = 0; i < count; ++i)
+        if (!changed(edge[i].other)) edge[n++] = edge[i];
+      count = uint8_t(n);
+    }
+  };
+
+  // Orders like (cost, u) compared as (float, uint32), for any cost but NaN (-0 counts as 0).
+  static uint64_t sort_key(float cost, uint32_t u) {
+    const uint32_t bits = std::bit_cast<uint32_t>(cost + 0.0f);
+    return uint64_t(bits & 0x80000000u ? ~bits : bits | 0x80000000u) << 32 | u;
+  }
+
   void build_star() {
+    const size_t live = s_.live.size();
+    const size_t workers = core::parallel_workers(live, size_t(1) << 16, s_.threads);
+    if (workers > 1) return build_star_parallel(workers);
     s_.first.assign(s_.position_count + 1, 0);
     for (const uint32_t t : s_.live)
       for (uint32_t k = 0; k < 3; ++k) ++s_.first[s_.corner_position(t, k) + 1];
@@ -177,6 +217,107 @@ class Engine {
         s_.wings[slot] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k]};
       }
     }
+  }
+
+  // build_star on several threads, with the same result: each worker counts and then files one
+  // range of the live triangles, its slots in a star following those of the ranges before it.
+  void build_star_parallel(size_t workers) {
+    const size_t live = s_.live.size(), block = (live + workers - 1) / workers;
+    const size_t blocks = (live + block - 1) / block;
+    const uint32_t positions = s_.position_count;
+    star_slots_.resize(blocks);
+    core::parallel_blocks(live, block, s_.threads, [&](size_t b, size_t begin, size_t end) {
+      std::vector<uint32_t>& count = star_slots_[b];
+      count.assign(positions, 0);
+      for (size_t i = begin; i < end; ++i)
+        for (uint32_t k = 0; k < 3; ++k) ++count[s_.corner_position(s_.live[i], k)];
+    });
+    s_.first.resize(size_t(positions) + 1);
+    uint32_t slot = 0;
+    for (uint32_t p = 0; p < positions; ++p) {
+      s_.first[p] = slot;
+      for (std::vector<uint32_t>& count : star_slots_) {
+        const uint32_t c = count[p];
+        count[p] = slot;  // where the block's first triangle at p goes
+        slot += c;
+      }
+    }
+    s_.first[positions] = slot;
+    s_.star.resize(slot);
+    s_.wings.resize(slot);
+    core::parallel_blocks(live, block, s_.threads, [&](size_t b, size_t begin, size_t end) {
+      std::vector<uint32_t>& fill = star_slots_[b];
+      for (size_t i = begin; i < end; ++i) {
+        const uint32_t t = s_.live[i];
+        const uint32_t* c = &s_.corner_pos[3 * size_t(t)];
+        for (uint32_t k = 0; k < 3; ++k) {
+          const uint32_t at = fill[c[k]]++;
+          s_.star[at] = t;
+          s_.wings[at] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k]};
+        }
+      }
+    });
+  }
+
+  // Checks the candidates of a chunk, all on the state before any of them is applied, but only those
+  // the applying loop will reach unlocked (about half of a chunk's candidates get locked by an
+  // earlier one in it). Whether it does depends on the earlier verdicts: on one thread they are
+  // known in order; on more, checks go in rounds, each taking the candidates that no undecided
+  // earlier one could lock (their positions are outside its star's ring). Each round is a
+  // sequential scan and a join, so the last round takes every candidate not surely locked.
+  void check_batch(const std::vector<uint32_t>& batch) {
+    const size_t n = batch.size();
+    checked_.assign(n, 0);
+    const bool sequential = core::parallel_workers(n, 32, s_.threads) <= 1;
+    const uint32_t chunk = ++stamp_;  // will_lock_: locked by a candidate that will be applied
+    const auto lock = [&](std::vector<uint32_t>& marks, uint32_t u, uint32_t v, uint32_t stamp) {
+      for (const uint32_t x : {u, v}) {
+        marks[x] = stamp;
+        for (const Wing& w : s_.wings_of(x)) marks[w.next] = stamp, marks[w.prev] = stamp;
+      }
+    };
+    std::vector<uint32_t>& todo = todo_;
+    for (size_t frontier = 0, rounds = 0;; ++rounds) {
+      // Everything before the frontier is decided.
+      for (; frontier < n; ++frontier) {
+        const uint32_t i = uint32_t(frontier), u = batch[i], v = best_[u].other;
+        if (will_lock_[u] == chunk || will_lock_[v] == chunk) continue;
+        if (!checked_[i]) {
+          if (!sequential) break;
+          check_candidate(batch, i, scratch_);
+        }
+        if (verdicts_[i] == Reject::ok) lock(will_lock_, u, v, chunk);
+      }
+      if (frontier == n) break;
+      const uint32_t round = ++stamp_;  // may_lock_: locked if an undecided candidate is applied
+      todo.clear();
+      for (uint32_t i = uint32_t(frontier); i < n; ++i) {
+        const uint32_t u = batch[i], v = best_[u].other;
+        if (will_lock_[u] == chunk || will_lock_[v] == chunk) continue;
+        if (checked_[i]) {
+          if (verdicts_[i] == Reject::ok) lock(will_lock_, u, v, chunk);
+          continue;
+        }
+        if (rounds + 1 >= max_check_rounds) {
+          todo.push_back(i);
+          continue;
+        }
+        if (may_lock_[u] != round && may_lock_[v] != round) todo.push_back(i);
+        lock(may_lock_, u, v, round);
+      }
+      core::parallel_blocks(todo.size(), 32, s_.threads, [&](size_t, size_t begin, size_t end) {
+        Scratch& scratch = block_scratch();
+        for (size_t j = begin; j < end; ++j) check_candidate(batch, todo[j], scratch);
+      });
+    }
+  }
+
+  void check_candidate(const std::vector<uint32_t>& batch, uint32_t i, Scratch& scratch) {
+    const uint32_t u = batch[i];
+    verdicts_[i] = evaluate(u, best_[u].other, scratch, decisions_[i], true);
+    // Ranked but not allowed: u waits for the next pass with its cheapest allowed edge.
+    if (verdicts_[i] != Reject::ok) fallback_[i] = best_checked(u, scratch);
+    checked_[i] = 1;
   }
 
   // A position whose star a collapse touched (it was locked) needs its edges ranked again; the pass
@@ -216,17 +357,16 @@ class Engine {
       uint32_t starts = 0, start = 0;
       bool border = false;
       for (size_t i = 0; i < star.size() && !complex; ++i) {
-        uint32_t as_next = 0, as_prev = 0, n_as_prev = 0;
+        uint32_t as_next = 0, as_prev = 0, n_as_prev = 0, p_as_next = 0;
         for (size_t j = 0; j < star.size(); ++j) {
           as_next += next[j] == next[i];
           as_prev += prev[j] == prev[i];
           n_as_prev += prev[j] == next[i];
+          p_as_next += next[j] == prev[i];
         }
         complex |= as_next > 1 || as_prev > 1;
         if (n_as_prev == 0) border = true;  // edge u-next[i] has one triangle
         // Triangle i starts a fan if no triangle continues into it (its prev is nobody's next).
-        uint32_t p_as_next = 0;
-        for (size_t j = 0; j < star.size(); ++j) p_as_next += next[j] == prev[i];
         if (p_as_next == 0) ++starts, start = uint32_t(i);
       }
       if (!complex) {
@@ -255,7 +395,12 @@ class Engine {
   void evaluate_all(bool first) {
     best_.resize(s_.position_count);
     mark_.resize(s_.position_count);
+    will_lock_.resize(s_.position_count);
+    may_lock_.resize(s_.position_count);
     const bool wide = first || metric_.reads_neighbourhood();
+    // Cheapest-edge lists are kept where a collapse changes only the edges at its kept position.
+    const bool lists = lists_ = !aggregate_ && !metric_.reads_neighbourhood();
+    if (lists) edges_.resize(s_.position_count);
     core::parallel_blocks(s_.position_count, 4096, s_.threads, [&](size_t, size_t begin, size_t end) {
      Scratch& scratch = block_scratch();
      for (size_t i = begin; i < end; ++i) {
@@ -281,15 +426,37 @@ class Engine {
         best_[u] = Best{};
         continue;
       }
-      neighbours(u, none, scratch.candidates);
-      for (const uint32_t v : scratch.candidates) {
+      const auto candidates = neighbours(u, none, scratch.candidates);
+      if (lists && !wide && !(mark_[u] & mark_kept)) {
+        // Only u's edges to kept positions changed (or vanished): update its cheapest edges. A full
+        // ranking (best pointed at a changed edge) is needed only if none of those are left.
+        EdgeList& list = edges_[u];
+        list.remove_if([&](uint32_t v) { return (s_.flags[v] & (flag_dead | flag_complex)) || (mark_[v] & mark_kept); });
+        for (const uint32_t v : candidates) {
+          if (v <= u || (s_.flags[v] & (flag_dead | flag_complex)) || !(mark_[v] & mark_kept)) continue;
+          Decision decision;
+          if (evaluate(u, v, scratch, decision, false) != Reject::ok) continue;
+          const float cost = float(decision.placement.cost);
+          list.insert({cost, v});
+          if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
+        }
+        if (!full) continue;
+        if (list.count > 0 || list.complete) {
+          best_[u] = list.count > 0 ? list.edge[0] : Best{};
+          continue;
+        }
+      }
+      EdgeList ranked;
+      for (const uint32_t v : candidates) {
         if (v <= u || (s_.flags[v] & (flag_dead | flag_complex))) continue;
         if (!full && !(mark_[v] & mark_kept)) continue;
         Decision decision;
         if (evaluate(u, v, scratch, decision, false) != Reject::ok) continue;
         const float cost = float(decision.placement.cost);
         if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
+        ranked.insert({cost, v});
       }
+      if (lists && full) edges_[u] = ranked;
       if (aggregate_)
         for (uint32_t j = virtual_first_[u]; j < virtual_first_[u + 1]; ++j) {
           const uint32_t v = virtual_partner_[j];
@@ -349,11 +516,11 @@ class Engine {
               }
             }
         std::sort(near.begin(), near.end());
-        neighbours(e.p, none, ring);
+        const auto around = neighbours(e.p, none, ring);
         uint32_t kept = 0;
         for (const auto& [d2, other] : near) {
           if (kept == k_nearest) break;
-          if (std::find(ring.begin(), ring.end(), other) != ring.end()) continue;  // an edge already
+          if (std::find(around.begin(), around.end(), other) != around.end()) continue;  // an edge already
           found[b].push_back({std::min(e.p, other), std::max(e.p, other)});
           ++kept;
         }
@@ -404,35 +571,32 @@ class Engine {
   }
 
   // The distinct positions around x, except `skip`.
-  void neighbours(uint32_t x, uint32_t skip, std::vector<uint32_t>& out) const {
-    out.clear();
+  // `storage` only holds them: written in place, since appending one by one costs a call each.
+  std::span<const uint32_t> neighbours(uint32_t x, uint32_t skip, std::vector<uint32_t>& storage) const {
     const auto wings = s_.wings_of(x);
+    if (storage.size() < 2 * wings.size()) storage.resize(4 * wings.size());
+    uint32_t* const begin = storage.data();
+    uint32_t* end = begin;
     // In a manifold fan every neighbour follows the centre in exactly one triangle, and only a
     // border fan's last neighbour does not: `next` needs no de-duplication there.
     const bool simple = !(s_.flags[x] & (flag_complex | flag_border));
     for (const Wing& w : wings)
-      if (w.next != skip && (simple || std::find(out.begin(), out.end(), w.next) == out.end())) out.push_back(w.next);
-    if (simple) return;
-    for (const Wing& w : wings)
-      if (w.prev != skip && std::find(out.begin(), out.end(), w.prev) == out.end()) out.push_back(w.prev);
+      if (w.next != skip && (simple || std::find(begin, end, w.next) == end)) *end++ = w.next;
+    if (!simple)
+      for (const Wing& w : wings)
+        if (w.prev != skip && std::find(begin, end, w.prev) == end) *end++ = w.prev;
+    return {begin, end};
   }
 
   // Wedge pairs for collapsing `removed` into `kept`: every (wedge, material) of removed must meet
   // one of kept's in a removed face, consistently, and distinct wedges must stay distinct. This is
   // what keeps seams and material borders: they can only collapse along themselves.
-  bool map_wedges(uint32_t kept, uint32_t removed, const std::vector<uint32_t>& faces,
+  bool map_wedges(uint32_t kept, uint32_t removed, std::span<const uint32_t> faces,
                   std::vector<WedgePair>& pairs) const {
     pairs.clear();
     if (!((s_.flags[kept] | s_.flags[removed]) & flag_seam)) {
-      // One wedge and material at each end: they pair up, as any removed face shows.
-      const uint32_t t = faces[0];
-      uint32_t from = none, to = none;
-      for (uint32_t k = 0; k < 3; ++k) {
-        const uint32_t p = s_.corner_position(t, k);
-        if (p == removed) from = s_.corners[3 * t + k];
-        if (p == kept) to = s_.corners[3 * t + k];
-      }
-      pairs.push_back({from, to, s_.material(t)});
+      // One wedge and material at each end (every corner of its star has it): they pair up.
+      pairs.push_back({s_.wings[s_.first[removed]].wedge, s_.wings[s_.first[kept]].wedge, s_.material(faces[0])});
       return true;
     }
     for (const uint32_t t : faces) {
@@ -508,17 +672,21 @@ class Engine {
     if ((fu & flag_locked) && (fv & flag_locked)) return Reject::topology;
     if (!aggregate_ && ((fu | fv) & flag_complex)) return Reject::topology;
 
-    auto& faces = scratch.removed_faces;
-    faces.clear();
     const auto wings = s_.wings_of(u);
-    for (size_t i = 0; i < wings.size(); ++i)
-      if (wings[i].next == v || wings[i].prev == v) faces.push_back(s_.star[s_.first[u] + i]);
+    const auto star = s_.triangles_of(u);
+    uint32_t shared = 0;
+    for (uint32_t i = 0; i < wings.size(); ++i)
+      if (wings[i].next == v || wings[i].prev == v) {
+        if (shared < 2) scratch.face[shared] = star[i], scratch.opposite[shared] = wings[i].next == v ? wings[i].prev : wings[i].next;
+        ++shared;
+      }
+    scratch.face_count = std::min<uint32_t>(shared, 2);
     // No shared face: a virtual pair (only ranked when aggregating).
-    if (faces.empty()) return aggregate_ ? evaluate_virtual(u, v, scratch, decision, checked) : Reject::topology;
+    if (shared == 0) return aggregate_ ? evaluate_virtual(u, v, scratch, decision, checked) : Reject::topology;
     if ((fu | fv) & flag_complex) return Reject::topology;
-    if (faces.size() > 2) return Reject::topology;
+    if (shared > 2) return Reject::topology;
     // An interior edge between two border positions would pinch the surface.
-    if ((fu & flag_border) && (fv & flag_border) && faces.size() != 1) return Reject::topology;
+    if ((fu & flag_border) && (fv & flag_border) && shared != 1) return Reject::topology;
     if (checked) {
       const Reject link = link_condition(u, v, scratch);
       if (link != Reject::ok) return link;
@@ -532,10 +700,10 @@ class Engine {
   Reject evaluate_virtual(uint32_t u, uint32_t v, Scratch& scratch, Decision& decision, bool checked) {
     const uint8_t fu = s_.flags[u], fv = s_.flags[v];
     if (checked) {
-      neighbours(u, none, scratch.neighbours_u);
-      neighbours(v, none, scratch.neighbours_v);
-      for (const uint32_t a : scratch.neighbours_u)
-        if (std::find(scratch.neighbours_v.begin(), scratch.neighbours_v.end(), a) != scratch.neighbours_v.end())
+      const auto around_u = neighbours(u, none, scratch.neighbours_u);
+      const auto around_v = neighbours(v, none, scratch.neighbours_v);
+      for (const uint32_t a : around_u)
+        if (std::find(around_v.begin(), around_v.end(), a) != around_v.end())
           return Reject::topology;
     }
     const bool fixed = s_.options.keep_vertices || ((fu | fv) & flag_locked);
@@ -546,7 +714,7 @@ class Engine {
       if (s_.flags[removed] & flag_locked) continue;
       if (!fixed && decision.kept != none) break;
       virtual_wedges(kept, removed, scratch);
-      const EdgeQuery query{kept, removed, fixed, scratch.pairs[d], scratch.kept_wedges, scratch.removed_faces};
+      const EdgeQuery query{kept, removed, fixed, scratch.pairs[d], scratch.kept_wedges, scratch.faces()};
       const Placement placement = metric_.place(s_, query);
       if (decision.kept == none || placement.cost < decision.placement.cost)
         decision = {kept, removed, fixed, placement, d};
@@ -566,20 +734,16 @@ class Engine {
   }
 
   Reject link_condition(uint32_t u, uint32_t v, Scratch& scratch) const {
-    const auto& faces = scratch.removed_faces;
-    // Link condition: the positions next to both u and v are exactly the opposite corners.
-    uint32_t opposite[2] = {none, none};
-    for (size_t i = 0; i < faces.size(); ++i)
-      for (uint32_t k = 0; k < 3; ++k) {
-        const uint32_t c = s_.corner_position(faces[i], k);
-        if (c != u && c != v) opposite[i] = c;
-      }
+    const auto faces = scratch.faces();
+    // Link condition: the positions next to both u and v are exactly the opposite corners (of
+    // non-degenerate faces: complex positions never get here).
+    const uint32_t opposite[2] = {scratch.opposite[0], faces.size() == 2 ? scratch.opposite[1] : none};
     if (faces.size() == 2 && opposite[0] == opposite[1]) return Reject::topology;
-    neighbours(u, v, scratch.neighbours_u);
-    neighbours(v, u, scratch.neighbours_v);
+    const auto around_u = neighbours(u, v, scratch.neighbours_u);
+    const auto around_v = neighbours(v, u, scratch.neighbours_v);
     size_t common = 0;
-    for (const uint32_t a : scratch.neighbours_u)
-      if (std::find(scratch.neighbours_v.begin(), scratch.neighbours_v.end(), a) != scratch.neighbours_v.end()) {
+    for (const uint32_t a : around_u)
+      if (std::find(around_v.begin(), around_v.end(), a) != around_v.end()) {
         if (a != opposite[0] && a != opposite[1]) return Reject::topology;
         ++common;
       }
@@ -603,7 +767,7 @@ class Engine {
 
   Reject place(uint32_t u, uint32_t v, Scratch& scratch, Decision& decision, bool checked) {
     const uint8_t fu = s_.flags[u], fv = s_.flags[v];
-    const auto& faces = scratch.removed_faces;
+    const auto faces = scratch.faces();
     // Directions allowed by locks and wedges. Without seams, attributes or checks, wedges do not
     // matter: each side has one wedge.
     const bool wedges = checked || channel_floats_ || ((fu | fv) & flag_seam);
@@ -657,8 +821,19 @@ class Engine {
   Best best_checked(uint32_t u, Scratch& scratch) {
     Best best;
     Decision decision;
-    neighbours(u, none, scratch.candidates);
-    for (const uint32_t v : scratch.candidates) {
+    if (lists_) {
+      // Checks only add rejections to the ranking's (with the same costs): the first of u's
+      // cheapest edges that passes them is the answer, if the list has one. best_[u] just failed
+      // on this state.
+      const EdgeList& list = edges_[u];
+      for (uint32_t i = 0; i < list.count; ++i) {
+        const uint32_t v = list.edge[i].other;
+        if (v == best_[u].other || (s_.flags[v] & (flag_dead | flag_complex | flag_pass_locked))) continue;
+        if (evaluate(u, v, scratch, decision, true) == Reject::ok) return {float(decision.placement.cost), v};
+      }
+      if (list.complete) return best;
+    }
+    for (const uint32_t v : neighbours(u, none, scratch.candidates)) {
       // Stars of positions locked in this pass are stale until the next rebuild.
       if (v <= u || (s_.flags[v] & (flag_dead | flag_complex | flag_pass_locked))) continue;
       if (evaluate(u, v, scratch, decision, true) != Reject::ok) continue;
@@ -673,10 +848,10 @@ class Engine {
     // The removed faces, wedge pairs and kept wedges, as the (parallel) checks found them.
     auto& faces = scratch.removed_faces;
     faces.clear();
-    for (const uint32_t t : s_.triangles_of(d.kept))
-      if (s_.corner_position(t, 0) == d.removed || s_.corner_position(t, 1) == d.removed ||
-          s_.corner_position(t, 2) == d.removed)
-        faces.push_back(t);
+    const auto kept_star = s_.triangles_of(d.kept);
+    const auto kept_wings = s_.wings_of(d.kept);
+    for (size_t i = 0; i < kept_star.size(); ++i)
+      if (kept_wings[i].next == d.removed || kept_wings[i].prev == d.removed) faces.push_back(kept_star[i]);
     auto& pairs = scratch.pairs[0];
     const bool virtual_pair = faces.empty();
     if (virtual_pair) {
@@ -837,6 +1012,8 @@ class Engine {
   // Per position: which of its edges to rank again next pass (mark_changed_edges).
   enum : uint8_t { mark_full = 1, mark_partial = 2, mark_kept = 4, mark_fallback = 8 };
   std::vector<uint8_t> mark_;
+  std::vector<EdgeList> edges_;  // per position, when the metric allows (evaluate_all)
+  bool lists_ = false;
 
   // Aggregation: virtual pairs, as found at the start, and per pass the pairs between the positions
   // they have become (merged_into_), at the lower position (CSR, like the star).
@@ -850,9 +1027,17 @@ class Engine {
     return scratch;
   }
   std::vector<uint32_t> fill_;
+  std::vector<std::vector<uint32_t>> star_slots_;  // build_star_parallel: per block, per position
+  std::vector<uint64_t> order_;  // the pass's candidates, cheapest first (sort_key)
   std::vector<Decision> decisions_;  // per candidate of the pass
   std::vector<Reject> verdicts_;
   std::vector<Best> fallback_;
+  // check_batch: which candidates are checked, and per position the round (stamp_) in which an
+  // applied (will_lock_) or undecided (may_lock_) candidate of the chunk locks it.
+  std::vector<uint8_t> checked_;
+  std::vector<uint32_t> todo_, will_lock_, may_lock_;
+  uint32_t stamp_ = 0;
+  static constexpr size_t max_check_rounds = 3;
 };
 
 template <class MetricT>
