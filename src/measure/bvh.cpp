@@ -648,15 +648,11 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
     scan_lanes_narrow(lanes, candidates);
   for (uint32_t i = 0; i < count; ++i) {
     if (i == middle) continue;
-    const uint32_t triangle = uint32_t(lanes.triangle()[i]);
-    const vec3f* c = &corners_[3 * size_t(slot_[triangle])];
-    const TrianglePoint tp = triangle_point_at(points[i], c[0], c[1], c[2], lanes.region()[i], lanes.s()[i],
-                                               lanes.t()[i], lanes.distance_squared()[i]);
     ClosestHit& h = out[i];
-    h.distance_squared = tp.distance_squared;
-    h.triangle = triangle;
-    h.point = tp.point;
-    h.v = tp.v, h.w = tp.w;
+    h.distance_squared = lanes.distance_squared()[i];
+    h.triangle = uint32_t(lanes.triangle()[i]);
+    h.v = lanes.s()[i], h.w = lanes.t()[i];
+    h.pending = lanes.region()[i];
   }
 }
 

@@ -17,6 +17,9 @@ struct ClosestHit {
   uint32_t triangle = UINT32_MAX;  // triangle index in the mesh
   vec3f point;
   float v = 0, w = 0;  // barycentric weights of the triangle's corners 1 and 2
+  // closest_group leaves the point and the weights to TriangleBvh::resolve (most samples never need
+  // them): until then this is the TriangleRegion and v, w hold its parameters. -1 once resolved.
+  int32_t pending = -1;
 };
 
 class TriangleBvh {
@@ -29,6 +32,14 @@ class TriangleBvh {
   // equals a brute-force scan's. `hint` is a triangle whose distance starts the search (the previous
   // query's answer is a good one); it changes only the speed.
   ClosestHit closest(const vec3f& p, uint32_t hint = 0) const;
+  // Fills in a closest_group hit's point and weights (p: its query point); nothing when they are set.
+  void resolve(ClosestHit& hit, const vec3f& p) const {
+    if (hit.pending < 0) return;
+    const vec3f* c = &corners_[3 * size_t(slot_[hit.triangle])];
+    const TrianglePoint tp = triangle_point_at(p, c[0], c[1], c[2], hit.pending, hit.v, hit.w, hit.distance_squared);
+    hit.point = tp.point, hit.v = tp.v, hit.w = tp.w;
+    hit.pending = -1;
+  }
   // The exact closest point on one triangle (mesh index).
   ClosestHit to_triangle(const vec3f& p, uint32_t triangle) const;
 
@@ -40,7 +51,7 @@ class TriangleBvh {
     std::vector<float> lane_floats;
     std::vector<int32_t> lane_ints;
   };
-  // closest() for each of `count` points, with identical answers, for points close together (the
+  // closest() for each of `count` points, with identical answers (once resolved), for points close together (the
   // samples of one small patch): one traversal with the points' box collects every triangle that can
   // be the closest to any of them, then each point scans those candidates' boxes and planes four at a
   // time before any exact distance.

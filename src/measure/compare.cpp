@@ -327,12 +327,15 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
     for (uint64_t k = begin; k < end; ++k) {
       const uint32_t p = from.position_order[k];
       const vec3f q = from.position(p);
-      const ClosestHit& h = block.hits[k - begin];
+      ClosestHit& h = block.hits[k - begin];
       const float d = std::sqrt(h.distance_squared);
       out.position_distance[p] = d;
       out.position_closest[p] = h.triangle;
       if (want_field) std::memcpy(&out.field[p], &d, 4);
-      if (from.position_triangle[p] != UINT32_MAX) acc.take(d, {q, h.point, from.position_triangle[p], h.triangle});
+      if (from.position_triangle[p] != UINT32_MAX && d > acc.max) {
+        bvh.resolve(h, q);
+        acc.take(d, {q, h.point, from.position_triangle[p], h.triangle});
+      }
     }
   });
   for (uint32_t p = 0; p < positions; ++p) r.vertex_samples += from.position_triangle[p] != UINT32_MAX;
@@ -364,9 +367,12 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
     for (uint64_t j = begin; j < end; ++j) {
       const vec3f q = sample(e, j);
       const Surface::Edge& edge = from.edges[e];
-      const ClosestHit& h = block.hits[j - begin];
+      ClosestHit& h = block.hits[j - begin];
       const float d = std::sqrt(h.distance_squared);
-      acc.take(d, {q, h.point, edge.triangle, h.triangle});
+      if (d > acc.max) {
+        bvh.resolve(h, q);
+        acc.take(d, {q, h.point, edge.triangle, h.triangle});
+      }
       if (want_field) raise(out.field, nearest_corner_position(from, edge.triangle, q), d);
     }
   });
@@ -468,14 +474,18 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       const Sample u = drawn[j - begin];
       const float w0 = 1 - u.s, w1 = u.w1(), w2 = u.w2();
       const vec3f q = at[j - begin];
-      const ClosestHit& h = block.hits[j - begin];
+      ClosestHit& h = block.hits[j - begin];
       const float d = std::sqrt(h.distance_squared);
       acc.sum += d;
       acc.sum_squares += double(d) * d;
-      acc.take(d, {q, h.point, uint32_t(t), h.triangle});
+      if (d > acc.max) {
+        bvh.resolve(h, q);
+        acc.take(d, {q, h.point, uint32_t(t), h.triangle});
+      }
       if (options.refine && j == plan.area_start[t]) out.triangle_closest[t] = h.triangle;
       if (want_field) raise(out.field, nearest_corner_position(from, t, q), d);
       if (!(normals || uvs || colors)) continue;
+      bvh.resolve(h, q);
       const uint32_t* fc = &fm.indices[3 * t];
       const uint32_t* tc = &tm.indices[3 * size_t(h.triangle)];
       const float u0 = 1 - h.v - h.w;

@@ -176,6 +176,7 @@ void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed) {
     bvh.closest_group(group.data(), uint32_t(group.size()), g % 3 ? triangle(rng) : 0, got.data(), scratch);
     for (size_t i = 0; i < group.size(); ++i) {
       const ClosestHit expected = brute_force(m, group[i]);
+      bvh.resolve(got[i], group[i]);
       ASSERT_EQ(got[i].distance_squared, expected.distance_squared) << "group " << g << " point " << i;
       ASSERT_EQ(got[i].triangle, expected.triangle) << "group " << g << " point " << i;
       ASSERT_EQ(got[i].point, expected.point) << "group " << g << " point " << i;
