@@ -8,6 +8,19 @@
 
 namespace lod::core {
 
+// Follows `next` (~0u ends a chain) from x to its end, pointing every visited entry straight at the
+// end (chains are shortened once, whatever their length).
+inline uint32_t chain_end(std::vector<uint32_t>& next, uint32_t x) {
+  uint32_t end = x;
+  while (next[end] != ~0u) end = next[end];
+  while (x != end) {
+    const uint32_t n = next[x];
+    next[x] = end;
+    x = n;
+  }
+  return end;
+}
+
 class UnionFind {
  public:
   explicit UnionFind(size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0u); }

@@ -1,6 +1,7 @@
 // Geomorphs: correspondence tables from collapse records, composition, and the morph itself.
 #include <cmath>
 
+#include "core/union_find.h"
 #include "lod/internal.h"
 #include "lodkit/error.h"
 #include "lodkit/lod.h"
@@ -10,18 +11,7 @@ namespace lod {
 namespace {
 constexpr uint32_t none = ~0u;
 
-// Follows `next` from x to its end, pointing every visited entry straight at the end (chains
-// shortened once, whatever their length).
-uint32_t chase(std::vector<uint32_t>& next, uint32_t x) {
-  uint32_t end = x;
-  while (next[end] != none) end = next[end];
-  while (x != end) {
-    const uint32_t n = next[x];
-    next[x] = end;
-    x = n;
-  }
-  return end;
-}
+using core::chain_end;
 }  // namespace
 
 Geomorph geomorph_from_record(const Mesh& source, const SimplifyResult& result) {
@@ -40,17 +30,17 @@ Geomorph geomorph_from_record(const Mesh& source, const SimplifyResult& result) 
   for (uint32_t j = 0; j < result.vertex_origin.size(); ++j) coarse_of[result.vertex_origin[j]] = j;
   std::vector<uint32_t> at_position(ids.count, none);  // final position -> a coarser vertex there
   for (uint32_t j = 0; j < result.vertex_origin.size(); ++j) {
-    const uint32_t p = chase(position_next, ids.id[result.vertex_origin[j]]);
+    const uint32_t p = chain_end(position_next, ids.id[result.vertex_origin[j]]);
     if (at_position[p] == none) at_position[p] = j;
   }
 
   Geomorph g;
   g.target.resize(n);
   for (uint32_t v = 0; v < n; ++v) {
-    uint32_t t = coarse_of[chase(wedge_next, v)];
+    uint32_t t = coarse_of[chain_end(wedge_next, v)];
     // A wedge whose every triangle vanished: any vertex at its final position (its triangles all
     // have zero area at t = 1 whatever attributes it takes).
-    if (t == none) t = at_position[chase(position_next, ids.id[v])];
+    if (t == none) t = at_position[chain_end(position_next, ids.id[v])];
     g.target[v] = t == none ? 0 : t;  // none: used by no triangle at all
   }
   return g;

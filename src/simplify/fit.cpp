@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/parallel.h"
+#include "core/union_find.h"
 #include "measure/bvh.h"
 
 namespace lod::collapse {
@@ -27,16 +28,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
 
   // The live position each position ended in: its collapse chain, shortened as it is walked.
   std::vector<uint32_t> end = s.successor;
-  const auto last = [&](uint32_t p) {
-    uint32_t r = p;
-    while (end[r] != none) r = end[r];
-    while (p != r) {
-      const uint32_t next = end[p];
-      end[p] = r;
-      p = next;
-    }
-    return r;
-  };
+  const auto last = [&](uint32_t p) { return core::chain_end(end, p); };
 
   // The result with its own compact numbering: live positions in order of first use.
   std::vector<uint32_t> slot(s.position_count, none), position;  // position id -> slot, and back
@@ -166,12 +158,11 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
           const float3& p = from[c[k]];
           return vec3d{p.x, p.y, p.z};
         };
-        const vec3d a0 = corner(before, 0), b0 = corner(before, 1), c0 = corner(before, 2);
-        const vec3d a1 = corner(result.positions, 0), b1 = corner(result.positions, 1), c1 = corner(result.positions, 2);
-        const vec3d n0 = cross(b0 - a0, c0 - a0), n1 = cross(b1 - a1, c1 - a1);
-        const double l0 = length(n0), l1 = length(n1);
-        const double longest = std::max({length_squared(b1 - a1), length_squared(c1 - b1), length_squared(a1 - c1)});
-        if (!(l1 > 1e-12 * longest) || (l0 > 0 && dot(n0, n1) < min_dot * l0 * l1))
+        const vec3d old_corners[3] = {corner(before, 0), corner(before, 1), corner(before, 2)};
+        const vec3d new_corners[3] = {corner(result.positions, 0), corner(result.positions, 1),
+                                      corner(result.positions, 2)};
+        const FaceChange change = face_change(old_corners, new_corners, min_dot);
+        if (change.degenerate || change.flipped)
           for (uint32_t k = 0; k < 3; ++k) revert[c[k]] |= moved[c[k]];
       }
       for (size_t j = 0; j < m; ++j)

@@ -647,15 +647,11 @@ class Engine {
         // The triangle as (x, next, prev), its own winding.
         const vec3d before[3] = {px, s_.normalized(w.next), s_.normalized(w.prev)};
         const vec3d after[3] = {p, before[1], before[2]};
-        const vec3d n0 = cross(before[1] - before[0], before[2] - before[0]);
-        const vec3d n1 = cross(after[1] - after[0], after[2] - after[0]);
-        const double l0 = length(n0), l1 = length(n1);
-        const double longest = std::max({length_squared(after[1] - after[0]), length_squared(after[2] - after[1]),
-                                         length_squared(after[0] - after[2])});
-        if (!(l1 > 1e-12 * longest)) return Reject::shape;  // degenerate
-        if (l0 > 0 && dot(n0, n1) < min_dot * l0 * l1) return Reject::flip;
+        const FaceChange change = face_change(before, after, min_dot);
+        if (change.degenerate) return Reject::shape;
+        if (change.flipped) return Reject::flip;
         // Aspect ratio: longest edge over its altitude, L / (2 area / L) = L^2 / |n|.
-        if (max_aspect > 0 && longest / l1 > max_aspect) return Reject::shape;
+        if (max_aspect > 0 && change.longest / change.normal_length > max_aspect) return Reject::shape;
       }
     }
     return Reject::ok;

@@ -6,6 +6,7 @@
 // the table, positions and costs of all other candidates exact until the next rebuild.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -106,6 +107,25 @@ inline uint32_t shared_triangles(const State& state, uint32_t u, uint32_t v) {
   return count;
 }
 inline bool is_border_edge(const State& state, uint32_t u, uint32_t v) { return shared_triangles(state, u, v) == 1; }
+
+// A triangle whose corners move from `before` to `after` (same winding): whether it becomes
+// degenerate or turns by more than the angle whose cosine is `min_dot`; |n| and the longest squared
+// edge after the move, for aspect-ratio checks (L^2 / |n| is the longest edge over its altitude).
+struct FaceChange {
+  bool degenerate = false, flipped = false;
+  double normal_length = 0, longest = 0;
+};
+inline FaceChange face_change(const vec3d* before, const vec3d* after, double min_dot) {
+  const vec3d n0 = cross(before[1] - before[0], before[2] - before[0]);
+  const vec3d n1 = cross(after[1] - after[0], after[2] - after[0]);
+  const double l0 = length(n0), l1 = length(n1);
+  const double longest = std::max({length_squared(after[1] - after[0]), length_squared(after[2] - after[1]),
+                                   length_squared(after[0] - after[2])});
+  FaceChange change{.normal_length = l1, .longest = longest};
+  change.degenerate = !(l1 > 1e-12 * longest);
+  change.flipped = l0 > 0 && dot(n0, n1) < min_dot * l0 * l1;
+  return change;
+}
 
 // Which wedge of the kept position each wedge (and material) of the removed position continues as.
 struct WedgePair {
