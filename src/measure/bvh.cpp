@@ -29,7 +29,7 @@ constexpr uint32_t max_depth = 128;        // traversal stack: 3 entries per lev
 // grown by a few ulps of the scene's extent and the comparison has a relative slack, so a box that
 // holds the closest triangle is never skipped (the result must equal a brute-force scan).
 constexpr float prune_slack = 1.0f + 1.0f / (1 << 18);
-// closest_group gives up on a group whose candidates outnumber this (the points are too far apart).
+// closest_group gives up on a group after scanning this many triangles (the points are too far apart).
 constexpr size_t max_group_candidates = 128;
 
 struct Box {
@@ -301,27 +301,6 @@ template <class V>
   std::memcpy(p, &v, sizeof v);
 }
 
-// Every point against the seed triangle; returns the largest squared distance.
-template <int W>
-[[gnu::always_inline]] inline float seed_lanes(const LaneArrays& l, const vec3f* corners, uint32_t seed) {
-  using F = typename Lanes<W>::F;
-  using I = typename Lanes<W>::I;
-  F upper{};
-  for (uint32_t i = 0; i < l.n; i += W) {
-    const LanePoints<W> r = closest_on_triangle_lanes<W>(load_lanes<F>(l.x() + i), load_lanes<F>(l.y() + i),
-                                                         load_lanes<F>(l.z() + i), corners[0], corners[1], corners[2]);
-    store_lanes(l.distance_squared() + i, r.distance_squared);
-    store_lanes(l.s() + i, r.s);
-    store_lanes(l.t() + i, r.t);
-    store_lanes(l.region() + i, r.region);
-    store_lanes(l.triangle() + i, I{} + int32_t(seed));
-    upper = upper > r.distance_squared ? upper : r.distance_squared;
-  }
-  float m = 0;
-  for (int k = 0; k < W; ++k) m = std::max(m, upper[k]);
-  return m;
-}
-
 // Each batch of points scans the candidates: box, then plane, then the exact distance of every lane.
 // A lane takes a triangle when it is nearer, or as near with a lower index (as a brute-force scan
 // would); a lane the box or the plane ruled out is never nearer, so taking it or not changes nothing.
@@ -370,18 +349,95 @@ template <int W>
   }
 }
 
+// closest_group's search: one traversal for the whole group, nearest boxes (to the points' box)
+// first, scanning each leaf's triangles in lanes as it is reached. The bound is the largest of the
+// points' best distances so far, so it shrinks as leaves are scanned; a box farther from the points'
+// box than that cannot hold any point's closest triangle. Every lane starts from the hint triangle.
+// Returns false, leaving the lanes with their best so far, once more than `budget` triangles were
+// scanned (the points are spread too far for one search).
+struct GroupTree {
+  const BvhNode* nodes;
+  GroupCandidates leaves;  // slots unused: a leaf's triangles are a range of the leaf order
+};
+
+template <int W>
+[[gnu::always_inline]] inline float lanes_upper(const LaneArrays& l) {
+  using F = typename Lanes<W>::F;
+  F upper = load_lanes<F>(l.distance_squared());
+  for (uint32_t i = W; i < l.n; i += W) {
+    const F d = load_lanes<F>(l.distance_squared() + i);
+    upper = upper > d ? upper : d;
+  }
+  float m = upper[0];
+  for (int k = 1; k < W; ++k) m = std::max(m, upper[k]);
+  return m;
+}
+
+template <int W>
+[[gnu::always_inline]] inline bool search_group(const LaneArrays& l, const GroupTree& tree, const float* lo,
+                                                const float* hi, uint32_t hint_slot, uint32_t budget) {
+  GroupCandidates c = tree.leaves;
+  uint32_t slots[16];
+  c.slots = slots;
+  slots[0] = hint_slot;
+  c.count = 1;
+  scan_lanes<W>(l, c);
+  float upper = lanes_upper<W>(l);
+  uint32_t stack[3 * max_depth + 4];
+  float stack_distance[3 * max_depth + 4], stack_key[3 * max_depth + 4];
+  int top = 0;
+  stack[top] = 0, stack_distance[top] = 0, stack_key[top] = 0, ++top;
+  const Probe probe(lo, hi);
+  // Boxes are visited nearest to the group's centre first (many overlap the group's box, and the
+  // triangles nearest its middle bound the most points); pruning uses the distance to the box.
+  const vec3f centre{(lo[0] + hi[0]) * 0.5f, (lo[1] + hi[1]) * 0.5f, (lo[2] + hi[2]) * 0.5f};
+  const Probe middle(centre);
+  uint32_t scanned = 0;
+  while (top > 0) {
+    --top;
+    float limit = upper * prune_slack;
+    if (stack_distance[top] > limit) continue;
+    const uint32_t ref = stack[top];
+    if (ref & bvh_leaf_bit) {
+      const uint32_t first = (ref & ~bvh_leaf_bit) >> 4, count = (ref & 15) + 1;
+      c.count = 0;
+      for (uint32_t s = first; s < first + count; ++s)
+        if (s != hint_slot) slots[c.count++] = s;
+      scanned += uint32_t(c.count);
+      if (scanned > budget) return false;
+      scan_lanes<W>(l, c);
+      upper = lanes_upper<W>(l);
+      continue;
+    }
+    const BvhNode& n = tree.nodes[ref];
+    float d[4], key[4];
+    const int mask = probe.within(n.box, limit, d);
+    if (!mask) continue;
+    middle.within(n.box, inf, key);
+    // Push the hits farthest first, so the nearest is popped next (sorted in place on the stack).
+    const int base = top;
+    for (unsigned m = unsigned(mask); m; m &= m - 1) {
+      const int k = __builtin_ctz(m);
+      if (n.child[k] == bvh_empty_child) continue;
+      int j = top++;
+      for (; j > base && stack_key[j - 1] < key[k]; --j)
+        stack[j] = stack[j - 1], stack_distance[j] = stack_distance[j - 1], stack_key[j] = stack_key[j - 1];
+      stack[j] = n.child[k], stack_distance[j] = d[k], stack_key[j] = key[k];
+    }
+  }
+  return true;
+}
+
 // Four lanes (SSE2, NEON), or eight with AVX2 when the CPU has it (chosen at run time, so a default
 // build uses it too). Both give the same bits: AVX2 alone has no fused multiply-add to contract to.
-[[gnu::noinline]] float seed_lanes_narrow(const LaneArrays& l, const vec3f* corners, uint32_t seed) {
-  return seed_lanes<4>(l, corners, seed);
+[[gnu::noinline]] bool search_group_narrow(const LaneArrays& l, const GroupTree& t, const float* lo, const float* hi,
+                                           uint32_t hint_slot, uint32_t budget) {
+  return search_group<4>(l, t, lo, hi, hint_slot, budget);
 }
-[[gnu::noinline]] void scan_lanes_narrow(const LaneArrays& l, const GroupCandidates& c) { scan_lanes<4>(l, c); }
 #if defined(__x86_64__) && defined(__GNUC__)
-[[gnu::noinline, gnu::target("avx2")]] float seed_lanes_wide(const LaneArrays& l, const vec3f* corners, uint32_t seed) {
-  return seed_lanes<8>(l, corners, seed);
-}
-[[gnu::noinline, gnu::target("avx2")]] void scan_lanes_wide(const LaneArrays& l, const GroupCandidates& c) {
-  scan_lanes<8>(l, c);
+[[gnu::noinline, gnu::target("avx2")]] bool search_group_wide(const LaneArrays& l, const GroupTree& t, const float* lo,
+                                                              const float* hi, uint32_t hint_slot, uint32_t budget) {
+  return search_group<8>(l, t, lo, hi, hint_slot, budget);
 }
 std::atomic<unsigned> lane_width{0};
 bool use_wide_lanes() {
@@ -390,8 +446,10 @@ bool use_wide_lanes() {
   return w ? w == 8 && avx2 : avx2;
 }
 #else
-float seed_lanes_wide(const LaneArrays& l, const vec3f* corners, uint32_t seed) { return seed_lanes_narrow(l, corners, seed); }
-void scan_lanes_wide(const LaneArrays& l, const GroupCandidates& c) { scan_lanes_narrow(l, c); }
+bool search_group_wide(const LaneArrays& l, const GroupTree& t, const float* lo, const float* hi, uint32_t hint_slot,
+                       uint32_t budget) {
+  return search_group_narrow(l, t, lo, hi, hint_slot, budget);
+}
 std::atomic<unsigned> lane_width{0};
 bool use_wide_lanes() { return false; }
 #endif
@@ -575,23 +633,17 @@ ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint) const {
 void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hint, ClosestHit* out,
                                 GroupScratch& scratch) const {
   if (count == 0) return;
-  // The closest triangle of the point nearest the group's centre bounds every point's distance: the
-  // candidates are the triangles whose boxes come that close to the points' box.
+  if (count == 1) {
+    out[0] = closest(points[0], hint);
+    return;
+  }
   float lo[3] = {points[0].x, points[0].y, points[0].z}, hi[3] = {lo[0], lo[1], lo[2]};
   for (uint32_t i = 1; i < count; ++i) {
     const float* p = &points[i].x;
     for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
   }
-  const vec3f centre{(lo[0] + hi[0]) * 0.5f, (lo[1] + hi[1]) * 0.5f, (lo[2] + hi[2]) * 0.5f};
-  uint32_t middle = 0;
-  for (uint32_t i = 1; i < count; ++i)
-    if (length_squared(points[i] - centre) < length_squared(points[middle] - centre)) middle = i;
-  out[middle] = closest(points[middle], hint);
-  const uint32_t seed = out[middle].triangle;
-  if (count == 1) return;
-
-  // The points a lane each, in batches (the last padded with copies of the last point), all measured
-  // against the seed first.
+  // The points a lane each, in batches (the last padded with copies of the last point), with no
+  // triangle yet.
   const bool wide = use_wide_lanes();
   const uint32_t width = wide ? 8 : 4;
   const uint32_t padded = (count + width - 1) / width * width;
@@ -601,53 +653,20 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
   for (uint32_t i = 0; i < padded; ++i) {
     const vec3f& p = points[std::min(i, count - 1)];
     lanes.x()[i] = p.x, lanes.y()[i] = p.y, lanes.z()[i] = p.z;
+    lanes.distance_squared()[i] = inf;
+    lanes.triangle()[i] = INT32_MAX;
   }
-  const vec3f* seed_corners = &corners_[3 * size_t(slot_[seed])];
-  const float upper = wide ? seed_lanes_wide(lanes, seed_corners, seed) : seed_lanes_narrow(lanes, seed_corners, seed);
-
-  std::vector<uint32_t>& slots = scratch.slots;
-  slots.clear();
-  bool spread = false;
-  {
-    const float limit = upper * prune_slack;
-    uint32_t stack[3 * max_depth + 4];
-    int top = 0;
-    stack[top++] = 0;
-    const Probe probe(lo, hi);
-    while (top > 0 && !spread) {
-      const Node& n = nodes_[stack[--top]];
-      for (unsigned m = unsigned(probe.within(n.box, limit)); m; m &= m - 1) {
-        const uint32_t ref = n.child[__builtin_ctz(m)];
-        if (ref == empty_child) continue;
-        if (!(ref & leaf_bit)) {
-          stack[top++] = ref;
-          continue;
-        }
-        const uint32_t first = (ref & ~leaf_bit) >> 4, leaf_count = (ref & 15) + 1;
-        if (slots.size() + leaf_count > max_group_candidates) {
-          spread = true;
-          break;
-        }
-        for (uint32_t s = first; s < first + leaf_count; ++s) slots.push_back(s);
-      }
-    }
-  }
-  if (spread) {
-    for (uint32_t i = 0; i < count; ++i)
-      if (i != middle) out[i] = closest(points[i], seed);
+  const GroupTree tree{nodes_.data(),
+                       {nullptr, 0, triangle_box_.data(), triangle_plane_.data(), corners_.data(), original_.data(), plane_slack_}};
+  const uint32_t hint_slot = slot_[hint < original_.size() ? hint : 0];
+  const bool done = wide ? search_group_wide(lanes, tree, lo, hi, hint_slot, max_group_candidates)
+                         : search_group_narrow(lanes, tree, lo, hi, hint_slot, max_group_candidates);
+  if (!done) {
+    // Too spread out: each point on its own, from its best triangle so far.
+    for (uint32_t i = 0; i < count; ++i) out[i] = closest(points[i], uint32_t(lanes.triangle()[i]));
     return;
   }
-  // Every point already holds its distance to the seed: no need to measure it again.
-  slots.erase(std::remove(slots.begin(), slots.end(), slot_[seed]), slots.end());
-
-  const GroupCandidates candidates{slots.data(), slots.size(), triangle_box_.data(), triangle_plane_.data(),
-                                   corners_.data(), original_.data(), plane_slack_};
-  if (wide)
-    scan_lanes_wide(lanes, candidates);
-  else
-    scan_lanes_narrow(lanes, candidates);
   for (uint32_t i = 0; i < count; ++i) {
-    if (i == middle) continue;
     ClosestHit& h = out[i];
     h.distance_squared = lanes.distance_squared()[i];
     h.triangle = uint32_t(lanes.triangle()[i]);

@@ -12,6 +12,17 @@
 
 namespace lod::measure {
 
+// A node of TriangleBvh's 4-wide tree.
+struct alignas(64) BvhNode {
+  // Child boxes, one lane per child: min x, y, z then max x, y, z, four lanes each (the layout
+  // Probe::within reads); an empty lane has min = +inf, max = -inf.
+  float box[24];
+  // Inner child: node index. Leaf: bvh_leaf_bit | first << 4 | (count - 1), first into the leaf-order triangles.
+  uint32_t child[4];
+};
+constexpr uint32_t bvh_leaf_bit = 0x80000000u;
+constexpr uint32_t bvh_empty_child = 0xFFFFFFFFu;
+
 struct ClosestHit {
   float distance_squared = std::numeric_limits<float>::infinity();
   uint32_t triangle = UINT32_MAX;  // triangle index in the mesh
@@ -45,17 +56,17 @@ class TriangleBvh {
 
   // Reusable memory for closest_group (one per thread).
   struct GroupScratch {
-    std::vector<uint32_t> slots;  // candidate triangles (leaf order)
     // Per point, padded to whole batches of lanes: x, y, z, squared distance, s, t (floats), then the
     // triangle (mesh index) and region (ints); see closest_on_triangle_lanes.
     std::vector<float> lane_floats;
     std::vector<int32_t> lane_ints;
   };
-  // closest() for each of `count` points, with identical answers (once resolved), for points close together (the
-  // samples of one small patch): one traversal with the points' box collects every triangle that can
-  // be the closest to any of them, then each point scans those candidates' boxes and planes four at a
-  // time before any exact distance.
-  // Points spread too far for that fall back to closest(), one by one. `hint` as for closest().
+  // closest() for each of `count` points, with identical answers (once resolved), for points close
+  // together (the samples of one small patch): one traversal for the whole group, nearest boxes to the
+  // group's centre first, scans each leaf's triangles for all points at once (4 or 8 lanes: box,
+  // plane, then the exact distance), and prunes boxes farther from the points' box than the largest
+  // of the points' best distances so far. `hint` (as for closest()) is every point's first triangle.
+  // Points spread too far for that fall back to closest(), one by one.
   void closest_group(const vec3f* points, uint32_t count, uint32_t hint, ClosestHit* out, GroupScratch& scratch) const;
 
   // closest_group's lane width: 0 picks 8 when the CPU has AVX2, else 4 (the default); tests force
@@ -71,15 +82,9 @@ class TriangleBvh {
   // as in a brute-force scan); true when it did.
   bool consider(const vec3f& p, uint32_t slot, ClosestHit& best) const;
 
-  struct alignas(64) Node {
-    // Child boxes, one lane per child: min x, y, z then max x, y, z, four lanes each (the layout
-    // Probe::within reads); an empty lane has min = +inf, max = -inf.
-    float box[24];
-    // Inner child: node index. Leaf: leaf_bit | first << 4 | (count - 1), first into corners_/3.
-    uint32_t child[4];
-  };
-  static constexpr uint32_t leaf_bit = 0x80000000u;
-  static constexpr uint32_t empty_child = 0xFFFFFFFFu;
+  using Node = BvhNode;
+  static constexpr uint32_t leaf_bit = bvh_leaf_bit;
+  static constexpr uint32_t empty_child = bvh_empty_child;
 
   std::vector<Node> nodes_;        // nodes_[0] is the root
   std::vector<vec3f> corners_;     // 3 per triangle, in leaf order

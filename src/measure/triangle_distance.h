@@ -189,29 +189,28 @@ template <int W>
                             pz - (a.z + ab.z * fv + ac.z * fw));
   r.region = in_face ? I{} + int32_t(region_face) : I{} + int32_t(region_none);
   r.s = fv, r.t = fw;
+  // A region no lane is in is skipped: its distances would be computed and thrown away (points of a
+  // group mostly share one or two regions).
   auto take = [&](const I& m, TriangleRegion region, const F& d, const F& s) {
     r.distance_squared = m ? d : r.distance_squared;
     r.region = m ? I{} + int32_t(region) : r.region;
     r.s = m ? s : r.s;
   };
-  {
-    const I m = (va <= 0) & (e43 >= 0) & (e56 >= 0);
+  if (const I m = (va <= 0) & (e43 >= 0) & (e56 >= 0); any_lane<W>(m)) {
     const F len = e43 + e56, w = len > 0 ? e43 / len : zero;
     take(m, region_bc, norm(px - (b.x + bc.x * w), py - (b.y + bc.y * w), pz - (b.z + bc.z * w)), w);
   }
-  {
-    const I m = (vb <= 0) & (d2 >= 0) & (d6 <= 0);
+  if (const I m = (vb <= 0) & (d2 >= 0) & (d6 <= 0); any_lane<W>(m)) {
     const F len = d2 - d6, w = len > 0 ? d2 / len : zero;
     take(m, region_ac, norm(px - (a.x + ac.x * w), py - (a.y + ac.y * w), pz - (a.z + ac.z * w)), w);
   }
-  take((d6 >= 0) & (d5 <= d6), region_c, norm(cpx, cpy, cpz), zero);
-  {
-    const I m = (vc <= 0) & (d1 >= 0) & (d3 <= 0);
+  if (const I m = (d6 >= 0) & (d5 <= d6); any_lane<W>(m)) take(m, region_c, norm(cpx, cpy, cpz), zero);
+  if (const I m = (vc <= 0) & (d1 >= 0) & (d3 <= 0); any_lane<W>(m)) {
     const F len = d1 - d3, v = len > 0 ? d1 / len : zero;
     take(m, region_ab, norm(px - (a.x + ab.x * v), py - (a.y + ab.y * v), pz - (a.z + ab.z * v)), v);
   }
-  take((d3 >= 0) & (d4 <= d3), region_b, norm(bpx, bpy, bpz), zero);
-  take((d1 <= 0) & (d2 <= 0), region_a, norm(apx, apy, apz), zero);
+  if (const I m = (d3 >= 0) & (d4 <= d3); any_lane<W>(m)) take(m, region_b, norm(bpx, bpy, bpz), zero);
+  if (const I m = (d1 <= 0) & (d2 <= 0); any_lane<W>(m)) take(m, region_a, norm(apx, apy, apz), zero);
   const I none = r.region == int32_t(region_none);
   if (any_lane<W>(none)) [[unlikely]] {
     for (int k = 0; k < W; ++k)
