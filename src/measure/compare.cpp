@@ -27,6 +27,9 @@ using measure::vec3f;
 constexpr size_t block_size = 1024;       // samples per block
 constexpr size_t blocks_per_slice = 256;  // progress is reported between slices
 constexpr uint32_t group_size = 32;       // samples per closest_group query
+// A triangle with many area samples is queried in patches of this many consecutive samples along a
+// serpentine through cells of about 4: whole batches of 8 lanes, and still compact.
+constexpr uint32_t patch_size = 8;
 
 uint64_t splitmix64(uint64_t x) {
   x += 0x9E3779B97F4A7C15ull;
@@ -408,9 +411,9 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       drawn[o] = sample(begin + o);
       at[o] = point(t, drawn[o]);
     }
-    // Queries go a triangle at a time; a triangle with many samples is cut into patches (cells of its
-    // (s, r2) square of about 8 samples, in serpentine order, by a counting sort), each a group of
-    // queries close together.
+    // Queries go a triangle at a time; a triangle with many samples is cut into patches: its samples
+    // in serpentine order through cells of its (s, r2) square of about 4 samples (a counting sort),
+    // cut every patch_size samples, each patch a group of queries close together.
     // Consecutive small triangles share a group while it has room and their boxes stay about as
     // large as the two together (neighbours, in a mesh whose order is mostly spatial).
     BlockQueries block;
@@ -449,7 +452,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       }
       block.cut();
       open = 0;
-      const uint32_t k = uint32_t(std::ceil(std::sqrt(double(b - a) / 8.0)));
+      const uint32_t k = uint32_t(std::ceil(std::sqrt(double(b - a) / 4.0)));
       cell.resize(b - a);
       cell_start.assign(size_t(k) * k + 1, 0);
       for (uint32_t o = a; o < b; ++o) {
@@ -463,7 +466,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       for (uint32_t o = a; o < b; ++o) sorted[cell_start[cell[o - a]]++] = o;
       for (uint32_t i = 0; i < b - a; ++i) {
         block.add(at[sorted[i]], sorted[i]);
-        if (i + 1 < b - a && cell[sorted[i + 1] - a] != cell[sorted[i] - a]) block.cut();
+        if ((i + 1) % patch_size == 0) block.cut();
       }
       block.cut();
     }
