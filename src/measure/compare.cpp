@@ -227,14 +227,22 @@ float4 interpolate(const std::vector<float4>& s, const uint32_t* c, float w0, fl
           s[c[0]].z * w0 + s[c[1]].z * w1 + s[c[2]].z * w2, s[c[0]].w * w0 + s[c[1]].w * w1 + s[c[2]].w * w2};
 }
 
-// Samples of one block, queried in groups of nearby points (TriangleBvh::closest_group); the hits
-// come back per offset in the block, so the caller reduces them in sample order.
+// Samples of one block, queried in groups of nearby points (TriangleBvh::closest_group); hit(o) is
+// the answer for offset o in the block, so the caller reduces them in sample order. One per thread,
+// reused block after block (cleared, its memory kept).
 struct BlockQueries {
   std::vector<vec3f> points;         // in query order
   std::vector<uint32_t> offset;      // query order -> offset in the block
+  std::vector<uint32_t> query;       // offset in the block -> query order
   std::vector<uint32_t> group_end;   // query order positions where a group ends
-  std::vector<ClosestHit> hits;      // per offset in the block
+  std::vector<ClosestHit> hits;      // in query order
+  TriangleBvh::GroupScratch scratch;
 
+  static BlockQueries& local() {
+    thread_local BlockQueries block;
+    block.points.clear(), block.offset.clear(), block.group_end.clear();
+    return block;
+  }
   void add(const vec3f& p, uint32_t block_offset) {
     points.push_back(p);
     offset.push_back(block_offset);
@@ -246,20 +254,20 @@ struct BlockQueries {
   // Groups not cut by the caller are runs of `size` consecutive points.
   void run(const TriangleBvh& bvh, uint32_t size, uint32_t& hint) {
     cut();
-    std::vector<ClosestHit> in_order(points.size());
-    TriangleBvh::GroupScratch scratch;
+    if (hits.size() < points.size()) hits.resize(points.size());
     uint32_t first = 0;
     for (const uint32_t last : group_end) {
       for (uint32_t g = first; g < last; g += size) {
         const uint32_t n = std::min(size, last - g);
-        bvh.closest_group(&points[g], n, hint, &in_order[g], scratch);
-        hint = in_order[g + n - 1].triangle;
+        bvh.closest_group(&points[g], n, hint, &hits[g], scratch);
+        hint = hits[g + n - 1].triangle;
       }
       first = last;
     }
-    hits.resize(points.size());
-    for (size_t q = 0; q < points.size(); ++q) hits[offset[q]] = in_order[q];
+    query.resize(points.size());
+    for (uint32_t q = 0; q < points.size(); ++q) query[offset[q]] = q;
   }
+  ClosestHit& hit(uint32_t block_offset) { return hits[query[block_offset]]; }
 };
 
 struct Direction {
@@ -324,13 +332,13 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
 
   // Vertices: every position (a vertex used by no triangle is measured for the field but is not a sample).
   run_stream(positions, options.threads, progress, total, [&](uint64_t begin, uint64_t end, Accumulator& acc, uint32_t& hint) {
-    BlockQueries block;
+    BlockQueries& block = BlockQueries::local();
     for (uint64_t k = begin; k < end; ++k) block.add(from.position(from.position_order[k]), uint32_t(k - begin));
     block.run(bvh, group_size, hint);
     for (uint64_t k = begin; k < end; ++k) {
       const uint32_t p = from.position_order[k];
       const vec3f q = from.position(p);
-      ClosestHit& h = block.hits[k - begin];
+      ClosestHit& h = block.hit(uint32_t(k - begin));
       const float d = std::sqrt(h.distance_squared);
       out.position_distance[p] = d;
       out.position_closest[p] = h.triangle;
@@ -357,7 +365,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       return a + (b - a) * t;
     };
     // A group never spans two edges (they part at their shared end): runs along one edge, 8 at most.
-    BlockQueries block;
+    BlockQueries& block = BlockQueries::local();
     size_t e = first_edge;
     for (uint64_t j = begin; j < end; ++j) {
       const size_t before = e;
@@ -370,7 +378,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
     for (uint64_t j = begin; j < end; ++j) {
       const vec3f q = sample(e, j);
       const Surface::Edge& edge = from.edges[e];
-      ClosestHit& h = block.hits[j - begin];
+      ClosestHit& h = block.hit(uint32_t(j - begin));
       const float d = std::sqrt(h.distance_squared);
       if (d > acc.max) {
         bvh.resolve(h, q);
@@ -416,7 +424,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
     // cut every patch_size samples, each patch a group of queries close together.
     // Consecutive small triangles share a group while it has room and their boxes stay about as
     // large as the two together (neighbours, in a mesh whose order is mostly spatial).
-    BlockQueries block;
+    BlockQueries& block = BlockQueries::local();
     std::vector<uint32_t> cell, cell_start, sorted;
     uint32_t open = 0;  // points in the current group of small triangles
     float open_lo[3] = {}, open_hi[3] = {};
@@ -477,7 +485,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       const Sample u = drawn[j - begin];
       const float w0 = 1 - u.s, w1 = u.w1(), w2 = u.w2();
       const vec3f q = at[j - begin];
-      ClosestHit& h = block.hits[j - begin];
+      ClosestHit& h = block.hit(uint32_t(j - begin));
       const float d = std::sqrt(h.distance_squared);
       acc.sum += d;
       acc.sum_squares += double(d) * d;
