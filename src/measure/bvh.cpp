@@ -32,12 +32,25 @@ constexpr float prune_slack = 1.0f + 1.0f / (1 << 18);
 // closest_group gives up on a group after scanning this many triangles (the points are too far apart).
 constexpr size_t max_group_candidates = 128;
 
-struct Box {
-  float lo[3] = {inf, inf, inf}, hi[3] = {-inf, -inf, -inf};
-  void grow(const Box& b) {
-    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], b.lo[k]), hi[k] = std::max(hi[k], b.hi[k]);
+// A point padded to four floats, for Box::grow's four-wide min and max.
+struct alignas(16) Point4 {
+  float v[4] = {0, 0, 0, 0};
+};
+
+// Four floats per corner (the last unused), so the build grows boxes with one SSE min and max.
+struct alignas(16) Box {
+  float lo[4] = {inf, inf, inf, inf}, hi[4] = {-inf, -inf, -inf, -inf};
+  void grow(const Box& b) { grow(b.lo, b.hi); }
+  void grow(const Point4& p) { grow(p.v, p.v); }
+  void grow(const float* blo, const float* bhi) {
+#if defined(__SSE2__)
+    _mm_store_ps(lo, _mm_min_ps(_mm_load_ps(lo), _mm_load_ps(blo)));
+    _mm_store_ps(hi, _mm_max_ps(_mm_load_ps(hi), _mm_load_ps(bhi)));
+#else
+    for (int k = 0; k < 4; ++k) lo[k] = std::min(lo[k], blo[k]), hi[k] = std::max(hi[k], bhi[k]);
+#endif
   }
-  void grow(const float* p) {
+  void grow_point(const float* p) {
     for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
   }
   // Half the surface area, which is all SAH needs (ratios).
@@ -136,9 +149,11 @@ struct BuildTask {
 
 // Binned SAH over triangle centroids, building a binary tree (root at index 0) whose leaves are ranges
 // of `order`, over order[begin, end). Nodes at `defer_depth` are left empty and listed in `deferred`.
-std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::vector<vec3f>& centroids,
-                                     std::vector<uint32_t>& order, uint32_t begin, uint32_t end, uint32_t depth,
-                                     uint32_t defer_depth, std::vector<BuildTask>& deferred) {
+// `bin` is per-triangle scratch: the binning pass leaves each triangle's bin there for the partition
+// (each call touches only its own range's triangles).
+std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::vector<Point4>& centroids,
+                                     std::vector<uint32_t>& order, std::vector<uint8_t>& bin, uint32_t begin,
+                                     uint32_t end, uint32_t depth, uint32_t defer_depth, std::vector<BuildTask>& deferred) {
   std::vector<BinaryNode> nodes;
   nodes.reserve(end - begin);  // about 2 / 3 of a node per triangle with leaves of ~3
   nodes.emplace_back();
@@ -154,7 +169,7 @@ std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::v
     Box box, centroid_box;
     for (uint32_t i = task.begin; i < task.end; ++i) {
       box.grow(boxes[order[i]]);
-      centroid_box.grow(&centroids[order[i]].x);
+      centroid_box.grow(centroids[order[i]]);
     }
     nodes[task.node].box = box;
     auto make_leaf = [&] {
@@ -173,8 +188,8 @@ std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::v
       if (centroid_box.hi[a] - centroid_box.lo[a] > centroid_box.hi[axis] - centroid_box.lo[axis]) axis = a;
     const float extent = centroid_box.hi[axis] - centroid_box.lo[axis];
     const float scale = extent > 0 ? float(bin_count) / extent : 0.0f;
-    auto bin_of = [&](const vec3f& c) {
-      const float t = ((&c.x)[axis] - centroid_box.lo[axis]) * scale;
+    auto bin_of = [&](const Point4& c) {
+      const float t = (c.v[axis] - centroid_box.lo[axis]) * scale;
       return std::min(bin_count - 1, std::max(0, int(t)));
     };
     float best_cost = inf;
@@ -183,7 +198,9 @@ std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::v
       Bin bins[bin_count];
       for (uint32_t i = task.begin; i < task.end; ++i) {
         const uint32_t t = order[i];
-        Bin& b = bins[bin_of(centroids[t])];
+        const int k = bin_of(centroids[t]);
+        bin[t] = uint8_t(k);
+        Bin& b = bins[k];
         b.box.grow(boxes[t]);
         ++b.count;
       }
@@ -221,7 +238,7 @@ std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::v
     } else {
       auto* first = order.data() + task.begin;
       auto* cut = std::partition(first, order.data() + task.end,
-                                 [&](uint32_t t) { return bin_of(centroids[t]) < best_split; });
+                                 [&](uint32_t t) { return bin[t] < best_split; });
       mid = uint32_t(cut - order.data());
     }
     const uint32_t left = uint32_t(nodes.size());
@@ -238,16 +255,17 @@ std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::v
 // The same tree built in parts: the top levels first, then the subtrees below `split_depth` side by
 // side (they own disjoint ranges of `order`), spliced in list order. The split depth is fixed, so the
 // layout does not depend on the thread count.
-std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::vector<vec3f>& centroids,
+std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::vector<Point4>& centroids,
                                      std::vector<uint32_t>& order, unsigned threads) {
   constexpr uint32_t split_depth = 3;  // up to 8 subtrees
   std::vector<BuildTask> deferred, none;
+  std::vector<uint8_t> bin(order.size());
   std::vector<BinaryNode> nodes =
-      build_binary(boxes, centroids, order, 0, uint32_t(order.size()), 0, split_depth, deferred);
+      build_binary(boxes, centroids, order, bin, 0, uint32_t(order.size()), 0, split_depth, deferred);
   std::vector<std::vector<BinaryNode>> parts(deferred.size());
   core::parallel_blocks(deferred.size(), 1, threads, [&](size_t k, size_t, size_t) {
     const BuildTask& t = deferred[k];
-    parts[k] = build_binary(boxes, centroids, order, t.begin, t.end, t.depth, UINT32_MAX, none);
+    parts[k] = build_binary(boxes, centroids, order, bin, t.begin, t.end, t.depth, UINT32_MAX, none);
   });
   for (size_t k = 0; k < deferred.size(); ++k) {
     // The part's root takes the deferred node's place; its other nodes follow, their child links moved.
@@ -462,12 +480,12 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
   if (triangles >= (size_t(1) << 27)) throw_bad_input("mesh", "more than 2^27 triangles to measure");
 
   std::vector<Box> boxes(triangles);
-  std::vector<vec3f> centroids(triangles);
+  std::vector<Point4> centroids(triangles);
   core::parallel_for(triangles, threads, [&](size_t t) {
     Box b;
-    for (int k = 0; k < 3; ++k) b.grow(&mesh.positions[mesh.indices[3 * t + k]].x);
+    for (int k = 0; k < 3; ++k) b.grow_point(&mesh.positions[mesh.indices[3 * t + k]].x);
     boxes[t] = b;
-    centroids[t] = {(b.lo[0] + b.hi[0]) * 0.5f, (b.lo[1] + b.hi[1]) * 0.5f, (b.lo[2] + b.hi[2]) * 0.5f};
+    for (int k = 0; k < 3; ++k) centroids[t].v[k] = (b.lo[k] + b.hi[k]) * 0.5f;
   });
   std::vector<uint32_t> order(triangles);
   for (uint32_t t = 0; t < triangles; ++t) order[t] = t;
@@ -505,7 +523,7 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
   triangle_box_.resize(6 * triangles);
   for (size_t s = 0; s < triangles; ++s) {
     Box b;
-    for (int k = 0; k < 3; ++k) b.grow(&corners_[3 * s + k].x);
+    for (int k = 0; k < 3; ++k) b.grow_point(&corners_[3 * s + k].x);
     for (int k = 0; k < 3; ++k) triangle_box_[6 * s + k] = b.lo[k] - grow, triangle_box_[6 * s + 3 + k] = b.hi[k] + grow;
   }
 
