@@ -323,48 +323,77 @@ template <class V>
 // A lane takes a triangle when it is nearer, or as near with a lower index (as a brute-force scan
 // would); a lane the box or the plane ruled out is never nearer, so taking it or not changes nothing.
 template <int W>
-[[gnu::always_inline]] inline void scan_lanes(const LaneArrays& l, const GroupCandidates& c) {
-  using F = typename Lanes<W>::F;
-  using I = typename Lanes<W>::I;
-  const F zero{};
-  for (uint32_t i = 0; i < l.n; i += W) {
-    const F px = load_lanes<F>(l.x() + i), py = load_lanes<F>(l.y() + i), pz = load_lanes<F>(l.z() + i);
-    F best = load_lanes<F>(l.distance_squared() + i), s = load_lanes<F>(l.s() + i), t = load_lanes<F>(l.t() + i);
-    I triangle = load_lanes<I>(l.triangle() + i), region = load_lanes<I>(l.region() + i);
-    F limit = best * prune_slack;
-    for (size_t k = 0; k < c.count; ++k) {
-      const uint32_t slot = c.slots[k];
-      const float* b = c.box + 6 * size_t(slot);
-      auto gap = [&](const F& p, float lo, float hi) {
-        const F below = lo - p, above = p - hi;
-        const F g = below > above ? below : above;
-        return g > zero ? g : zero;
-      };
-      const F gx = gap(px, b[0], b[3]), gy = gap(py, b[1], b[4]), gz = gap(pz, b[2], b[5]);
-      const I near_box = gx * gx + gy * gy + gz * gz <= limit;
-      if (!any_lane<W>(near_box)) continue;
-      const float* plane = c.plane + 4 * size_t(slot);
-      const F offset = plane[0] * px + plane[1] * py + plane[2] * pz - plane[3];
-      const F size = (offset < zero ? -offset : offset) - c.plane_slack;
-      const F plane_gap = size > zero ? size : zero;
-      if (!any_lane<W>(near_box & (plane_gap * plane_gap <= limit))) continue;
-      const vec3f* corner = c.corners + 3 * size_t(slot);
-      const LanePoints<W> r = closest_on_triangle_lanes<W>(px, py, pz, corner[0], corner[1], corner[2]);
-      const I index = I{} + int32_t(c.original[slot]);
-      const I take = (r.distance_squared < best) | ((r.distance_squared == best) & (index < triangle));
-      best = take ? r.distance_squared : best;
-      triangle = take ? index : triangle;
-      region = take ? r.region : region;
-      s = take ? r.s : s;
-      t = take ? r.t : t;
-      limit = best * prune_slack;
-    }
+struct Batch {
+  typename Lanes<W>::F px, py, pz, best, s, t;
+  typename Lanes<W>::I triangle, region;
+  void load(const LaneArrays& l, uint32_t i) {
+    using F = typename Lanes<W>::F;
+    using I = typename Lanes<W>::I;
+    px = load_lanes<F>(l.x() + i), py = load_lanes<F>(l.y() + i), pz = load_lanes<F>(l.z() + i);
+    best = load_lanes<F>(l.distance_squared() + i), s = load_lanes<F>(l.s() + i), t = load_lanes<F>(l.t() + i);
+    triangle = load_lanes<I>(l.triangle() + i), region = load_lanes<I>(l.region() + i);
+  }
+  void store(const LaneArrays& l, uint32_t i) const {
     store_lanes(l.distance_squared() + i, best);
     store_lanes(l.s() + i, s);
     store_lanes(l.t() + i, t);
     store_lanes(l.triangle() + i, triangle);
     store_lanes(l.region() + i, region);
   }
+  float upper() const {
+    float m = best[0];
+    for (int k = 1; k < W; ++k) m = std::max(m, best[k]);
+    return m;
+  }
+};
+
+template <int W>
+[[gnu::always_inline]] inline void scan_batch(Batch<W>& p, const GroupCandidates& c) {
+  using F = typename Lanes<W>::F;
+  using I = typename Lanes<W>::I;
+  const F zero{};
+  F limit = p.best * prune_slack;
+  for (size_t k = 0; k < c.count; ++k) {
+    const uint32_t slot = c.slots[k];
+    const float* b = c.box + 6 * size_t(slot);
+    auto gap = [&](const F& q, float lo, float hi) {
+      const F below = lo - q, above = q - hi;
+      const F g = below > above ? below : above;
+      return g > zero ? g : zero;
+    };
+    const F gx = gap(p.px, b[0], b[3]), gy = gap(p.py, b[1], b[4]), gz = gap(p.pz, b[2], b[5]);
+    const I near_box = gx * gx + gy * gy + gz * gz <= limit;
+    if (!any_lane<W>(near_box)) continue;
+    const float* plane = c.plane + 4 * size_t(slot);
+    const F offset = plane[0] * p.px + plane[1] * p.py + plane[2] * p.pz - plane[3];
+    const F size = (offset < zero ? -offset : offset) - c.plane_slack;
+    const F plane_gap = size > zero ? size : zero;
+    if (!any_lane<W>(near_box & (plane_gap * plane_gap <= limit))) continue;
+    const vec3f* corner = c.corners + 3 * size_t(slot);
+    const LanePoints<W> r = closest_on_triangle_lanes<W>(p.px, p.py, p.pz, corner[0], corner[1], corner[2]);
+    const I index = I{} + int32_t(c.original[slot]);
+    const I take = (r.distance_squared < p.best) | ((r.distance_squared == p.best) & (index < p.triangle));
+    p.best = take ? r.distance_squared : p.best;
+    p.triangle = take ? index : p.triangle;
+    p.region = take ? r.region : p.region;
+    p.s = take ? r.s : p.s;
+    p.t = take ? r.t : p.t;
+    limit = p.best * prune_slack;
+  }
+}
+
+// Every batch of points through scan_batch; returns the largest best distance.
+template <int W>
+[[gnu::always_inline]] inline float scan_lanes(const LaneArrays& l, const GroupCandidates& c) {
+  float upper = 0;
+  for (uint32_t i = 0; i < l.n; i += W) {
+    Batch<W> p;
+    p.load(l, i);
+    scan_batch<W>(p, c);
+    p.store(l, i);
+    upper = std::max(upper, p.upper());
+  }
+  return upper;
 }
 
 // closest_group's search: one traversal for the whole group, nearest boxes (to the points' box)
@@ -378,29 +407,17 @@ struct GroupTree {
   GroupCandidates leaves;  // slots unused: a leaf's triangles are a range of the leaf order
 };
 
-template <int W>
-[[gnu::always_inline]] inline float lanes_upper(const LaneArrays& l) {
-  using F = typename Lanes<W>::F;
-  F upper = load_lanes<F>(l.distance_squared());
-  for (uint32_t i = W; i < l.n; i += W) {
-    const F d = load_lanes<F>(l.distance_squared() + i);
-    upper = upper > d ? upper : d;
-  }
-  float m = upper[0];
-  for (int k = 1; k < W; ++k) m = std::max(m, upper[k]);
-  return m;
-}
-
-template <int W>
-[[gnu::always_inline]] inline bool search_group(const LaneArrays& l, const GroupTree& tree, const float* lo,
-                                                const float* hi, uint32_t hint_slot, uint32_t budget) {
+// scan(candidates) scans the points (one batch kept in registers, or all of them) and returns the
+// largest best distance.
+template <class Scan>
+[[gnu::always_inline]] inline bool search_group(const GroupTree& tree, const float* lo, const float* hi,
+                                                uint32_t hint_slot, uint32_t budget, Scan&& scan) {
   GroupCandidates c = tree.leaves;
   uint32_t slots[16];
   c.slots = slots;
   slots[0] = hint_slot;
   c.count = 1;
-  scan_lanes<W>(l, c);
-  float upper = lanes_upper<W>(l);
+  float upper = scan(c);
   uint32_t stack[3 * max_depth + 4];
   float stack_distance[3 * max_depth + 4], stack_key[3 * max_depth + 4];
   int top = 0;
@@ -423,8 +440,7 @@ template <int W>
         if (s != hint_slot) slots[c.count++] = s;
       scanned += uint32_t(c.count);
       if (scanned > budget) return false;
-      scan_lanes<W>(l, c);
-      upper = lanes_upper<W>(l);
+      upper = scan(c);
       continue;
     }
     const BvhNode& n = tree.nodes[ref];
@@ -448,14 +464,39 @@ template <int W>
 
 // Four lanes (SSE2, NEON), or eight with AVX2 when the CPU has it (chosen at run time, so a default
 // build uses it too). Both give the same bits: AVX2 alone has no fused multiply-add to contract to.
+// One batch (the usual patch of 8 with 8 lanes) stays in registers through the whole search.
+template <int W>
+[[gnu::always_inline]] inline bool search_group_lanes(const LaneArrays& l, const GroupTree& t, const float* lo,
+                                                      const float* hi, uint32_t hint_slot, uint32_t budget) {
+  // Functors, not lambdas: a lambda would not take the caller's avx2 target.
+  struct One {
+    Batch<W>& p;
+    [[gnu::always_inline]] float operator()(const GroupCandidates& c) const {
+      scan_batch<W>(p, c);
+      return p.upper();
+    }
+  };
+  struct All {
+    const LaneArrays& l;
+    [[gnu::always_inline]] float operator()(const GroupCandidates& c) const { return scan_lanes<W>(l, c); }
+  };
+  if (l.n == W) {
+    Batch<W> p;
+    p.load(l, 0);
+    const bool done = search_group(t, lo, hi, hint_slot, budget, One{p});
+    p.store(l, 0);
+    return done;
+  }
+  return search_group(t, lo, hi, hint_slot, budget, All{l});
+}
 [[gnu::noinline]] bool search_group_narrow(const LaneArrays& l, const GroupTree& t, const float* lo, const float* hi,
                                            uint32_t hint_slot, uint32_t budget) {
-  return search_group<4>(l, t, lo, hi, hint_slot, budget);
+  return search_group_lanes<4>(l, t, lo, hi, hint_slot, budget);
 }
 #if defined(__x86_64__) && defined(__GNUC__)
 [[gnu::noinline, gnu::target("avx2")]] bool search_group_wide(const LaneArrays& l, const GroupTree& t, const float* lo,
                                                               const float* hi, uint32_t hint_slot, uint32_t budget) {
-  return search_group<8>(l, t, lo, hi, hint_slot, budget);
+  return search_group_lanes<8>(l, t, lo, hi, hint_slot, budget);
 }
 std::atomic<unsigned> lane_width{0};
 bool use_wide_lanes() {
