@@ -202,11 +202,14 @@ void raise(std::vector<uint32_t>& field, uint32_t position, float d) {
   }
 }
 
-// A sample's region: the corner of its triangle nearest to it (the first on ties), as a position id.
+// A sample's region: the corner of its triangle nearest to it (the first on ties).
+int nearest_corner(const vec3f& c0, const vec3f& c1, const vec3f& c2, const vec3f& q) {
+  const float l0 = length_squared(q - c0), l1 = length_squared(q - c1), l2 = length_squared(q - c2);
+  return l0 <= l1 && l0 <= l2 ? 0 : (l1 <= l2 ? 1 : 2);
+}
+// The same as a position id.
 uint32_t nearest_corner_position(const Surface& s, size_t triangle, const vec3f& q) {
-  const float l0 = length_squared(q - s.corner(triangle, 0)), l1 = length_squared(q - s.corner(triangle, 1)),
-              l2 = length_squared(q - s.corner(triangle, 2));
-  const int k = l0 <= l1 && l0 <= l2 ? 0 : (l1 <= l2 ? 1 : 2);
+  const int k = nearest_corner(s.corner(triangle, 0), s.corner(triangle, 1), s.corner(triangle, 2), q);
   return s.ids.id[s.mesh->indices[3 * triangle + k]];
 }
 
@@ -227,6 +230,13 @@ float4 interpolate(const std::vector<float4>& s, const uint32_t* c, float w0, fl
           s[c[0]].z * w0 + s[c[1]].z * w1 + s[c[2]].z * w2, s[c[0]].w * w0 + s[c[1]].w * w1 + s[c[2]].w * w2};
 }
 
+// An area sample, uniform in its triangle: s = sqrt(r1) picks the distance from corner 0 with density ~ s.
+struct AreaSample {
+  float s, r2;
+  float w1() const { return s * (1 - r2); }  // barycentric weights; w0 = 1 - s
+  float w2() const { return s * r2; }
+};
+
 // Samples of one block, queried in groups of nearby points (TriangleBvh::closest_group); hit(o) is
 // the answer for offset o in the block, so the caller reduces them in sample order. One per thread,
 // reused block after block (cleared, its memory kept).
@@ -237,6 +247,10 @@ struct BlockQueries {
   std::vector<uint32_t> group_end;   // query order positions where a group ends
   std::vector<ClosestHit> hits;      // in query order
   TriangleBvh::GroupScratch scratch;
+  // The area stream's own: each sample's draw and point, and the patch sort.
+  std::vector<AreaSample> drawn;
+  std::vector<vec3f> at;
+  std::vector<uint32_t> cell, cell_start, sorted;
 
   static BlockQueries& local() {
     thread_local BlockQueries block;
@@ -396,36 +410,31 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
   run_stream(plan.area_samples, options.threads, progress, total, [&](uint64_t begin, uint64_t end, Accumulator& acc, uint32_t& hint) {
     const size_t first_triangle =
         size_t(std::upper_bound(plan.area_start.begin(), plan.area_start.end(), begin) - plan.area_start.begin()) - 1;
-    // Uniform in the triangle: s = sqrt(r1) picks the distance from corner 0 with density ~ s.
-    struct Sample {
-      float s, r2;
-      float w1() const { return s * (1 - r2); }  // barycentric weights; w0 = 1 - s
-      float w2() const { return s * r2; }
-    };
     auto sample = [&](uint64_t j) {
       const uint64_t bits = splitmix64(stream_seed + j);
       const float r1 = float(bits >> 40) * 0x1p-24f, r2 = float((bits >> 16) & 0xFFFFFF) * 0x1p-24f;
-      return Sample{std::sqrt(r1), r2};
+      return AreaSample{std::sqrt(r1), r2};
     };
-    auto point = [&](size_t t, const Sample& u) {
-      return from.corner(t, 0) * (1 - u.s) + from.corner(t, 1) * u.w1() + from.corner(t, 2) * u.w2();
-    };
-    // Each sample drawn once per block.
+    // Each sample drawn once per block, a triangle at a time.
+    BlockQueries& block = BlockQueries::local();
     const size_t n = size_t(end - begin);
-    std::vector<Sample> drawn(n);
-    std::vector<vec3f> at(n);
-    for (size_t t = first_triangle, o = 0; o < n; ++o) {
-      while (plan.area_start[t + 1] <= begin + o) ++t;
-      drawn[o] = sample(begin + o);
-      at[o] = point(t, drawn[o]);
+    std::vector<AreaSample>& drawn = block.drawn;
+    std::vector<vec3f>& at = block.at;
+    drawn.resize(n), at.resize(n);
+    for (size_t t = first_triangle; plan.area_start[t] < end; ++t) {
+      const vec3f c0 = from.corner(t, 0), c1 = from.corner(t, 1), c2 = from.corner(t, 2);
+      const uint64_t last = std::min(end, plan.area_start[t + 1]);
+      for (uint64_t j = std::max(begin, plan.area_start[t]); j < last; ++j) {
+        const AreaSample u = drawn[j - begin] = sample(j);
+        at[j - begin] = c0 * (1 - u.s) + c1 * u.w1() + c2 * u.w2();
+      }
     }
     // Queries go a triangle at a time; a triangle with many samples is cut into patches: its samples
     // in serpentine order through cells of its (s, r2) square of about 4 samples (a counting sort),
     // cut every patch_size samples, each patch a group of queries close together.
     // Consecutive small triangles share a group while it has room and their boxes stay about as
     // large as the two together (neighbours, in a mesh whose order is mostly spatial).
-    BlockQueries& block = BlockQueries::local();
-    std::vector<uint32_t> cell, cell_start, sorted;
+    std::vector<uint32_t>&cell = block.cell, &cell_start = block.cell_start, &sorted = block.sorted;
     uint32_t open = 0;  // points in the current group of small triangles
     float open_lo[3] = {}, open_hi[3] = {};
     auto diagonal = [](const float* lo, const float* hi) {
@@ -479,51 +488,54 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       block.cut();
     }
     block.run(bvh, group_size, hint);
-    size_t t = first_triangle;
-    for (uint64_t j = begin; j < end; ++j) {
-      while (plan.area_start[t + 1] <= j) ++t;
-      const Sample u = drawn[j - begin];
-      const float w0 = 1 - u.s, w1 = u.w1(), w2 = u.w2();
-      const vec3f q = at[j - begin];
-      ClosestHit& h = block.hit(uint32_t(j - begin));
-      const float d = std::sqrt(h.distance_squared);
-      acc.sum += d;
-      acc.sum_squares += double(d) * d;
-      if (d > acc.max) {
-        bvh.resolve(h, q);
-        acc.take(d, {q, h.point, uint32_t(t), h.triangle});
-      }
-      if (options.refine && j == plan.area_start[t]) out.triangle_closest[t] = h.triangle;
-      if (want_field) raise(out.field, nearest_corner_position(from, t, q), d);
-      if (!(normals || uvs || colors)) continue;
-      bvh.resolve(h, q);
-      const uint32_t* fc = &fm.indices[3 * t];
-      const uint32_t* tc = &tm.indices[3 * size_t(h.triangle)];
-      const float u0 = 1 - h.v - h.w;
-      if (normals) {
-        const vec3f na = interpolate(fm.normals, fc, w0, w1, w2), nb = interpolate(tm.normals, tc, u0, h.v, h.w);
-        const double la = length_squared(na), lb = length_squared(nb);
-        if (la > 0 && lb > 0) {
-          const double cx = double(na.y) * nb.z - double(na.z) * nb.y, cy = double(na.z) * nb.x - double(na.x) * nb.z,
-                       cz = double(na.x) * nb.y - double(na.y) * nb.x;
-          // atan2 keeps small angles accurate, where acos of a dot product near 1 does not.
-          const double angle =
-              std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), double(dot(na, nb))) * (180.0 / std::numbers::pi);
-          acc.normal_sum += angle, acc.normal_max = std::max(acc.normal_max, angle), ++acc.normal_count;
+    for (size_t t = first_triangle; plan.area_start[t] < end; ++t) {
+      const vec3f c0 = from.corner(t, 0), c1 = from.corner(t, 1), c2 = from.corner(t, 2);
+      const uint32_t* corner_id = &from.mesh->indices[3 * t];
+      const uint64_t last = std::min(end, plan.area_start[t + 1]);
+      for (uint64_t j = std::max(begin, plan.area_start[t]); j < last; ++j) {
+        const AreaSample u = drawn[j - begin];
+        const float w0 = 1 - u.s, w1 = u.w1(), w2 = u.w2();
+        const vec3f q = at[j - begin];
+        ClosestHit& h = block.hit(uint32_t(j - begin));
+        const float d = std::sqrt(h.distance_squared);
+        acc.sum += d;
+        acc.sum_squares += double(d) * d;
+        if (d > acc.max) {
+          bvh.resolve(h, q);
+          acc.take(d, {q, h.point, uint32_t(t), h.triangle});
         }
-      }
-      if (uvs) {
-        const float2 ua = interpolate(fm.uvs[0], fc, w0, w1, w2), ub = interpolate(tm.uvs[0], tc, u0, h.v, h.w);
-        const double du = double(ua.x) - ub.x, dv = double(ua.y) - ub.y;
-        const double diff = std::sqrt(du * du + dv * dv);
-        acc.uv_sum += diff, acc.uv_max = std::max(acc.uv_max, diff), ++acc.uv_count;
-      }
-      if (colors) {
-        const float4 ca = interpolate(fm.colors, fc, w0, w1, w2), cb = interpolate(tm.colors, tc, u0, h.v, h.w);
-        const double dr = double(ca.x) - cb.x, dg = double(ca.y) - cb.y, db = double(ca.z) - cb.z,
-                     da = double(ca.w) - cb.w;
-        const double diff = std::sqrt(dr * dr + dg * dg + db * db + da * da);
-        acc.color_sum += diff, acc.color_max = std::max(acc.color_max, diff), ++acc.color_count;
+        if (options.refine && j == plan.area_start[t]) out.triangle_closest[t] = h.triangle;
+        if (want_field) raise(out.field, from.ids.id[corner_id[nearest_corner(c0, c1, c2, q)]], d);
+        if (!(normals || uvs || colors)) continue;
+        bvh.resolve(h, q);
+        const uint32_t* fc = &fm.indices[3 * t];
+        const uint32_t* tc = &tm.indices[3 * size_t(h.triangle)];
+        const float u0 = 1 - h.v - h.w;
+        if (normals) {
+          const vec3f na = interpolate(fm.normals, fc, w0, w1, w2), nb = interpolate(tm.normals, tc, u0, h.v, h.w);
+          const double la = length_squared(na), lb = length_squared(nb);
+          if (la > 0 && lb > 0) {
+            const double cx = double(na.y) * nb.z - double(na.z) * nb.y, cy = double(na.z) * nb.x - double(na.x) * nb.z,
+                         cz = double(na.x) * nb.y - double(na.y) * nb.x;
+            // atan2 keeps small angles accurate, where acos of a dot product near 1 does not.
+            const double angle =
+                std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), double(dot(na, nb))) * (180.0 / std::numbers::pi);
+            acc.normal_sum += angle, acc.normal_max = std::max(acc.normal_max, angle), ++acc.normal_count;
+          }
+        }
+        if (uvs) {
+          const float2 ua = interpolate(fm.uvs[0], fc, w0, w1, w2), ub = interpolate(tm.uvs[0], tc, u0, h.v, h.w);
+          const double du = double(ua.x) - ub.x, dv = double(ua.y) - ub.y;
+          const double diff = std::sqrt(du * du + dv * dv);
+          acc.uv_sum += diff, acc.uv_max = std::max(acc.uv_max, diff), ++acc.uv_count;
+        }
+        if (colors) {
+          const float4 ca = interpolate(fm.colors, fc, w0, w1, w2), cb = interpolate(tm.colors, tc, u0, h.v, h.w);
+          const double dr = double(ca.x) - cb.x, dg = double(ca.y) - cb.y, db = double(ca.z) - cb.z,
+                       da = double(ca.w) - cb.w;
+          const double diff = std::sqrt(dr * dr + dg * dg + db * db + da * da);
+          acc.color_sum += diff, acc.color_max = std::max(acc.color_max, diff), ++acc.color_count;
+        }
       }
     }
   });
