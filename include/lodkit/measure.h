@@ -107,8 +107,8 @@ struct Deviation {
   std::vector<float> vertex_error;
 
   // Timing, not part of the result (it varies between runs).
-  double build_seconds = 0;  // both BVHs
-  double query_seconds = 0;  // sampling and queries
+  double build_seconds = 0;  // both BVHs and both surfaces' sample plans
+  double query_seconds = 0;  // drawing the samples and querying them
   uint64_t queries = 0;      // closest-point queries made (deterministic)
 };
 

@@ -535,11 +535,6 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
   original_ = order;
   slot_.resize(triangles);
   corners_.resize(3 * triangles);
-  for (uint32_t s = 0; s < triangles; ++s) {
-    slot_[order[s]] = s;
-    for (int k = 0; k < 3; ++k) corners_[3 * s + k] = mesh.positions[mesh.indices[3 * size_t(order[s]) + k]];
-  }
-
   // Growth of every box: a few ulps of the largest coordinate.
   float magnitude = 0;
   for (const float3& p : mesh.positions)
@@ -547,26 +542,27 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
   const float grow = magnitude * 1e-6f + std::numeric_limits<float>::min();
   plane_slack_ = 4 * grow;
   triangle_plane_.assign(4 * triangles, 0.0f);
-  for (size_t s = 0; s < triangles; ++s) {
-    // In double, then rounded: the rounding is within plane_slack_ (a degenerate triangle keeps a zero
-    // plane, which prunes nothing).
-    const vec3f* c = &corners_[3 * s];
+  triangle_box_.resize(6 * triangles);
+  // Per leaf-order triangle, each slot written by its own item: corners, plane and grown box.
+  core::parallel_for(triangles, threads, [&](size_t s) {
+    slot_[order[s]] = uint32_t(s);
+    vec3f* c = &corners_[3 * s];
+    for (int k = 0; k < 3; ++k) c[k] = mesh.positions[mesh.indices[3 * size_t(order[s]) + k]];
+    Box b;
+    for (int k = 0; k < 3; ++k) b.grow_point(&c[k].x);
+    for (int k = 0; k < 3; ++k) triangle_box_[6 * s + k] = b.lo[k] - grow, triangle_box_[6 * s + 3 + k] = b.hi[k] + grow;
+    // The plane in double, then rounded: the rounding is within plane_slack_ (a degenerate triangle
+    // keeps a zero plane, which prunes nothing).
     const double ux = double(c[1].x) - c[0].x, uy = double(c[1].y) - c[0].y, uz = double(c[1].z) - c[0].z;
     const double vx = double(c[2].x) - c[0].x, vy = double(c[2].y) - c[0].y, vz = double(c[2].z) - c[0].z;
     const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
     const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
     const double scale = std::max({std::fabs(ux), std::fabs(uy), std::fabs(uz), std::fabs(vx), std::fabs(vy), std::fabs(vz)});
-    if (!(length > 1e-6 * scale * scale)) continue;
+    if (!(length > 1e-6 * scale * scale)) return;
     float* plane = &triangle_plane_[4 * s];
     plane[0] = float(nx / length), plane[1] = float(ny / length), plane[2] = float(nz / length);
     plane[3] = float((nx * c[0].x + ny * c[0].y + nz * c[0].z) / length);
-  }
-  triangle_box_.resize(6 * triangles);
-  for (size_t s = 0; s < triangles; ++s) {
-    Box b;
-    for (int k = 0; k < 3; ++k) b.grow_point(&corners_[3 * s + k].x);
-    for (int k = 0; k < 3; ++k) triangle_box_[6 * s + k] = b.lo[k] - grow, triangle_box_[6 * s + 3 + k] = b.hi[k] + grow;
-  }
+  });
 
   // Collapse: each 4-wide node takes a binary node's children and opens the largest inner ones until
   // it has four.
