@@ -32,32 +32,37 @@ constexpr float prune_slack = 1.0f + 1.0f / (1 << 18);
 // closest_group gives up on a group after scanning this many triangles (the points are too far apart).
 constexpr size_t max_group_candidates = 128;
 
-// A point padded to four floats, for Box::grow's four-wide min and max.
-struct alignas(16) Point4 {
-  float v[4] = {0, 0, 0, 0};
-};
-
-// Four floats per corner (the last unused), so the build grows boxes with one SSE min and max.
-struct alignas(16) Box {
-  float lo[4] = {inf, inf, inf, inf}, hi[4] = {-inf, -inf, -inf, -inf};
-  void grow(const Box& b) { grow(b.lo, b.hi); }
-  void grow(const Point4& p) { grow(p.v, p.v); }
-  void grow(const float* blo, const float* bhi) {
-#if defined(__SSE2__)
-    _mm_store_ps(lo, _mm_min_ps(_mm_load_ps(lo), _mm_load_ps(blo)));
-    _mm_store_ps(hi, _mm_max_ps(_mm_load_ps(hi), _mm_load_ps(bhi)));
-#else
-    for (int k = 0; k < 4; ++k) lo[k] = std::min(lo[k], blo[k]), hi[k] = std::max(hi[k], bhi[k]);
-#endif
-  }
-  void grow_point(const float* p) {
-    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
-  }
+// A triangle's bounds as the build stores them: six floats (24 bytes a triangle). Box::grow reads
+// each corner with one unaligned four-float load; the fourth float is the next one in memory, so
+// arrays of these (and of centroids) have a spare element at the end.
+struct Bounds {
+  float lo[3], hi[3];
   // Half the surface area, which is all SAH needs (ratios).
   float half_area() const {
     const float x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2];
     return x < 0 ? 0 : x * y + y * z + z * x;
   }
+};
+
+// Four floats per corner (the fourth is ignored), so the build grows boxes with one SSE min and max.
+struct alignas(16) Box {
+  float lo[4] = {inf, inf, inf, inf}, hi[4] = {-inf, -inf, -inf, -inf};
+  void grow(const Box& b) { grow(b.lo, b.hi); }
+  void grow(const Bounds& b) { grow(b.lo, b.hi); }
+  void grow(const vec3f& p) { grow(&p.x, &p.x); }
+  void grow(const float* blo, const float* bhi) {
+#if defined(__SSE2__)
+    _mm_store_ps(lo, _mm_min_ps(_mm_load_ps(lo), _mm_loadu_ps(blo)));
+    _mm_store_ps(hi, _mm_max_ps(_mm_load_ps(hi), _mm_loadu_ps(bhi)));
+#else
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], blo[k]), hi[k] = std::max(hi[k], bhi[k]);
+#endif
+  }
+  void grow_point(const float* p) {
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  }
+  Bounds bounds() const { return {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}}; }
+  float half_area() const { return bounds().half_area(); }
 };
 
 // A box [lo, hi] (a point when lo == hi) measured against four boxes at once.
@@ -133,7 +138,7 @@ class Probe {
 };
 
 struct BinaryNode {
-  Box box;
+  Bounds box;
   uint32_t left = 0;          // inner: children at left and left + 1
   uint32_t begin = 0, count = 0;  // leaf: range of the triangle order (count > 0)
 };
@@ -151,7 +156,7 @@ struct BuildTask {
 // of `order`, over order[begin, end). Nodes at `defer_depth` are left empty and listed in `deferred`.
 // `bin` is per-triangle scratch: the binning pass leaves each triangle's bin there for the partition
 // (each call touches only its own range's triangles).
-std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::vector<Point4>& centroids,
+std::vector<BinaryNode> build_binary(const std::vector<Bounds>& boxes, const std::vector<vec3f>& centroids,
                                      std::vector<uint32_t>& order, std::vector<uint8_t>& bin, uint32_t begin,
                                      uint32_t end, uint32_t depth, uint32_t defer_depth, std::vector<BuildTask>& deferred) {
   std::vector<BinaryNode> nodes;
@@ -171,7 +176,7 @@ std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::v
       box.grow(boxes[order[i]]);
       centroid_box.grow(centroids[order[i]]);
     }
-    nodes[task.node].box = box;
+    nodes[task.node].box = box.bounds();
     auto make_leaf = [&] {
       nodes[task.node].begin = task.begin;
       nodes[task.node].count = n;
@@ -188,8 +193,8 @@ std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::v
       if (centroid_box.hi[a] - centroid_box.lo[a] > centroid_box.hi[axis] - centroid_box.lo[axis]) axis = a;
     const float extent = centroid_box.hi[axis] - centroid_box.lo[axis];
     const float scale = extent > 0 ? float(bin_count) / extent : 0.0f;
-    auto bin_of = [&](const Point4& c) {
-      const float t = (c.v[axis] - centroid_box.lo[axis]) * scale;
+    auto bin_of = [&](const vec3f& c) {
+      const float t = ((&c.x)[axis] - centroid_box.lo[axis]) * scale;
       return std::min(bin_count - 1, std::max(0, int(t)));
     };
     float best_cost = inf;
@@ -255,7 +260,7 @@ std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::v
 // The same tree built in parts: the top levels first, then the subtrees below `split_depth` side by
 // side (they own disjoint ranges of `order`), spliced in list order. The split depth is fixed, so the
 // layout does not depend on the thread count.
-std::vector<BinaryNode> build_binary(const std::vector<Box>& boxes, const std::vector<Point4>& centroids,
+std::vector<BinaryNode> build_binary(const std::vector<Bounds>& boxes, const std::vector<vec3f>& centroids,
                                      std::vector<uint32_t>& order, unsigned threads) {
   constexpr uint32_t split_depth = 3;  // up to 8 subtrees
   std::vector<BuildTask> deferred, none;
@@ -520,13 +525,13 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
   if (triangles == 0) throw_internal("TriangleBvh: no triangles");
   if (triangles >= (size_t(1) << 27)) throw_bad_input("mesh", "more than 2^27 triangles to measure");
 
-  std::vector<Box> boxes(triangles);
-  std::vector<Point4> centroids(triangles);
+  std::vector<Bounds> boxes(triangles + 1);  // + 1: Box::grow's four-float loads
+  std::vector<vec3f> centroids(triangles + 1);
   core::parallel_for(triangles, threads, [&](size_t t) {
     Box b;
     for (int k = 0; k < 3; ++k) b.grow_point(&mesh.positions[mesh.indices[3 * t + k]].x);
-    boxes[t] = b;
-    for (int k = 0; k < 3; ++k) centroids[t].v[k] = (b.lo[k] + b.hi[k]) * 0.5f;
+    for (int k = 0; k < 3; ++k) boxes[t].lo[k] = b.lo[k], boxes[t].hi[k] = b.hi[k];
+    centroids[t] = {(b.lo[0] + b.hi[0]) * 0.5f, (b.lo[1] + b.hi[1]) * 0.5f, (b.lo[2] + b.hi[2]) * 0.5f};
   });
   std::vector<uint32_t> order(triangles);
   for (uint32_t t = 0; t < triangles; ++t) order[t] = t;

@@ -608,22 +608,20 @@ Deviation compare(const Mesh& a, const Mesh& b, const CompareOptions& options) {
   const uint64_t samples =
       options.samples ? options.samples
                       : std::clamp<uint64_t>(10 * std::max(a.triangle_count(), b.triangle_count()), 10'000, 2'000'000);
-  // The two trees, and the two surfaces with their sample plans, are made side by side (each is
-  // mostly serial; the larger tree's build takes the most time and runs its subtrees in parallel).
-  const uint64_t seed_ab = splitmix64(options.seed ^ 0xA5A5A5A5ull), seed_ba = splitmix64(options.seed ^ 0x5A5A5A5Aull);
+  // The two trees are built side by side (each build is mostly serial), then the two surfaces and
+  // their sample plans are made side by side: one step after the other, so that the builds'
+  // temporary arrays are gone before the surfaces take their memory.
   std::optional<TriangleBvh> trees[2];
-  std::optional<Surface> surfaces[2];
-  Plan plans[2];
-  core::parallel_blocks(4, 1, options.threads, [&](size_t k, size_t, size_t) {
-    const Mesh& m = k % 2 ? b : a;
-    if (k < 2) {
-      trees[k].emplace(m, options.threads);
-    } else {
-      Surface& s = surfaces[k - 2].emplace(m);
-      plans[k - 2] = plan_samples(s, samples, options.edge_samples, k == 3 ? seed_ba : seed_ab);
-    }
+  core::parallel_blocks(2, 1, options.threads, [&](size_t k, size_t, size_t) {
+    trees[k].emplace(k ? b : a, options.threads);
   });
   const TriangleBvh &bvh_a = *trees[0], &bvh_b = *trees[1];
+  const uint64_t seed_ab = splitmix64(options.seed ^ 0xA5A5A5A5ull), seed_ba = splitmix64(options.seed ^ 0x5A5A5A5Aull);
+  std::optional<Surface> surfaces[2];
+  Plan plans[2];
+  core::parallel_blocks(2, 1, options.threads, [&](size_t k, size_t, size_t) {
+    plans[k] = plan_samples(surfaces[k].emplace(k ? b : a), samples, options.edge_samples, k ? seed_ba : seed_ab);
+  });
   Surface &sa = *surfaces[0], &sb = *surfaces[1];
   const Plan &plan_a = plans[0], &plan_b = plans[1];
   const auto built = std::chrono::steady_clock::now();
