@@ -427,6 +427,9 @@ class Engine {
         continue;
       }
       const auto candidates = neighbours(u, none, scratch.candidates);
+      if constexpr (requires { metric_.prefetch(u); })
+        for (const uint32_t v : candidates)
+          if (v > u) metric_.prefetch(v), __builtin_prefetch(&s_.position[v]);
       if (lists && !wide && !(mark_[u] & mark_kept)) {
         // Only u's edges to kept positions changed (or vanished): update its cheapest edges. A full
         // ranking (best pointed at a changed edge) is needed only if none of those are left.
