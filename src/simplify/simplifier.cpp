@@ -206,15 +206,13 @@ class Engine {
     for (const uint32_t t : s_.live)
       for (uint32_t k = 0; k < 3; ++k) ++s_.first[s_.corner_position(t, k) + 1];
     for (uint32_t p = 0; p < s_.position_count; ++p) s_.first[p + 1] += s_.first[p];
-    s_.star.resize(s_.first[s_.position_count]);
-    s_.wings.resize(s_.star.size());
+    s_.wings.resize(s_.first[s_.position_count]);
     fill_.assign(s_.first.begin(), s_.first.end() - 1);
     for (const uint32_t t : s_.live) {
       const uint32_t* c = &s_.corner_pos[3 * size_t(t)];
       for (uint32_t k = 0; k < 3; ++k) {
         const uint32_t slot = fill_[c[k]]++;
-        s_.star[slot] = t;
-        s_.wings[slot] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k]};
+        s_.wings[slot] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k], t};
       }
     }
   }
@@ -243,7 +241,6 @@ class Engine {
       }
     }
     s_.first[positions] = slot;
-    s_.star.resize(slot);
     s_.wings.resize(slot);
     core::parallel_blocks(live, block, s_.threads, [&](size_t b, size_t begin, size_t end) {
       std::vector<uint32_t>& fill = star_slots_[b];
@@ -252,8 +249,7 @@ class Engine {
         const uint32_t* c = &s_.corner_pos[3 * size_t(t)];
         for (uint32_t k = 0; k < 3; ++k) {
           const uint32_t at = fill[c[k]]++;
-          s_.star[at] = t;
-          s_.wings[at] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k]};
+          s_.wings[at] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k], t};
         }
       }
     });
