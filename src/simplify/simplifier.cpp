@@ -422,23 +422,38 @@ class Engine {
         best_[u] = Best{};
         continue;
       }
-      const auto candidates = neighbours(u, none, scratch.candidates);
-      if constexpr (requires { metric_.prefetch(u); })
-        for (const uint32_t v : candidates)
-          if (v > u) metric_.prefetch(v), __builtin_prefetch(&s_.position[v]);
+      // u's neighbours, as neighbours() lists them: in a manifold interior fan, each wing's next
+      // once, read in place (no copy).
+      const bool simple = !(s_.flags[u] & (flag_complex | flag_border));
+      const std::span<const uint32_t> listed = simple ? std::span<const uint32_t>{} : neighbours(u, none, scratch.candidates);
+      const auto each_neighbour = [&](auto&& fn) {
+        if (simple)
+          for (const Wing& w : s_.wings_of(u)) fn(w.next);
+        else
+          for (const uint32_t v : listed) fn(v);
+      };
+      if constexpr (requires { metric_.prefetch(u); }) {
+        if (simple) {
+          for (const Wing& w : s_.wings_of(u))
+            if (w.next > u) metric_.prefetch(w.next), __builtin_prefetch(&s_.position[w.next]);
+        } else {
+          for (const uint32_t v : listed)
+            if (v > u) metric_.prefetch(v), __builtin_prefetch(&s_.position[v]);
+        }
+      }
       if (lists && !wide && !(mark_[u] & mark_kept)) {
         // Only u's edges to kept positions changed (or vanished): update its cheapest edges. A full
         // ranking (best pointed at a changed edge) is needed only if none of those are left.
         EdgeList& list = edges_[u];
         list.remove_if([&](uint32_t v) { return (s_.flags[v] & (flag_dead | flag_complex)) || (mark_[v] & mark_kept); });
-        for (const uint32_t v : candidates) {
-          if (v <= u || (s_.flags[v] & (flag_dead | flag_complex)) || !(mark_[v] & mark_kept)) continue;
+        each_neighbour([&](uint32_t v) {
+          if (v <= u || (s_.flags[v] & (flag_dead | flag_complex)) || !(mark_[v] & mark_kept)) return;
           Decision decision;
-          if (evaluate(u, v, scratch, decision, false) != Reject::ok) continue;
+          if (evaluate(u, v, scratch, decision, false) != Reject::ok) return;
           const float cost = float(decision.placement.cost);
           list.insert({cost, v});
           if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
-        }
+        });
         if (!full) continue;
         if (list.count > 0 || list.complete) {
           best_[u] = list.count > 0 ? list.edge[0] : Best{};
@@ -446,15 +461,15 @@ class Engine {
         }
       }
       EdgeList ranked;
-      for (const uint32_t v : candidates) {
-        if (v <= u || (s_.flags[v] & (flag_dead | flag_complex))) continue;
-        if (!full && !(mark_[v] & mark_kept)) continue;
+      each_neighbour([&](uint32_t v) {
+        if (v <= u || (s_.flags[v] & (flag_dead | flag_complex))) return;
+        if (!full && !(mark_[v] & mark_kept)) return;
         Decision decision;
-        if (evaluate(u, v, scratch, decision, false) != Reject::ok) continue;
+        if (evaluate(u, v, scratch, decision, false) != Reject::ok) return;
         const float cost = float(decision.placement.cost);
         if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
         ranked.insert({cost, v});
-      }
+      });
       if (lists && full) edges_[u] = ranked;
       if (aggregate_)
         for (uint32_t j = virtual_first_[u]; j < virtual_first_[u + 1]; ++j) {
