@@ -682,14 +682,21 @@ class Engine {
     if ((fu & flag_locked) && (fv & flag_locked)) return Reject::topology;
     if (!aggregate_ && ((fu | fv) & flag_complex)) return Reject::topology;
 
-    const auto wings = s_.wings_of(u);
-    const auto star = s_.triangles_of(u);
     uint32_t shared = 0;
-    for (uint32_t i = 0; i < wings.size(); ++i)
-      if (wings[i].next == v || wings[i].prev == v) {
-        if (shared < 2) scratch.face[shared] = star[i], scratch.opposite[shared] = wings[i].next == v ? wings[i].prev : wings[i].next;
-        ++shared;
-      }
+    if (!checked && !aggregate_ && !channel_floats_ && !(fu & (flag_border | flag_complex)) && !((fu | fv) & flag_seam)) {
+      // Ranking an edge of a manifold interior position (v is one of its neighbours), without seams
+      // or attributes: only the number of removed faces matters (no wedges are mapped), and it is
+      // two, v following u in one triangle of the closed fan and preceding it in another.
+      shared = 2;
+    } else {
+      const auto wings = s_.wings_of(u);
+      const auto star = s_.triangles_of(u);
+      for (uint32_t i = 0; i < wings.size(); ++i)
+        if (wings[i].next == v || wings[i].prev == v) {
+          if (shared < 2) scratch.face[shared] = star[i], scratch.opposite[shared] = wings[i].next == v ? wings[i].prev : wings[i].next;
+          ++shared;
+        }
+    }
     scratch.face_count = std::min<uint32_t>(shared, 2);
     // No shared face: a virtual pair (only ranked when aggregating).
     if (shared == 0) return aggregate_ ? evaluate_virtual(u, v, scratch, decision, checked) : Reject::topology;
