@@ -32,12 +32,16 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
 
   // The result with its own compact numbering: live positions in order of first use.
   std::vector<uint32_t> slot(s.position_count, none), position;  // position id -> slot, and back
+  std::vector<uint32_t> first_use;  // per slot: the first result triangle at it
   Mesh result;
   for (size_t t = 0; t < triangles; ++t) {
     if (!s.alive[t]) continue;
     for (uint32_t k = 0; k < 3; ++k) {
       const uint32_t p = s.corner_pos[3 * t + k];
-      if (slot[p] == none) slot[p] = uint32_t(position.size()), position.push_back(p);
+      if (slot[p] == none) {
+        slot[p] = uint32_t(position.size()), position.push_back(p);
+        first_use.push_back(uint32_t(result.indices.size() / 3));
+      }
       result.indices.push_back(slot[p]);
     }
   }
@@ -86,7 +90,13 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
   for (size_t v = 0; v < input.vertex_count(); v += stride)
     if (share[v] > 0) samples.push_back(uint32_t(v));
 
+  // The first search of each sample starts from a triangle at the position it ended in (nearby);
+  // later ones from its last foot. The start changes only the speed.
   std::vector<Foot> foot(samples.size());
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const uint32_t j = slot[last(s.position_of[samples[i]])];
+    foot[i].triangle = j == none ? 0 : first_use[j];
+  }
   std::vector<vec3d> num(m);
   std::vector<double> den(m);
   std::vector<uint8_t> moved(m), revert(m);
@@ -98,7 +108,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
     core::parallel_for(samples.size(), s.threads, [&](size_t i) {
       Foot& f = foot[i];
       const uint32_t v = samples[i];
-      const measure::ClosestHit hit = bvh.closest(input.positions[v], f.triangle == none ? 0 : f.triangle);
+      const measure::ClosestHit hit = bvh.closest(input.positions[v], f.triangle);
       f.triangle = hit.triangle, f.v = hit.v, f.w = hit.w;
       const uint32_t* c = &result.indices[3 * size_t(hit.triangle)];
       const vec3d q = normalized(c[0]) * (1.0 - double(hit.v) - double(hit.w)) + normalized(c[1]) * double(hit.v) +

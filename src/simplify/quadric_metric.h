@@ -101,6 +101,14 @@ class QuadricMetric {
 
   bool reads_neighbourhood() const { return memoryless_; }
 
+  // Starts loading a position's quadric (88 bytes, two cache lines): ranking u's edges reads the
+  // quadrics of neighbours scattered in memory, and asking for all of them first overlaps the misses.
+  void prefetch(uint32_t position) const {
+    const char* q = reinterpret_cast<const char*>(&quadric_[position]);
+    __builtin_prefetch(q);
+    __builtin_prefetch(q + sizeof(QuadricD) - 1);
+  }
+
   // The stored quadric of a position (for tests: memoryless quadrics equal a rebuild from scratch).
   const QuadricD& quadric(uint32_t position) const { return quadric_[position]; }
 

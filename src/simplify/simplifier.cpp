@@ -206,15 +206,13 @@ class Engine {
     for (const uint32_t t : s_.live)
       for (uint32_t k = 0; k < 3; ++k) ++s_.first[s_.corner_position(t, k) + 1];
     for (uint32_t p = 0; p < s_.position_count; ++p) s_.first[p + 1] += s_.first[p];
-    s_.star.resize(s_.first[s_.position_count]);
-    s_.wings.resize(s_.star.size());
+    s_.wings.resize(s_.first[s_.position_count]);
     fill_.assign(s_.first.begin(), s_.first.end() - 1);
     for (const uint32_t t : s_.live) {
       const uint32_t* c = &s_.corner_pos[3 * size_t(t)];
       for (uint32_t k = 0; k < 3; ++k) {
         const uint32_t slot = fill_[c[k]]++;
-        s_.star[slot] = t;
-        s_.wings[slot] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k]};
+        s_.wings[slot] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k], t};
       }
     }
   }
@@ -243,7 +241,6 @@ class Engine {
       }
     }
     s_.first[positions] = slot;
-    s_.star.resize(slot);
     s_.wings.resize(slot);
     core::parallel_blocks(live, block, s_.threads, [&](size_t b, size_t begin, size_t end) {
       std::vector<uint32_t>& fill = star_slots_[b];
@@ -252,8 +249,7 @@ class Engine {
         const uint32_t* c = &s_.corner_pos[3 * size_t(t)];
         for (uint32_t k = 0; k < 3; ++k) {
           const uint32_t at = fill[c[k]]++;
-          s_.star[at] = t;
-          s_.wings[at] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k]};
+          s_.wings[at] = {c[(k + 1) % 3], c[(k + 2) % 3], s_.corners[3 * size_t(t) + k], t};
         }
       }
     });
@@ -426,20 +422,38 @@ class Engine {
         best_[u] = Best{};
         continue;
       }
-      const auto candidates = neighbours(u, none, scratch.candidates);
+      // u's neighbours, as neighbours() lists them: in a manifold interior fan, each wing's next
+      // once, read in place (no copy).
+      const bool simple = !(s_.flags[u] & (flag_complex | flag_border));
+      const std::span<const uint32_t> listed = simple ? std::span<const uint32_t>{} : neighbours(u, none, scratch.candidates);
+      const auto each_neighbour = [&](auto&& fn) {
+        if (simple)
+          for (const Wing& w : s_.wings_of(u)) fn(w.next);
+        else
+          for (const uint32_t v : listed) fn(v);
+      };
+      if constexpr (requires { metric_.prefetch(u); }) {
+        if (simple) {
+          for (const Wing& w : s_.wings_of(u))
+            if (w.next > u) metric_.prefetch(w.next), __builtin_prefetch(&s_.position[w.next]);
+        } else {
+          for (const uint32_t v : listed)
+            if (v > u) metric_.prefetch(v), __builtin_prefetch(&s_.position[v]);
+        }
+      }
       if (lists && !wide && !(mark_[u] & mark_kept)) {
         // Only u's edges to kept positions changed (or vanished): update its cheapest edges. A full
         // ranking (best pointed at a changed edge) is needed only if none of those are left.
         EdgeList& list = edges_[u];
         list.remove_if([&](uint32_t v) { return (s_.flags[v] & (flag_dead | flag_complex)) || (mark_[v] & mark_kept); });
-        for (const uint32_t v : candidates) {
-          if (v <= u || (s_.flags[v] & (flag_dead | flag_complex)) || !(mark_[v] & mark_kept)) continue;
+        each_neighbour([&](uint32_t v) {
+          if (v <= u || (s_.flags[v] & (flag_dead | flag_complex)) || !(mark_[v] & mark_kept)) return;
           Decision decision;
-          if (evaluate(u, v, scratch, decision, false) != Reject::ok) continue;
+          if (evaluate(u, v, scratch, decision, false) != Reject::ok) return;
           const float cost = float(decision.placement.cost);
           list.insert({cost, v});
           if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
-        }
+        });
         if (!full) continue;
         if (list.count > 0 || list.complete) {
           best_[u] = list.count > 0 ? list.edge[0] : Best{};
@@ -447,15 +461,15 @@ class Engine {
         }
       }
       EdgeList ranked;
-      for (const uint32_t v : candidates) {
-        if (v <= u || (s_.flags[v] & (flag_dead | flag_complex))) continue;
-        if (!full && !(mark_[v] & mark_kept)) continue;
+      each_neighbour([&](uint32_t v) {
+        if (v <= u || (s_.flags[v] & (flag_dead | flag_complex))) return;
+        if (!full && !(mark_[v] & mark_kept)) return;
         Decision decision;
-        if (evaluate(u, v, scratch, decision, false) != Reject::ok) continue;
+        if (evaluate(u, v, scratch, decision, false) != Reject::ok) return;
         const float cost = float(decision.placement.cost);
         if (cost < best_[u].cost || (cost == best_[u].cost && v < best_[u].other)) best_[u] = {cost, v};
         ranked.insert({cost, v});
-      }
+      });
       if (lists && full) edges_[u] = ranked;
       if (aggregate_)
         for (uint32_t j = virtual_first_[u]; j < virtual_first_[u + 1]; ++j) {
@@ -668,14 +682,21 @@ class Engine {
     if ((fu & flag_locked) && (fv & flag_locked)) return Reject::topology;
     if (!aggregate_ && ((fu | fv) & flag_complex)) return Reject::topology;
 
-    const auto wings = s_.wings_of(u);
-    const auto star = s_.triangles_of(u);
     uint32_t shared = 0;
-    for (uint32_t i = 0; i < wings.size(); ++i)
-      if (wings[i].next == v || wings[i].prev == v) {
-        if (shared < 2) scratch.face[shared] = star[i], scratch.opposite[shared] = wings[i].next == v ? wings[i].prev : wings[i].next;
-        ++shared;
-      }
+    if (!checked && !aggregate_ && !channel_floats_ && !(fu & (flag_border | flag_complex)) && !((fu | fv) & flag_seam)) {
+      // Ranking an edge of a manifold interior position (v is one of its neighbours), without seams
+      // or attributes: only the number of removed faces matters (no wedges are mapped), and it is
+      // two, v following u in one triangle of the closed fan and preceding it in another.
+      shared = 2;
+    } else {
+      const auto wings = s_.wings_of(u);
+      const auto star = s_.triangles_of(u);
+      for (uint32_t i = 0; i < wings.size(); ++i)
+        if (wings[i].next == v || wings[i].prev == v) {
+          if (shared < 2) scratch.face[shared] = star[i], scratch.opposite[shared] = wings[i].next == v ? wings[i].prev : wings[i].next;
+          ++shared;
+        }
+    }
     scratch.face_count = std::min<uint32_t>(shared, 2);
     // No shared face: a virtual pair (only ranked when aggregating).
     if (shared == 0) return aggregate_ ? evaluate_virtual(u, v, scratch, decision, checked) : Reject::topology;

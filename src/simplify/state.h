@@ -39,10 +39,28 @@ struct AttributeLayout {
   int color = -1;
 };
 
-// A star triangle seen from its centre: the other two corners in winding order, and the wedge
-// (input vertex) at the centre's corner.
+// A star triangle seen from its centre: the other two corners in winding order, the wedge (input
+// vertex) at the centre's corner, and the triangle. One 16-byte entry (never split across cache
+// lines): rebuilding the table scatters one write per corner, and most walks read both.
 struct Wing {
-  uint32_t next, prev, wedge;
+  uint32_t next, prev, wedge, triangle;
+};
+
+// The triangle ids of a star, in increasing order (a view of its wings).
+struct StarTriangles {
+  const Wing* first;
+  const Wing* last;
+  struct iterator {
+    const Wing* w;
+    uint32_t operator*() const { return w->triangle; }
+    iterator& operator++() { return ++w, *this; }
+    bool operator==(const iterator& o) const { return w == o.w; }
+  };
+  iterator begin() const { return {first}; }
+  iterator end() const { return {last}; }
+  size_t size() const { return size_t(last - first); }
+  bool empty() const { return first == last; }
+  uint32_t operator[](size_t i) const { return first[i].triangle; }
 };
 
 struct State {
@@ -75,14 +93,11 @@ struct State {
   // Position -> live triangles, rebuilt each pass from the live triangle list (increasing ids).
   std::vector<uint32_t> live;   // live triangle ids, compacted each pass
   std::vector<uint32_t> first;  // position_count + 1
-  std::vector<uint32_t> star;   // triangle ids
-  std::vector<Wing> wings;      // parallel to star: the hot loops read neighbours without a lookup
+  std::vector<Wing> wings;      // per star triangle: the hot loops read neighbours without a lookup
 
   State(const Mesh& m, const SimplifyOptions& o) : mesh(m), options(o) {}
 
-  std::span<const uint32_t> triangles_of(uint32_t p) const {
-    return {star.data() + first[p], star.data() + first[p + 1]};
-  }
+  StarTriangles triangles_of(uint32_t p) const { return {wings.data() + first[p], wings.data() + first[p + 1]}; }
   std::span<const Wing> wings_of(uint32_t p) const { return {wings.data() + first[p], wings.data() + first[p + 1]}; }
   uint32_t corner_position(uint32_t triangle, uint32_t k) const { return corner_pos[3 * triangle + k]; }
   uint32_t material(uint32_t triangle) const { return mesh.materials.empty() ? 0 : mesh.materials[triangle]; }
