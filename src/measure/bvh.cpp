@@ -30,7 +30,7 @@ constexpr uint32_t max_depth = 128;        // traversal stack: 3 entries per lev
 // holds the closest triangle is never skipped (the result must equal a brute-force scan).
 constexpr float prune_slack = 1.0f + 1.0f / (1 << 18);
 // closest_group gives up on a group after scanning this many triangles (the points are too far apart).
-constexpr size_t max_group_candidates = 128;
+constexpr size_t max_group_scanned = 128;
 
 // A triangle's bounds as the build stores them: six floats (24 bytes a triangle). Box::grow reads
 // each corner with one unaligned four-float load; the fourth float is the next one in memory, so
@@ -719,8 +719,8 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
   const GroupTree tree{nodes_.data(),
                        {nullptr, 0, triangle_box_.data(), triangle_plane_.data(), corners_.data(), original_.data(), plane_slack_}};
   const uint32_t hint_slot = slot_[hint < original_.size() ? hint : 0];
-  const bool done = wide ? search_group_wide(lanes, tree, lo, hi, hint_slot, max_group_candidates)
-                         : search_group_narrow(lanes, tree, lo, hi, hint_slot, max_group_candidates);
+  const bool done = wide ? search_group_wide(lanes, tree, lo, hi, hint_slot, max_group_scanned)
+                         : search_group_narrow(lanes, tree, lo, hi, hint_slot, max_group_scanned);
   if (!done) {
     // Too spread out: each point on its own, from its best triangle so far.
     for (uint32_t i = 0; i < count; ++i) out[i] = closest(points[i], uint32_t(lanes.triangle()[i]));
