@@ -410,6 +410,14 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
   run_stream(plan.area_samples, options.threads, progress, total, [&](uint64_t begin, uint64_t end, Accumulator& acc, uint32_t& hint) {
     const size_t first_triangle =
         size_t(std::upper_bound(plan.area_start.begin(), plan.area_start.end(), begin) - plan.area_start.begin()) - 1;
+    // fn(t, a, b) for each triangle with samples in the block: its samples are the block's [a, b).
+    auto each_triangle = [&](auto&& fn) {
+      for (size_t t = first_triangle; plan.area_start[t] < end; ++t) {
+        const uint32_t a = uint32_t(std::max(begin, plan.area_start[t]) - begin);
+        const uint32_t b = uint32_t(std::min(end, plan.area_start[t + 1]) - begin);
+        if (a < b) fn(t, a, b);
+      }
+    };
     auto sample = [&](uint64_t j) {
       const uint64_t bits = splitmix64(stream_seed + j);
       const float r1 = float(bits >> 40) * 0x1p-24f, r2 = float((bits >> 16) & 0xFFFFFF) * 0x1p-24f;
@@ -421,14 +429,13 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
     std::vector<AreaSample>& drawn = block.drawn;
     std::vector<vec3f>& at = block.at;
     drawn.resize(n), at.resize(n);
-    for (size_t t = first_triangle; plan.area_start[t] < end; ++t) {
+    each_triangle([&](size_t t, uint32_t a, uint32_t b) {
       const vec3f c0 = from.corner(t, 0), c1 = from.corner(t, 1), c2 = from.corner(t, 2);
-      const uint64_t last = std::min(end, plan.area_start[t + 1]);
-      for (uint64_t j = std::max(begin, plan.area_start[t]); j < last; ++j) {
-        const AreaSample u = drawn[j - begin] = sample(j);
-        at[j - begin] = c0 * (1 - u.s) + c1 * u.w1() + c2 * u.w2();
+      for (uint32_t o = a; o < b; ++o) {
+        const AreaSample u = drawn[o] = sample(begin + o);
+        at[o] = c0 * (1 - u.s) + c1 * u.w1() + c2 * u.w2();
       }
-    }
+    });
     // Queries go a triangle at a time; a triangle with many samples is cut into patches: its samples
     // in serpentine order through cells of its (s, r2) square of about 4 samples (a counting sort),
     // cut every patch_size samples, each patch a group of queries close together.
@@ -441,10 +448,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       const float x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2];
       return std::sqrt(x * x + y * y + z * z);
     };
-    for (size_t t = first_triangle; plan.area_start[t] < end; ++t) {
-      const uint32_t a = uint32_t(std::max(begin, plan.area_start[t]) - begin);
-      const uint32_t b = uint32_t(std::min(end, plan.area_start[t + 1]) - begin);
-      if (a >= b) continue;
+    each_triangle([&](size_t t, uint32_t a, uint32_t b) {
       if (b - a <= group_size) {
         const vec3f c0 = from.corner(t, 0), c1 = from.corner(t, 1), c2 = from.corner(t, 2);
         float lo[3], hi[3];
@@ -465,7 +469,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
         std::copy(lo, lo + 3, open_lo), std::copy(hi, hi + 3, open_hi);
         for (uint32_t o = a; o < b; ++o) block.add(at[o], o);
         open += b - a;
-        continue;
+        return;
       }
       block.cut();
       open = 0;
@@ -486,17 +490,17 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
         if ((i + 1) % patch_size == 0) block.cut();
       }
       block.cut();
-    }
+    });
     block.run(bvh, group_size, hint);
-    for (size_t t = first_triangle; plan.area_start[t] < end; ++t) {
+    each_triangle([&](size_t t, uint32_t a, uint32_t b) {
       const vec3f c0 = from.corner(t, 0), c1 = from.corner(t, 1), c2 = from.corner(t, 2);
       const uint32_t* corner_id = &from.mesh->indices[3 * t];
-      const uint64_t last = std::min(end, plan.area_start[t + 1]);
-      for (uint64_t j = std::max(begin, plan.area_start[t]); j < last; ++j) {
-        const AreaSample u = drawn[j - begin];
+      for (uint32_t o = a; o < b; ++o) {
+        const uint64_t j = begin + o;
+        const AreaSample u = drawn[o];
         const float w0 = 1 - u.s, w1 = u.w1(), w2 = u.w2();
-        const vec3f q = at[j - begin];
-        ClosestHit& h = block.hit(uint32_t(j - begin));
+        const vec3f q = at[o];
+        ClosestHit& h = block.hit(o);
         const float d = std::sqrt(h.distance_squared);
         acc.sum += d;
         acc.sum_squares += double(d) * d;
@@ -537,7 +541,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
           acc.color_sum += diff, acc.color_max = std::max(acc.color_max, diff), ++acc.color_count;
         }
       }
-    }
+    });
   });
   r.area_samples = plan.area_samples;
   r.area = from.area;

@@ -432,6 +432,7 @@ class Engine {
         else
           for (const uint32_t v : listed) fn(v);
       };
+      // The prefetch loops are written out: through each_neighbour, GCC dropped the prefetches.
       if constexpr (requires { metric_.prefetch(u); }) {
         if (simple) {
           for (const Wing& w : s_.wings_of(u))
