@@ -23,6 +23,10 @@ namespace {
 constexpr float inf = std::numeric_limits<float>::infinity();
 constexpr int bin_count = 16;
 constexpr uint32_t max_leaf = 8;  // triangles per leaf (a node's leaf link can count up to 16)
+// SAH's cost of visiting a node, against 1 for a triangle: a group's node visit sorts and pushes its
+// children, and a leaf's triangles are tested a batch of points at a time with a box test first, so
+// leaves of a few triangles (rather than SAH's usual one or two) save visits (3% of the instructions).
+constexpr float traversal_cost = 4;
 constexpr uint32_t max_binned_depth = 64;  // deeper than this, split at the median: depth stays bounded
 constexpr uint32_t max_depth = 128;        // traversal stack: 3 entries per level plus one
 // Pruning compares a box's float distance with a triangle's float distance; both round. Boxes are
@@ -229,9 +233,9 @@ std::vector<BinaryNode> build_binary(const std::vector<Bounds>& boxes, const std
       }
     }
     const int best_axis = best_cost < inf ? axis : -1;
-    // SAH with traversal cost 1 and triangle cost 1, relative to this node's area.
+    // SAH in units of one triangle test, relative to this node's area.
     const float area = box.half_area();
-    const float split_cost = 1.0f + (area > 0 ? best_cost / area : float(n));
+    const float split_cost = traversal_cost + (area > 0 ? best_cost / area : float(n));
     if (n <= max_leaf && (best_axis < 0 || float(n) <= split_cost)) {
       make_leaf();
       continue;

@@ -28,8 +28,11 @@ constexpr size_t block_size = 1024;       // samples per block
 constexpr size_t blocks_per_slice = 256;  // progress is reported between slices
 constexpr uint32_t group_size = 32;       // samples per closest_group query
 // A triangle with many area samples is queried in patches of this many consecutive samples along a
-// serpentine through cells of about 4: whole batches of 8 lanes, and still compact.
+// serpentine through square cells of about one sample in the triangle's plane, in strips
+// `patch_strip` cells high walked column by column: whole batches of 8 lanes, each patch a compact
+// block of about 3 x 3 cells. The smaller a patch's box, the fewer triangles its search must rule out.
 constexpr uint32_t patch_size = 8;
+constexpr uint32_t patch_strip = 3;
 
 uint64_t splitmix64(uint64_t x) {
   x += 0x9E3779B97F4A7C15ull;
@@ -436,9 +439,9 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
         at[o] = c0 * (1 - u.s) + c1 * u.w1() + c2 * u.w2();
       }
     });
-    // Queries go a triangle at a time; a triangle with many samples is cut into patches: its samples
-    // in serpentine order through cells of its (s, r2) square of about 4 samples (a counting sort),
-    // cut every patch_size samples, each patch a group of queries close together.
+    // Queries go a triangle at a time; a triangle with many samples is cut into patches (see
+    // patch_size), each a group of queries close together: its samples sorted by cell (a counting
+    // sort, stable), cut every patch_size samples.
     // Consecutive small triangles share a group while it has room and their boxes stay about as
     // large as the two together (neighbours, in a mesh whose order is mostly spatial).
     std::vector<uint32_t>&cell = block.cell, &cell_start = block.cell_start, &sorted = block.sorted;
@@ -473,13 +476,38 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       }
       block.cut();
       open = 0;
-      const uint32_t k = uint32_t(std::ceil(std::sqrt(double(b - a) / 4.0)));
-      cell.resize(b - a);
-      cell_start.assign(size_t(k) * k + 1, 0);
+      // The plane's frame: u along the longest edge from its first corner, v towards the third
+      // corner; the triangle fills half of its [0, length] x [0, height] rectangle.
+      vec3f corner[3] = {from.corner(t, 0), from.corner(t, 1), from.corner(t, 2)};
+      int longest = 0;
+      float longest_length = -1;
+      for (int k = 0; k < 3; ++k)
+        if (const float l = length_squared(corner[(k + 1) % 3] - corner[k]); l > longest_length) longest_length = l, longest = k;
+      const vec3f origin = corner[longest], edge = corner[(longest + 1) % 3] - origin;
+      const vec3f other = corner[(longest + 2) % 3] - origin;
+      const float length = std::sqrt(longest_length);
+      const vec3f u_axis = length > 0 ? edge * (1 / length) : vec3f{0, 0, 0};
+      const vec3f across = other - u_axis * dot(other, u_axis);
+      const float height = std::sqrt(length_squared(across));
+      const vec3f v_axis = height > 0 ? across * (1 / height) : vec3f{0, 0, 0};
+      const uint32_t count = b - a;
+      const float side = std::sqrt(0.5f * length * height / float(count));
+      const float per_side = side > 0 ? 1 / side : 0.0f;
+      constexpr float max_cells = 4096;  // per axis (a sliver's long side)
+      const uint32_t columns = uint32_t(std::min(length * per_side, max_cells)) + 1;
+      const uint32_t rows = uint32_t(std::min(height * per_side, max_cells)) + 1;
+      const uint32_t strips = (rows + patch_strip - 1) / patch_strip;
+      cell.resize(count);
+      cell_start.assign(size_t(strips) * columns * patch_strip + 1, 0);
       for (uint32_t o = a; o < b; ++o) {
-        const uint32_t row = std::min(k - 1, uint32_t(drawn[o].s * float(k)));
-        const uint32_t col = std::min(k - 1, uint32_t(drawn[o].r2 * float(k)));
-        cell[o - a] = row * k + (row & 1 ? k - 1 - col : col);
+        const vec3f d = at[o] - origin;
+        const uint32_t cu = std::min(columns - 1, uint32_t(std::max(0.0f, dot(d, u_axis) * per_side)));
+        const uint32_t cv = std::min(rows - 1, uint32_t(std::max(0.0f, dot(d, v_axis) * per_side)));
+        // Strips alternate direction, and so do the columns within a strip: each cell's successor
+        // is a neighbour.
+        const uint32_t strip = cv / patch_strip, column = strip & 1 ? columns - 1 - cu : cu;
+        const uint32_t row = column & 1 ? patch_strip - 1 - cv % patch_strip : cv % patch_strip;
+        cell[o - a] = (strip * columns + column) * patch_strip + row;
         ++cell_start[cell[o - a] + 1];
       }
       for (size_t c = 1; c < cell_start.size(); ++c) cell_start[c] += cell_start[c - 1];
