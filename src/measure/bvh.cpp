@@ -290,8 +290,7 @@ std::vector<BinaryNode> build_binary(const std::vector<Bounds>& boxes, const std
 }
 
 // closest_group's points in lanes: per point (padded to whole batches) x, y, z, the squared distance
-// to its best triangle so far, that triangle's s and t (closest_on_triangle_lanes), its mesh index and
-// its region.
+// to its best triangle so far and that triangle's mesh index.
 struct LaneArrays {
   float* floats;
   int32_t* ints;
@@ -300,19 +299,15 @@ struct LaneArrays {
   float* y() const { return floats + n; }
   float* z() const { return floats + 2 * size_t(n); }
   float* distance_squared() const { return floats + 3 * size_t(n); }
-  float* s() const { return floats + 4 * size_t(n); }
-  float* t() const { return floats + 5 * size_t(n); }
   int32_t* triangle() const { return ints; }
-  int32_t* region() const { return ints + n; }
 };
 
 // closest_group's candidates (leaf order) and the tree's per-triangle arrays.
 struct GroupCandidates {
   const uint32_t* slots;
   size_t count;
-  const float* box;     // 6 per triangle
-  const float* plane;   // 4 per triangle
-  const vec3f* corners;  // 3 per triangle
+  const float* box;  // 6 per triangle
+  const PreparedTriangle* triangles;
   const uint32_t* original;
   float plane_slack;
 };
@@ -333,21 +328,18 @@ template <class V>
 // would); a lane the box or the plane ruled out is never nearer, so taking it or not changes nothing.
 template <int W>
 struct Batch {
-  typename Lanes<W>::F px, py, pz, best, s, t;
-  typename Lanes<W>::I triangle, region;
+  typename Lanes<W>::F px, py, pz, best;
+  typename Lanes<W>::I triangle;
   void load(const LaneArrays& l, uint32_t i) {
     using F = typename Lanes<W>::F;
     using I = typename Lanes<W>::I;
     px = load_lanes<F>(l.x() + i), py = load_lanes<F>(l.y() + i), pz = load_lanes<F>(l.z() + i);
-    best = load_lanes<F>(l.distance_squared() + i), s = load_lanes<F>(l.s() + i), t = load_lanes<F>(l.t() + i);
-    triangle = load_lanes<I>(l.triangle() + i), region = load_lanes<I>(l.region() + i);
+    best = load_lanes<F>(l.distance_squared() + i);
+    triangle = load_lanes<I>(l.triangle() + i);
   }
   void store(const LaneArrays& l, uint32_t i) const {
     store_lanes(l.distance_squared() + i, best);
-    store_lanes(l.s() + i, s);
-    store_lanes(l.t() + i, t);
     store_lanes(l.triangle() + i, triangle);
-    store_lanes(l.region() + i, region);
   }
   float upper() const {
     float m = best[0];
@@ -373,20 +365,18 @@ template <int W>
     const F gx = gap(p.px, b[0], b[3]), gy = gap(p.py, b[1], b[4]), gz = gap(p.pz, b[2], b[5]);
     const I near_box = gx * gx + gy * gy + gz * gz <= limit;
     if (!any_lane<W>(near_box)) continue;
-    const float* plane = c.plane + 4 * size_t(slot);
-    const F offset = plane[0] * p.px + plane[1] * p.py + plane[2] * p.pz - plane[3];
-    const F size = (offset < zero ? -offset : offset) - c.plane_slack;
+    // The distance to the plane (h) bounds the triangle's, and is a face point's distance.
+    const PreparedTriangle& tri = c.triangles[slot];
+    const F apx = p.px - tri.a.x, apy = p.py - tri.a.y, apz = p.pz - tri.a.z;
+    const F h = tri.normal.x * apx + tri.normal.y * apy + tri.normal.z * apz;
+    const F size = (h < zero ? -h : h) - c.plane_slack;
     const F plane_gap = size > zero ? size : zero;
     if (!any_lane<W>(near_box & (plane_gap * plane_gap <= limit))) continue;
-    const vec3f* corner = c.corners + 3 * size_t(slot);
-    const LanePoints<W> r = closest_on_triangle_lanes<W>(p.px, p.py, p.pz, corner[0], corner[1], corner[2]);
+    const F d = closest_on_triangle_lanes<W>(apx, apy, apz, h, tri);
     const I index = I{} + int32_t(c.original[slot]);
-    const I take = (r.distance_squared < p.best) | ((r.distance_squared == p.best) & (index < p.triangle));
-    p.best = take ? r.distance_squared : p.best;
+    const I take = (d < p.best) | ((d == p.best) & (index < p.triangle));
+    p.best = take ? d : p.best;
     p.triangle = take ? index : p.triangle;
-    p.region = take ? r.region : p.region;
-    p.s = take ? r.s : p.s;
-    p.t = take ? r.t : p.t;
     limit = p.best * prune_slack;
   }
 }
@@ -543,34 +533,23 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
 
   original_ = order;
   slot_.resize(triangles);
-  corners_.resize(3 * triangles);
+  triangles_.resize(triangles);
   // Growth of every box: a few ulps of the largest coordinate.
   float magnitude = 0;
   for (const float3& p : mesh.positions)
     magnitude = std::max({magnitude, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
   const float grow = magnitude * 1e-6f + std::numeric_limits<float>::min();
   plane_slack_ = 4 * grow;
-  triangle_plane_.assign(4 * triangles, 0.0f);
   triangle_box_.resize(6 * triangles);
-  // Per leaf-order triangle, each slot written by its own item: corners, plane and grown box.
+  // Per leaf-order triangle, each slot written by its own item: the prepared triangle and its grown box.
   core::parallel_for(triangles, threads, [&](size_t s) {
     slot_[order[s]] = uint32_t(s);
-    vec3f* c = &corners_[3 * s];
-    for (int k = 0; k < 3; ++k) c[k] = mesh.positions[mesh.indices[3 * size_t(order[s]) + k]];
+    const uint32_t* corner = &mesh.indices[3 * size_t(order[s])];
+    const vec3f c[3] = {mesh.positions[corner[0]], mesh.positions[corner[1]], mesh.positions[corner[2]]};
+    triangles_[s] = prepare_triangle(c[0], c[1], c[2]);
     Box b;
     for (int k = 0; k < 3; ++k) b.grow_point(&c[k].x);
     for (int k = 0; k < 3; ++k) triangle_box_[6 * s + k] = b.lo[k] - grow, triangle_box_[6 * s + 3 + k] = b.hi[k] + grow;
-    // The plane in double, then rounded: the rounding is within plane_slack_ (a degenerate triangle
-    // keeps a zero plane, which prunes nothing).
-    const double ux = double(c[1].x) - c[0].x, uy = double(c[1].y) - c[0].y, uz = double(c[1].z) - c[0].z;
-    const double vx = double(c[2].x) - c[0].x, vy = double(c[2].y) - c[0].y, vz = double(c[2].z) - c[0].z;
-    const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-    const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
-    const double scale = std::max({std::fabs(ux), std::fabs(uy), std::fabs(uz), std::fabs(vx), std::fabs(vy), std::fabs(vz)});
-    if (!(length > 1e-6 * scale * scale)) return;
-    float* plane = &triangle_plane_[4 * s];
-    plane[0] = float(nx / length), plane[1] = float(ny / length), plane[2] = float(nz / length);
-    plane[3] = float((nx * c[0].x + ny * c[0].y + nz * c[0].z) / length);
   });
 
   // Collapse: each 4-wide node takes a binary node's children and opens the largest inner ones until
@@ -642,8 +621,7 @@ ClosestHit TriangleBvh::to_triangle(const vec3f& p, uint32_t triangle) const {
 }
 
 bool TriangleBvh::consider(const vec3f& p, uint32_t slot, ClosestHit& best) const {
-  const vec3f* c = &corners_[3 * size_t(slot)];
-  const TrianglePoint tp = closest_on_triangle(p, c[0], c[1], c[2]);
+  const TrianglePoint tp = closest_on_triangle(p, triangles_[slot]);
   if (tp.distance_squared > best.distance_squared) return false;
   const uint32_t triangle = original_[slot];
   if (tp.distance_squared == best.distance_squared && triangle >= best.triangle) return false;
@@ -670,8 +648,8 @@ ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint) const {
       const uint32_t first = (ref & ~leaf_bit) >> 4, count = (ref & 15) + 1;
       for (uint32_t s = first; s < first + count; ++s) {
         // A triangle is never nearer than its plane: a cheap test before the exact one.
-        const float* plane = &triangle_plane_[4 * size_t(s)];
-        const float gap = std::max(std::fabs(plane[0] * p.x + plane[1] * p.y + plane[2] * p.z - plane[3]) - plane_slack_, 0.0f);
+        const PreparedTriangle& t = triangles_[s];
+        const float gap = std::max(std::fabs(dot(t.normal, p - t.a)) - plane_slack_, 0.0f);
         if (gap * gap > limit) continue;
         if (consider(p, s, best)) limit = best.distance_squared * prune_slack;
       }
@@ -711,8 +689,8 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
   const bool wide = use_wide_lanes();
   const uint32_t width = wide ? 8 : 4;
   const uint32_t padded = (count + width - 1) / width * width;
-  scratch.lane_floats.resize(6 * size_t(padded));
-  scratch.lane_ints.resize(2 * size_t(padded));
+  scratch.lane_floats.resize(4 * size_t(padded));
+  scratch.lane_ints.resize(size_t(padded));
   LaneArrays lanes{scratch.lane_floats.data(), scratch.lane_ints.data(), padded};
   for (uint32_t i = 0; i < padded; ++i) {
     const vec3f& p = points[std::min(i, count - 1)];
@@ -721,7 +699,7 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
     lanes.triangle()[i] = INT32_MAX;
   }
   const GroupTree tree{nodes_.data(),
-                       {nullptr, 0, triangle_box_.data(), triangle_plane_.data(), corners_.data(), original_.data(), plane_slack_}};
+                       {nullptr, 0, triangle_box_.data(), triangles_.data(), original_.data(), plane_slack_}};
   const uint32_t hint_slot = slot_[hint < original_.size() ? hint : 0];
   const bool done = wide ? search_group_wide(lanes, tree, lo, hi, hint_slot, max_group_scanned)
                          : search_group_narrow(lanes, tree, lo, hi, hint_slot, max_group_scanned);
@@ -734,8 +712,7 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
     ClosestHit& h = out[i];
     h.distance_squared = lanes.distance_squared()[i];
     h.triangle = uint32_t(lanes.triangle()[i]);
-    h.v = lanes.s()[i], h.w = lanes.t()[i];
-    h.pending = lanes.region()[i];
+    h.resolved = false;
   }
 }
 

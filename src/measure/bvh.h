@@ -28,9 +28,8 @@ struct ClosestHit {
   uint32_t triangle = UINT32_MAX;  // triangle index in the mesh
   vec3f point;
   float v = 0, w = 0;  // barycentric weights of the triangle's corners 1 and 2
-  // closest_group leaves the point and the weights to TriangleBvh::resolve (most samples never need
-  // them): until then this is the TriangleRegion and v, w hold its parameters. -1 once resolved.
-  int32_t pending = -1;
+  // closest_group leaves the point and the weights to TriangleBvh::resolve (most samples never need them).
+  bool resolved = true;
 };
 
 class TriangleBvh {
@@ -45,19 +44,18 @@ class TriangleBvh {
   ClosestHit closest(const vec3f& p, uint32_t hint = 0) const;
   // Fills in a closest_group hit's point and weights (p: its query point); nothing when they are set.
   void resolve(ClosestHit& hit, const vec3f& p) const {
-    if (hit.pending < 0) return;
-    const vec3f* c = &corners_[3 * size_t(slot_[hit.triangle])];
-    const TrianglePoint tp = triangle_point_at(p, c[0], c[1], c[2], hit.pending, hit.v, hit.w, hit.distance_squared);
+    if (hit.resolved) return;
+    const TrianglePoint tp = closest_on_triangle(p, triangles_[slot_[hit.triangle]]);
     hit.point = tp.point, hit.v = tp.v, hit.w = tp.w;
-    hit.pending = -1;
+    hit.resolved = true;
   }
   // The exact closest point on one triangle (mesh index).
   ClosestHit to_triangle(const vec3f& p, uint32_t triangle) const;
 
   // Reusable memory for closest_group (one per thread).
   struct GroupScratch {
-    // Per point, padded to whole batches of lanes: x, y, z, squared distance, s, t (floats), then the
-    // triangle (mesh index) and region (ints); see closest_on_triangle_lanes.
+    // Per point, padded to whole batches of lanes: x, y, z and the squared distance (floats), then
+    // the triangle (mesh index).
     std::vector<float> lane_floats;
     std::vector<int32_t> lane_ints;
   };
@@ -87,12 +85,11 @@ class TriangleBvh {
   static constexpr uint32_t empty_child = bvh_empty_child;
 
   std::vector<Node> nodes_;        // nodes_[0] is the root
-  std::vector<vec3f> corners_;     // 3 per triangle, in leaf order
+  std::vector<PreparedTriangle> triangles_;  // in leaf order
   std::vector<uint32_t> original_;  // leaf order -> mesh triangle
   std::vector<uint32_t> slot_;      // mesh triangle -> leaf order
   std::vector<float> triangle_box_;  // per leaf-order triangle: grown min x, y, z, max x, y, z
-  std::vector<float> triangle_plane_;  // per leaf-order triangle: unit normal x, y, z, offset (0 when degenerate)
-  float plane_slack_ = 0;              // rounding allowance of a plane distance
+  float plane_slack_ = 0;              // rounding allowance of a distance to a triangle's plane
   uint32_t depth_ = 0;              // of the 4-wide tree
 };
 

@@ -40,78 +40,125 @@ struct TrianglePoint {
   float distance_squared = 0;
 };
 
+// A triangle made ready for closest-point queries: its first corner, its two edges from there, their
+// dot products and its unit normal. One cache line; the BVH keeps one per triangle, so a query's work
+// per triangle is two dot products for the region and one for the distance to the plane.
+struct alignas(64) PreparedTriangle {
+  vec3f a, ab, ac;
+  vec3f normal;  // unit, from doubles; zero for a degenerate triangle
+  float ab2 = 0, ac2 = 0, abac = 0;  // |ab|^2, |ac|^2, ab . ac
+  float det = 0;  // |ab|^2 |ac|^2 - (ab . ac)^2 (from doubles); 0 for a degenerate triangle: no face region
+};
+
+inline PreparedTriangle prepare_triangle(const vec3f& a, const vec3f& b, const vec3f& c) {
+  PreparedTriangle t;
+  t.a = a, t.ab = b - a, t.ac = c - a;
+  t.ab2 = dot(t.ab, t.ab), t.ac2 = dot(t.ac, t.ac), t.abac = dot(t.ab, t.ac);
+  const double ux = t.ab.x, uy = t.ab.y, uz = t.ab.z, vx = t.ac.x, vy = t.ac.y, vz = t.ac.z;
+  const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+  const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
+  const double scale = std::max({std::fabs(ux), std::fabs(uy), std::fabs(uz), std::fabs(vx), std::fabs(vy), std::fabs(vz)});
+  // Degenerate to rounding (a sliver whose normal would be noise): edges and corners only.
+  if (length > 1e-6 * scale * scale) {
+    t.normal = {float(nx / length), float(ny / length), float(nz / length)};
+    t.det = float(length * length);  // |ab x ac|^2 = |ab|^2 |ac|^2 - (ab . ac)^2
+  }
+  return t;
+}
+
 namespace detail {
-inline TrianglePoint on_segment(const vec3f& p, const vec3f& a, const vec3f& b, float& t) {
-  const vec3f ab = b - a;
-  const float len2 = length_squared(ab);
-  t = len2 > 0 ? std::clamp(dot(p - a, ab) / len2, 0.0f, 1.0f) : 0.0f;
+// The closest point of segment [p0, p0 + e] to the point at offset q from p0: parameter and squared distance.
+inline float on_segment(const vec3f& q, const vec3f& e, float& s) {
+  const float len2 = length_squared(e);
+  s = len2 > 0 ? std::clamp(dot(q, e) / len2, 0.0f, 1.0f) : 0.0f;
+  return length_squared(q - e * s);
+}
+// A degenerate triangle, or rounding that left a point in no region: the closest of the three edges
+// (ap = p - a). On ties the first edge in the order ab, bc, ac.
+[[gnu::noinline]] inline TrianglePoint closest_on_edges(const vec3f& ap, const PreparedTriangle& t) {
+  float s0, s1, s2;
+  const vec3f bc = t.ac - t.ab;
+  const float e0 = on_segment(ap, t.ab, s0), e1 = on_segment(ap - t.ab, bc, s1), e2 = on_segment(ap, t.ac, s2);
   TrianglePoint r;
-  r.point = a + ab * t;
-  r.distance_squared = length_squared(p - r.point);
+  if (e0 <= e1 && e0 <= e2) {
+    r.point = t.a + t.ab * s0, r.v = s0, r.distance_squared = e0;
+  } else if (e1 <= e2) {
+    r.point = t.a + t.ab + bc * s1, r.v = 1 - s1, r.w = s1, r.distance_squared = e1;
+  } else {
+    r.point = t.a + t.ac * s2, r.w = s2, r.distance_squared = e2;
+  }
   return r;
 }
 }  // namespace detail
 
-// Always inlined: the BVH scans call it millions of times per compare, and a call costs a tenth of it.
-[[gnu::always_inline]] inline TrianglePoint closest_on_triangle(const vec3f& p, const vec3f& a, const vec3f& b,
-                                                             const vec3f& c) {
+// The exact closest point (Ericson's Voronoi regions, tested in his order: corner a, b, edge ab,
+// corner c, edge ac, edge bc, face). A face point's distance is its distance to the plane. Always
+// inlined: the BVH calls it millions of times per compare.
+[[gnu::always_inline]] inline TrianglePoint closest_on_triangle(const vec3f& p, const PreparedTriangle& t) {
   TrianglePoint r;
-  auto done = [&](const vec3f& q, float v, float w) {
-    r.point = q, r.v = v, r.w = w;
-    r.distance_squared = length_squared(p - q);
+  const vec3f ap = p - t.a;
+  auto done = [&](const vec3f& offset, float v, float w) {  // offset: the point's, from a
+    r.point = t.a + offset, r.v = v, r.w = w;
+    r.distance_squared = length_squared(ap - offset);
     return r;
   };
-  const vec3f ab = b - a, ac = c - a, ap = p - a;
-  const float d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return done(a, 0, 0);
-  const vec3f bp = p - b;
-  const float d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return done(b, 1, 0);
-  const float vc = d1 * d4 - d3 * d2;
+  // Ericson's regions assume a proper triangle (with a == b, say, the "edge ab" region would take
+  // points of edge ac).
+  if (!(t.det > 0)) [[unlikely]] return detail::closest_on_edges(ap, t);
+  const float d1 = dot(t.ab, ap), d2 = dot(t.ac, ap);
+  if (d1 <= 0 && d2 <= 0) return done({0, 0, 0}, 0, 0);
+  const float d3 = d1 - t.ab2, d4 = d2 - t.abac;  // ab . (p - b), ac . (p - b)
+  if (d3 >= 0 && d4 <= d3) return done(t.ab, 1, 0);
+  const float vc = t.ab2 * d2 - t.abac * d1;
   if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    const float len = d1 - d3;  // |ab|^2; zero only when a == b
-    const float v = len > 0 ? d1 / len : 0;
-    return done(a + ab * v, v, 0);
+    const float v = d1 / t.ab2;  // det > 0: no edge has length 0
+    return done(t.ab * v, v, 0);
   }
-  const vec3f cp = p - c;
-  const float d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return done(c, 0, 1);
-  const float vb = d5 * d2 - d1 * d6;
+  const float d5 = d1 - t.abac, d6 = d2 - t.ac2;  // ab . (p - c), ac . (p - c)
+  if (d6 >= 0 && d5 <= d6) return done(t.ac, 0, 1);
+  const float vb = t.ac2 * d1 - t.abac * d2;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    const float len = d2 - d6;  // |ac|^2
-    const float w = len > 0 ? d2 / len : 0;
-    return done(a + ac * w, 0, w);
+    const float w = d2 / t.ac2;
+    return done(t.ac * w, 0, w);
   }
-  const float va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
-    const float len = (d4 - d3) + (d5 - d6);  // |bc|^2
-    const float w = len > 0 ? (d4 - d3) / len : 0;
-    return done(b + (c - b) * w, 1 - w, w);
+  const float va = t.det - vb - vc;
+  const float e43 = d4 - d3, e56 = d5 - d6;
+  if (va <= 0 && e43 >= 0 && e56 >= 0) {
+    const float len = e43 + e56;  // |bc|^2
+    const float w = len > 0 ? e43 / len : 0;
+    const vec3f bc = t.ac - t.ab;
+    r.point = t.a + t.ab + bc * w, r.v = 1 - w, r.w = w;
+    r.distance_squared = length_squared(ap - t.ab - bc * w);
+    return r;
   }
-  const float denom = va + vb + vc;
-  if (denom > 0 && va >= 0 && vb >= 0 && vc >= 0) {
-    const float v = vb / denom, w = vc / denom;
-    return done(a + ab * v + ac * w, v, w);
+  if (va >= 0 && vb >= 0 && vc >= 0) {
+    const float h = dot(t.normal, ap);
+    r.distance_squared = h * h;
+    // The weights from sub-triangle areas in double: vb and vc lose digits to cancellation on thin
+    // triangles, which the distance (to the plane) does not need but the point does.
+    const double ux = t.ab.x, uy = t.ab.y, uz = t.ab.z, vx = t.ac.x, vy = t.ac.y, vz = t.ac.z;
+    const double wx = ap.x, wy = ap.y, wz = ap.z;
+    const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+    const double n2 = nx * nx + ny * ny + nz * nz;
+    const double v = ((wy * vz - wz * vy) * nx + (wz * vx - wx * vz) * ny + (wx * vy - wy * vx) * nz) / n2;
+    const double w = ((uy * wz - uz * wy) * nx + (uz * wx - ux * wz) * ny + (ux * wy - uy * wx) * nz) / n2;
+    r.v = float(v), r.w = float(w);
+    r.point = {float(t.a.x + ux * v + vx * w), float(t.a.y + uy * v + vy * w), float(t.a.z + uz * v + vz * w)};
+    return r;
   }
-  // A degenerate (collinear) triangle, or rounding that left no region: the closest of the edges.
-  float t0, t1, t2;
-  TrianglePoint e0 = detail::on_segment(p, a, b, t0);
-  e0.v = t0;
-  TrianglePoint e1 = detail::on_segment(p, b, c, t1);
-  e1.v = 1 - t1, e1.w = t1;
-  TrianglePoint e2 = detail::on_segment(p, a, c, t2);
-  e2.w = t2;
-  TrianglePoint best = e0;
-  if (e1.distance_squared < best.distance_squared) best = e1;
-  if (e2.distance_squared < best.distance_squared) best = e2;
-  return best;
+  return detail::closest_on_edges(ap, t);
 }
 
-// The same answer for several points against one triangle, a point per lane, branch-free (GCC/Clang
-// vector extensions: SSE or AVX on x86-64, NEON on ARM). Every lane's squared distance equals
-// closest_on_triangle's bit for bit: each region's point is formed by the same float operations, and
-// the region is picked in the same order. The point and weights are left to triangle_point_at, for
-// the one winning triangle of a point.
+// The same for a triangle given by its corners.
+inline TrianglePoint closest_on_triangle(const vec3f& p, const vec3f& a, const vec3f& b, const vec3f& c) {
+  return closest_on_triangle(p, prepare_triangle(a, b, c));
+}
+
+// The same squared distance for several points against one triangle, a point per lane, branch-free
+// (GCC/Clang vector extensions: SSE or AVX on x86-64, NEON on ARM), equal to closest_on_triangle's
+// bit for bit: each region's distance is formed by the same float operations, and the region is
+// picked in the same order. The point and weights are left to closest_on_triangle, for the one
+// winning triangle of a point.
 template <int W>
 struct Lanes;
 template <>
@@ -123,22 +170,6 @@ template <>
 struct Lanes<8> {
   typedef float F __attribute__((vector_size(32)));
   typedef int32_t I __attribute__((vector_size(32)));
-};
-
-// Regions of closest_on_triangle, in its order of tests; `none` when rounding or a degenerate
-// triangle left no region (the scalar function is run for that lane).
-enum TriangleRegion : int32_t { region_a, region_b, region_ab, region_c, region_ac, region_bc, region_face, region_none };
-
-// closest_on_triangle's squared distance, out of line: the lanes' rare fallback.
-[[gnu::noinline]] inline float closest_on_triangle_distance(const vec3f& p, const vec3f& a, const vec3f& b, const vec3f& c) {
-  return closest_on_triangle(p, a, b, c).distance_squared;
-}
-
-template <int W>
-struct LanePoints {
-  typename Lanes<W>::F distance_squared;
-  typename Lanes<W>::I region;
-  typename Lanes<W>::F s, t;  // the region's parameters: v (ab, face) or w (ac, bc), and w (face)
 };
 
 // Whether any lane of a comparison's mask is set. Only SSE2 instructions, so that it also serves code
@@ -161,81 +192,91 @@ template <int W>
 
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wpsabi"  // 32-byte vectors only cross inlined calls
+namespace detail {
+// Functions, not lambdas, so that they take an AVX2 caller's target when inlined.
 template <int W>
-[[gnu::always_inline]] inline LanePoints<W> closest_on_triangle_lanes(const typename Lanes<W>::F& px,
-                                                                     const typename Lanes<W>::F& py,
-                                                                     const typename Lanes<W>::F& pz, const vec3f& a,
-                                                                     const vec3f& b, const vec3f& c) {
+[[gnu::always_inline]] inline typename Lanes<W>::F norm_lanes(const typename Lanes<W>::F& x, const typename Lanes<W>::F& y,
+                                                              const typename Lanes<W>::F& z) {
+  return x * x + y * y + z * z;
+}
+// on_segment's squared distance per lane.
+template <int W>
+[[gnu::always_inline]] inline typename Lanes<W>::F on_segment_lanes(const typename Lanes<W>::F& qx,
+                                                                    const typename Lanes<W>::F& qy,
+                                                                    const typename Lanes<W>::F& qz, const vec3f& e) {
+  using F = typename Lanes<W>::F;
+  const float len2 = length_squared(e);
+  F s{};
+  if (len2 > 0) {
+    s = (qx * e.x + qy * e.y + qz * e.z) / len2;
+    s = s < 0 ? F{} : s;
+    s = s > 1 ? F{} + 1.0f : s;
+  }
+  return norm_lanes<W>(qx - e.x * s, qy - e.y * s, qz - e.z * s);
+}
+// closest_on_edges's squared distance per lane: the least of the three edges'.
+template <int W>
+[[gnu::always_inline]] inline typename Lanes<W>::F closest_on_edges_lanes(const typename Lanes<W>::F& apx,
+                                                                          const typename Lanes<W>::F& apy,
+                                                                          const typename Lanes<W>::F& apz,
+                                                                          const PreparedTriangle& t) {
+  using F = typename Lanes<W>::F;
+  const vec3f bc = t.ac - t.ab;
+  const F e0 = on_segment_lanes<W>(apx, apy, apz, t.ab);
+  const F e1 = on_segment_lanes<W>(apx - t.ab.x, apy - t.ab.y, apz - t.ab.z, bc);
+  const F e2 = on_segment_lanes<W>(apx, apy, apz, t.ac);
+  const F m = e1 < e2 ? e1 : e2;
+  return e0 < m ? e0 : m;
+}
+}  // namespace detail
+
+// ap = p - t.a per lane, and h = t.normal . ap (the caller's plane test has them already).
+template <int W>
+[[gnu::always_inline]] inline typename Lanes<W>::F closest_on_triangle_lanes(const typename Lanes<W>::F& apx,
+                                                                             const typename Lanes<W>::F& apy,
+                                                                             const typename Lanes<W>::F& apz,
+                                                                             const typename Lanes<W>::F& h,
+                                                                             const PreparedTriangle& t) {
   using F = typename Lanes<W>::F;
   using I = typename Lanes<W>::I;
-  const vec3f ab = b - a, ac = c - a, bc = c - b;
+  const vec3f ab = t.ab, ac = t.ac, bc = t.ac - t.ab;
   const F zero{};
-  auto norm = [](const F& x, const F& y, const F& z) { return x * x + y * y + z * z; };
-  const F apx = px - a.x, apy = py - a.y, apz = pz - a.z;
+  if (!(t.det > 0)) [[unlikely]] return detail::closest_on_edges_lanes<W>(apx, apy, apz, t);
   const F d1 = ab.x * apx + ab.y * apy + ab.z * apz, d2 = ac.x * apx + ac.y * apy + ac.z * apz;
-  const F bpx = px - b.x, bpy = py - b.y, bpz = pz - b.z;
-  const F d3 = ab.x * bpx + ab.y * bpy + ab.z * bpz, d4 = ac.x * bpx + ac.y * bpy + ac.z * bpz;
-  const F cpx = px - c.x, cpy = py - c.y, cpz = pz - c.z;
-  const F d5 = ab.x * cpx + ab.y * cpy + ab.z * cpz, d6 = ac.x * cpx + ac.y * cpy + ac.z * cpz;
-  const F vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+  const F d3 = d1 - t.ab2, d4 = d2 - t.abac, d5 = d1 - t.abac, d6 = d2 - t.ac2;
+  const F vc = t.ab2 * d2 - t.abac * d1, vb = t.ac2 * d1 - t.abac * d2, va = t.det - vb - vc;
   const F e43 = d4 - d3, e56 = d5 - d6;
 
-  // The regions from the last tested to the first, each overriding the ones after it.
-  LanePoints<W> r;
-  const F denom = va + vb + vc;
-  const I in_face = (denom > 0) & (va >= 0) & (vb >= 0) & (vc >= 0);
-  const F fv = vb / denom, fw = vc / denom;
-  r.distance_squared = norm(px - (a.x + ab.x * fv + ac.x * fw), py - (a.y + ab.y * fv + ac.y * fw),
-                            pz - (a.z + ab.z * fv + ac.z * fw));
-  r.region = in_face ? I{} + int32_t(region_face) : I{} + int32_t(region_none);
-  r.s = fv, r.t = fw;
-  // A region no lane is in is skipped: its distances would be computed and thrown away (points of a
-  // group mostly share one or two regions).
-  auto take = [&](const I& m, TriangleRegion region, const F& d, const F& s) {
-    r.distance_squared = m ? d : r.distance_squared;
-    r.region = m ? I{} + int32_t(region) : r.region;
-    r.s = m ? s : r.s;
+  // The regions from the last tested to the first, each overriding the ones after it; a region no
+  // lane is in is skipped (points of a group mostly share one or two regions).
+  const I in_face = (va >= 0) & (vb >= 0) & (vc >= 0);
+  I found = in_face;
+  F d = h * h;
+  auto take = [&](const I& m, const F& distance) {
+    d = m ? distance : d;
+    found |= m;
   };
   if (const I m = (va <= 0) & (e43 >= 0) & (e56 >= 0); any_lane<W>(m)) {
     const F len = e43 + e56, w = len > 0 ? e43 / len : zero;
-    take(m, region_bc, norm(px - (b.x + bc.x * w), py - (b.y + bc.y * w), pz - (b.z + bc.z * w)), w);
+    take(m, detail::norm_lanes<W>(apx - ab.x - bc.x * w, apy - ab.y - bc.y * w, apz - ab.z - bc.z * w));
   }
   if (const I m = (vb <= 0) & (d2 >= 0) & (d6 <= 0); any_lane<W>(m)) {
-    const F len = d2 - d6, w = len > 0 ? d2 / len : zero;
-    take(m, region_ac, norm(px - (a.x + ac.x * w), py - (a.y + ac.y * w), pz - (a.z + ac.z * w)), w);
+    const F w = d2 / t.ac2;
+    take(m, detail::norm_lanes<W>(apx - ac.x * w, apy - ac.y * w, apz - ac.z * w));
   }
-  if (const I m = (d6 >= 0) & (d5 <= d6); any_lane<W>(m)) take(m, region_c, norm(cpx, cpy, cpz), zero);
+  if (const I m = (d6 >= 0) & (d5 <= d6); any_lane<W>(m)) take(m, detail::norm_lanes<W>(apx - ac.x, apy - ac.y, apz - ac.z));
   if (const I m = (vc <= 0) & (d1 >= 0) & (d3 <= 0); any_lane<W>(m)) {
-    const F len = d1 - d3, v = len > 0 ? d1 / len : zero;
-    take(m, region_ab, norm(px - (a.x + ab.x * v), py - (a.y + ab.y * v), pz - (a.z + ab.z * v)), v);
+    const F v = d1 / t.ab2;
+    take(m, detail::norm_lanes<W>(apx - ab.x * v, apy - ab.y * v, apz - ab.z * v));
   }
-  if (const I m = (d3 >= 0) & (d4 <= d3); any_lane<W>(m)) take(m, region_b, norm(bpx, bpy, bpz), zero);
-  if (const I m = (d1 <= 0) & (d2 <= 0); any_lane<W>(m)) take(m, region_a, norm(apx, apy, apz), zero);
-  const I none = r.region == int32_t(region_none);
-  if (any_lane<W>(none)) [[unlikely]] {
-    for (int k = 0; k < W; ++k)
-      if (none[k]) r.distance_squared[k] = closest_on_triangle_distance({px[k], py[k], pz[k]}, a, b, c);
+  if (const I m = (d3 >= 0) & (d4 <= d3); any_lane<W>(m)) take(m, detail::norm_lanes<W>(apx - ab.x, apy - ab.y, apz - ab.z));
+  if (const I m = (d1 <= 0) & (d2 <= 0); any_lane<W>(m)) take(m, detail::norm_lanes<W>(apx, apy, apz));
+  if (const I none = ~found; any_lane<W>(none)) [[unlikely]] {
+    const F e = detail::closest_on_edges_lanes<W>(apx, apy, apz, t);
+    d = none ? e : d;
   }
-  return r;
+  return d;
 }
 #pragma GCC diagnostic pop
-
-// closest_on_triangle's answer from a lane of closest_on_triangle_lanes: the same floats.
-inline TrianglePoint triangle_point_at(const vec3f& p, const vec3f& a, const vec3f& b, const vec3f& c,
-                                       int32_t region, float s, float t, float distance_squared) {
-  TrianglePoint r;
-  r.distance_squared = distance_squared;
-  switch (region) {
-    case region_a: r.point = a; break;
-    case region_b: r.point = b, r.v = 1; break;
-    case region_ab: r.point = a + (b - a) * s, r.v = s; break;
-    case region_c: r.point = c, r.w = 1; break;
-    case region_ac: r.point = a + (c - a) * s, r.w = s; break;
-    case region_bc: r.point = b + (c - b) * s, r.v = 1 - s, r.w = s; break;
-    case region_face: r.point = a + (b - a) * s + (c - a) * t, r.v = s, r.w = t; break;
-    default: return closest_on_triangle(p, a, b, c);
-  }
-  return r;
-}
 
 }  // namespace lod::measure
