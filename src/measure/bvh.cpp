@@ -164,7 +164,8 @@ std::vector<BinaryNode> build_binary(const std::vector<Bounds>& boxes, const std
                                      std::vector<uint32_t>& order, std::vector<uint8_t>& bin, uint32_t begin,
                                      uint32_t end, uint32_t depth, uint32_t defer_depth, std::vector<BuildTask>& deferred) {
   std::vector<BinaryNode> nodes;
-  nodes.reserve(end - begin);  // about 2 / 3 of a node per triangle with leaves of ~3
+  // At most a node per triangle (leaves of a few); a call that defers stops after a few levels.
+  nodes.reserve(defer_depth < 32 ? std::min<size_t>(end - begin, size_t(2) << (defer_depth - depth)) : end - begin);
   nodes.emplace_back();
   std::vector<BuildTask> tasks{{0, begin, end, depth}};
   while (!tasks.empty()) {
@@ -276,6 +277,9 @@ std::vector<BinaryNode> build_binary(const std::vector<Bounds>& boxes, const std
     const BuildTask& t = deferred[k];
     parts[k] = build_binary(boxes, centroids, order, bin, t.begin, t.end, t.depth, UINT32_MAX, none);
   });
+  size_t total = nodes.size();
+  for (const std::vector<BinaryNode>& part : parts) total += part.size() - 1;
+  nodes.reserve(total);
   for (size_t k = 0; k < deferred.size(); ++k) {
     // The part's root takes the deferred node's place; its other nodes follow, their child links moved.
     const uint32_t offset = uint32_t(nodes.size()) - 1;
@@ -285,6 +289,7 @@ std::vector<BinaryNode> build_binary(const std::vector<Bounds>& boxes, const std
     };
     nodes[deferred[k].node] = moved(parts[k][0]);
     for (size_t i = 1; i < parts[k].size(); ++i) nodes.push_back(moved(parts[k][i]));
+    std::vector<BinaryNode>().swap(parts[k]);  // freed as it is copied: the peak stays near one tree
   }
   return nodes;
 }
@@ -530,6 +535,9 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
   std::vector<uint32_t> order(triangles);
   for (uint32_t t = 0; t < triangles; ++t) order[t] = t;
   const std::vector<BinaryNode> binary = build_binary(boxes, centroids, order, threads);
+  // Freed before the per-triangle arrays are made: a third less peak memory on large meshes.
+  std::vector<Bounds>().swap(boxes);
+  std::vector<vec3f>().swap(centroids);
 
   original_ = order;
   slot_.resize(triangles);

@@ -640,20 +640,22 @@ Deviation compare(const Mesh& a, const Mesh& b, const CompareOptions& options) {
   const uint64_t samples =
       options.samples ? options.samples
                       : std::clamp<uint64_t>(10 * std::max(a.triangle_count(), b.triangle_count()), 10'000, 2'000'000);
-  // The two trees are built side by side (each build is mostly serial), then the two surfaces and
-  // their sample plans are made side by side: one step after the other, so that the builds'
-  // temporary arrays are gone before the surfaces take their memory.
-  std::optional<TriangleBvh> trees[2];
-  core::parallel_blocks(2, 1, options.threads, [&](size_t k, size_t, size_t) {
-    trees[k].emplace(k ? b : a, options.threads);
-  });
-  const TriangleBvh &bvh_a = *trees[0], &bvh_b = *trees[1];
+  // The two trees, the two surfaces and their sample plans are made side by side (each tree's build
+  // is mostly serial at the top); a tree frees its build's temporary arrays early, so this costs no
+  // peak memory.
   const uint64_t seed_ab = splitmix64(options.seed ^ 0xA5A5A5A5ull), seed_ba = splitmix64(options.seed ^ 0x5A5A5A5Aull);
+  std::optional<TriangleBvh> trees[2];
   std::optional<Surface> surfaces[2];
   Plan plans[2];
-  core::parallel_blocks(2, 1, options.threads, [&](size_t k, size_t, size_t) {
-    plans[k] = plan_samples(surfaces[k].emplace(k ? b : a), samples, options.edge_samples, k ? seed_ba : seed_ab);
+  core::parallel_blocks(4, 1, options.threads, [&](size_t k, size_t, size_t) {
+    const size_t side = k % 2;  // a, then b
+    const Mesh& mesh = side ? b : a;
+    if (k < 2)
+      trees[side].emplace(mesh, options.threads);
+    else
+      plans[side] = plan_samples(surfaces[side].emplace(mesh), samples, options.edge_samples, side ? seed_ba : seed_ab);
   });
+  const TriangleBvh &bvh_a = *trees[0], &bvh_b = *trees[1];
   Surface &sa = *surfaces[0], &sb = *surfaces[1];
   const Plan &plan_a = plans[0], &plan_b = plans[1];
   const auto built = std::chrono::steady_clock::now();
