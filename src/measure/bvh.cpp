@@ -186,7 +186,8 @@ std::vector<BinaryNode> build_binary(const std::vector<Bounds>& boxes, const std
       nodes[task.node].begin = task.begin;
       nodes[task.node].count = n;
     };
-    if (n <= 2) {
+    // A split costs at least a node visit, so a node of no more triangles than that is a leaf.
+    if (float(n) <= traversal_cost) {
       make_leaf();
       continue;
     }
