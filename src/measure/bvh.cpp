@@ -347,10 +347,19 @@ struct Batch {
     store_lanes(l.distance_squared() + i, best);
     store_lanes(l.triangle() + i, triangle);
   }
+  // The largest lane, by halving (distances are never NaN).
   float upper() const {
-    float m = best[0];
-    for (int k = 1; k < W; ++k) m = std::max(m, best[k]);
-    return m;
+    typename Lanes<4>::F m;
+    if constexpr (W == 8) {
+      const typename Lanes<4>::F lo = __builtin_shufflevector(best, best, 0, 1, 2, 3);
+      const typename Lanes<4>::F hi = __builtin_shufflevector(best, best, 4, 5, 6, 7);
+      m = lo > hi ? lo : hi;
+    } else {
+      m = best;
+    }
+    const typename Lanes<4>::F q = __builtin_shufflevector(m, m, 2, 3, 0, 1);
+    m = m > q ? m : q;
+    return std::max(m[0], m[1]);
   }
 };
 
@@ -452,6 +461,11 @@ template <class Scan>
     float d[4], key[4];
     const int mask = probe.within(n.box, limit, d);
     if (!mask) continue;
+    if (!(mask & (mask - 1))) {  // one child (the usual case deep in the tree): no order to find
+      const int k = __builtin_ctz(unsigned(mask));
+      if (n.child[k] != bvh_empty_child) stack[top] = n.child[k], stack_distance[top] = d[k], stack_key[top] = 0, ++top;
+      continue;
+    }
     middle.within(n.box, inf, key);
     // Push the hits farthest first, so the nearest is popped next (sorted in place on the stack).
     const int base = top;
