@@ -640,23 +640,24 @@ void TriangleBvh::set_lane_width(unsigned width) { lane_width.store(width, std::
 ClosestHit TriangleBvh::to_triangle(const vec3f& p, uint32_t triangle) const {
   ClosestHit hit;  // no triangle yet: the first one considered is taken
   consider(p, slot_[triangle], hit);
+  resolve(hit, p);
   return hit;
 }
 
 bool TriangleBvh::consider(const vec3f& p, uint32_t slot, ClosestHit& best) const {
-  const TrianglePoint tp = closest_on_triangle(p, triangles_[slot]);
-  if (tp.distance_squared > best.distance_squared) return false;
+  const float d = closest_distance_squared(p, triangles_[slot]);
+  if (d > best.distance_squared) return false;
   const uint32_t triangle = original_[slot];
-  if (tp.distance_squared == best.distance_squared && triangle >= best.triangle) return false;
-  best.distance_squared = tp.distance_squared;
+  if (d == best.distance_squared && triangle >= best.triangle) return false;
+  best.distance_squared = d;
   best.triangle = triangle;
-  best.point = tp.point;
-  best.v = tp.v, best.w = tp.w;
+  best.resolved = false;  // the point is found once, for the answer
   return true;
 }
 
 ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint) const {
-  ClosestHit best = to_triangle(p, hint < original_.size() ? hint : 0);
+  ClosestHit best;
+  consider(p, slot_[hint < original_.size() ? hint : 0], best);
   float limit = best.distance_squared * prune_slack;
   uint32_t stack[3 * max_depth + 4];
   float stack_distance[3 * max_depth + 4];
@@ -692,6 +693,7 @@ ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint) const {
       stack[j] = n.child[k], stack_distance[j] = d[k];
     }
   }
+  resolve(best, p);
   return best;
 }
 

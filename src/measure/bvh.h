@@ -77,7 +77,7 @@ class TriangleBvh {
 
  private:
   // Takes leaf-order triangle `slot` into `best` when it is closer to p (ties: the lower mesh index wins,
-  // as in a brute-force scan); true when it did.
+  // as in a brute-force scan), its point left to resolve(); true when it did.
   bool consider(const vec3f& p, uint32_t slot, ClosestHit& best) const;
 
   using Node = BvhNode;

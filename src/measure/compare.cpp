@@ -523,6 +523,9 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
     each_triangle([&](size_t t, uint32_t a, uint32_t b) {
       const vec3f c0 = from.corner(t, 0), c1 = from.corner(t, 1), c2 = from.corner(t, 2);
       const uint32_t* corner_id = &from.mesh->indices[3 * t];
+      // The triangle's largest distance in each corner's region, raised into the field once: an
+      // atomic per triangle corner rather than per sample.
+      float corner_max[3] = {-1, -1, -1};
       for (uint32_t o = a; o < b; ++o) {
         const uint64_t j = begin + o;
         const AreaSample u = drawn[o];
@@ -537,7 +540,10 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
           acc.take(d, {q, h.point, uint32_t(t), h.triangle});
         }
         if (options.refine && j == plan.area_start[t]) out.triangle_closest[t] = h.triangle;
-        if (want_field) raise(out.field, from.ids.id[corner_id[nearest_corner(c0, c1, c2, q)]], d);
+        if (want_field) {
+          float& m = corner_max[nearest_corner(c0, c1, c2, q)];
+          m = std::max(m, d);
+        }
         if (!(normals || uvs || colors)) continue;
         bvh.resolve(h, q);
         const uint32_t* fc = &fm.indices[3 * t];
@@ -569,6 +575,9 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
           acc.color_sum += diff, acc.color_max = std::max(acc.color_max, diff), ++acc.color_count;
         }
       }
+      if (want_field)
+        for (int k = 0; k < 3; ++k)
+          if (corner_max[k] >= 0) raise(out.field, from.ids.id[corner_id[k]], corner_max[k]);
     });
   });
   r.area_samples = plan.area_samples;

@@ -91,9 +91,11 @@ inline float on_segment(const vec3f& q, const vec3f& e, float& s) {
 }
 }  // namespace detail
 
+namespace detail {
 // The exact closest point (Ericson's Voronoi regions, tested in his order: corner a, b, edge ab,
-// corner c, edge ac, edge bc, face). A face point's distance is its distance to the plane. Always
-// inlined: the BVH calls it millions of times per compare.
+// corner c, edge ac, edge bc, face). A face point's distance is its distance to the plane. With
+// want_point false only the squared distance is set (the same bits).
+template <bool want_point>
 [[gnu::always_inline]] inline TrianglePoint closest_on_triangle(const vec3f& p, const PreparedTriangle& t) {
   TrianglePoint r;
   const vec3f ap = p - t.a;
@@ -134,6 +136,7 @@ inline float on_segment(const vec3f& q, const vec3f& e, float& s) {
   if (va >= 0 && vb >= 0 && vc >= 0) {
     const float h = dot(t.normal, ap);
     r.distance_squared = h * h;
+    if constexpr (!want_point) return r;
     // The weights from sub-triangle areas in double: vb and vc lose digits to cancellation on thin
     // triangles, which the distance (to the plane) does not need but the point does.
     const double ux = t.ab.x, uy = t.ab.y, uz = t.ab.z, vx = t.ac.x, vy = t.ac.y, vz = t.ac.z;
@@ -148,10 +151,20 @@ inline float on_segment(const vec3f& q, const vec3f& e, float& s) {
   }
   return detail::closest_on_edges(ap, t);
 }
+}  // namespace detail
+
+inline TrianglePoint closest_on_triangle(const vec3f& p, const PreparedTriangle& t) {
+  return detail::closest_on_triangle<true>(p, t);
+}
+// Its squared distance alone (what a search needs until it has its answer). Always inlined: the BVH
+// calls it millions of times per compare.
+[[gnu::always_inline]] inline float closest_distance_squared(const vec3f& p, const PreparedTriangle& t) {
+  return detail::closest_on_triangle<false>(p, t).distance_squared;
+}
 
 // The same for a triangle given by its corners.
 inline TrianglePoint closest_on_triangle(const vec3f& p, const vec3f& a, const vec3f& b, const vec3f& c) {
-  return closest_on_triangle(p, prepare_triangle(a, b, c));
+  return detail::closest_on_triangle<true>(p, prepare_triangle(a, b, c));
 }
 
 // The same squared distance for several points against one triangle, a point per lane, branch-free
