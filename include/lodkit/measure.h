@@ -107,8 +107,8 @@ struct Deviation {
   std::vector<float> vertex_error;
 
   // Timing, not part of the result (it varies between runs).
-  double build_seconds = 0;  // both BVHs and both surfaces' sample plans
-  double query_seconds = 0;  // drawing the samples and querying them
+  double build_seconds = 0;  // until the queries start: the smaller mesh's BVH, both surfaces' sample plans
+  double query_seconds = 0;  // the rest: the samples drawn and queried (the larger BVH is built alongside)
   uint64_t queries = 0;      // closest-point queries made (deterministic)
 };
 

@@ -16,6 +16,7 @@
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 namespace lod::core {
 
@@ -71,6 +72,30 @@ template <class Fn>
 void parallel_for(size_t count, unsigned threads, Fn&& fn, size_t block_size = 4096) {
   parallel_blocks(count, block_size, threads, [&](size_t, size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) fn(i);
+  });
+}
+
+// Runs side() alongside main(), which stays on the calling thread (so it may report progress); both
+// may use parallel_blocks inside. Returns when both are done; with one thread, side() runs first.
+template <class Side, class Main>
+void run_alongside(unsigned threads, Side&& side, Main&& main) {
+  const int workers = std::min(int(thread_count(threads)), std::max(1, tbb::info::default_concurrency()));
+  if (workers <= 1) {
+    side();
+    main();
+    return;
+  }
+  shared_arena(workers).execute([&] {
+    tbb::task_group group;
+    group.run([&] { side(); });
+    try {
+      main();
+    } catch (...) {
+      group.cancel();
+      group.wait();
+      throw;
+    }
+    group.wait();
   });
 }
 
