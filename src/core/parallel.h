@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <exception>
+#include <latch>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -16,7 +18,6 @@
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
-#include <tbb/task_group.h>
 
 namespace lod::core {
 
@@ -75,8 +76,9 @@ void parallel_for(size_t count, unsigned threads, Fn&& fn, size_t block_size = 4
   });
 }
 
-// Runs side() alongside main(), which stays on the calling thread (so it may report progress); both
-// may use parallel_blocks inside. Returns when both are done; with one thread, side() runs first.
+// Runs side() on a worker alongside main(), which runs on the calling thread itself (so it may report
+// progress there); both may use parallel_blocks inside. Returns when both are done, rethrowing the
+// first exception (main's before side's). With one thread, side() runs first.
 template <class Side, class Main>
 void run_alongside(unsigned threads, Side&& side, Main&& main) {
   const int workers = std::min(int(thread_count(threads)), std::max(1, tbb::info::default_concurrency()));
@@ -85,18 +87,26 @@ void run_alongside(unsigned threads, Side&& side, Main&& main) {
     main();
     return;
   }
-  shared_arena(workers).execute([&] {
-    tbb::task_group group;
-    group.run([&] { side(); });
+  std::exception_ptr side_error, main_error;
+  std::latch side_done(1);
+  // enqueue, not a task group inside execute(): an enqueued task always gets a worker, and main()
+  // stays on this thread even if the arena's master slot is taken.
+  shared_arena(workers).enqueue([&] {
     try {
-      main();
+      side();
     } catch (...) {
-      group.cancel();
-      group.wait();
-      throw;
+      side_error = std::current_exception();
     }
-    group.wait();
+    side_done.count_down();
   });
+  try {
+    main();
+  } catch (...) {
+    main_error = std::current_exception();
+  }
+  side_done.wait();
+  if (main_error) std::rethrow_exception(main_error);
+  if (side_error) std::rethrow_exception(side_error);
 }
 
 }  // namespace lod::core
