@@ -8,9 +8,6 @@
 #include <cstddef>
 #include <exception>
 #include <latch>
-#include <map>
-#include <memory>
-#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -35,21 +32,6 @@ inline size_t parallel_workers(size_t count, size_t block_size, unsigned threads
   return std::min({size_t(thread_count(threads)), blocks, cores});
 }
 
-// One arena per worker count, made on first use and kept: callers run many short parallel steps (the
-// simplifier several per pass, compare one per slice of samples), and a new arena per step cost
-// 10-70 us of thread hand-off against about 1 us to reuse one.
-inline tbb::task_arena& shared_arena(int workers) {
-  static std::mutex mutex;
-  static std::map<int, std::unique_ptr<tbb::task_arena>> arenas;
-  const std::lock_guard<std::mutex> lock(mutex);
-  std::unique_ptr<tbb::task_arena>& arena = arenas[workers];
-  if (!arena) {
-    arena = std::make_unique<tbb::task_arena>(workers);
-    arena->initialize();
-  }
-  return *arena;
-}
-
 // Calls fn(block, begin, end) for every block of `block_size` items of [0, count), on up to
 // `threads` threads. Blocks are claimed dynamically; fn must only write block-owned outputs.
 // Runs inline (no task overhead) when one thread or one block is enough.
@@ -61,7 +43,12 @@ void parallel_blocks(size_t count, size_t block_size, unsigned threads, Fn&& fn)
     for (size_t b = 0; b < blocks; ++b) fn(b, b * block_size, std::min(count, (b + 1) * block_size));
     return;
   }
-  shared_arena(static_cast<int>(workers)).execute([&] {
+  // oneTBB's persistent workers: callers run many short parallel steps (the simplifier several per
+  // pass), where starting threads each time would cost more than the work. (A single arena kept for
+  // the process was 1 us per call faster, but its workers outlive main(), and with them the
+  // thread-local scratch of compare, which LeakSanitizer reports.)
+  tbb::task_arena arena{static_cast<int>(workers)};
+  arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t b = range.begin(); b < range.end(); ++b) fn(b, b * block_size, std::min(count, (b + 1) * block_size));
     });
@@ -90,8 +77,9 @@ void run_alongside(unsigned threads, Side&& side, Main&& main) {
   std::exception_ptr side_error, main_error;
   std::latch side_done(1);
   // enqueue, not a task group inside execute(): an enqueued task always gets a worker, and main()
-  // stays on this thread even if the arena's master slot is taken.
-  shared_arena(workers).enqueue([&] {
+  // stays on this thread. The arena goes once side() is done (a worker still leaving it keeps it).
+  tbb::task_arena arena{workers};
+  arena.enqueue([&] {
     try {
       side();
     } catch (...) {
