@@ -68,7 +68,7 @@ void parallel_for(size_t count, unsigned threads, Fn&& fn, size_t block_size = 4
 // first exception (main's before side's). With one thread, side() runs first.
 template <class Side, class Main>
 void run_alongside(unsigned threads, Side&& side, Main&& main) {
-  const int workers = std::min(int(thread_count(threads)), std::max(1, tbb::info::default_concurrency()));
+  const size_t workers = parallel_workers(2, 1, threads);  // two tasks
   if (workers <= 1) {
     side();
     main();
@@ -78,7 +78,7 @@ void run_alongside(unsigned threads, Side&& side, Main&& main) {
   std::latch side_done(1);
   // enqueue, not a task group inside execute(): an enqueued task always gets a worker, and main()
   // stays on this thread. The arena goes once side() is done (a worker still leaving it keeps it).
-  tbb::task_arena arena{workers};
+  tbb::task_arena arena{static_cast<int>(workers)};
   arena.enqueue([&] {
     try {
       side();
