@@ -54,18 +54,26 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
   // Each input corner stands for a third of its triangle's area (normalised frame): the weight of
   // its vertex as a sample, and of the position that vertex ended in ("mass", for the pull below).
   // The pull's candidates are the input triangles with a corner that ended in the position.
+  // The slot each input vertex ended in is looked up once: per corner, the chain walks and slot
+  // reads were most of this setup.
+  std::vector<uint32_t> vertex_slot(input.vertex_count());
+  for (size_t v = 0; v < input.vertex_count(); ++v) vertex_slot[v] = slot[last(s.position_of[v])];
   std::vector<double> share(input.vertex_count(), 0.0), mass(m, 0.0);
   std::vector<uint32_t> candidates_first(m + 1, 0), candidates;
-  const auto final_slot = [&](uint32_t corner) { return slot[last(s.position_of[input.indices[corner]])]; };
   for (int fill = 0; fill < 2; ++fill) {
     for (size_t t = 0; t < triangles; ++t) {
-      uint32_t j[3];
-      for (uint32_t k = 0; k < 3; ++k) j[k] = final_slot(uint32_t(3 * t + k));
+      const uint32_t* corner = &input.indices[3 * t];
+      const uint32_t j[3] = {vertex_slot[corner[0]], vertex_slot[corner[1]], vertex_slot[corner[2]]};
       for (uint32_t k = 0; k < 3; ++k) {
         if (j[k] == none || (k > 0 && j[k] == j[0]) || (k > 1 && j[k] == j[1])) continue;
         if (fill) candidates[candidates_first[j[k]]++] = uint32_t(t);
         else ++candidates_first[j[k] + 1];
       }
+      if (fill) continue;
+      vec3d p[3];
+      for (uint32_t k = 0; k < 3; ++k) p[k] = s.normalized_input(input.positions[corner[k]]);
+      const double third = length(cross(p[1] - p[0], p[2] - p[0])) / 6;
+      for (uint32_t k = 0; k < 3; ++k) share[corner[k]] += third;
     }
     if (fill) break;
     for (size_t j = 0; j < m; ++j) candidates_first[j + 1] += candidates_first[j];
@@ -73,16 +81,8 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
   }
   std::rotate(candidates_first.rbegin(), candidates_first.rbegin() + 1, candidates_first.rend());  // back to starts
   candidates_first[0] = 0;
-  for (size_t t = 0; t < triangles; ++t) {
-    vec3d p[3];
-    for (uint32_t k = 0; k < 3; ++k) p[k] = s.normalized_input(input.positions[input.indices[3 * t + k]]);
-    const double third = length(cross(p[1] - p[0], p[2] - p[0])) / 6;
-    for (uint32_t k = 0; k < 3; ++k) share[input.indices[3 * t + k]] += third;
-  }
-  for (size_t v = 0; v < input.vertex_count(); ++v) {
-    const uint32_t j = slot[last(s.position_of[v])];
-    if (j != none) mass[j] += share[v];
-  }
+  for (size_t v = 0; v < input.vertex_count(); ++v)
+    if (vertex_slot[v] != none) mass[vertex_slot[v]] += share[v];
   // Far down, the input has many vertices per surviving position; 16 per position fix it as well
   // (every k-th input vertex, weighted k times) at a fraction of the closest-point searches.
   const size_t stride = std::max<size_t>(1, input.vertex_count() / (16 * m));
@@ -94,7 +94,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
   // later ones from its last foot. The start changes only the speed.
   std::vector<Foot> foot(samples.size());
   for (size_t i = 0; i < samples.size(); ++i) {
-    const uint32_t j = slot[last(s.position_of[samples[i]])];
+    const uint32_t j = vertex_slot[samples[i]];
     foot[i].triangle = j == none ? 0 : first_use[j];
   }
   std::vector<vec3d> num(m);
