@@ -3,6 +3,7 @@
 #
 #   scripts/bench.sh io [RUNS=5]
 #   scripts/bench.sh simplify [--quick] [RUNS=3]
+#   scripts/bench.sh simplify --requality
 #   scripts/bench.sh measure [PAIRS=20]
 #   scripts/bench.sh lod [RUNS=15]
 #   scripts/bench.sh optimize [--quick] [--no-big] [RUNS=5]
@@ -18,6 +19,8 @@
 # lodkit's five metrics side by side. Prints the tables and the issue 3 targets, writes
 # bench/results/simplify.json and the rate-distortion plot bench/results/simplify-rd.{png,svg}.
 # --quick: two small meshes, one run each (a smoke test of the whole chain).
+# --requality: only lodkit's quality again (current build, corpus cases), judged against the peers'
+# outputs the last full run left; seconds instead of minutes (bench/simplify/requality.py).
 #
 # measure: `lodkit compare` against CGAL's distance (cgal_distance) on PAIRS (mesh, simplified) pairs:
 # values and time at the same sample count; writes bench/results/measure.json.
@@ -47,7 +50,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 usage() {
-  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5]" >&2
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -139,16 +142,22 @@ area_io() {
 
 # ---- simplify ------------------------------------------------------------------------------------
 area_simplify() {
-  local quick="" runs=""
+  local quick="" runs="" requality=""
   for a in "$@"; do
     case $a in
       --quick) quick=--quick ;;
+      --requality) requality=1 ;;
       *) [[ $a =~ ^[1-9][0-9]*$ ]] && [ -z "$runs" ] || usage; runs=$a ;;
     esac
   done
   [ -n "$runs" ] || { [ -n "$quick" ] && runs=1 || runs=3; }
   local started=$SECONDS
   configure
+  if [ -n "$requality" ]; then
+    build_targets lodkit_cli lodkit_bench_simplify
+    python3 bench/simplify/requality.py "$build/bench" "$build/lodkit" build/bench-data/simplify
+    return
+  fi
   # CGAL compiles slowly: the peers are built here, by name, never by a plain build.
   build_targets lodkit_cli lodkit_bench_simplify peer_meshopt peer_cgal peer_openmesh cgal_distance
   [ -x "$build/bench/lodkit_bench_simplify" ] || { echo "bench: lodkit_bench_simplify was not built" >&2; exit 1; }

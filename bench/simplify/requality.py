@@ -1,0 +1,138 @@
+"""Judges the current lodkit build's quality again, in seconds, against the peers' outputs of the last
+full simplify run (scripts/bench.sh simplify), without running the peers or timing anything.
+
+  requality.py BENCH_DIR LODKIT_CLI DATA_DIR [--threads N]
+
+For every corpus case the full run left a meshoptimizer or CGAL-GH output for
+(DATA_DIR/out/STEM-TARGET-TOOL.ply), lodkit_bench_simplify simplifies the corpus mesh to the same
+target with the default metric (as the full run does; outputs under DATA_DIR/out/requality/), and
+`lodkit compare` measures every result against its input. The verdicts follow report.py: lodkit at
+most the better of the peers that reached the target (values within TIE are equal), lodkit short of
+the target counts against it. The peers' distances are kept in DATA_DIR/out/peer-distances.json,
+keyed by file size and time, so only the first call measures them. Prints the share and worst ratio
+per target and quantity, and the cases lodkit loses; exits 1 when a tool fails.
+
+Quick feedback while working on quality; the full run remains the reference (it also times and
+measures memory)."""
+import concurrent.futures
+import json
+import math
+import os
+import subprocess
+import sys
+
+QUALITY_PEERS = ("cgal-gh", "meshopt")  # the issue's "better of CGAL-GH and meshoptimizer"
+TIE = 1e-7  # as report.py: relative distances closer than this are equal
+CORPUS = "data/corpus"
+
+bench_dir, cli, data_dir = sys.argv[1], sys.argv[2], sys.argv[3]
+threads = sys.argv[sys.argv.index("--threads") + 1] if "--threads" in sys.argv else "0"
+out_dir = os.path.join(data_dir, "out")
+own_dir = os.path.join(out_dir, "requality")
+os.makedirs(own_dir, exist_ok=True)
+
+inputs = {}
+for f in os.listdir(CORPUS):
+    stem, _, ext = f.rpartition(".")
+    if ext.lower() in ("off", "ply", "stl"):
+        inputs[stem] = os.path.join(CORPUS, f)
+
+cases = set()
+for f in os.listdir(out_dir):
+    for peer in QUALITY_PEERS:
+        if f.endswith(f"-{peer}.ply"):
+            stem, _, target = f[: -len(f"-{peer}.ply")].rpartition("-")
+            if stem in inputs and target.isdigit():
+                cases.add((stem, int(target)))
+cases = sorted(cases)
+if not cases:
+    sys.exit(f"requality: no peer outputs under {out_dir}: run `scripts/bench.sh simplify` once first")
+
+
+def run_json(command):
+    """The JSON report a tool prints: all of stdout (`lodkit compare`) or its last line (bench programs)."""
+    p = subprocess.run(command, capture_output=True, text=True)
+    if p.returncode != 0:
+        sys.exit(f"requality: {' '.join(command)} failed: {p.stderr.strip()[:300]}")
+    try:
+        return json.loads(p.stdout)
+    except json.JSONDecodeError:
+        return json.loads([l for l in p.stdout.splitlines() if l.startswith("{")][-1])
+
+
+def distance(input_path, output_path):
+    j = run_json([cli, "compare", input_path, output_path, "--json"])
+    return {"hausdorff": j["symmetric"]["relative_hausdorff"], "rms": j["symmetric"]["relative_rms"],
+            "triangles": j["b_triangles"]}
+
+
+cache_path = os.path.join(out_dir, "peer-distances.json")
+cache = json.load(open(cache_path)) if os.path.exists(cache_path) else {}
+
+
+def peer_distances(case):
+    stem, target = case
+    found = {}
+    for peer in QUALITY_PEERS:
+        path = os.path.join(out_dir, f"{stem}-{target}-{peer}.ply")
+        if not os.path.exists(path):
+            continue
+        st = os.stat(path)
+        key = f"{os.path.basename(path)}:{st.st_size}:{int(st.st_mtime)}"
+        found[peer] = cache[key] if key in cache else distance(inputs[stem], path)
+        found[peer]["key"] = key
+    return found
+
+
+def lodkit_distances(case):
+    stem, target = case
+    path = os.path.join(own_dir, f"{stem}-{target}-lodkit.ply")
+    run_json([os.path.join(bench_dir, "lodkit_bench_simplify"), "cqem", inputs[stem], path, str(target), "1", "--json",
+              "--threads", threads])
+    return distance(inputs[stem], path)
+
+
+with concurrent.futures.ThreadPoolExecutor(max_workers=os.cpu_count() or 2) as pool:
+    peers = list(pool.map(peer_distances, cases))
+    mine = list(pool.map(lodkit_distances, cases))
+for found in peers:
+    for d in found.values():
+        cache[d["key"]] = {k: v for k, v in d.items() if k != "key"}
+with open(cache_path + ".tmp", "w") as f:
+    json.dump(cache, f)
+os.replace(cache_path + ".tmp", cache_path)
+
+# The 10% and 1% targets of a mesh: the larger of its two is 10%.
+targets = {}
+for stem, target in cases:
+    targets.setdefault(stem, []).append(target)
+short = lambda d, target: d["triangles"] > 1.05 * target + 2
+lines = []
+for level, label in ((0, "10%"), (1, "1%")):
+    for what in ("hausdorff", "rms"):
+        judged = good = 0
+        worst, losses = (0.0, None), []
+        for case, found, own in zip(cases, peers, mine):
+            stem, target = case
+            if sorted(targets[stem], reverse=True).index(target) != level:
+                continue
+            reached = [d[what] for d in found.values() if not short(d, target)]
+            if not reached:
+                continue
+            judged += 1
+            best = min(reached)
+            if short(own, target):
+                losses.append(f"{stem} (lodkit short)")
+                continue
+            if own[what] <= best + TIE:
+                good += 1
+                continue
+            ratio = own[what] / best if best > 0 else math.inf
+            losses.append(f"{stem} {ratio:.2f}x")
+            worst = max(worst, (ratio, stem))
+        share = good / judged if judged else 0
+        lines.append(f"{label:>3} {what:<9} lodkit <= best(GH, mo) on {good}/{judged} = {share:.0%}, worst "
+                     f"{worst[0]:.2f}x {worst[1] or ''}")
+        if losses:
+            lines.append("      loses: " + ", ".join(losses))
+print("\n".join(lines))
