@@ -57,6 +57,14 @@ struct SimplifyOptions {
   // longest-edge / shortest-altitude ratio above it.
   float min_normal_dot = 0.2f;
   float max_aspect_ratio = 0.0f;
+  // Distance guard (quadric metrics): a collapse waits while the input point of either end of its
+  // edge would end farther from the faces around it than sqrt(distance_guard * level), level being
+  // the quadric cost the current pass's collapses reach (a mean squared distance). Quadrics average
+  // over their planes, so a thin part (a spike, an antler) can cost almost nothing to remove; the
+  // guard holds such collapses back until the rest of the mesh has reached that error. Chosen on the
+  // corpus (4 to 16 tried): Hausdorff distance at most the better of CGAL and meshoptimizer's on 12
+  // and 14 more cases in 100 (10% and 1%), for about 8% more time. 0 turns it off.
+  float distance_guard = 6.0f;
   bool lock_border = false;                // border positions never move
   std::vector<uint8_t> locked;             // per input vertex: non-zero means its position never moves
   std::vector<float> importance;           // per input vertex: multiplies the cost of moving it (>= 0)
@@ -150,6 +158,7 @@ struct SimplifyResult {
   uint64_t collapses = 0;
   uint64_t virtual_pairs = 0;  // collapses that joined two positions without a shared face (aggregation)
   uint64_t rejected_topology = 0, rejected_flip = 0, rejected_seam = 0, rejected_shape = 0;
+  uint64_t deferred_distance = 0;  // collapses the distance guard held back (each time it did)
   uint64_t pruned_triangles = 0;
   uint64_t fitted_positions = 0;  // positions the final fit moved
   uint32_t passes = 0;

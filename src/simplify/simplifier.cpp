@@ -14,6 +14,7 @@
 #include <limits>
 #include <numeric>
 #include <tuple>
+#include <type_traits>
 
 #include "core/parallel.h"
 #include "core/union_find.h"
@@ -23,6 +24,7 @@
 #include "simplify/multipose_metric.h"
 #include "simplify/quadric_metric.h"
 #include "simplify/record.h"
+#include "measure/triangle_distance.h"
 
 namespace lod {
 
@@ -63,7 +65,7 @@ struct Decision {
   int direction = 0;  // index of the pairs in Scratch
 };
 
-enum class Reject { ok, topology, seam, flip, shape };
+enum class Reject { ok, topology, seam, flip, shape, distance };
 
 template <class MetricT>
 class Engine {
@@ -109,6 +111,14 @@ class Engine {
       if (considered < order.size()) std::nth_element(order.begin(), order.begin() + considered, order.end());
       order.resize(considered);
       std::sort(order.begin(), order.end());
+      if (guard_ > 0) {
+        // The guard's level: the cost this pass's collapses reach, never lower than an earlier
+        // pass's; a pass that applied nothing lets the least held-back collapse through next.
+        const uint32_t at_goal = uint32_t(order[std::min(order.size(), goal) - 1]);
+        level_ = std::max(level_, double(best_[at_goal].cost));
+        if (stalled_ && least_excess_ < std::numeric_limits<double>::infinity()) level_ = std::max(level_, least_excess_);
+        least_excess_ = std::numeric_limits<double>::infinity();
+      }
 
       // Full checks run in parallel on chunks of the candidates still free, then the chunk is
       // applied in cost order. A candidate is applied only if none of its positions was locked by
@@ -129,12 +139,14 @@ class Engine {
         decisions_.resize(batch.size());
         verdicts_.resize(batch.size());
         fallback_.resize(batch.size());
+        excess_.resize(batch.size());
         check_batch(batch);
         for (size_t i = 0; i < batch.size(); ++i) {
           if (s_.live_triangles <= target_triangles) break;
           const uint32_t u = batch[i], v = best_[u].other;
           if (v == none || ((s_.flags[u] | s_.flags[v]) & flag_pass_locked)) continue;  // none: u died
           if (verdicts_[i] != Reject::ok) {
+            if (verdicts_[i] == Reject::distance) least_excess_ = std::min(least_excess_, excess_[i]);
             rejected_[int(verdicts_[i])] += 1;
             best_[u] = fallback_[i];
             mark_[u] |= mark_fallback;
@@ -145,6 +157,7 @@ class Engine {
           ++applied;
         }
       }
+      stalled_ = applied == 0;
       if (applied == 0 && deferred == 0) break;
       std::erase_if(s_.live, [&](uint32_t t) { return !s_.alive[t]; });
       if (s_.options.progress && start_triangles > target_triangles)
@@ -311,9 +324,40 @@ class Engine {
   void check_candidate(const std::vector<uint32_t>& batch, uint32_t i, Scratch& scratch) {
     const uint32_t u = batch[i];
     verdicts_[i] = evaluate(u, best_[u].other, scratch, decisions_[i], true);
+    if (verdicts_[i] == Reject::ok && guard_ > 0 && (excess_[i] = distance_excess(decisions_[i])) > 0)
+      verdicts_[i] = Reject::distance;
     // Ranked but not allowed: u waits for the next pass with its cheapest allowed edge.
     if (verdicts_[i] != Reject::ok) fallback_[i] = best_checked(u, scratch);
     checked_[i] = 1;
+  }
+
+  // The distance guard (SimplifyOptions::distance_guard): 0 if the input points of both ends stay
+  // within sqrt(guard * max(level, cost)) of the faces around the kept position after the collapse,
+  // else the level at which they would (their distance squared over the guard).
+  double distance_excess(const Decision& d) const {
+    // Below this (squared, normalised frame) a distance is float noise: flat collapses pass.
+    constexpr double noise = 1e-12;
+    const double bound = std::max(noise, guard_ * std::max(level_, d.placement.cost));
+    const auto point = [](const vec3d& v) { return measure::vec3f(float(v.x), float(v.y), float(v.z)); };
+    const measure::vec3f to = point(d.placement.position);
+    double excess = 0;
+    for (const uint32_t x : {d.kept, d.removed}) {
+      const measure::vec3f q = point(s_.normalized_input(origin_[x]));
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const uint32_t y : {d.kept, d.removed}) {
+        const uint32_t other = y == d.kept ? d.removed : d.kept;
+        for (const Wing& w : s_.wings_of(y)) {
+          if (w.next == other || w.prev == other) continue;  // removed by the collapse
+          const measure::TrianglePoint hit =
+              measure::closest_on_triangle(q, to, point(s_.normalized(w.next)), point(s_.normalized(w.prev)));
+          nearest = std::min(nearest, double(measure::length_squared(q - hit.point)));
+          if (nearest <= bound) break;
+        }
+        if (nearest <= bound) break;
+      }
+      if (nearest > bound && nearest < std::numeric_limits<double>::infinity()) excess = std::max(excess, nearest / guard_);
+    }
+    return excess;
   }
 
   // A position whose star a collapse touched (it was locked) needs its edges ranked again; the pass
@@ -1020,7 +1064,10 @@ class Engine {
   bool aggregate_ = false;  // rank virtual pairs too
   bool keep_borders_ = false;  // the metric has no border term: keep borders by the rules in place()
   double max_cost_ = 0;
-  uint64_t rejected_[5] = {};
+  uint64_t rejected_[6] = {};
+  // The distance guard: its factor (0: off), the input positions (by position id), and its level.
+  double guard_ = 0;
+  std::vector<float3> origin_;
 
  private:
   State& s_;
@@ -1050,6 +1097,9 @@ class Engine {
   std::vector<Decision> decisions_;  // per candidate of the pass
   std::vector<Reject> verdicts_;
   std::vector<Best> fallback_;
+  std::vector<double> excess_;  // per candidate: distance_excess when the guard held it back
+  double level_ = 0, least_excess_ = std::numeric_limits<double>::infinity();
+  bool stalled_ = false;  // the last pass applied nothing
   // check_batch: which candidates are checked, and per position the round (stamp_) in which an
   // applied (will_lock_) or undecided (may_lock_) candidate of the chunk locks it.
   std::vector<uint8_t> checked_;
@@ -1063,6 +1113,10 @@ void run(State& state, MetricT& metric, const std::vector<Channel>& channels, ui
          SimplifyResult& result) {
   Engine<MetricT> engine(state, metric, result);
   engine.channels_ = channels;
+  if constexpr (std::is_same_v<MetricT, QuadricMetric>) {
+    engine.guard_ = state.options.distance_guard;
+    if (engine.guard_ > 0) engine.origin_ = state.position;
+  }
   engine.aggregate_ = state.options.aggregate_distance > 0;
   engine.keep_borders_ = state.options.metric == Metric::qem || state.options.metric == Metric::edge_length;
   for (const Channel& c : channels) engine.channel_floats_ += c.size;
@@ -1072,6 +1126,7 @@ void run(State& state, MetricT& metric, const std::vector<Channel>& channels, ui
   result.rejected_seam = engine.rejected_[int(Reject::seam)];
   result.rejected_flip = engine.rejected_[int(Reject::flip)];
   result.rejected_shape = engine.rejected_[int(Reject::shape)];
+  result.deferred_distance = engine.rejected_[int(Reject::distance)];
 }
 
 // Drops the live triangles of every connected component whose bounding-box diagonal is below `size`.
@@ -1142,8 +1197,8 @@ void check_options(const Mesh& mesh, const SimplifyOptions& o) {
   for (const float w : o.importance)
     if (!(w >= 0) || !std::isfinite(w)) throw_usage("simplify: importance weights must be finite and >= 0");
   if (!(o.min_normal_dot >= -1 && o.min_normal_dot <= 1)) throw_usage("simplify: min_normal_dot must be in [-1, 1]");
-  for (const float w : {o.normal_weight, o.uv_weight, o.color_weight, o.border_weight, o.max_aspect_ratio})
-    if (!(w >= 0) || !std::isfinite(w)) throw_usage("simplify: weights and max_aspect_ratio must be finite and >= 0");
+  for (const float w : {o.normal_weight, o.uv_weight, o.color_weight, o.border_weight, o.max_aspect_ratio, o.distance_guard})
+    if (!(w >= 0) || !std::isfinite(w)) throw_usage("simplify: weights, max_aspect_ratio and distance_guard must be finite and >= 0");
   if (!(o.aggregate_distance >= 0)) throw_usage("simplify: aggregate_distance must be >= 0");
 }
 

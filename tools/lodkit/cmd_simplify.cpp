@@ -25,6 +25,7 @@ struct SimplifyCommand {
   bool keep_vertices = false, lock_border = false, prune = false, json = false, force = false;
   unsigned threads = 0;
   uint32_t fit = SimplifyOptions{}.fit_iterations;
+  float guard = SimplifyOptions{}.distance_guard;
 };
 
 }  // namespace
@@ -79,6 +80,10 @@ Command register_simplify(CLI::App& root) {
   app->add_flag("--prune", o->prune, "Drop components smaller than the error reached");
   app->add_option("--fit", o->fit, "Iterations fitting the result's vertices to the input after the collapses (0: none)")
       ->capture_default_str();
+  app->add_option("--distance-guard", o->guard,
+                  "Hold back collapses that would leave an input point farther than sqrt(G x the pass's cost level) "
+                  "from the result (quadric metrics; 0: off)")
+      ->capture_default_str();
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
@@ -93,6 +98,7 @@ Command register_simplify(CLI::App& root) {
                 .max_relative_error = o->error,
                 .metric = parse_metric(o->metric),
                 .keep_vertices = o->keep_vertices,
+                .distance_guard = o->guard,
                 .lock_border = o->lock_border,
                 .aggregate_distance = o->aggregate,
                 .prune = o->prune,
@@ -112,7 +118,7 @@ Command register_simplify(CLI::App& root) {
             for (Mesh* m : meshes) validate(*m, o->input), total += m->triangle_count();
             uint64_t in_triangles = 0, out_triangles = 0, in_vertices = 0, out_vertices = 0;
             float error = 0, relative_error = 0;
-            uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, fitted = 0, rejected[4] = {};
+            uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, fitted = 0, deferred = 0, rejected[4] = {};
             start = std::chrono::steady_clock::now();
             {
               ProgressBar bar("simplifying");
@@ -133,7 +139,7 @@ Command register_simplify(CLI::App& root) {
                 passes += r.passes, collapses += r.collapses, virtual_pairs += r.virtual_pairs, pruned += r.pruned_triangles;
                 fitted += r.fitted_positions;
                 rejected[0] += r.rejected_topology, rejected[1] += r.rejected_seam;
-                rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape;
+                rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape, deferred += r.deferred_distance;
                 relative_error = std::max(relative_error, r.relative_error);
                 *m = std::move(r.mesh);
               }
@@ -152,6 +158,7 @@ Command register_simplify(CLI::App& root) {
                                   {"fitted_positions", fitted},
                                   {"rejected", {{"topology", rejected[0]}, {"seam", rejected[1]},
                                                 {"flip", rejected[2]}, {"shape", rejected[3]}}},
+                                  {"deferred_distance", deferred},
                                   {"load_seconds", load_seconds}, {"simplify_seconds", simplify_seconds},
                                   {"write_seconds", write_seconds}};
               fmt::print("{}\n", j.dump(2));
