@@ -64,7 +64,7 @@ struct SimplifyOptions {
   // guard holds such collapses back until the rest of the mesh has reached that error. Chosen on the
   // corpus among 2 to 64: lodkit's Hausdorff distance at most the better of CGAL's and
   // meshoptimizer's on 79% instead of 67% of the cases at 10%, 73% instead of 59% at 1%
-  // (scripts/bench.sh simplify --requality), for 8-11% more time. 0 turns it off.
+  // (scripts/bench.sh simplify --requality), for about 7% more time. 0 turns it off.
   float distance_guard = 6.0f;
   bool lock_border = false;                // border positions never move
   std::vector<uint8_t> locked;             // per input vertex: non-zero means its position never moves

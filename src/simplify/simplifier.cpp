@@ -51,6 +51,7 @@ double seconds(clock::time_point a, clock::time_point b) { return std::chrono::d
 struct Scratch {
   std::vector<uint32_t> removed_faces, neighbours_u, neighbours_v, kept_wedges, candidates, extra;
   std::vector<WedgePair> pairs[2];
+  std::vector<measure::vec3f> fan;  // distance_excess: the fan's far corners
   // The removed faces of the edge being evaluated (at most two get that far) and per face its
   // corner that is neither end.
   uint32_t face[2] = {}, face_count = 0, opposite[2] = {};
@@ -324,7 +325,7 @@ class Engine {
   void check_candidate(const std::vector<uint32_t>& batch, uint32_t i, Scratch& scratch) {
     const uint32_t u = batch[i];
     verdicts_[i] = evaluate(u, best_[u].other, scratch, decisions_[i], true);
-    if (verdicts_[i] == Reject::ok && guard_ > 0 && (excess_[i] = distance_excess(decisions_[i])) > 0)
+    if (verdicts_[i] == Reject::ok && guard_ > 0 && (excess_[i] = distance_excess(decisions_[i], scratch)) > 0)
       verdicts_[i] = Reject::distance;
     // Ranked but not allowed: u waits for the next pass with its cheapest allowed edge.
     if (verdicts_[i] != Reject::ok) fallback_[i] = best_checked(u, scratch);
@@ -334,26 +335,34 @@ class Engine {
   // The distance guard (SimplifyOptions::distance_guard): 0 if the input points of both ends stay
   // within sqrt(guard * max(level, cost)) of the faces around the kept position after the collapse,
   // else the level at which they would (their distance squared over the guard).
-  double distance_excess(const Decision& d) const {
+  double distance_excess(const Decision& d, Scratch& scratch) const {
     // Below this (squared, normalised frame) a distance is float noise: flat collapses pass.
     constexpr double noise = 1e-12;
     const double bound = std::max(noise, guard_ * std::max(level_, d.placement.cost));
     const auto point = [](const vec3d& v) { return measure::vec3f(float(v.x), float(v.y), float(v.z)); };
     const measure::vec3f to = point(d.placement.position);
+    // The fan after the collapse, as the two far corners of each face (the kept position is `to`):
+    // the kept star's faces, then the removed star's from `split` on.
+    std::vector<measure::vec3f>& fan = scratch.fan;
+    fan.clear();
+    size_t split = 0;
+    for (const uint32_t y : {d.kept, d.removed}) {
+      const uint32_t other = y == d.kept ? d.removed : d.kept;
+      for (const Wing& w : s_.wings_of(y))
+        if (w.next != other && w.prev != other)  // else removed by the collapse
+          fan.push_back(point(s_.normalized(w.next))), fan.push_back(point(s_.normalized(w.prev)));
+      if (y == d.kept) split = fan.size();
+    }
     double excess = 0;
     for (const uint32_t x : {d.kept, d.removed}) {
       const measure::vec3f q = point(s_.normalized_input(origin_[x]));
+      // Only whether some face is within the bound matters; the point's own star is likelier to be.
+      const size_t start = x == d.kept ? 0 : split;
       double nearest = std::numeric_limits<double>::infinity();
-      for (const uint32_t y : {d.kept, d.removed}) {
-        const uint32_t other = y == d.kept ? d.removed : d.kept;
-        for (const Wing& w : s_.wings_of(y)) {
-          if (w.next == other || w.prev == other) continue;  // removed by the collapse
-          const measure::TrianglePoint hit =
-              measure::closest_on_triangle(q, to, point(s_.normalized(w.next)), point(s_.normalized(w.prev)));
-          nearest = std::min(nearest, double(measure::length_squared(q - hit.point)));
-          if (nearest <= bound) break;
-        }
-        if (nearest <= bound) break;
+      for (size_t k = 0; k < fan.size() && nearest > bound; k += 2) {
+        const size_t i = (start + k) % fan.size();
+        const measure::TrianglePoint hit = measure::closest_on_triangle(q, to, fan[i], fan[i + 1]);
+        nearest = std::min(nearest, double(measure::length_squared(q - hit.point)));
       }
       if (nearest > bound && nearest < std::numeric_limits<double>::infinity()) excess = std::max(excess, nearest / guard_);
     }
