@@ -5,7 +5,8 @@
 // higher position), then applies the cheapest candidates in cost order. A collapse locks every
 // position around it for the rest of the pass, so the candidates applied later were evaluated on
 // exactly the neighbourhood they change: the result is the same on any number of threads, and no
-// adjacency is updated (or allocated) per collapse.
+// adjacency is updated (or allocated) per collapse. With the quadric metrics, a distance guard holds
+// back collapses that would leave an end's input point far from the result (distance_excess).
 #include <algorithm>
 #include <atomic>
 #include <bit>
@@ -19,12 +20,12 @@
 #include "core/parallel.h"
 #include "core/union_find.h"
 #include "lodkit/error.h"
+#include "measure/triangle_distance.h"
 #include "simplify/edge_length.h"
 #include "simplify/fit.h"
 #include "simplify/multipose_metric.h"
 #include "simplify/quadric_metric.h"
 #include "simplify/record.h"
-#include "measure/triangle_distance.h"
 
 namespace lod {
 
