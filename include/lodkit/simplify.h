@@ -57,7 +57,7 @@ struct SimplifyOptions {
   // longest-edge / shortest-altitude ratio above it.
   float min_normal_dot = 0.2f;
   float max_aspect_ratio = 0.0f;
-  // Distance guard (quadric metrics): a collapse waits while the input point of either end of its
+  // Distance guard (qem and cqem): a collapse waits while the input point of either end of its
   // edge would end farther from the faces around it than sqrt(distance_guard * level), level being
   // the quadric cost the current pass's collapses reach (a mean squared distance). Quadrics average
   // over their planes, so a thin part (a spike, an antler) can cost almost nothing to remove; the

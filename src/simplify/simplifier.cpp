@@ -98,6 +98,7 @@ class Engine {
       order.clear();
       for (uint32_t u = 0; u < s_.position_count; ++u)
         if (best_[u].other != none && best_[u].cost <= cost_limit) order.push_back(sort_key(best_[u].cost, u));
+      if (order.empty() && guard_ > 0 && release_held()) continue;
       if (order.empty()) break;
 
       // This pass applies at most a third of the live positions' worth of collapses, fewer as the
@@ -148,10 +149,15 @@ class Engine {
           const uint32_t u = batch[i], v = best_[u].other;
           if (v == none || ((s_.flags[u] | s_.flags[v]) & flag_pass_locked)) continue;  // none: u died
           if (verdicts_[i] != Reject::ok) {
-            if (verdicts_[i] == Reject::distance) least_excess_ = std::min(least_excess_, excess_[i]);
             rejected_[int(verdicts_[i])] += 1;
             best_[u] = fallback_[i];
             mark_[u] |= mark_fallback;
+            if (verdicts_[i] == Reject::distance) {
+              // Like any rejected candidate, u waits with its next allowed edge until something
+              // around it changes; release_held() ranks it again if the engine runs out first.
+              least_excess_ = std::min(least_excess_, excess_[i]);
+              held_[u] = excess_[i];
+            }
             ++deferred;
             continue;
           }
@@ -331,6 +337,18 @@ class Engine {
     // Ranked but not allowed: u waits for the next pass with its cheapest allowed edge.
     if (verdicts_[i] != Reject::ok) fallback_[i] = best_checked(u, scratch);
     checked_[i] = 1;
+  }
+
+  // No candidate left, but the distance guard held some back: rank their positions again and raise
+  // the level to the least excess, so the target is still reached. False if none was held.
+  bool release_held() {
+    double least = std::numeric_limits<double>::infinity();
+    for (uint32_t u = 0; u < s_.position_count; ++u)
+      if (held_[u] > 0 && !(s_.flags[u] & flag_dead)) least = std::min(least, held_[u]), mark_[u] |= mark_full;
+    std::fill(held_.begin(), held_.end(), 0.0);
+    if (least == std::numeric_limits<double>::infinity()) return false;
+    level_ = std::max(level_, least);
+    return true;
   }
 
   // The distance guard (SimplifyOptions::distance_guard): 0 if the input points of both ends stay
@@ -629,6 +647,12 @@ class Engine {
   // only needs to weigh its edge to the kept position against its unchanged best.
   void mark_changed_edges(const Decision& d) {
     mark_[d.kept] |= mark_full | mark_kept;
+    if (guard_ > 0) {
+      // The geometry around these positions changed: a held-back collapse is weighed afresh.
+      held_[d.kept] = 0;
+      for (const uint32_t x : {d.kept, d.removed})
+        for (const Wing& w : s_.wings_of(x)) held_[w.next] = 0, held_[w.prev] = 0;
+    }
     for (const uint32_t x : {d.kept, d.removed})
       for (const Wing& w : s_.wings_of(x))
         for (const uint32_t p : {w.next, w.prev}) {
@@ -1078,6 +1102,7 @@ class Engine {
   // The distance guard: its factor (0: off), the input positions (by position id), and its level.
   double guard_ = 0;
   std::vector<float3> origin_;
+  std::vector<double> held_;  // per position: the level its held-back collapse needs (0: none)
 
  private:
   State& s_;
@@ -1123,9 +1148,12 @@ void run(State& state, MetricT& metric, const std::vector<Channel>& channels, ui
          SimplifyResult& result) {
   Engine<MetricT> engine(state, metric, result);
   engine.channels_ = channels;
+  // The guard needs a held-back edge ranked again next pass (evaluate_all's marks); memoryless
+  // metrics re-rank by dirty flags instead, so it applies to qem and cqem.
+  const Metric m = state.options.metric;
   if constexpr (std::is_same_v<MetricT, QuadricMetric>) {
-    engine.guard_ = state.options.distance_guard;
-    if (engine.guard_ > 0) engine.origin_ = state.position;
+    if (m == Metric::qem || m == Metric::constrained_qem) engine.guard_ = state.options.distance_guard;
+    if (engine.guard_ > 0) engine.origin_ = state.position, engine.held_.assign(state.position_count, 0.0);
   }
   engine.aggregate_ = state.options.aggregate_distance > 0;
   engine.keep_borders_ = state.options.metric == Metric::qem || state.options.metric == Metric::edge_length;

@@ -127,7 +127,7 @@ TEST(SimplifySkinned, MultiposeWithTheIdentityPoseIsConstrainedQem) {
   SimplifyOptions plain = o.simplify;
   plain.metric = Metric::constrained_qem;
   plain.fit_iterations = 0;  // the multi-pose metric is not followed by the rest-pose fit
-  plain.distance_guard = 0;  // nor guarded by rest-pose distances (quadric metrics only)
+  plain.distance_guard = 0;  // nor guarded by rest-pose distances (qem and cqem only)
   const SimplifyResult s = simplify(m, plain);
   EXPECT_EQ(r.mesh.indices, s.mesh.indices);
   EXPECT_EQ(r.mesh.positions, s.mesh.positions);

@@ -82,7 +82,7 @@ Command register_simplify(CLI::App& root) {
       ->capture_default_str();
   app->add_option("--distance-guard", o->guard,
                   "Hold back collapses that would leave an input point farther than sqrt(G x the pass's cost level) "
-                  "from the result (quadric metrics; 0: off)")
+                  "from the result (qem and cqem; 0: off)")
       ->capture_default_str();
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
