@@ -28,6 +28,8 @@ CORPUS = "data/corpus"
 bench_dir, cli, data_dir = sys.argv[1], sys.argv[2], sys.argv[3]
 threads = sys.argv[sys.argv.index("--threads") + 1] if "--threads" in sys.argv else "0"
 out_dir = os.path.join(data_dir, "out")
+if not os.path.isdir(out_dir):
+    sys.exit(f"requality: {out_dir} does not exist: run `scripts/bench.sh simplify` once first")
 own_dir = os.path.join(out_dir, "requality")
 os.makedirs(own_dir, exist_ok=True)
 

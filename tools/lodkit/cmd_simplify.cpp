@@ -81,8 +81,8 @@ Command register_simplify(CLI::App& root) {
   app->add_option("--fit", o->fit, "Iterations fitting the result's vertices to the input after the collapses (0: none)")
       ->capture_default_str();
   app->add_option("--distance-guard", o->guard,
-                  "Hold back collapses that would leave an input point farther than sqrt(G x the pass's cost level) "
-                  "from the result (qem and cqem; 0: off)")
+                  "Hold back collapses that would leave an input point farther from the result than G times (in "
+                  "squared distance) the error the other collapses reach: keeps thin parts (qem and cqem; 0: off)")
       ->capture_default_str();
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
