@@ -14,11 +14,11 @@ import shutil
 import subprocess
 import sys
 
+from verdict import QUALITY_PEERS, judge, stopped_short
+
 TOOLS = ("lodkit", "lodkit-1t", "meshopt", "cgal-gh", "cgal-lt", "openmesh")
 PEERS = ("meshopt", "cgal-gh", "cgal-lt", "openmesh")
-QUALITY_PEERS = ("cgal-gh", "meshopt")  # the "better of CGAL-GH and meshoptimizer"
 METRICS = ("edge", "qem", "cqem", "memoryless", "cmemoryless")
-TIE = 1e-7  # relative distances closer than this are equal (both tools exact on a flat part)
 
 results_path, out_path, machine, runs = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
 records = [json.loads(l) for l in open(results_path) if l.strip()]
@@ -122,21 +122,9 @@ for row in rows:
     k = lambda t: (name, f, t)
     h = {t: quality(k(t), "hausdorff") for t in quality_tools}
     r = {t: quality(k(t), "rms") for t in quality_tools}
-    # A tool that stopped well short of the target kept more triangles: an easier job, not comparable.
-    short = lambda t: ok(k(t)) and triangles_out(k(t)) > 1.05 * row["target"] + 2
-    # The verdict per quantity: "ok" (lodkit <= the better of the peers that reached the target),
-    # "worse" (with the ratio), "short" (lodkit stopped short where a peer did not: counts against
-    # lodkit), or None (no peer reached the target, or a value is missing: not a case).
-    def verdict(values):
-        reached = [values[t] for t in QUALITY_PEERS if values[t] is not None and not short(t)]
-        if values["lodkit"] is None or not reached:
-            return None, None
-        if short("lodkit"):
-            return "short", None
-        best = min(reached)
-        if values["lodkit"] <= best + TIE:
-            return "ok", 1.0
-        return "worse", values["lodkit"] / best
+    short = lambda t: ok(k(t)) and stopped_short(triangles_out(k(t)), row["target"])
+    verdict = lambda values: judge(values["lodkit"], [values[t] for t in QUALITY_PEERS if values[t] is not None
+                                                      and not short(t)], short("lodkit"))
     (vh, rh), (vr, rr) = verdict(h), verdict(r)
     row.update({"hausdorff": h, "rms": r, "hausdorff_verdict": vh, "hausdorff_ratio": rh, "rms_verdict": vr,
                 "rms_ratio": rr, "lodkit_short": short("lodkit"),

@@ -7,8 +7,8 @@ For every corpus case the full run left a meshoptimizer or CGAL-GH output for
 (DATA_DIR/out/STEM-TARGET-TOOL.ply), lodkit_bench_simplify simplifies the corpus mesh to the same
 target with the default metric (as the full run does; outputs under DATA_DIR/out/requality/), and
 `lodkit compare` measures every result against its input. The verdicts follow report.py: lodkit at
-most the better of the peers that reached the target (values within TIE are equal), lodkit short of
-the target counts against it. The peers' distances are kept in DATA_DIR/out/peer-distances.json,
+most the better of the peers that reached the target, lodkit short of the target counting against
+it (verdict.py, shared with report.py). The peers' distances are kept in DATA_DIR/out/peer-distances.json,
 keyed by file size and time, so only the first call measures them. Prints the share and worst ratio
 per target and quantity, and the cases lodkit loses; exits 1 when a tool fails.
 
@@ -16,13 +16,12 @@ Quick feedback while working on quality; the full run remains the reference (it 
 measures memory)."""
 import concurrent.futures
 import json
-import math
 import os
 import subprocess
 import sys
 
-QUALITY_PEERS = ("cgal-gh", "meshopt")  # the issue's "better of CGAL-GH and meshoptimizer"
-TIE = 1e-7  # as report.py: relative distances closer than this are equal
+from verdict import QUALITY_PEERS, judge, stopped_short
+
 CORPUS = "data/corpus"
 
 bench_dir, cli, data_dir = sys.argv[1], sys.argv[2], sys.argv[3]
@@ -108,7 +107,6 @@ os.replace(cache_path + ".tmp", cache_path)
 targets = {}
 for stem, target in cases:
     targets.setdefault(stem, []).append(target)
-short = lambda d, target: d["triangles"] > 1.05 * target + 2
 lines = []
 for level, label in ((0, "10%"), (1, "1%")):
     for what in ("hausdorff", "rms"):
@@ -118,20 +116,18 @@ for level, label in ((0, "10%"), (1, "1%")):
             stem, target = case
             if sorted(targets[stem], reverse=True).index(target) != level:
                 continue
-            reached = [d[what] for d in found.values() if not short(d, target)]
-            if not reached:
+            reached = [d[what] for d in found.values() if not stopped_short(d["triangles"], target)]
+            verdict, ratio = judge(own[what], reached, stopped_short(own["triangles"], target))
+            if verdict is None:
                 continue
             judged += 1
-            best = min(reached)
-            if short(own, target):
-                losses.append(f"{stem} (lodkit short)")
-                continue
-            if own[what] <= best + TIE:
+            if verdict == "ok":
                 good += 1
-                continue
-            ratio = own[what] / best if best > 0 else math.inf
-            losses.append(f"{stem} {ratio:.2f}x")
-            worst = max(worst, (ratio, stem))
+            elif verdict == "short":
+                losses.append(f"{stem} (lodkit short)")
+            else:
+                losses.append(f"{stem} {ratio:.2f}x")
+                worst = max(worst, (ratio, stem))
         share = good / judged if judged else 0
         lines.append(f"{label:>3} {what:<9} lodkit <= best(GH, mo) on {good}/{judged} = {share:.0%}, worst "
                      f"{worst[0]:.2f}x {worst[1] or ''}")

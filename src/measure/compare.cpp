@@ -677,18 +677,15 @@ Deviation compare(const Mesh& a, const Mesh& b, const CompareOptions& options) {
           plans[side] = plan_samples(surfaces[side].emplace(side ? b : a), samples, options.edge_samples, side ? seed_ba : seed_ab);
         });
         dev.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        progress.total = surfaces[0]->ids.count + plans[0].edge_start.back() + plans[0].area_samples +
-                         surfaces[1]->ids.count + plans[1].edge_start.back() + plans[1].area_samples +
-                         (options.refine ? 2 * budget : 0);
+        dev.queries = surfaces[0]->ids.count + plans[0].edge_start.back() + plans[0].area_samples +
+                      surfaces[1]->ids.count + plans[1].edge_start.back() + plans[1].area_samples;
+        progress.total = dev.queries + (options.refine ? 2 * budget : 0);
         measure(alongside);  // the direction that queries the other tree
       });
   measure(1 - alongside);
   const TriangleBvh &bvh_a = *trees[0], &bvh_b = *trees[1];
   Surface &sa = *surfaces[0], &sb = *surfaces[1];
-  const Plan &plan_a = plans[0], &plan_b = plans[1];
   Direction &ab = directions[0], &ba = directions[1];
-  dev.queries = sa.ids.count + plan_a.edge_start.back() + plan_a.area_samples + sb.ids.count +
-                plan_b.edge_start.back() + plan_b.area_samples;
   if (options.refine) {
     const float tolerance = float(options.refine_tolerance * dev.diagonal);
     refine_direction(ab, sa, sb, bvh_b, options, tolerance, budget, progress);

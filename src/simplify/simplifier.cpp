@@ -647,12 +647,8 @@ class Engine {
   // only needs to weigh its edge to the kept position against its unchanged best.
   void mark_changed_edges(const Decision& d) {
     mark_[d.kept] |= mark_full | mark_kept;
-    if (guard_ > 0) {
-      // The geometry around these positions changed: a held-back collapse is weighed afresh.
-      held_[d.kept] = 0;
-      for (const uint32_t x : {d.kept, d.removed})
-        for (const Wing& w : s_.wings_of(x)) held_[w.next] = 0, held_[w.prev] = 0;
-    }
+    // The geometry around these positions changed: a collapse the guard held back is weighed afresh.
+    if (guard_ > 0) held_[d.kept] = 0;
     for (const uint32_t x : {d.kept, d.removed})
       for (const Wing& w : s_.wings_of(x))
         for (const uint32_t p : {w.next, w.prev}) {
@@ -660,6 +656,7 @@ class Engine {
           if (p == d.kept || p == d.removed) continue;
           const bool stale = other == d.kept || other == d.removed || (mark_[p] & mark_fallback);
           mark_[p] |= stale ? mark_full : mark_partial;
+          if (guard_ > 0) held_[p] = 0;
         }
   }
 
