@@ -9,12 +9,14 @@ target with the default metric (as the full run does; outputs under DATA_DIR/out
 `lodkit compare` measures every result against its input. The verdicts follow report.py: lodkit at
 most the better of the peers that reached the target, lodkit short of the target counting against
 it (verdict.py, shared with report.py). The peers' distances are kept in DATA_DIR/out/peer-distances.json,
-keyed by file size and time, so only the first call measures them. Prints the share and worst ratio
+keyed by file size and time and by a digest of the measuring code (src/measure), so only the first call
+after a full run or a change to the measure measures them. Prints the share and worst ratio
 per target and quantity, and the cases lodkit loses; exits 1 when a tool fails.
 
 Quick feedback while working on quality; the full run remains the reference (it also times and
 measures memory)."""
 import concurrent.futures
+import hashlib
 import json
 import os
 import subprocess
@@ -67,6 +69,11 @@ def distance(input_path, output_path):
             "triangles": j["b_triangles"]}
 
 
+# A fix to the measure changes the peers' distances too: its sources are part of every key.
+measure_digest = hashlib.sha1()
+for f in sorted(os.listdir("src/measure")):
+    measure_digest.update(f.encode() + open(os.path.join("src/measure", f), "rb").read())
+measure_digest = measure_digest.hexdigest()[:12]
 cache_path = os.path.join(out_dir, "peer-distances.json")
 cache = json.load(open(cache_path)) if os.path.exists(cache_path) else {}
 
@@ -79,7 +86,7 @@ def peer_distances(case):
         if not os.path.exists(path):
             continue
         st = os.stat(path)
-        key = f"{os.path.basename(path)}:{st.st_size}:{int(st.st_mtime)}"
+        key = f"{os.path.basename(path)}:{st.st_size}:{int(st.st_mtime)}:{measure_digest}"
         found[peer] = cache[key] if key in cache else distance(inputs[stem], path)
         found[peer]["key"] = key
     return found
@@ -96,6 +103,7 @@ def lodkit_distances(case):
 with concurrent.futures.ThreadPoolExecutor(max_workers=os.cpu_count() or 2) as pool:
     peers = list(pool.map(peer_distances, cases))
     mine = list(pool.map(lodkit_distances, cases))
+cache = {}  # only this run's keys: stale ones would pile up
 for found in peers:
     for d in found.values():
         cache[d["key"]] = {k: v for k, v in d.items() if k != "key"}

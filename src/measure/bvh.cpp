@@ -363,6 +363,16 @@ struct Batch {
   }
 };
 
+// How far each lane lies outside [lo, hi]. A function, not a lambda: inlined, it takes an AVX2
+// caller's target (a lambda left out of line would pass eight-lane vectors without AVX).
+template <int W>
+[[gnu::always_inline]] inline typename Lanes<W>::F box_gap(const typename Lanes<W>::F& q, float lo, float hi) {
+  using F = typename Lanes<W>::F;
+  const F below = lo - q, above = q - hi, zero{};
+  const F g = below > above ? below : above;
+  return g > zero ? g : zero;
+}
+
 template <int W>
 [[gnu::always_inline]] inline void scan_batch(Batch<W>& p, const GroupCandidates& c) {
   using F = typename Lanes<W>::F;
@@ -372,12 +382,7 @@ template <int W>
   for (size_t k = 0; k < c.count; ++k) {
     const uint32_t slot = c.slots[k];
     const float* b = c.box + 6 * size_t(slot);
-    auto gap = [&](const F& q, float lo, float hi) {
-      const F below = lo - q, above = q - hi;
-      const F g = below > above ? below : above;
-      return g > zero ? g : zero;
-    };
-    const F gx = gap(p.px, b[0], b[3]), gy = gap(p.py, b[1], b[4]), gz = gap(p.pz, b[2], b[5]);
+    const F gx = box_gap<W>(p.px, b[0], b[3]), gy = box_gap<W>(p.py, b[1], b[4]), gz = box_gap<W>(p.pz, b[2], b[5]);
     const I near_box = gx * gx + gy * gy + gz * gz <= limit;
     if (!any_lane<W>(near_box)) continue;
     // The distance to the plane (h) bounds the triangle's, and is a face point's distance.

@@ -92,6 +92,21 @@ inline float on_segment(const vec3f& q, const vec3f& e, float& s) {
 }  // namespace detail
 
 namespace detail {
+// The triangle's edges turned a quarter in its plane, pointing inwards (unit normal x edge). The
+// point's side of edge ab is m.ab . (p - a): Ericson's vc = (ab2 ac.ap - abac ab.ap), divided by the
+// normal's length, but from one dot product. His form cancels two products of size |ab|^2 |ac| |ap|
+// to leave one of size |ab| |ac| sin(angle) |ap|: on a sliver that loses every digit, and a point of
+// the face next to a long edge fell into an edge region (3.8e-4 too far on a 1.5-long sliver).
+struct EdgeNormals {
+  vec3f ab, ac, bc;
+};
+inline vec3f cross(const vec3f& a, const vec3f& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+[[gnu::always_inline]] inline EdgeNormals edge_normals(const PreparedTriangle& t) {
+  return {cross(t.normal, t.ab), cross(t.ac, t.normal), cross(t.normal, t.ac - t.ab)};
+}
+
 // The exact closest point (Ericson's Voronoi regions, tested in his order: corner a, b, edge ab,
 // corner c, edge ac, edge bc, face). A face point's distance is its distance to the plane. With
 // want_point false only the squared distance is set (the same bits).
@@ -111,19 +126,20 @@ template <bool want_point>
   if (d1 <= 0 && d2 <= 0) return done({0, 0, 0}, 0, 0);
   const float d3 = d1 - t.ab2, d4 = d2 - t.abac;  // ab . (p - b), ac . (p - b)
   if (d3 >= 0 && d4 <= d3) return done(t.ab, 1, 0);
-  const float vc = t.ab2 * d2 - t.abac * d1;
+  const EdgeNormals m = edge_normals(t);
+  const float vc = dot(m.ab, ap);
   if (vc <= 0 && d1 >= 0 && d3 <= 0) {
     const float v = d1 / t.ab2;  // det > 0: no edge has length 0
     return done(t.ab * v, v, 0);
   }
   const float d5 = d1 - t.abac, d6 = d2 - t.ac2;  // ab . (p - c), ac . (p - c)
   if (d6 >= 0 && d5 <= d6) return done(t.ac, 0, 1);
-  const float vb = t.ac2 * d1 - t.abac * d2;
+  const float vb = dot(m.ac, ap);
   if (vb <= 0 && d2 >= 0 && d6 <= 0) {
     const float w = d2 / t.ac2;
     return done(t.ac * w, 0, w);
   }
-  const float va = t.det - vb - vc;
+  const float va = dot(m.bc, ap - t.ab);
   const float e43 = d4 - d3, e56 = d5 - d6;
   if (va <= 0 && e43 >= 0 && e56 >= 0) {
     const float len = e43 + e56;  // |bc|^2
@@ -257,7 +273,9 @@ template <int W>
   if (!(t.det > 0)) [[unlikely]] return detail::closest_on_edges_lanes<W>(apx, apy, apz, t);
   const F d1 = ab.x * apx + ab.y * apy + ab.z * apz, d2 = ac.x * apx + ac.y * apy + ac.z * apz;
   const F d3 = d1 - t.ab2, d4 = d2 - t.abac, d5 = d1 - t.abac, d6 = d2 - t.ac2;
-  const F vc = t.ab2 * d2 - t.abac * d1, vb = t.ac2 * d1 - t.abac * d2, va = t.det - vb - vc;
+  const detail::EdgeNormals en = detail::edge_normals(t);
+  const F vc = en.ab.x * apx + en.ab.y * apy + en.ab.z * apz, vb = en.ac.x * apx + en.ac.y * apy + en.ac.z * apz;
+  const F va = en.bc.x * (apx - ab.x) + en.bc.y * (apy - ab.y) + en.bc.z * (apz - ab.z);
   const F e43 = d4 - d3, e56 = d5 - d6;
 
   // The regions from the last tested to the first, each overriding the ones after it; a region no

@@ -108,6 +108,7 @@ void expect_lanes_match_scalar(uint32_t seed) {
       case 1: b = a; break;                   // two corners equal
       case 2: b = c = a; break;               // a point
       case 3: c = {b.x, b.y, a.z}; break;     // axis-aligned pieces
+      case 4: c = a + (b - a) * 0.7f + vec3f{1e-3f, -2e-3f, 1e-3f}; break;  // a sliver
       default: break;
     }
     const PreparedTriangle tri = prepare_triangle(a, b, c);
@@ -143,6 +144,44 @@ void expect_lanes_match_scalar(uint32_t seed) {
 TEST(MeasureTriangle, LanesMatchTheScalarFunction) {
   expect_lanes_match_scalar<4>(17);
   expect_lanes_match_scalar<8>(19);
+}
+
+// Slivers (a long triangle with a short side, as simplification leaves on a cylinder) with points of
+// the face next to an edge: the distance stays within float rounding of the double reference's, not
+// just its square within 1e-5. The first case is from a simplified cylinder, where the point lies
+// 6e-8 from the sliver but was reported 3.8e-4 away (in the region of edge bc).
+TEST(MeasureTriangle, SliversKeepTheirDistanceToFloatRounding) {
+  struct Case {
+    vec3f p, a, b, c;
+  };
+  std::vector<Case> cases = {{{1.4910873f, -0.8856195f, 0.4643783f},
+                              {0.0f, -0.919979f, 0.391967f},
+                              {1.55172f, -0.885456f, 0.464723f},
+                              {1.44828f, -0.885456f, 0.464723f}}};
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f), sign(-1.0f, 1.0f);
+  for (int trial = 0; trial < 20000; ++trial) {
+    // Long side 0.5-3 in a random direction, width down to 1e-4 of it, the short side anywhere.
+    const vec3f a{sign(rng), sign(rng), sign(rng)};
+    const vec3f axis = vec3f{sign(rng), sign(rng), sign(rng)} * (0.5f + 2.5f * unit(rng));
+    const vec3f side = vec3f{sign(rng), sign(rng), sign(rng)} * (std::pow(10.0f, -1 - 3 * unit(rng)) * 3);
+    const vec3f b = a + axis, c = a + axis * unit(rng) + side;
+    // In the face at barycentrics near an edge (down to 1e-4 of the way in), lifted by up to 1e-6.
+    float u = std::pow(10.0f, -4 * unit(rng)), v = unit(rng) * (1 - u);
+    const float weights[3] = {u, v, 1 - u - v};
+    const int k = trial % 3;  // which corner is the near one's opposite
+    const float wa = weights[k], wb = weights[(k + 1) % 3], wc = weights[(k + 2) % 3];
+    const vec3f lift = vec3f{sign(rng), sign(rng), sign(rng)} * 1e-6f;
+    cases.push_back({a * wa + b * wb + c * wc + lift, a, b, c});
+  }
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const Case& k = cases[i];
+    const double reference = std::sqrt(reference_distance_squared(k.p, k.a, k.b, k.c));
+    const double size = std::sqrt(std::max({length_squared(k.b - k.a), length_squared(k.c - k.a)}));
+    const TrianglePoint r = closest_on_triangle(k.p, k.a, k.b, k.c);
+    // Coordinates up to ~4: a few float ulps of 4 (the reference rounds the same float inputs).
+    ASSERT_NEAR(std::sqrt(double(r.distance_squared)), reference, 2e-6 * (1 + size)) << "case " << i;
+  }
 }
 
 // The lowest-index triangle among the closest ones, by scanning them all.
