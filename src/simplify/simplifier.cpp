@@ -357,7 +357,11 @@ class Engine {
   double distance_excess(const Decision& d, Scratch& scratch) const {
     // Below this (squared, normalised frame) a distance is float noise: flat collapses pass.
     constexpr double noise = 1e-12;
-    const double bound = std::max(noise, guard_ * std::max(level_, d.placement.cost));
+    // Judged in the level's units, as the excess is returned: once the level has risen to an
+    // excess, that distance passes exactly (guard * (d / guard) can round below d, and a collapse
+    // held back at every level it raised would stall the engine).
+    const double allowed = std::max(level_, d.placement.cost);
+    const auto over = [&](double distance_squared) { return distance_squared > noise && distance_squared / guard_ > allowed; };
     const auto point = [](const vec3d& v) { return measure::vec3f(float(v.x), float(v.y), float(v.z)); };
     const measure::vec3f to = point(d.placement.position);
     // The fan after the collapse, as the two far corners of each face (the kept position is `to`):
@@ -378,12 +382,12 @@ class Engine {
       // Only whether some face is within the bound matters; the point's own star is likelier to be.
       const size_t start = x == d.kept ? 0 : split;
       double nearest = std::numeric_limits<double>::infinity();
-      for (size_t k = 0; k < fan.size() && nearest > bound; k += 2) {
+      for (size_t k = 0; k < fan.size() && over(nearest); k += 2) {
         const size_t i = (start + k) % fan.size();
         const measure::TrianglePoint hit = measure::closest_on_triangle(q, to, fan[i], fan[i + 1]);
         nearest = std::min(nearest, double(measure::length_squared(q - hit.point)));
       }
-      if (nearest > bound && nearest < std::numeric_limits<double>::infinity()) excess = std::max(excess, nearest / guard_);
+      if (over(nearest) && nearest < std::numeric_limits<double>::infinity()) excess = std::max(excess, nearest / guard_);
     }
     return excess;
   }
