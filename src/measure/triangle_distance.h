@@ -41,19 +41,19 @@ struct TrianglePoint {
 };
 
 // A triangle made ready for closest-point queries: its first corner, its two edges from there, their
-// dot products and its unit normal. One cache line; the BVH keeps one per triangle, so a query's work
+// squared lengths and its unit normal. One cache line; the BVH keeps one per triangle, so a query's work
 // per triangle is two dot products for the region and one for the distance to the plane.
 struct alignas(64) PreparedTriangle {
   vec3f a, ab, ac;
   vec3f normal;  // unit, from doubles; zero for a degenerate triangle
-  float ab2 = 0, ac2 = 0, abac = 0;  // |ab|^2, |ac|^2, ab . ac
+  float ab2 = 0, ac2 = 0;  // |ab|^2, |ac|^2
   float det = 0;  // |ab|^2 |ac|^2 - (ab . ac)^2 (from doubles); 0 for a degenerate triangle: no face region
 };
 
 inline PreparedTriangle prepare_triangle(const vec3f& a, const vec3f& b, const vec3f& c) {
   PreparedTriangle t;
   t.a = a, t.ab = b - a, t.ac = c - a;
-  t.ab2 = dot(t.ab, t.ab), t.ac2 = dot(t.ac, t.ac), t.abac = dot(t.ab, t.ac);
+  t.ab2 = dot(t.ab, t.ab), t.ac2 = dot(t.ac, t.ac);
   const double ux = t.ab.x, uy = t.ab.y, uz = t.ab.z, vx = t.ac.x, vy = t.ac.y, vz = t.ac.z;
   const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
   const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
@@ -93,7 +93,7 @@ inline float on_segment(const vec3f& q, const vec3f& e, float& s) {
 
 namespace detail {
 // The triangle's edges turned a quarter in its plane, pointing inwards (unit normal x edge). The
-// point's side of edge ab is m.ab . (p - a): Ericson's vc = (ab2 ac.ap - abac ab.ap), divided by the
+// point's side of edge ab is m.ab . (p - a): Ericson's vc = |ab|^2 ac.ap - (ab.ac)(ab.ap), divided by the
 // normal's length, but from one dot product. His form cancels two products of size |ab|^2 |ac| |ap|
 // to leave one of size |ab| |ac| sin(angle) |ap|: on a sliver that loses every digit, and a point of
 // the face next to a long edge fell into an edge region (3.8e-4 too far on a 1.5-long sliver).
@@ -124,7 +124,10 @@ template <bool want_point>
   if (!(t.det > 0)) [[unlikely]] return detail::closest_on_edges(ap, t);
   const float d1 = dot(t.ab, ap), d2 = dot(t.ac, ap);
   if (d1 <= 0 && d2 <= 0) return done({0, 0, 0}, 0, 0);
-  const float d3 = d1 - t.ab2, d4 = d2 - t.abac;  // ab . (p - b), ac . (p - b)
+  // Dot products with p - b and p - c rather than d1 - |ab|^2 and the like: those cancel on a long
+  // sliver and moved the foot on its short edge bc (5e-6 on a 2.9-long sliver).
+  const vec3f bp = ap - t.ab, cp = ap - t.ac;
+  const float d3 = dot(t.ab, bp), d4 = dot(t.ac, bp);  // ab . (p - b), ac . (p - b)
   if (d3 >= 0 && d4 <= d3) return done(t.ab, 1, 0);
   const EdgeNormals m = edge_normals(t);
   const float vc = dot(m.ab, ap);
@@ -132,21 +135,21 @@ template <bool want_point>
     const float v = d1 / t.ab2;  // det > 0: no edge has length 0
     return done(t.ab * v, v, 0);
   }
-  const float d5 = d1 - t.abac, d6 = d2 - t.ac2;  // ab . (p - c), ac . (p - c)
+  const float d5 = dot(t.ab, cp), d6 = dot(t.ac, cp);  // ab . (p - c), ac . (p - c)
   if (d6 >= 0 && d5 <= d6) return done(t.ac, 0, 1);
   const float vb = dot(m.ac, ap);
   if (vb <= 0 && d2 >= 0 && d6 <= 0) {
     const float w = d2 / t.ac2;
     return done(t.ac * w, 0, w);
   }
-  const float va = dot(m.bc, ap - t.ab);
+  const float va = dot(m.bc, bp);
   const float e43 = d4 - d3, e56 = d5 - d6;
   if (va <= 0 && e43 >= 0 && e56 >= 0) {
     const float len = e43 + e56;  // |bc|^2
     const float w = len > 0 ? e43 / len : 0;
     const vec3f bc = t.ac - t.ab;
     r.point = t.a + t.ab + bc * w, r.v = 1 - w, r.w = w;
-    r.distance_squared = length_squared(ap - t.ab - bc * w);
+    r.distance_squared = length_squared(bp - bc * w);
     return r;
   }
   if (va >= 0 && vb >= 0 && vc >= 0) {
@@ -272,10 +275,12 @@ template <int W>
   const F zero{};
   if (!(t.det > 0)) [[unlikely]] return detail::closest_on_edges_lanes<W>(apx, apy, apz, t);
   const F d1 = ab.x * apx + ab.y * apy + ab.z * apz, d2 = ac.x * apx + ac.y * apy + ac.z * apz;
-  const F d3 = d1 - t.ab2, d4 = d2 - t.abac, d5 = d1 - t.abac, d6 = d2 - t.ac2;
+  const F bpx = apx - ab.x, bpy = apy - ab.y, bpz = apz - ab.z, cpx = apx - ac.x, cpy = apy - ac.y, cpz = apz - ac.z;
+  const F d3 = ab.x * bpx + ab.y * bpy + ab.z * bpz, d4 = ac.x * bpx + ac.y * bpy + ac.z * bpz;
+  const F d5 = ab.x * cpx + ab.y * cpy + ab.z * cpz, d6 = ac.x * cpx + ac.y * cpy + ac.z * cpz;
   const detail::EdgeNormals en = detail::edge_normals(t);
   const F vc = en.ab.x * apx + en.ab.y * apy + en.ab.z * apz, vb = en.ac.x * apx + en.ac.y * apy + en.ac.z * apz;
-  const F va = en.bc.x * (apx - ab.x) + en.bc.y * (apy - ab.y) + en.bc.z * (apz - ab.z);
+  const F va = en.bc.x * bpx + en.bc.y * bpy + en.bc.z * bpz;
   const F e43 = d4 - d3, e56 = d5 - d6;
 
   // The regions from the last tested to the first, each overriding the ones after it; a region no
@@ -289,18 +294,18 @@ template <int W>
   };
   if (const I m = (va <= 0) & (e43 >= 0) & (e56 >= 0); any_lane<W>(m)) {
     const F len = e43 + e56, w = len > 0 ? e43 / len : zero;
-    take(m, detail::norm_lanes<W>(apx - ab.x - bc.x * w, apy - ab.y - bc.y * w, apz - ab.z - bc.z * w));
+    take(m, detail::norm_lanes<W>(bpx - bc.x * w, bpy - bc.y * w, bpz - bc.z * w));
   }
   if (const I m = (vb <= 0) & (d2 >= 0) & (d6 <= 0); any_lane<W>(m)) {
     const F w = d2 / t.ac2;
     take(m, detail::norm_lanes<W>(apx - ac.x * w, apy - ac.y * w, apz - ac.z * w));
   }
-  if (const I m = (d6 >= 0) & (d5 <= d6); any_lane<W>(m)) take(m, detail::norm_lanes<W>(apx - ac.x, apy - ac.y, apz - ac.z));
+  if (const I m = (d6 >= 0) & (d5 <= d6); any_lane<W>(m)) take(m, detail::norm_lanes<W>(cpx, cpy, cpz));
   if (const I m = (vc <= 0) & (d1 >= 0) & (d3 <= 0); any_lane<W>(m)) {
     const F v = d1 / t.ab2;
     take(m, detail::norm_lanes<W>(apx - ab.x * v, apy - ab.y * v, apz - ab.z * v));
   }
-  if (const I m = (d3 >= 0) & (d4 <= d3); any_lane<W>(m)) take(m, detail::norm_lanes<W>(apx - ab.x, apy - ab.y, apz - ab.z));
+  if (const I m = (d3 >= 0) & (d4 <= d3); any_lane<W>(m)) take(m, detail::norm_lanes<W>(bpx, bpy, bpz));
   if (const I m = (d1 <= 0) & (d2 <= 0); any_lane<W>(m)) take(m, detail::norm_lanes<W>(apx, apy, apz));
   if (const I none = ~found; any_lane<W>(none)) [[unlikely]] {
     const F e = detail::closest_on_edges_lanes<W>(apx, apy, apz, t);
