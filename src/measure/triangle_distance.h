@@ -42,7 +42,7 @@ struct TrianglePoint {
 
 // A triangle made ready for closest-point queries: its first corner, its two edges from there, their
 // squared lengths and its unit normal. One cache line; the BVH keeps one per triangle, so a query's work
-// per triangle is two dot products for the region and one for the distance to the plane.
+// per triangle is a few dot products for the region and one for the distance to the plane.
 struct alignas(64) PreparedTriangle {
   vec3f a, ab, ac;
   vec3f normal;  // unit, from doubles; zero for a degenerate triangle
