@@ -63,8 +63,9 @@ struct SimplifyOptions {
   // over their planes, so a thin part (a spike, an antler) can cost almost nothing to remove; the
   // guard holds such collapses back until the rest of the mesh has reached that error. Chosen on the
   // corpus among 2 to 64: lodkit's Hausdorff distance at most the better of CGAL's and
-  // meshoptimizer's on 79% instead of 67% of the cases at 10%, 73% instead of 59% at 1%
-  // (scripts/bench.sh simplify --requality), for about 7% more time. 0 turns it off.
+  // meshoptimizer's on 81% instead of 71% of the cases at 10%, 71% instead of 59% at 1%
+  // (scripts/bench.sh simplify --requality, with the measure's sliver fixes), for about 7% more
+  // time. 0 turns it off.
   float distance_guard = 6.0f;
   bool lock_border = false;                // border positions never move
   std::vector<uint8_t> locked;             // per input vertex: non-zero means its position never moves
