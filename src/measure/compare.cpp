@@ -10,6 +10,8 @@
 #include <numbers>
 #include <optional>
 
+#include <tbb/enumerable_thread_specific.h>
+
 #include "core/parallel.h"
 #include "lodkit/error.h"
 #include "lodkit/measure.h"
@@ -241,8 +243,13 @@ struct AreaSample {
 };
 
 // Samples of one block, queried in groups of nearby points (TriangleBvh::closest_group); hit(o) is
-// the answer for offset o in the block, so the caller reduces them in sample order. One per thread,
-// reused block after block (cleared, its memory kept).
+// the answer for offset o in the block, so the caller reduces them in sample order. One per thread
+// and direction, reused block after block (cleared, its memory kept).
+struct BlockQueries;
+// Owned by the measuring call, not thread_local: oneTBB's workers outlive the call and main(), and
+// thread_local scratch would stay allocated with them (and, with LeakSanitizer's TLS scan off, as in
+// the render tests, look leaked at exit).
+using BlockScratch = tbb::enumerable_thread_specific<BlockQueries>;
 struct BlockQueries {
   std::vector<vec3f> points;         // in query order
   std::vector<uint32_t> offset;      // query order -> offset in the block
@@ -255,8 +262,8 @@ struct BlockQueries {
   std::vector<vec3f> at;
   std::vector<uint32_t> cell, cell_start, sorted;
 
-  static BlockQueries& local() {
-    thread_local BlockQueries block;
+  static BlockQueries& local(BlockScratch& per_thread) {
+    BlockQueries& block = per_thread.local();
     block.points.clear(), block.offset.clear(), block.group_end.clear();
     return block;
   }
@@ -346,10 +353,11 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
   if (want_field) out.field.assign(positions, 0);
   if (options.refine) out.triangle_closest.assign(fm.triangle_count(), UINT32_MAX);
   Accumulator total;
+  BlockScratch per_thread;
 
   // Vertices: every position (a vertex used by no triangle is measured for the field but is not a sample).
   run_stream(positions, options.threads, progress, total, [&](uint64_t begin, uint64_t end, Accumulator& acc, uint32_t& hint) {
-    BlockQueries& block = BlockQueries::local();
+    BlockQueries& block = BlockQueries::local(per_thread);
     for (uint64_t k = begin; k < end; ++k) block.add(from.position(from.position_order[k]), uint32_t(k - begin));
     block.run(bvh, group_size, hint);
     for (uint64_t k = begin; k < end; ++k) {
@@ -382,7 +390,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       return a + (b - a) * t;
     };
     // A group never spans two edges (they part at their shared end): runs along one edge, 8 at most.
-    BlockQueries& block = BlockQueries::local();
+    BlockQueries& block = BlockQueries::local(per_thread);
     size_t e = first_edge;
     for (uint64_t j = begin; j < end; ++j) {
       const size_t before = e;
@@ -427,7 +435,7 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       return AreaSample{std::sqrt(r1), r2};
     };
     // Each sample drawn once per block, a triangle at a time.
-    BlockQueries& block = BlockQueries::local();
+    BlockQueries& block = BlockQueries::local(per_thread);
     const size_t n = size_t(end - begin);
     std::vector<AreaSample>& drawn = block.drawn;
     std::vector<vec3f>& at = block.at;
