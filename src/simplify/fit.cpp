@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 #include "core/parallel.h"
 #include "core/union_find.h"
@@ -11,6 +12,7 @@ namespace lod::collapse {
 namespace {
 
 constexpr uint32_t none = ~0u;
+constexpr uint32_t max_group = 32;  // samples per closest_group query
 
 // An input vertex's closest point on the current result: the result's triangle, the barycentric
 // weights of its corners 1 and 2, and the residual input - surface point (normalised frame).
@@ -97,6 +99,19 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
     const uint32_t j = vertex_slot[samples[i]];
     foot[i].triangle = j == none ? 0 : first_use[j];
   }
+  // The searches run in groups of samples that ended in the same position (close together), so one
+  // traversal serves a group (TriangleBvh::closest_group, same answers as closest()); the sums below
+  // stay in sample order.
+  // (A counting sort by slot; a sample at no slot goes last.)
+  const auto sample_slot = [&](size_t i) { return std::min<size_t>(vertex_slot[samples[i]], m); };
+  std::vector<uint32_t> slot_start(m + 2, 0), by_slot(samples.size()), group_first;
+  for (size_t i = 0; i < samples.size(); ++i) ++slot_start[sample_slot(i) + 1];
+  std::partial_sum(slot_start.begin(), slot_start.end(), slot_start.begin());
+  for (size_t i = 0; i < samples.size(); ++i) by_slot[slot_start[sample_slot(i)]++] = uint32_t(i);
+  for (size_t k = 0; k < by_slot.size(); ++k)
+    if (k == 0 || sample_slot(by_slot[k]) != sample_slot(by_slot[k - 1]) || k - group_first.back() == max_group)
+      group_first.push_back(uint32_t(k));
+  group_first.push_back(uint32_t(by_slot.size()));
   std::vector<vec3d> num(m);
   std::vector<double> den(m);
   std::vector<uint8_t> moved(m), revert(m);
@@ -105,16 +120,26 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
   const auto normalized = [&](size_t j) { return s.normalized_input(result.positions[j]); };
   for (uint32_t iteration = 0; iteration < iterations; ++iteration) {
     const measure::TriangleBvh bvh(result, s.threads);
-    core::parallel_for(samples.size(), s.threads, [&](size_t i) {
-      Foot& f = foot[i];
-      const uint32_t v = samples[i];
-      const measure::ClosestHit hit = bvh.closest(input.positions[v], f.triangle);
-      f.triangle = hit.triangle, f.v = hit.v, f.w = hit.w;
-      const uint32_t* c = &result.indices[3 * size_t(hit.triangle)];
-      const vec3d q = normalized(c[0]) * (1.0 - double(hit.v) - double(hit.w)) + normalized(c[1]) * double(hit.v) +
-                      normalized(c[2]) * double(hit.w);
-      const vec3d r = s.normalized_input(input.positions[v]) - q;
-      f.residual[0] = float(r.x), f.residual[1] = float(r.y), f.residual[2] = float(r.z);
+    core::parallel_blocks(group_first.size() - 1, 256, s.threads, [&](size_t, size_t group_begin, size_t group_end) {
+      measure::TriangleBvh::GroupScratch scratch;
+      measure::vec3f points[max_group];
+      measure::ClosestHit hits[max_group];
+      for (size_t g = group_begin; g < group_end; ++g) {
+        const uint32_t first = group_first[g], count = group_first[g + 1] - first;
+        for (uint32_t k = 0; k < count; ++k) points[k] = measure::vec3f(input.positions[samples[by_slot[first + k]]]);
+        bvh.closest_group(points, count, foot[by_slot[first]].triangle, hits, scratch);
+        for (uint32_t k = 0; k < count; ++k) {
+          measure::ClosestHit& hit = hits[k];
+          bvh.resolve(hit, points[k]);
+          Foot& f = foot[by_slot[first + k]];
+          f.triangle = hit.triangle, f.v = hit.v, f.w = hit.w;
+          const uint32_t* c = &result.indices[3 * size_t(hit.triangle)];
+          const vec3d q = normalized(c[0]) * (1.0 - double(hit.v) - double(hit.w)) +
+                          normalized(c[1]) * double(hit.v) + normalized(c[2]) * double(hit.w);
+          const vec3d r = s.normalized_input(input.positions[samples[by_slot[first + k]]]) - q;
+          f.residual[0] = float(r.x), f.residual[1] = float(r.y), f.residual[2] = float(r.z);
+        }
+      }
     });
     // Each position's normal equation with its neighbours held still, summed in sample order (so
     // the sums do not depend on the thread count).
