@@ -113,7 +113,9 @@ TEST(SimplifyCore, ReplayAndUndoAreExact) {
             simplify(mesh, {.target_ratio = 0.2f, .metric = metric, .keep_vertices = keep, .normal_weight = 0.5f,
                             .uv_weight = 0.5f});
         ASSERT_GT(r.collapses, 0u);
-        if (keep) EXPECT_TRUE(r.record.fitted.empty());
+        if (keep) {
+          EXPECT_TRUE(r.record.fitted.empty());
+        }
         fitted += r.record.fitted.size();
         EXPECT_EQ(replay(mesh, r.record, r.record.collapses.size()), r.mesh);
         EXPECT_EQ(replay_and_undo(mesh, r.record), mesh);
