@@ -46,7 +46,7 @@ void parallel_blocks(size_t count, size_t block_size, unsigned threads, Fn&& fn)
   // oneTBB's persistent workers: callers run many short parallel steps (the simplifier several per
   // pass), where starting threads each time would cost more than the work. (A single arena kept for
   // the process was 1 us per call faster, but its workers outlive main(), and with them the
-  // thread-local scratch of compare, which LeakSanitizer reports.)
+  // thread-local scratch of the simplifier, which LeakSanitizer reports where its TLS scan is off.)
   tbb::task_arena arena{static_cast<int>(workers)};
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const tbb::blocked_range<size_t>& range) {
