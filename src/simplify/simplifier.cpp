@@ -477,9 +477,12 @@ class Engine {
      Scratch& scratch = block_scratch();
      for (size_t i = begin; i < end; ++i) {
       const uint32_t u = uint32_t(i);
-      bool full = aggregate_, partial = false;
+      // Virtual pairs follow merged positions around: rank everything again (an opt-in mode), unless
+      // the last pass applied nothing. The state is then unchanged, and ranking again would bring
+      // back the very candidates the checks just rejected, pass after pass (an endless loop on a
+      // pinched soup, found by SimplifyRobustness); their fallbacks, the cheapest allowed edges, go.
+      bool full = aggregate_ && !stalled_, partial = false;
       if (aggregate_) {
-        // Virtual pairs follow merged positions around: rank everything again (an opt-in mode).
       } else if (wide) {
         // Memoryless costs read the faces around both ends: a collapse changes the costs of every
         // edge with an end in its locked ring.
