@@ -3,7 +3,8 @@
 #
 #   scripts/fuzz.sh FORMAT|all [SECONDS=600] [JOBS=nproc]
 #
-# FORMAT is obj, ply, off, stl, gltf or lpm (progressive meshes). JOBS is how many fuzzer processes run at once: with `all`,
+# FORMAT is obj, ply, off, stl, gltf, lpm (progressive meshes) or simplify (the simplifier, on
+# 16 option bytes followed by an OFF file). JOBS is how many fuzzer processes run at once: with `all`,
 # that many formats at a time; with one format and JOBS > 1, libFuzzer's -fork=JOBS.
 #
 # Builds the fuzz preset when needed. Seeds (fuzz/seeds/<format>/) are copied into the working corpus
@@ -20,7 +21,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
-all_formats=(obj ply off stl gltf lpm)
+all_formats=(obj ply off stl gltf lpm simplify)
 usage() {
   echo "usage: scripts/fuzz.sh FORMAT|all [SECONDS=600] [JOBS=$(nproc)]   (FORMAT: ${all_formats[*]})" >&2
   exit 2
