@@ -51,6 +51,7 @@ double seconds(clock::time_point a, clock::time_point b) { return std::chrono::d
 // Per-thread scratch for evaluating one edge; reused so evaluation allocates nothing in steady state.
 struct Scratch {
   std::vector<uint32_t> removed_faces, neighbours_u, neighbours_v, kept_wedges, candidates, extra;
+  std::vector<uint64_t> keys;  // best_checked: edges by cost
   std::vector<WedgePair> pairs[2];
   std::vector<measure::vec3f> fan;  // distance_excess: the fan's far corners
   // The removed faces of the edge being evaluated (at most two get that far) and per face its
@@ -406,6 +407,22 @@ class Engine {
   void classify() {
     core::parallel_blocks(s_.position_count, 4096, s_.threads, [&](size_t, size_t begin, size_t end) {
      std::vector<uint32_t> next, prev;  // per block: thread_local costs a TLS lookup per use here
+     // next and prev as (value, index), sorted: counts and first occurrences by binary search, so a
+     // star of thousands of triangles (a fan's centre) costs n log n, not n^2.
+     std::vector<uint64_t> next_sorted, prev_sorted;
+     const auto sorted = [](const std::vector<uint32_t>& values, std::vector<uint64_t>& out) {
+       out.resize(values.size());
+       for (size_t i = 0; i < values.size(); ++i) out[i] = uint64_t(values[i]) << 32 | i;
+       std::sort(out.begin(), out.end());
+     };
+     const auto range = [](const std::vector<uint64_t>& in, uint32_t value) {
+       const auto lo = std::lower_bound(in.begin(), in.end(), uint64_t(value) << 32);
+       return std::pair{lo, std::lower_bound(lo, in.end(), (uint64_t(value) + 1) << 32)};
+     };
+     const auto count = [&](const std::vector<uint64_t>& in, uint32_t value) {
+       const auto [lo, hi] = range(in, value);
+       return uint32_t(hi - lo);
+     };
      for (size_t u = begin; u < end; ++u) {
       uint8_t& f = s_.flags[u];
       f &= uint8_t(~(flag_border | flag_complex | flag_seam));
@@ -424,22 +441,16 @@ class Engine {
         complex |= w.next == u || w.prev == u || w.next == w.prev;  // degenerate triangle
         next.push_back(w.next), prev.push_back(w.prev);
       }
+      sorted(next, next_sorted), sorted(prev, prev_sorted);
       // A manifold star: each neighbour is `next` at most once and `prev` at most once, and the
       // triangles form one fan, open (border) or closed.
       uint32_t starts = 0, start = 0;
       bool border = false;
       for (size_t i = 0; i < star.size() && !complex; ++i) {
-        uint32_t as_next = 0, as_prev = 0, n_as_prev = 0, p_as_next = 0;
-        for (size_t j = 0; j < star.size(); ++j) {
-          as_next += next[j] == next[i];
-          as_prev += prev[j] == prev[i];
-          n_as_prev += prev[j] == next[i];
-          p_as_next += next[j] == prev[i];
-        }
-        complex |= as_next > 1 || as_prev > 1;
-        if (n_as_prev == 0) border = true;  // edge u-next[i] has one triangle
+        complex |= count(next_sorted, next[i]) > 1 || count(prev_sorted, prev[i]) > 1;
+        if (count(prev_sorted, next[i]) == 0) border = true;  // edge u-next[i] has one triangle
         // Triangle i starts a fan if no triangle continues into it (its prev is nobody's next).
-        if (p_as_next == 0) ++starts, start = uint32_t(i);
+        if (count(next_sorted, prev[i]) == 0) ++starts, start = uint32_t(i);
       }
       if (!complex) {
         if (starts > 1) complex = true;
@@ -447,8 +458,8 @@ class Engine {
           // Walk the fan from its start (or anywhere if closed); it must visit every triangle.
           size_t visited = 1, i = start;
           for (; visited <= star.size(); ++visited) {
-            size_t j = 0;
-            while (j < star.size() && prev[j] != next[i]) ++j;
+            const auto [lo, hi] = range(prev_sorted, next[i]);  // the first j with prev[j] == next[i]
+            const size_t j = lo == hi ? star.size() : size_t(uint32_t(*lo));
             if (j == star.size() || j == start) break;
             i = j;
           }
@@ -677,6 +688,16 @@ class Engine {
     // In a manifold fan every neighbour follows the centre in exactly one triangle, and only a
     // border fan's last neighbour does not: `next` needs no de-duplication there.
     const bool simple = !(s_.flags[x] & (flag_complex | flag_border));
+    if (!simple && wings.size() > 64) {
+      // A large border or non-manifold star: de-duplicating by search would take the square of its
+      // size. Sorted instead (callers treat the list as a set).
+      for (const Wing& w : wings) {
+        if (w.next != skip) *end++ = w.next;
+        if (w.prev != skip) *end++ = w.prev;
+      }
+      std::sort(begin, end);
+      return {begin, std::unique(begin, end)};
+    }
     for (const Wing& w : wings)
       if (w.next != skip && (simple || std::find(begin, end, w.next) == end)) *end++ = w.next;
     if (!simple)
@@ -772,11 +793,13 @@ class Engine {
       // two, v following u in one triangle of the closed fan and preceding it in another.
       shared = 2;
     } else {
-      const auto wings = s_.wings_of(u);
-      const auto star = s_.triangles_of(u);
-      for (uint32_t i = 0; i < wings.size(); ++i)
-        if (wings[i].next == v || wings[i].prev == v) {
-          if (shared < 2) scratch.face[shared] = star[i], scratch.opposite[shared] = wings[i].next == v ? wings[i].prev : wings[i].next;
+      // The faces on edge (u, v) are in both stars, in the same (triangle id) order: scan the smaller,
+      // so that a position with thousands of faces (a fan's centre) costs its neighbours nothing.
+      const bool from_u = s_.first[u + 1] - s_.first[u] <= s_.first[v + 1] - s_.first[v];
+      const uint32_t other = from_u ? v : u;
+      for (const Wing& w : s_.wings_of(from_u ? u : v))
+        if (w.next == other || w.prev == other) {
+          if (shared < 2) scratch.face[shared] = w.triangle, scratch.opposite[shared] = w.next == other ? w.prev : w.next;
           ++shared;
         }
     }
@@ -933,12 +956,22 @@ class Engine {
       }
       if (list.complete) return best;
     }
+    // Every edge ranked by cost alone, then checked cheapest first (by cost, then position, as
+    // above): the first that passes is the answer. Checking all of them would cost a position with
+    // thousands of edges (a fan's centre) the square of that, since each check walks its star.
+    std::vector<uint64_t>& keys = scratch.keys;
+    keys.clear();
     for (const uint32_t v : neighbours(u, none, scratch.candidates)) {
       // Stars of positions locked in this pass are stale until the next rebuild.
       if (v <= u || (s_.flags[v] & (flag_dead | flag_complex | flag_pass_locked))) continue;
-      if (evaluate(u, v, scratch, decision, true) != Reject::ok) continue;
+      if (evaluate(u, v, scratch, decision, false) != Reject::ok) continue;
       const float cost = float(decision.placement.cost);
-      if (cost < best.cost || (cost == best.cost && v < best.other)) best = {cost, v};
+      if (!std::isnan(cost)) keys.push_back(sort_key(cost, v));
+    }
+    std::sort(keys.begin(), keys.end());
+    for (const uint64_t key : keys) {
+      const uint32_t v = uint32_t(key);
+      if (evaluate(u, v, scratch, decision, true) == Reject::ok) return {float(decision.placement.cost), v};
     }
     return best;
   }

@@ -1,10 +1,11 @@
-// The engine on messy meshes: seeded random corruptions of small shapes (duplicate, reversed,
-// degenerate and fin triangles, pinched positions, seams, stray vertices, extreme scales) under
+// The engine on messy meshes: seeded random corruptions of small shapes and fans (duplicate,
+// reversed, degenerate and fin triangles, pinched positions, seams, stray vertices, extreme scales) under
 // random options. Whatever the input, simplify must not crash or throw, its output must validate,
 // the record must replay to the output and undo to the input, and the thread count must not matter.
 // The ASan/UBSan preset runs this too, which is where a stray read would show.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <random>
 #include <string>
@@ -43,11 +44,22 @@ void add_triangle(Mesh& m, uint32_t a, uint32_t b, uint32_t c) {
 
 Mesh messy_mesh(Draw& d) {
   Mesh m;
-  switch (d.below(5)) {
+  switch (d.below(6)) {
     case 0: m = shapes::icosphere(1 + d.below(2)); break;
     case 1: m = shapes::torus(1.0f, 0.3f, 8 + d.below(12), 6 + d.below(6)); break;
     case 2: m = shapes::grid(2 + d.below(8), 2 + d.below(8)); break;
     case 3: m = shapes::cylinder(6 + d.below(10)); break;
+    case 4: {  // a fan: one position with hundreds of faces, inside a disc or on its border
+      const uint32_t n = 100 + d.below(900);
+      const bool closed = d.chance(50);
+      m.positions.push_back({0, 0, 0});
+      for (uint32_t i = 0; i < n; ++i) {
+        const float a = float(i) * (closed ? 6.2831853f : 3.1415926f) / float(closed ? n : n - 1);
+        m.positions.push_back({std::cos(a), std::sin(a), 0.1f * d.unit()});
+      }
+      for (uint32_t i = 0; i + (closed ? 0 : 1) < n; ++i) m.indices.insert(m.indices.end(), {0, 1 + i, 1 + (i + 1) % n});
+      break;
+    }
     default: {  // a soup: random triangles over random points, any orientation or overlap
       const uint32_t points = 3 + d.below(60), triangles = 1 + d.below(120);
       for (uint32_t i = 0; i < points; ++i) m.positions.push_back({d.unit(), d.unit(), d.unit()});
