@@ -407,9 +407,11 @@ class Engine {
   void classify() {
     core::parallel_blocks(s_.position_count, 4096, s_.threads, [&](size_t, size_t begin, size_t end) {
      std::vector<uint32_t> next, prev;  // per block: thread_local costs a TLS lookup per use here
-     // next and prev as (value, index), sorted: counts and first occurrences by binary search, so a
-     // star of thousands of triangles (a fan's centre) costs n log n, not n^2.
+     // Counts and first occurrences in next and prev: by scanning a small star, and in a large one
+     // (a fan's centre, thousands of triangles) by binary search over (value, index) pairs, sorted,
+     // so that it costs n log n, not n^2.
      std::vector<uint64_t> next_sorted, prev_sorted;
+     bool small = true;
      const auto sorted = [](const std::vector<uint32_t>& values, std::vector<uint64_t>& out) {
        out.resize(values.size());
        for (size_t i = 0; i < values.size(); ++i) out[i] = uint64_t(values[i]) << 32 | i;
@@ -419,9 +421,15 @@ class Engine {
        const auto lo = std::lower_bound(in.begin(), in.end(), uint64_t(value) << 32);
        return std::pair{lo, std::lower_bound(lo, in.end(), (uint64_t(value) + 1) << 32)};
      };
-     const auto count = [&](const std::vector<uint64_t>& in, uint32_t value) {
+     const auto count = [&](const std::vector<uint32_t>& values, const std::vector<uint64_t>& in, uint32_t value) {
+       if (small) return uint32_t(std::count(values.begin(), values.end(), value));
        const auto [lo, hi] = range(in, value);
        return uint32_t(hi - lo);
+     };
+     const auto first_index = [&](const std::vector<uint32_t>& values, const std::vector<uint64_t>& in, uint32_t value) {
+       if (small) return size_t(std::find(values.begin(), values.end(), value) - values.begin());
+       const auto [lo, hi] = range(in, value);
+       return lo == hi ? values.size() : size_t(uint32_t(*lo));
      };
      for (size_t u = begin; u < end; ++u) {
       uint8_t& f = s_.flags[u];
@@ -441,16 +449,17 @@ class Engine {
         complex |= w.next == u || w.prev == u || w.next == w.prev;  // degenerate triangle
         next.push_back(w.next), prev.push_back(w.prev);
       }
-      sorted(next, next_sorted), sorted(prev, prev_sorted);
+      small = star.size() <= 16;
+      if (!small) sorted(next, next_sorted), sorted(prev, prev_sorted);
       // A manifold star: each neighbour is `next` at most once and `prev` at most once, and the
       // triangles form one fan, open (border) or closed.
       uint32_t starts = 0, start = 0;
       bool border = false;
       for (size_t i = 0; i < star.size() && !complex; ++i) {
-        complex |= count(next_sorted, next[i]) > 1 || count(prev_sorted, prev[i]) > 1;
-        if (count(prev_sorted, next[i]) == 0) border = true;  // edge u-next[i] has one triangle
+        complex |= count(next, next_sorted, next[i]) > 1 || count(prev, prev_sorted, prev[i]) > 1;
+        if (count(prev, prev_sorted, next[i]) == 0) border = true;  // edge u-next[i] has one triangle
         // Triangle i starts a fan if no triangle continues into it (its prev is nobody's next).
-        if (count(next_sorted, prev[i]) == 0) ++starts, start = uint32_t(i);
+        if (count(next, next_sorted, prev[i]) == 0) ++starts, start = uint32_t(i);
       }
       if (!complex) {
         if (starts > 1) complex = true;
@@ -458,8 +467,7 @@ class Engine {
           // Walk the fan from its start (or anywhere if closed); it must visit every triangle.
           size_t visited = 1, i = start;
           for (; visited <= star.size(); ++visited) {
-            const auto [lo, hi] = range(prev_sorted, next[i]);  // the first j with prev[j] == next[i]
-            const size_t j = lo == hi ? star.size() : size_t(uint32_t(*lo));
+            const size_t j = first_index(prev, prev_sorted, next[i]);  // the first j with prev[j] == next[i]
             if (j == star.size() || j == start) break;
             i = j;
           }
