@@ -4,6 +4,7 @@
 #   scripts/bench.sh io [RUNS=5]
 #   scripts/bench.sh simplify [--quick] [RUNS=3]
 #   scripts/bench.sh simplify --requality
+#   scripts/bench.sh simplify --pathological [RUNS=3]
 #   scripts/bench.sh measure [PAIRS=20]
 #   scripts/bench.sh lod [RUNS=15]
 #   scripts/bench.sh optimize [--quick] [--no-big] [RUNS=5]
@@ -21,6 +22,9 @@
 # --quick: two small meshes, one run each (a smoke test of the whole chain).
 # --requality: only lodkit's quality again (current build, corpus cases), judged against the peers'
 # outputs the last full run left; seconds instead of minutes (bench/simplify/requality.py).
+# --pathological: `lodkit simplify` to 10% on triangle fans of 2,000 to 100,000 triangles around one
+# position, where per-edge work that walks a whole star is quadratic: median time and peak memory
+# (bench/simplify/pathological.py).
 #
 # measure: `lodkit compare` against CGAL's distance (cgal_distance) on PAIRS (mesh, simplified) pairs:
 # values and time at the same sample count; writes bench/results/measure.json.
@@ -50,7 +54,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 usage() {
-  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5]" >&2
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -142,11 +146,12 @@ area_io() {
 
 # ---- simplify ------------------------------------------------------------------------------------
 area_simplify() {
-  local quick="" runs="" requality=""
+  local quick="" runs="" requality="" pathological=""
   for a in "$@"; do
     case $a in
       --quick) quick=--quick ;;
       --requality) requality=1 ;;
+      --pathological) pathological=1 ;;
       *) [[ $a =~ ^[1-9][0-9]*$ ]] && [ -z "$runs" ] || usage; runs=$a ;;
     esac
   done
@@ -156,6 +161,11 @@ area_simplify() {
   if [ -n "$requality" ]; then
     build_targets lodkit_cli lodkit_bench_simplify
     python3 bench/simplify/requality.py "$build/bench" "$build/lodkit" build/bench-data/simplify
+    return
+  fi
+  if [ -n "$pathological" ]; then
+    build_targets lodkit_cli
+    python3 bench/simplify/pathological.py "$build/lodkit" build/bench-data/pathological "$runs"
     return
   fi
   # CGAL compiles slowly: the peers are built here, by name, never by a plain build.
