@@ -803,7 +803,7 @@ class Engine {
     } else {
       // The faces on edge (u, v) are in both stars, in the same (triangle id) order: scan the smaller,
       // so that a position with thousands of faces (a fan's centre) costs its neighbours nothing.
-      const bool from_u = s_.first[u + 1] - s_.first[u] <= s_.first[v + 1] - s_.first[v];
+      const bool from_u = s_.triangles_of(u).size() <= s_.triangles_of(v).size();
       const uint32_t other = from_u ? v : u;
       for (const Wing& w : s_.wings_of(from_u ? u : v))
         if (w.next == other || w.prev == other) {

@@ -119,7 +119,7 @@ struct State {
 // Number of live triangles around u that also hold position v. Counted in the smaller of the two
 // stars (the same triangles): next to a position with thousands of faces, a border test stays cheap.
 inline uint32_t shared_triangles(const State& state, uint32_t u, uint32_t v) {
-  if (state.first[v + 1] - state.first[v] < state.first[u + 1] - state.first[u]) std::swap(u, v);
+  if (state.triangles_of(v).size() < state.triangles_of(u).size()) std::swap(u, v);
   uint32_t count = 0;
   for (const Wing& w : state.wings_of(u)) count += w.next == v || w.prev == v;
   return count;

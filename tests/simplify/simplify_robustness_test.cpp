@@ -141,10 +141,8 @@ SimplifyOptions random_options(Draw& d, const Mesh& m) {
   o.fit_iterations = d.below(4);
   if (d.chance(20)) o.max_relative_error = d.unit() * 0.05f;
   if (d.chance(20)) {
-    float3 lo = m.positions[0], hi = lo;
-    for (const float3& p : m.positions)
-      lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)},
-      hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    float3 lo, hi;
+    bounding_box(m, lo, hi);
     o.aggregate_distance = (hi.x - lo.x + hi.y - lo.y + hi.z - lo.z) * d.unit() * 0.2f;
   }
   if (d.chance(20)) {
