@@ -115,6 +115,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
   std::vector<vec3d> num(m);
   std::vector<double> den(m);
   std::vector<uint8_t> moved(m), revert(m);
+  std::vector<uint32_t> nearest(m, 0);  // per position: its closest candidate in the last iteration
   std::vector<float3> before;
   const std::vector<float3> start = result.positions;
   const auto normalized = [&](size_t j) { return s.normalized_input(result.positions[j]); };
@@ -163,14 +164,34 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
       // Minimise sum a |r - beta d|^2 + weight mass |x + d - c|^2 over the move d, c being the
       // position's closest point on the input (among the input triangles it stands for).
       const measure::vec3f x(before[j]);
-      measure::vec3f c = x;
-      float best = std::numeric_limits<float>::infinity();
-      for (uint32_t i = candidates_first[j]; i < candidates_first[j + 1]; ++i) {
+      const auto distance = [&](uint32_t i) {
         const uint32_t* corner = &input.indices[3 * size_t(candidates[i])];
         const measure::TrianglePoint hit = measure::closest_on_triangle(
             x, input.positions[corner[0]], input.positions[corner[1]], input.positions[corner[2]]);
-        const float d = measure::length_squared(x - hit.point);
-        if (d < best) best = d, c = hit.point;
+        return std::pair{measure::length_squared(x - hit.point), hit.point};
+      };
+      // The first candidate at the least distance, as a scan of all would find it. The last
+      // iteration's winner (moves are small) bounds that distance; a candidate whose box is
+      // farther cannot win and is skipped. The box is widened by float rounding and the bound
+      // loosened by 0.1%, so a skipped candidate could never have tied with the winner.
+      const uint32_t begin = candidates_first[j], end = candidates_first[j + 1];
+      const float bound = begin < end ? distance(std::clamp(nearest[j], begin, end - 1)).first * 1.001f : 0.0f;
+      measure::vec3f c = x;
+      float best = std::numeric_limits<float>::infinity();
+      for (uint32_t i = begin; i < end; ++i) {
+        const uint32_t* corner = &input.indices[3 * size_t(candidates[i])];
+        const float3& a = input.positions[corner[0]];
+        const float3& b = input.positions[corner[1]];
+        const float3& e = input.positions[corner[2]];
+        const auto gap = [](float p, float u, float v, float w) {
+          const float lo = std::min({u, v, w}), hi = std::max({u, v, w});
+          const float slack = 1e-6f * std::max(std::abs(lo), std::abs(hi)) + 1e-30f;
+          const float g = std::max({lo - slack - p, p - hi - slack, 0.0f});
+          return g * g;
+        };
+        if (gap(x.x, a.x, b.x, e.x) + gap(x.y, a.y, b.y, e.y) + gap(x.z, a.z, b.z, e.z) > bound) continue;
+        const auto [d, point] = distance(i);
+        if (d < best) best = d, c = point, nearest[j] = i;
       }
       const double pull = weight * mass[j];
       const vec3d here = normalized(j);
