@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 #include <numeric>
 
 #include "core/parallel.h"
@@ -113,25 +112,6 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
     if (k == 0 || sample_slot(by_slot[k]) != sample_slot(by_slot[k - 1]) || k - group_first.back() == max_group)
       group_first.push_back(uint32_t(k));
   group_first.push_back(uint32_t(by_slot.size()));
-  // EXPERIMENT: result -> input samples at edge midpoints, against a BVH of the input.
-  const double edge_weight = getenv("LODKIT_FIT_EDGE") ? atof(getenv("LODKIT_FIT_EDGE")) : 0.0;
-  const bool exact_pull = getenv("LODKIT_FIT_EXACT") != nullptr;
-  std::vector<std::pair<uint32_t, uint32_t>> edges;
-  std::vector<double> edge_area;
-  std::unique_ptr<measure::TriangleBvh> input_bvh;
-  std::vector<measure::ClosestHit> edge_hit, vertex_hit;
-  if (edge_weight > 0 || exact_pull) {
-    input_bvh = std::make_unique<measure::TriangleBvh>(input, s.threads);
-    for (size_t t = 0; t < result_triangles; ++t)
-      for (uint32_t k = 0; k < 3; ++k) {
-        const uint32_t a = result.indices[3 * t + k], b = result.indices[3 * t + (k + 1) % 3];
-        edges.push_back({std::min(a, b), std::max(a, b)});
-      }
-    std::sort(edges.begin(), edges.end());
-    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-    edge_hit.resize(edges.size());
-    vertex_hit.resize(m);
-  }
   std::vector<vec3d> num(m);
   std::vector<double> den(m);
   std::vector<uint8_t> moved(m), revert(m);
@@ -177,54 +157,6 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
         den[j] += a * beta[k] * beta[k];
       }
     }
-    if (edge_weight > 0) {
-      // Area around each edge: a third of its faces' (current positions).
-      edge_area.assign(edges.size(), 0.0);
-      std::vector<double> face_third(result_triangles);
-      for (size_t t = 0; t < result_triangles; ++t) {
-        const uint32_t* c = &result.indices[3 * t];
-        face_third[t] = length(cross(normalized(c[1]) - normalized(c[0]), normalized(c[2]) - normalized(c[0]))) / 6;
-      }
-      for (size_t t = 0; t < result_triangles; ++t)
-        for (uint32_t k = 0; k < 3; ++k) {
-          const uint32_t a = result.indices[3 * t + k], b = result.indices[3 * t + (k + 1) % 3];
-          const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair{std::min(a, b), std::max(a, b)});
-          edge_area[size_t(it - edges.begin())] += face_third[t];
-        }
-      core::parallel_blocks(edges.size(), 1024, s.threads, [&](size_t, size_t begin, size_t end) {
-        uint32_t hint = 0;
-        for (size_t e = begin; e < end; ++e) {
-          const float3& a = result.positions[edges[e].first];
-          const float3& b = result.positions[edges[e].second];
-          const measure::vec3f mid((a.x + b.x) * 0.5f, (a.y + b.y) * 0.5f, (a.z + b.z) * 0.5f);
-          edge_hit[e] = input_bvh->closest(mid, hint);
-          hint = edge_hit[e].triangle;
-        }
-      });
-      static const double power = getenv("LODKIT_FIT_EDGE_P") ? atof(getenv("LODKIT_FIT_EDGE_P")) : 0.0;
-      static const double cap = getenv("LODKIT_FIT_EDGE_CAP") ? atof(getenv("LODKIT_FIT_EDGE_CAP")) : 100.0;
-      double sum_r2 = 0, sum_a = 0;
-      std::vector<vec3d> rr(edges.size());
-      for (size_t e = 0; e < edges.size(); ++e) {
-        const auto [j, k] = edges[e];
-        const vec3d mid = (normalized(j) + normalized(k)) * 0.5;
-        const measure::vec3f& c = edge_hit[e].point;
-        rr[e] = s.normalized_input(float3{c.x, c.y, c.z}) - mid;
-        sum_r2 += edge_area[e] * length_squared(rr[e]), sum_a += edge_area[e];
-      }
-      const double rms = sum_a > 0 ? std::sqrt(sum_r2 / sum_a) : 0;
-      for (size_t e = 0; e < edges.size(); ++e) {
-        const auto [j, k] = edges[e];
-        const vec3d r = rr[e];
-        double a = edge_weight * edge_area[e];
-        if (power > 0 && rms > 0) a *= std::min(cap, std::pow(length(r) / rms, power));
-        for (const uint32_t x : {j, k}) num[x] = num[x] + r * (a * 0.5), den[x] += a * 0.25;
-      }
-    }
-    if (exact_pull)
-      core::parallel_blocks(m, 1024, s.threads, [&](size_t, size_t begin, size_t end) {
-        for (size_t j = begin; j < end; ++j) vertex_hit[j] = input_bvh->closest(measure::vec3f(result.positions[j]), vertex_hit[j].triangle);
-      });
     before = result.positions;
     core::parallel_for(m, s.threads, [&](size_t j) {
       moved[j] = 0;
@@ -261,7 +193,6 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
         const auto [d, point] = distance(i);
         if (d < best) best = d, c = point, nearest[j] = i;
       }
-      if (exact_pull) c = vertex_hit[j].point;
       const double pull = weight * mass[j];
       const vec3d here = normalized(j);
       const vec3d d = (num[j] - (here - s.normalized_input(float3{c.x, c.y, c.z})) * pull) * (1.0 / (den[j] + pull));
