@@ -13,6 +13,10 @@ namespace {
 
 constexpr uint32_t none = ~0u;
 constexpr uint32_t max_group = 32;  // samples per closest_group query
+// The edge term (see fit_positions): its weight against the input samples', and the cap of its
+// emphasis on large residuals.
+constexpr double edge_weight = 0.05, edge_cap = 30;
+constexpr size_t chunk_triangles = size_t(1) << 17;  // closest_on_input: input triangles per BVH
 
 // An input vertex's closest point on the current result: the result's triangle, the barycentric
 // weights of its corners 1 and 2, and the residual input - surface point (normalised frame).
@@ -21,6 +25,78 @@ struct Foot {
   float v = 0, w = 0;
   float residual[3] = {};
 };
+
+// The exact closest input point to each of `points`, ties going to the lowest input triangle (as a
+// scan of all would), through a BVH over one spatial chunk of the input at a time: a BVH of the
+// whole input would add about 90 bytes per input triangle to the peak memory. Chunks are ranges of
+// the internal position ids (Morton order) of the triangles' first corners; a chunk farther from a
+// point than its best so far is skipped. `hits` holds a first answer per point (distance, input
+// triangle and point, or an infinite distance) and is improved in place.
+void closest_on_input(const State& s, const std::vector<measure::vec3f>& points, std::vector<measure::ClosestHit>& hits) {
+  const Mesh& input = s.mesh;
+  const size_t triangles = input.triangle_count(), n = points.size();
+  if (triangles == 0 || n == 0) return;
+  const size_t chunks = (triangles + chunk_triangles - 1) / chunk_triangles;
+  const auto chunk_of = [&](size_t t) { return size_t(s.position_of[input.indices[3 * t]]) * chunks / s.position_count; };
+  std::vector<uint32_t> first(chunks + 1, 0), order(triangles);
+  for (size_t t = 0; t < triangles; ++t) ++first[chunk_of(t) + 1];
+  std::partial_sum(first.begin(), first.end(), first.begin());
+  {
+    std::vector<uint32_t> fill(first.begin(), first.end() - 1);
+    for (size_t t = 0; t < triangles; ++t) order[fill[chunk_of(t)]++] = uint32_t(t);  // increasing within a chunk
+  }
+  Mesh part;
+  part.positions = input.positions;
+  for (size_t c = 0; c < chunks; ++c) {
+    if (first[c] == first[c + 1]) continue;
+    part.indices.clear();
+    measure::vec3f lo(std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+                      std::numeric_limits<float>::infinity());
+    measure::vec3f hi(-lo.x, -lo.y, -lo.z);
+    for (uint32_t i = first[c]; i < first[c + 1]; ++i)
+      for (uint32_t k = 0; k < 3; ++k) {
+        const uint32_t v = input.indices[3 * size_t(order[i]) + k];
+        part.indices.push_back(v);
+        const float3& q = input.positions[v];
+        lo = {std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z)};
+        hi = {std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z)};
+      }
+    const measure::TriangleBvh bvh(part, s.threads);
+    // Groups of consecutive points (neighbours on the result) share one traversal (closest_group,
+    // same answers as closest()).
+    const auto local = [&](uint32_t triangle) {  // its index in this chunk, or 0 (any start)
+      const auto at = std::lower_bound(order.begin() + first[c], order.begin() + first[c + 1], triangle);
+      return at != order.begin() + first[c + 1] && *at == triangle ? uint32_t(at - order.begin() - first[c]) : 0u;
+    };
+    core::parallel_blocks(n, 8 * max_group, s.threads, [&](size_t, size_t begin, size_t end) {
+      measure::TriangleBvh::GroupScratch scratch;
+      measure::vec3f group[max_group];
+      measure::ClosestHit found[max_group];
+      uint32_t which[max_group];
+      for (size_t g = begin; g < end; g += max_group) {
+        uint32_t count = 0;
+        for (size_t i = g; i < std::min(end, g + max_group); ++i) {
+          const measure::vec3f& p = points[i];
+          const auto gap = [](float x, float l, float h) { return std::max({l - x, x - h, 0.0f}); };
+          const float gx = gap(p.x, lo.x, hi.x), gy = gap(p.y, lo.y, hi.y), gz = gap(p.z, lo.z, hi.z);
+          // Skipped only when surely farther (the 0.1% covers the rounding of both distances).
+          if ((gx * gx + gy * gy + gz * gz) > hits[i].distance_squared * 1.001f) continue;
+          group[count] = p, which[count++] = uint32_t(i);
+        }
+        if (count == 0) continue;
+        bvh.closest_group(group, count, local(hits[which[0]].triangle), found, scratch);
+        for (uint32_t k = 0; k < count; ++k) {
+          measure::ClosestHit& hit = found[k];
+          measure::ClosestHit& best = hits[which[k]];
+          bvh.resolve(hit, group[k]);
+          hit.triangle = order[first[c] + hit.triangle];
+          if (hit.distance_squared < best.distance_squared || (hit.distance_squared == best.distance_squared && hit.triangle < best.triangle))
+            best = hit;
+        }
+      }
+    });
+  }
+}
 
 }  // namespace
 
@@ -112,6 +188,49 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
     if (k == 0 || sample_slot(by_slot[k]) != sample_slot(by_slot[k - 1]) || k - group_first.back() == max_group)
       group_first.push_back(uint32_t(k));
   group_first.push_back(uint32_t(by_slot.size()));
+  // Result -> input at the edges: the maximum distance of a result from its input is mostly at the
+  // midpoint of a long edge whose ends both lie on the input (the surface bends away between them).
+  // Each result edge's midpoint is pulled towards its closest input point, found once, before the
+  // iterations (the moves are small next to the edges).
+  std::vector<std::pair<uint32_t, uint32_t>> edges;
+  std::vector<uint32_t> edge_of_side(3 * result_triangles);  // per triangle side: its edge
+  for (size_t t = 0; t < result_triangles; ++t)
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t a = result.indices[3 * t + k], b = result.indices[3 * t + (k + 1) % 3];
+      edges.push_back({std::min(a, b), std::max(a, b)});
+    }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  for (size_t t = 0; t < result_triangles; ++t)
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t a = result.indices[3 * t + k], b = result.indices[3 * t + (k + 1) % 3];
+      edge_of_side[3 * t + k] = uint32_t(std::lower_bound(edges.begin(), edges.end(), std::pair{std::min(a, b), std::max(a, b)}) - edges.begin());
+    }
+  std::vector<measure::vec3f> edge_target(edges.size());
+  for (size_t e = 0; e < edges.size(); ++e) {
+    const float3 &a = result.positions[edges[e].first], &b = result.positions[edges[e].second];
+    edge_target[e] = measure::vec3f((a.x + b.x) * 0.5f, (a.y + b.y) * 0.5f, (a.z + b.z) * 0.5f);
+  }
+  {
+    // A first answer from an input triangle at each end (the first of the pull's candidates): a
+    // bound that lets the exact search skip the input's far chunks, and its starting triangle.
+    std::vector<measure::ClosestHit> hits(edges.size());
+    core::parallel_for(edges.size(), s.threads, [&](size_t e) {
+      measure::ClosestHit& best = hits[e];
+      for (const uint32_t j : {edges[e].first, edges[e].second}) {
+        if (candidates_first[j] == candidates_first[j + 1]) continue;
+        const uint32_t t = candidates[candidates_first[j]], *corner = &input.indices[3 * size_t(t)];
+        const measure::TrianglePoint hit = measure::closest_on_triangle(
+            edge_target[e], input.positions[corner[0]], input.positions[corner[1]], input.positions[corner[2]]);
+        if (hit.distance_squared < best.distance_squared || (hit.distance_squared == best.distance_squared && t < best.triangle))
+          best.distance_squared = hit.distance_squared, best.triangle = t, best.point = hit.point;
+      }
+    });
+    closest_on_input(s, edge_target, hits);
+    for (size_t e = 0; e < edges.size(); ++e) edge_target[e] = hits[e].point;
+  }
+  std::vector<vec3d> edge_residual(edges.size());
+  std::vector<double> edge_area(edges.size());
   std::vector<vec3d> num(m);
   std::vector<double> den(m);
   std::vector<uint8_t> moved(m), revert(m);
@@ -157,6 +276,29 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
         den[j] += a * beta[k] * beta[k];
       }
     }
+    // Each edge stands for a third of its faces' area, scaled by (residual / rms)^2 up to a cap:
+    // reweighted towards the largest residuals, which decide the Hausdorff distance (an
+    // iteratively reweighted least-squares step towards the maximum).
+    std::fill(edge_area.begin(), edge_area.end(), 0.0);
+    for (size_t t = 0; t < result_triangles; ++t) {
+      const uint32_t* c = &result.indices[3 * t];
+      const double third = length(cross(normalized(c[1]) - normalized(c[0]), normalized(c[2]) - normalized(c[0]))) / 6;
+      for (uint32_t k = 0; k < 3; ++k) edge_area[edge_of_side[3 * t + k]] += third;
+    }
+    double squares = 0, area = 0;
+    for (size_t e = 0; e < edges.size(); ++e) {
+      const measure::vec3f& c = edge_target[e];
+      edge_residual[e] = s.normalized_input(float3{c.x, c.y, c.z}) - (normalized(edges[e].first) + normalized(edges[e].second)) * 0.5;
+      squares += edge_area[e] * length_squared(edge_residual[e]), area += edge_area[e];
+    }
+    const double mean_square = area > 0 ? squares / area : 0;
+    for (size_t e = 0; e < edges.size(); ++e) {
+      const double emphasis = mean_square > 0 ? std::min(edge_cap, length_squared(edge_residual[e]) / mean_square) : 0;
+      const double a = edge_weight * edge_area[e] * emphasis;
+      // The midpoint moves by half of each end's move: (d_j + d_k) / 2 against the residual.
+      for (const uint32_t j : {edges[e].first, edges[e].second})
+        num[j] = num[j] + edge_residual[e] * (a * 0.5), den[j] += a * 0.25;
+    }
     before = result.positions;
     core::parallel_for(m, s.threads, [&](size_t j) {
       moved[j] = 0;
@@ -174,11 +316,11 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
       // iteration's winner (moves are small) bounds that distance; a candidate whose box is
       // farther cannot win and is skipped. The box is widened by float rounding and the bound
       // loosened by 0.1%, so a skipped candidate could never have tied with the winner.
-      const uint32_t begin = candidates_first[j], end = candidates_first[j + 1];
-      const float bound = begin < end ? distance(std::clamp(nearest[j], begin, end - 1)).first * 1.001f : 0.0f;
+      const uint32_t begin = candidates_first[j], stop = candidates_first[j + 1];
+      const float bound = begin < stop ? distance(std::clamp(nearest[j], begin, stop - 1)).first * 1.001f : 0.0f;
       measure::vec3f c = x;
       float best = std::numeric_limits<float>::infinity();
-      for (uint32_t i = begin; i < end; ++i) {
+      for (uint32_t i = begin; i < stop; ++i) {
         const uint32_t* corner = &input.indices[3 * size_t(candidates[i])];
         const float3& a = input.positions[corner[0]];
         const float3& b = input.positions[corner[1]];
