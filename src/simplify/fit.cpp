@@ -16,7 +16,6 @@ constexpr uint32_t max_group = 32;  // samples per closest_group query
 // The edge term (see fit_positions): its weight against the input samples', and the cap of its
 // emphasis on large residuals.
 constexpr double edge_weight = 0.05, edge_cap = 30;
-constexpr size_t chunk_triangles = size_t(1) << 17;  // closest_on_input: input triangles per BVH
 
 // An input vertex's closest point on the current result: the result's triangle, the barycentric
 // weights of its corners 1 and 2, and the residual input - surface point (normalised frame).
@@ -26,13 +25,13 @@ struct Foot {
   float residual[3] = {};
 };
 
-// The exact closest input point to each of `points`, ties going to the lowest input triangle (as a
-// scan of all would), through a BVH over one spatial chunk of the input at a time: a BVH of the
-// whole input would add about 90 bytes per input triangle to the peak memory. Chunks are ranges of
-// the internal position ids (Morton order) of the triangles' first corners; a chunk farther from a
-// point than its best so far is skipped. `hits` holds a first answer per point (distance, input
-// triangle and point, or an infinite distance) and is improved in place.
-void closest_on_input(const State& s, const std::vector<measure::vec3f>& points, std::vector<measure::ClosestHit>& hits) {
+}  // namespace
+
+// A BVH of the whole input would add about 90 bytes per input triangle to the peak memory; one chunk
+// at a time adds that for the chunk only. Chunks are ranges of the internal position ids (Morton
+// order) of the triangles' first corners, so each is compact in space.
+void closest_on_input(const State& s, const std::vector<measure::vec3f>& points, std::vector<measure::ClosestHit>& hits,
+                      size_t chunk_triangles) {
   const Mesh& input = s.mesh;
   const size_t triangles = input.triangle_count(), n = points.size();
   if (triangles == 0 || n == 0) return;
@@ -97,8 +96,6 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
     });
   }
 }
-
-}  // namespace
 
 void fit_positions(State& s, uint32_t iterations, double weight, std::vector<FittedPosition>* fitted) {
   const Mesh& input = s.mesh;
@@ -226,7 +223,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
           best.distance_squared = hit.distance_squared, best.triangle = t, best.point = hit.point;
       }
     });
-    closest_on_input(s, edge_target, hits);
+    closest_on_input(s, edge_target, hits, fit_chunk_triangles);
     for (size_t e = 0; e < edges.size(); ++e) edge_target[e] = hits[e].point;
   }
   std::vector<vec3d> edge_residual(edges.size());

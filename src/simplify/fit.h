@@ -26,6 +26,7 @@
 
 #include <vector>
 
+#include "measure/bvh.h"
 #include "simplify/state.h"
 
 namespace lod::collapse {
@@ -33,5 +34,17 @@ namespace lod::collapse {
 // Moves state.position of live positions (never locked ones), counts each moved position in
 // state.moves and appends it to `fitted` (public ids), if given.
 void fit_positions(State& state, uint32_t iterations, double weight, std::vector<FittedPosition>* fitted);
+
+// Input triangles per BVH in closest_on_input, as the fit uses it.
+constexpr size_t fit_chunk_triangles = size_t(1) << 17;
+
+// The exact closest point of state.mesh (the input) to each of `points`, ties going to the lowest
+// input triangle, as a scan of all would find it. `hits` holds a first answer per point (squared
+// distance, input triangle and point, or an infinite distance) and is improved in place. The input
+// is searched through a BVH over at most `chunk_triangles` of its triangles at a time (nearby ones),
+// skipping a chunk whose box is farther from a point than its best so far. Reads state.position_of
+// and position_count (to group the triangles) and state.threads; the answers never depend on these.
+void closest_on_input(const State& state, const std::vector<measure::vec3f>& points,
+                      std::vector<measure::ClosestHit>& hits, size_t chunk_triangles);
 
 }  // namespace lod::collapse

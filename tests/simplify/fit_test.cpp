@@ -1,0 +1,84 @@
+// The fit's exact closest-point search over the input in chunks (closest_on_input), against a
+// brute-force scan of every input triangle.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <numeric>
+#include <random>
+
+#include "core/shapes.h"
+#include "measure/triangle_distance.h"
+#include "simplify/fit.h"
+
+namespace lod::collapse {
+namespace {
+
+// Every triangle's distance, the lowest triangle winning ties.
+measure::ClosestHit brute_force(const Mesh& mesh, const measure::vec3f& p) {
+  measure::ClosestHit best;
+  for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+    const uint32_t* c = &mesh.indices[3 * size_t(t)];
+    const measure::TrianglePoint hit =
+        measure::closest_on_triangle(p, mesh.positions[c[0]], mesh.positions[c[1]], mesh.positions[c[2]]);
+    if (hit.distance_squared < best.distance_squared)
+      best.distance_squared = hit.distance_squared, best.triangle = t, best.point = hit.point;
+  }
+  return best;
+}
+
+TEST(FitClosestOnInput, EqualsAScanOfEveryTriangleForAnyChunkSizeAndStart) {
+  // A torus and a sphere inside it (two parts), plus copies of a few triangles at higher indices:
+  // the copies tie with their originals, which must win.
+  Mesh mesh = shapes::torus(1.0f, 0.4f, 24, 12);
+  const Mesh sphere = shapes::icosphere(2);
+  const uint32_t base = uint32_t(mesh.positions.size());
+  mesh.positions.insert(mesh.positions.end(), sphere.positions.begin(), sphere.positions.end());
+  for (const uint32_t i : sphere.indices) mesh.indices.push_back(base + i);
+  for (uint32_t t = 0; t < 40; t += 3) mesh.indices.insert(mesh.indices.end(), &mesh.indices[3 * t], &mesh.indices[3 * t + 3]);
+
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> coordinate(-2.0f, 2.0f);
+  std::vector<measure::vec3f> points;
+  for (int i = 0; i < 400; ++i) points.emplace_back(coordinate(rng), coordinate(rng), 0.6f * coordinate(rng));
+  for (size_t v = 0; v < mesh.positions.size(); v += 7) points.emplace_back(mesh.positions[v]);  // on the surface
+  std::vector<measure::ClosestHit> expected;
+  for (const measure::vec3f& p : points) expected.push_back(brute_force(mesh, p));
+
+  const SimplifyOptions options;
+  State state(mesh, options);
+  state.position_count = uint32_t(mesh.positions.size());
+  state.position_of.resize(mesh.positions.size());
+  std::iota(state.position_of.begin(), state.position_of.end(), 0u);
+  std::shuffle(state.position_of.begin(), state.position_of.end(), rng);  // chunks of scattered triangles too
+
+  for (const size_t chunk : {size_t(1), size_t(7), size_t(100), fit_chunk_triangles}) {
+    for (const unsigned threads : {1u, 2u}) {
+      state.threads = threads;
+      for (const bool seeded : {false, true}) {
+        // A first answer: none, or some far triangle's (a loose bound, a poor start).
+        std::vector<measure::ClosestHit> hits(points.size());
+        if (seeded)
+          for (size_t i = 0; i < points.size(); ++i) {
+            const uint32_t t = uint32_t((i * 37) % mesh.triangle_count());
+            const uint32_t* c = &mesh.indices[3 * size_t(t)];
+            const measure::TrianglePoint hit = measure::closest_on_triangle(
+                points[i], mesh.positions[c[0]], mesh.positions[c[1]], mesh.positions[c[2]]);
+            hits[i].distance_squared = hit.distance_squared, hits[i].triangle = t, hits[i].point = hit.point;
+          }
+        closest_on_input(state, points, hits, chunk);
+        for (size_t i = 0; i < points.size(); ++i) {
+          SCOPED_TRACE(testing::Message() << "chunk " << chunk << ", threads " << threads << ", seeded " << seeded
+                                          << ", point " << i);
+          EXPECT_EQ(hits[i].triangle, expected[i].triangle);
+          EXPECT_EQ(hits[i].distance_squared, expected[i].distance_squared);
+          EXPECT_EQ(hits[i].point.x, expected[i].point.x);
+          EXPECT_EQ(hits[i].point.y, expected[i].point.y);
+          EXPECT_EQ(hits[i].point.z, expected[i].point.z);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace lod::collapse
