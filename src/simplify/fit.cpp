@@ -189,20 +189,22 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
   // midpoint of a long edge whose ends both lie on the input (the surface bends away between them).
   // Each result edge's midpoint is pulled towards its closest input point, found once, before the
   // iterations (the moves are small next to the edges).
-  std::vector<std::pair<uint32_t, uint32_t>> edges;
+  // Edges in the order of their ends' position ids (Morton order), so that neighbouring edges, which
+  // share the closest-point searches below, are close in space.
+  std::vector<std::pair<uint32_t, uint32_t>> edges;  // position ids
   std::vector<uint32_t> edge_of_side(3 * result_triangles);  // per triangle side: its edge
+  const auto side = [&](size_t t, uint32_t k) {
+    const uint32_t a = position[result.indices[3 * t + k]], b = position[result.indices[3 * t + (k + 1) % 3]];
+    return std::pair{std::min(a, b), std::max(a, b)};
+  };
   for (size_t t = 0; t < result_triangles; ++t)
-    for (uint32_t k = 0; k < 3; ++k) {
-      const uint32_t a = result.indices[3 * t + k], b = result.indices[3 * t + (k + 1) % 3];
-      edges.push_back({std::min(a, b), std::max(a, b)});
-    }
+    for (uint32_t k = 0; k < 3; ++k) edges.push_back(side(t, k));
   std::sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
   for (size_t t = 0; t < result_triangles; ++t)
-    for (uint32_t k = 0; k < 3; ++k) {
-      const uint32_t a = result.indices[3 * t + k], b = result.indices[3 * t + (k + 1) % 3];
-      edge_of_side[3 * t + k] = uint32_t(std::lower_bound(edges.begin(), edges.end(), std::pair{std::min(a, b), std::max(a, b)}) - edges.begin());
-    }
+    for (uint32_t k = 0; k < 3; ++k)
+      edge_of_side[3 * t + k] = uint32_t(std::lower_bound(edges.begin(), edges.end(), side(t, k)) - edges.begin());
+  for (auto& [a, b] : edges) a = slot[a], b = slot[b];  // from here on, slots
   std::vector<measure::vec3f> edge_target(edges.size());
   for (size_t e = 0; e < edges.size(); ++e) {
     const float3 &a = result.positions[edges[e].first], &b = result.positions[edges[e].second];
