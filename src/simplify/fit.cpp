@@ -87,6 +87,8 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
         for (uint32_t k = 0; k < count; ++k) {
           measure::ClosestHit& hit = found[k];
           measure::ClosestHit& best = hits[which[k]];
+          // No triangle when every distance overflowed (coordinates near FLT_MAX): nothing found.
+          if (hit.triangle >= first[c + 1] - first[c]) continue;
           bvh.resolve(hit, group[k]);
           hit.triangle = order[first[c] + hit.triangle];
           if (hit.distance_squared < best.distance_squared || (hit.distance_squared == best.distance_squared && hit.triangle < best.triangle))
@@ -226,7 +228,8 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
       }
     });
     closest_on_input(s, edge_target, hits, fit_chunk_triangles);
-    for (size_t e = 0; e < edges.size(); ++e) edge_target[e] = hits[e].point;
+    for (size_t e = 0; e < edges.size(); ++e)
+      if (hits[e].triangle != none) edge_target[e] = hits[e].point;  // else the midpoint: no pull
   }
   std::vector<vec3d> edge_residual(edges.size());
   std::vector<double> edge_area(edges.size());
@@ -288,6 +291,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
     for (size_t e = 0; e < edges.size(); ++e) {
       const measure::vec3f& c = edge_target[e];
       edge_residual[e] = s.normalized_input(float3{c.x, c.y, c.z}) - (normalized(edges[e].first) + normalized(edges[e].second)) * 0.5;
+      if (!std::isfinite(length_squared(edge_residual[e]))) edge_residual[e] = {};  // overflowed: no pull
       squares += edge_area[e] * length_squared(edge_residual[e]), area += edge_area[e];
     }
     const double mean_square = area > 0 ? squares / area : 0;

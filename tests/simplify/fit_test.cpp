@@ -7,6 +7,7 @@
 #include <random>
 
 #include "core/shapes.h"
+#include "lodkit/simplify.h"
 #include "measure/triangle_distance.h"
 #include "simplify/fit.h"
 
@@ -78,6 +79,27 @@ TEST(FitClosestOnInput, EqualsAScanOfEveryTriangleForAnyChunkSizeAndStart) {
       }
     }
   }
+}
+
+// Coordinates near FLT_MAX overflow every squared distance: the search then finds no triangle and
+// the fit leaves those edges alone (found by fuzz_simplify: resolve() read past the BVH).
+TEST(FitClosestOnInput, OverflowingDistancesFindNothingAndTheFitStillRuns) {
+  Mesh mesh;
+  mesh.positions = {{0, 0, 1e38f}, {1, -10, 0}, {1, 1, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, -1e38f}};
+  mesh.indices = {0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 4, 1, 5, 2, 1, 5, 3, 2, 5, 4, 3, 5, 1, 4};
+  const SimplifyOptions options;
+  State state(mesh, options);
+  state.position_count = uint32_t(mesh.positions.size());
+  state.position_of = {0, 1, 2, 3, 4, 5};
+  const std::vector<measure::vec3f> points = {{0, 0.5f, 3e38f}, {0, 0, -3e38f}};
+  std::vector<measure::ClosestHit> hits(points.size());
+  closest_on_input(state, points, hits, 2);
+  for (const measure::ClosestHit& hit : hits) {
+    EXPECT_EQ(hit.triangle, UINT32_MAX);
+    EXPECT_FALSE(hit.distance_squared < std::numeric_limits<float>::infinity());
+  }
+  const SimplifyResult r = simplify(mesh, {.target_triangles = 4});
+  EXPECT_NO_THROW(validate(r.mesh));
 }
 
 }  // namespace
