@@ -660,8 +660,9 @@ bool TriangleBvh::consider(const vec3f& p, uint32_t slot, ClosestHit& best) cons
   return true;
 }
 
-ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint) const {
+ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint, float bound) const {
   ClosestHit best;
+  best.distance_squared = bound;  // no triangle yet: consider() takes any within the bound
   consider(p, slot_[hint < original_.size() ? hint : 0], best);
   float limit = best.distance_squared * prune_slack;
   uint32_t stack[3 * max_depth + 4];
@@ -703,10 +704,11 @@ ClosestHit TriangleBvh::closest(const vec3f& p, uint32_t hint) const {
 }
 
 void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hint, ClosestHit* out,
-                                GroupScratch& scratch) const {
+                                GroupScratch& scratch, const float* bounds) const {
   if (count == 0) return;
+  const auto bound = [&](uint32_t i) { return bounds ? bounds[i] : inf; };
   if (count == 1) {
-    out[0] = closest(points[0], hint);
+    out[0] = closest(points[0], hint, bound(0));
     return;
   }
   float lo[3] = {points[0].x, points[0].y, points[0].z}, hi[3] = {lo[0], lo[1], lo[2]};
@@ -725,7 +727,7 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
   for (uint32_t i = 0; i < padded; ++i) {
     const vec3f& p = points[std::min(i, count - 1)];
     lanes.x()[i] = p.x, lanes.y()[i] = p.y, lanes.z()[i] = p.z;
-    lanes.distance_squared()[i] = inf;
+    lanes.distance_squared()[i] = bound(std::min(i, count - 1));  // a lane keeps INT32_MAX if none is within
     lanes.triangle()[i] = INT32_MAX;
   }
   const GroupTree tree{nodes_.data(),
@@ -735,14 +737,15 @@ void TriangleBvh::closest_group(const vec3f* points, uint32_t count, uint32_t hi
                          : search_group_narrow(lanes, tree, lo, hi, hint_slot, max_group_scanned);
   if (!done) {
     // Too spread out: each point on its own, from its best triangle so far.
-    for (uint32_t i = 0; i < count; ++i) out[i] = closest(points[i], uint32_t(lanes.triangle()[i]));
+    for (uint32_t i = 0; i < count; ++i) out[i] = closest(points[i], uint32_t(lanes.triangle()[i]), bound(i));
     return;
   }
   for (uint32_t i = 0; i < count; ++i) {
     ClosestHit& h = out[i];
     h.distance_squared = lanes.distance_squared()[i];
-    h.triangle = uint32_t(lanes.triangle()[i]);
-    h.resolved = false;
+    const bool found = lanes.triangle()[i] != INT32_MAX;
+    h.triangle = found ? uint32_t(lanes.triangle()[i]) : UINT32_MAX;
+    h.resolved = !found;  // nothing to resolve without a triangle
   }
 }
 

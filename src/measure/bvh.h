@@ -40,8 +40,11 @@ class TriangleBvh {
 
   // The exact closest point over all triangles; ties go to the lowest triangle index, so the answer
   // equals a brute-force scan's. `hint` is a triangle whose distance starts the search (the previous
-  // query's answer is a good one); it changes only the speed.
-  ClosestHit closest(const vec3f& p, uint32_t hint = 0) const;
+  // query's answer is a good one); it changes only the speed. With a `bound` (squared distance) only
+  // triangles at most that far are looked for (a caller that knows a point elsewhere prunes sooner):
+  // the answer is the same when one is; when none is, the hit has no triangle (UINT32_MAX).
+  ClosestHit closest(const vec3f& p, uint32_t hint = 0,
+                     float bound = std::numeric_limits<float>::infinity()) const;
   // Fills in a closest_group hit's point and weights (p: its query point); nothing when they are set.
   void resolve(ClosestHit& hit, const vec3f& p) const {
     if (hit.resolved) return;
@@ -63,9 +66,11 @@ class TriangleBvh {
   // together (the samples of one small patch): one traversal for the whole group, nearest boxes to the
   // group's centre first, scans each leaf's triangles for all points at once (4 or 8 lanes: box,
   // plane, then the exact distance), and prunes boxes farther from the points' box than the largest
-  // of the points' best distances so far. `hint` (as for closest()) is every point's first triangle.
-  // Points spread too far for that fall back to closest(), one by one.
-  void closest_group(const vec3f* points, uint32_t count, uint32_t hint, ClosestHit* out, GroupScratch& scratch) const;
+  // of the points' best distances so far. `hint` (as for closest()) is every point's first triangle,
+  // and `bounds`, if given, each point's bound (as for closest()). Points spread too far for that
+  // fall back to closest(), one by one.
+  void closest_group(const vec3f* points, uint32_t count, uint32_t hint, ClosestHit* out, GroupScratch& scratch,
+                     const float* bounds = nullptr) const;
 
   // closest_group's lane width: 0 picks 8 when the CPU has AVX2, else 4 (the default); tests force
   // 4 or 8 to check both. Process-wide; the results never depend on it.

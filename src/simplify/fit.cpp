@@ -71,6 +71,7 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
       measure::TriangleBvh::GroupScratch scratch;
       measure::vec3f group[max_group];
       measure::ClosestHit found[max_group];
+      float bound[max_group];
       uint32_t which[max_group];
       for (size_t g = begin; g < end; g += max_group) {
         uint32_t count = 0;
@@ -80,14 +81,16 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
           const float gx = gap(p.x, lo.x, hi.x), gy = gap(p.y, lo.y, hi.y), gz = gap(p.z, lo.z, hi.z);
           // Skipped only when surely farther (the 0.1% covers the rounding of both distances).
           if ((gx * gx + gy * gy + gz * gz) > hits[i].distance_squared * 1.001f) continue;
-          group[count] = p, which[count++] = uint32_t(i);
+          // The search looks only as far as the best so far (ties included, for the lower triangle).
+          group[count] = p, bound[count] = hits[i].distance_squared, which[count++] = uint32_t(i);
         }
         if (count == 0) continue;
-        bvh.closest_group(group, count, local(hits[which[0]].triangle), found, scratch);
+        bvh.closest_group(group, count, local(hits[which[0]].triangle), found, scratch, bound);
         for (uint32_t k = 0; k < count; ++k) {
           measure::ClosestHit& hit = found[k];
           measure::ClosestHit& best = hits[which[k]];
-          // No triangle when every distance overflowed (coordinates near FLT_MAX): nothing found.
+          // No triangle: none in this chunk within the bound (or every distance overflowed, with
+          // coordinates near FLT_MAX).
           if (hit.triangle >= first[c + 1] - first[c]) continue;
           bvh.resolve(hit, group[k]);
           hit.triangle = order[first[c] + hit.triangle];

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <algorithm>
 #include <random>
 #include <vector>
@@ -241,6 +243,18 @@ void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed) {
     ASSERT_EQ(got.distance_squared, expected.distance_squared) << "point " << i;
     ASSERT_EQ(got.triangle, expected.triangle) << "point " << i;
     ASSERT_EQ(got.point, expected.point) << "point " << i;
+    // A bound at or above the answer's distance finds the same answer (ties too); one just below it
+    // finds nothing.
+    for (const float bound : {expected.distance_squared, 2 * expected.distance_squared + 1e-3f}) {
+      const ClosestHit within = bvh.closest(p, i % 3 ? triangle(rng) : 0, bound);
+      ASSERT_EQ(within.triangle, expected.triangle) << "point " << i << " bound " << bound;
+      ASSERT_EQ(within.point, expected.point) << "point " << i << " bound " << bound;
+    }
+    if (expected.distance_squared > 0) {
+      const float below = std::nextafter(expected.distance_squared, 0.0f);
+      const ClosestHit none = bvh.closest(p, i % 3 ? triangle(rng) : 0, below);
+      ASSERT_EQ(none.triangle, UINT32_MAX) << "point " << i;
+    }
   }
 
   // Groups: tight clusters (one traversal serves them all) up to clusters spread over the whole mesh
@@ -255,9 +269,24 @@ void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed) {
     std::vector<vec3f> group(size(rng));
     for (vec3f& p : group) p = {c.x + r * jitter(rng) * 100, c.y + r * jitter(rng) * 100, c.z + r * jitter(rng) * 100};
     std::vector<ClosestHit> got(group.size());
-    bvh.closest_group(group.data(), uint32_t(group.size()), g % 3 ? triangle(rng) : 0, got.data(), scratch);
+    // Every third group with bounds: per point its answer's distance, a looser one, or just below
+    // (nothing then).
+    std::vector<float> bounds(group.size());
+    std::vector<uint8_t> below(group.size(), 0);
+    for (size_t i = 0; i < group.size(); ++i) {
+      const float d = brute_force(m, group[i]).distance_squared;
+      bounds[i] = i % 3 == 0 ? d : i % 3 == 1 ? 4 * d + 1e-3f : std::nextafter(d, 0.0f);
+      below[i] = i % 3 == 2 && d > 0;
+    }
+    const bool bounded = g % 3 == 1;
+    bvh.closest_group(group.data(), uint32_t(group.size()), g % 3 ? triangle(rng) : 0, got.data(), scratch,
+                      bounded ? bounds.data() : nullptr);
     for (size_t i = 0; i < group.size(); ++i) {
       const ClosestHit expected = brute_force(m, group[i]);
+      if (bounded && below[i]) {
+        ASSERT_EQ(got[i].triangle, UINT32_MAX) << "group " << g << " point " << i;
+        continue;
+      }
       bvh.resolve(got[i], group[i]);
       ASSERT_EQ(got[i].distance_squared, expected.distance_squared) << "group " << g << " point " << i;
       ASSERT_EQ(got[i].triangle, expected.triangle) << "group " << g << " point " << i;
