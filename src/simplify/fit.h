@@ -20,7 +20,7 @@
 // the finer late passes): Hausdorff distance about -8%, RMS about -20% (10%) and -25% (1%),
 // geometric means; the edge term takes the corpus's 10% Hausdorff distance further down where it was
 // worst (bench/README, eleventh session). The feet come from measure's BVH over the (small) result,
-// the edges' closest points from chunks of at most 2^17 input triangles, so the fit adds little
+// the edges' closest points from chunks of about 2^17 input triangles, so the fit adds little
 // memory. The result does not depend on the thread count.
 #pragma once
 
@@ -41,7 +41,7 @@ constexpr size_t fit_chunk_triangles = size_t(1) << 17;
 // The exact closest point of state.mesh (the input) to each of `points`, ties going to the lowest
 // input triangle, as a scan of all would find it. `hits` holds a first answer per point (squared
 // distance, input triangle and point, or an infinite distance) and is improved in place. The input
-// is searched through a BVH over at most `chunk_triangles` of its triangles at a time (nearby ones),
+// is searched through a BVH over about `chunk_triangles` of its triangles at a time (nearby ones),
 // skipping a chunk whose box is farther from a point than its best so far. Reads state.position_of
 // and position_count (to group the triangles) and state.threads; the answers never depend on these.
 void closest_on_input(const State& state, const std::vector<measure::vec3f>& points,
