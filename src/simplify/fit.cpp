@@ -25,6 +25,18 @@ struct Foot {
   float residual[3] = {};
 };
 
+// The closest point of x on input triangle t.
+measure::TrianglePoint on_input_triangle(const Mesh& input, uint32_t t, const measure::vec3f& x) {
+  const uint32_t* corner = &input.indices[3 * size_t(t)];
+  return measure::closest_on_triangle(x, input.positions[corner[0]], input.positions[corner[1]], input.positions[corner[2]]);
+}
+
+// Whether a point at squared distance d on input triangle t beats `best`: nearer, or as near on a
+// lower triangle (the answer a scan of every triangle gives).
+bool closer(float d, uint32_t t, const measure::ClosestHit& best) {
+  return d < best.distance_squared || (d == best.distance_squared && t < best.triangle);
+}
+
 }  // namespace
 
 // A BVH of the whole input would add about 90 bytes per input triangle to the peak memory; one chunk
@@ -94,8 +106,7 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
           if (hit.triangle >= first[c + 1] - first[c]) continue;
           bvh.resolve(hit, group[k]);
           hit.triangle = order[first[c] + hit.triangle];
-          if (hit.distance_squared < best.distance_squared || (hit.distance_squared == best.distance_squared && hit.triangle < best.triangle))
-            best = hit;
+          if (closer(hit.distance_squared, hit.triangle, best)) best = hit;
         }
       }
     });
@@ -223,11 +234,9 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
       measure::ClosestHit& best = hits[e];
       for (const uint32_t j : {edges[e].first, edges[e].second}) {
         if (candidates_first[j] == candidates_first[j + 1]) continue;
-        const uint32_t t = candidates[candidates_first[j]], *corner = &input.indices[3 * size_t(t)];
-        const measure::TrianglePoint hit = measure::closest_on_triangle(
-            edge_target[e], input.positions[corner[0]], input.positions[corner[1]], input.positions[corner[2]]);
-        if (hit.distance_squared < best.distance_squared || (hit.distance_squared == best.distance_squared && t < best.triangle))
-          best.distance_squared = hit.distance_squared, best.triangle = t, best.point = hit.point;
+        const uint32_t t = candidates[candidates_first[j]];
+        const measure::TrianglePoint hit = on_input_triangle(input, t, edge_target[e]);
+        if (closer(hit.distance_squared, t, best)) best.distance_squared = hit.distance_squared, best.triangle = t, best.point = hit.point;
       }
     });
     closest_on_input(s, edge_target, hits, fit_chunk_triangles);
@@ -313,9 +322,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
       // position's closest point on the input (among the input triangles it stands for).
       const measure::vec3f x(before[j]);
       const auto distance = [&](uint32_t i) {
-        const uint32_t* corner = &input.indices[3 * size_t(candidates[i])];
-        const measure::TrianglePoint hit = measure::closest_on_triangle(
-            x, input.positions[corner[0]], input.positions[corner[1]], input.positions[corner[2]]);
+        const measure::TrianglePoint hit = on_input_triangle(input, candidates[i], x);
         return std::pair{measure::length_squared(x - hit.point), hit.point};
       };
       // The first candidate at the least distance, as a scan of all would find it. The last
