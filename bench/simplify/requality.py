@@ -11,18 +11,21 @@ most the better of the peers that reached the target, lodkit short of the target
 it (verdict.py, shared with report.py). The peers' distances are kept in DATA_DIR/out/peer-distances.json,
 keyed by file size and time and by a digest of the measuring code (src/measure), so only the first call
 after a full run or a change to the measure measures them. Prints the share and worst ratio
-per target and quantity, and the cases lodkit loses; exits 1 when a tool fails.
+per target and quantity, the geometric mean of lodkit's value over the best peer's (cases where
+both are above the tie level: a share moves by whole cases, the mean shows smaller changes), and
+the cases lodkit loses; exits 1 when a tool fails.
 
 Quick feedback while working on quality; the full run remains the reference (it also times and
 measures memory)."""
 import concurrent.futures
 import hashlib
 import json
+import math
 import os
 import subprocess
 import sys
 
-from verdict import QUALITY_PEERS, judge, stopped_short
+from verdict import QUALITY_PEERS, TIE, judge, stopped_short
 
 CORPUS = "data/corpus"
 
@@ -119,7 +122,7 @@ lines = []
 for level, label in ((0, "10%"), (1, "1%")):
     for what in ("hausdorff", "rms"):
         judged = good = 0
-        worst, losses = (0.0, None), []
+        worst, losses, logs = (0.0, None), [], []
         for case, found, own in zip(cases, peers, mine):
             stem, target = case
             if sorted(targets[stem], reverse=True).index(target) != level:
@@ -129,6 +132,9 @@ for level, label in ((0, "10%"), (1, "1%")):
             if verdict is None:
                 continue
             judged += 1
+            best = min(reached)
+            if verdict != "short" and best > TIE and own[what] > TIE:
+                logs.append(math.log(own[what] / best))
             if verdict == "ok":
                 good += 1
             elif verdict == "short":
@@ -138,7 +144,8 @@ for level, label in ((0, "10%"), (1, "1%")):
                 worst = max(worst, (ratio, stem))
         share = good / judged if judged else 0
         lines.append(f"{label:>3} {what:<9} lodkit <= best(GH, mo) on {good}/{judged} = {share:.0%}, worst "
-                     f"{worst[0]:.2f}x {worst[1] or ''}")
+                     f"{worst[0]:.2f}x {worst[1] or ''}; lodkit / best geometric mean "
+                     f"{math.exp(sum(logs) / len(logs)) if logs else math.nan:.3f} over {len(logs)}")
         if losses:
             lines.append("      loses: " + ", ".join(losses))
 print("\n".join(lines))
