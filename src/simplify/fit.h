@@ -14,10 +14,10 @@
 // with m_e the edge's midpoint, c_e its exact closest input point (found once, through a BVH over
 // one chunk of the input at a time), A_e a third of its faces' area and w_e = (|c_e - m_e| / rms)^2,
 // capped: a reweighted step towards the largest distances, which are mostly at the midpoints of
-// long edges whose ends lie on the input. Each iteration fixes the feet and closest points,
-// moves every position by 0.7 of the solution of its own normal equation (damped Jacobi: full
-// steps overshoot, neighbours moving together), then takes back the moves around any
-// face that would turn by more than the flip limit or degenerate. Corpus meshes (10% and 1%, with
+// long edges whose ends lie on the input. Each iteration fixes the feet and closest points, then
+// runs three Jacobi sweeps: each moves every position by 0.7 of the solution of its own normal
+// equation (damped: full steps overshoot, neighbours moving together), then takes back the moves
+// around any face that would turn by more than the flip limit or degenerate. Corpus meshes (10% and 1%, with
 // the finer late passes): Hausdorff distance about -8%, RMS about -20% (10%) and -25% (1%),
 // geometric means; the edge term takes the corpus's 10% Hausdorff distance further down where it was
 // worst (bench/README, eleventh session). The feet come from measure's BVH over the (small) result,
