@@ -25,7 +25,7 @@ constexpr double step = 0.7;
 // stay fixed, the residuals follow the moves. The searches are most of an iteration's cost; more
 // sweeps bring each iteration closer to the least-squares solution for its feet (Hoppe et al.
 // solve it exactly). Corpus: 3 sweeps, geometric means of lodkit / best peer 10% Hausdorff 0.741 ->
-// 0.739, 1% 0.868 -> 0.855, at +3% of the time on armadillo-s2 -> 83,200 (bench/README).
+// 0.739, 1% 0.868 -> 0.855, at +2% of the time on armadillo-s2 -> 83,200 (bench/README).
 constexpr uint32_t sweeps = 3;
 
 // An input vertex's closest point on the result (found once per iteration): the result's triangle
