@@ -258,11 +258,42 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
   std::vector<vec3d> num(m);
   std::vector<double> den(m);
   std::vector<uint8_t> moved(m), revert(m);
-  std::vector<measure::vec3f> pulled(m);
+  std::vector<measure::vec3f> pulled(m);  // per position: the pull's target in this iteration
   std::vector<uint32_t> nearest(m, 0);  // per position: its closest candidate in the last iteration
   std::vector<float3> before;
   const std::vector<float3> start = result.positions;
   const auto normalized = [&](size_t j) { return s.normalized_input(result.positions[j]); };
+  // The closest point to x among position j's candidate input triangles (x itself if it has none):
+  // the first candidate at the least distance, as a scan of all would find it. The last iteration's
+  // winner (moves are small) bounds that distance; a candidate whose box is farther cannot win and
+  // is skipped. The box is widened by float rounding and the bound loosened by 0.1%, so a skipped
+  // candidate could never have tied with the winner.
+  const auto closest_candidate = [&](size_t j, const measure::vec3f& x) {
+    const auto distance = [&](uint32_t i) {
+      const measure::TrianglePoint hit = on_input_triangle(input, candidates[i], x);
+      return std::pair{measure::length_squared(x - hit.point), hit.point};
+    };
+    const uint32_t begin = candidates_first[j], stop = candidates_first[j + 1];
+    const float bound = begin < stop ? distance(std::clamp(nearest[j], begin, stop - 1)).first * 1.001f : 0.0f;
+    measure::vec3f c = x;
+    float best = std::numeric_limits<float>::infinity();
+    for (uint32_t i = begin; i < stop; ++i) {
+      const uint32_t* corner = &input.indices[3 * size_t(candidates[i])];
+      const float3& a = input.positions[corner[0]];
+      const float3& b = input.positions[corner[1]];
+      const float3& e = input.positions[corner[2]];
+      const auto gap = [](float p, float u, float v, float w) {
+        const float lo = std::min({u, v, w}), hi = std::max({u, v, w});
+        const float slack = 1e-6f * std::max(std::abs(lo), std::abs(hi)) + 1e-30f;
+        const float g = std::max({lo - slack - p, p - hi - slack, 0.0f});
+        return g * g;
+      };
+      if (gap(x.x, a.x, b.x, e.x) + gap(x.y, a.y, b.y, e.y) + gap(x.z, a.z, b.z, e.z) > bound) continue;
+      const auto [d, point] = distance(i);
+      if (d < best) best = d, c = point, nearest[j] = uint32_t(i);
+    }
+    return c;
+  };
   for (uint32_t iteration = 0; iteration < iterations; ++iteration) {
     const measure::TriangleBvh bvh(result, s.threads);
     core::parallel_blocks(group_first.size() - 1, 256, s.threads, [&](size_t, size_t group_begin, size_t group_end) {
@@ -326,38 +357,14 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
       before = result.positions;
       core::parallel_for(m, s.threads, [&](size_t j) {
         moved[j] = 0;
-        if (!(den[j] > 0) || (s.flags[position[j]] & flag_locked)) return;
+        if (s.flags[position[j]] & flag_locked) return;
+        // The pull's target stays fixed for the iteration, like the feet. Found for every position
+        // in the first sweep, also those that do not move in it: a later sweep may move them.
+        if (sweep == 0) pulled[j] = closest_candidate(j, measure::vec3f(before[j]));
+        if (!(den[j] > 0)) return;
         // Minimise sum a |r - beta d|^2 + weight mass |x + d - c|^2 over the move d, c being the
         // position's closest point on the input (among the input triangles it stands for).
-        const measure::vec3f x(before[j]);
-        const auto distance = [&](uint32_t i) {
-          const measure::TrianglePoint hit = on_input_triangle(input, candidates[i], x);
-          return std::pair{measure::length_squared(x - hit.point), hit.point};
-        };
-        // The first candidate at the least distance, as a scan of all would find it. The last
-        // iteration's winner (moves are small) bounds that distance; a candidate whose box is
-        // farther cannot win and is skipped. The box is widened by float rounding and the bound
-        // loosened by 0.1%, so a skipped candidate could never have tied with the winner.
-        const uint32_t begin = candidates_first[j], stop = candidates_first[j + 1];
-        const float bound = sweep == 0 && begin < stop ? distance(std::clamp(nearest[j], begin, stop - 1)).first * 1.001f : 0.0f;
-        measure::vec3f c = sweep == 0 ? x : pulled[j];
-        float best = std::numeric_limits<float>::infinity();
-        for (uint32_t i = begin; i < stop && sweep == 0; ++i) {
-          const uint32_t* corner = &input.indices[3 * size_t(candidates[i])];
-          const float3& a = input.positions[corner[0]];
-          const float3& b = input.positions[corner[1]];
-          const float3& e = input.positions[corner[2]];
-          const auto gap = [](float p, float u, float v, float w) {
-            const float lo = std::min({u, v, w}), hi = std::max({u, v, w});
-            const float slack = 1e-6f * std::max(std::abs(lo), std::abs(hi)) + 1e-30f;
-            const float g = std::max({lo - slack - p, p - hi - slack, 0.0f});
-            return g * g;
-          };
-          if (gap(x.x, a.x, b.x, e.x) + gap(x.y, a.y, b.y, e.y) + gap(x.z, a.z, b.z, e.z) > bound) continue;
-          const auto [d, point] = distance(i);
-          if (d < best) best = d, c = point, nearest[j] = i;
-        }
-        pulled[j] = c;
+        const measure::vec3f& c = pulled[j];
         const double pull = weight * mass[j];
         const vec3d here = normalized(j);
         const vec3d d = (num[j] - (here - s.normalized_input(float3{c.x, c.y, c.z})) * pull) * (step / (den[j] + pull));
