@@ -17,6 +17,7 @@
 #include <tuple>
 #include <type_traits>
 
+#include "core/heap.h"
 #include "core/parallel.h"
 #include "core/union_find.h"
 #include "lodkit/error.h"
@@ -1293,7 +1294,9 @@ namespace collapse {
 
 // The engine around any metric: the quadric family, or (with `multipose`) the multi-pose metric of
 // skinned meshes, whose chosen influences then replace the output's joints and weights.
-SimplifyResult simplify_with(const Mesh& mesh, const SimplifyOptions& options, const MultiposeInput* multipose) {
+namespace {
+
+SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, const MultiposeInput* multipose) {
   const auto start = clock::now();
   check_options(mesh, options);
   SimplifyResult result;
@@ -1406,6 +1409,14 @@ SimplifyResult simplify_with(const Mesh& mesh, const SimplifyOptions& options, c
   result.output_triangles = result.mesh.triangle_count();
   result.output_vertices = result.mesh.vertex_count();
   result.seconds_total = seconds(start, clock::now());
+  return result;
+}
+
+}  // namespace
+
+SimplifyResult simplify_with(const Mesh& mesh, const SimplifyOptions& options, const MultiposeInput* multipose) {
+  SimplifyResult result = simplify_once(mesh, options, multipose);
+  core::release_free_memory();  // the working state is gone: a LOD chain's next call starts afresh
   return result;
 }
 
