@@ -75,7 +75,8 @@ int main(int argc, char** argv) {
                    {"relative_error", result.relative_error},
                    {"passes", result.passes},
                    {"seconds_setup", result.seconds_setup},
-                   {"seconds_collapse", result.seconds_collapse}});
+                   {"seconds_collapse", result.seconds_collapse},
+                   {"seconds_fit", result.seconds_fit}});
     return 0;
   });
 }

@@ -1377,6 +1377,8 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
     QuadricMetric metric(constrained, memoryless, channels);
     run(state, metric, channels, target, cost_limit, result);
   }
+  const auto fit_start = clock::now();
+  result.seconds_collapse = seconds(engine_start, fit_start);
   // The fit moves positions only: keep_vertices promises input vertices, and the multi-pose metric
   // places positions for every pose, which a rest-pose fit would undo.
   if (options.fit_iterations > 0 && !options.keep_vertices && !multipose) {
@@ -1384,9 +1386,8 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
     fit_positions(state, options.fit_iterations, fit_weight, &fitted);
     result.fitted_positions = fitted.size();
     if (options.record) result.record.fitted = std::move(fitted);
+    result.seconds_fit = seconds(fit_start, clock::now());
   }
-  const auto engine_end = clock::now();
-  result.seconds_collapse = seconds(engine_start, engine_end);
 
   // Pruning comes after the record: replaying the record gives the mesh before pruning.
   if (options.prune) result.pruned_triangles = prune_components(state, result.error);

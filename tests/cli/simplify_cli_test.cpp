@@ -24,6 +24,8 @@ TEST(CliSimplify, WritesTheLibraryResultAndReportsIt) {
   const Mesh out = read_mesh(dir / "out.ply");
   EXPECT_EQ(j["output_triangles"], out.triangle_count());
   EXPECT_LE(out.triangle_count(), torus.triangle_count() / 10);
+  EXPECT_GT(j["fit_seconds"].get<double>(), 0.0);  // the default final fit, part of simplify_seconds
+  EXPECT_LE(j["fit_seconds"].get<double>(), j["simplify_seconds"].get<double>());
   // The same call through the library gives the same mesh (the PLY round trip is exact).
   const SimplifyResult lib = simplify(read_mesh(dir / "torus.ply"), {.target_ratio = 0.1f, .metric = Metric::constrained_qem});
   EXPECT_EQ(lib.mesh.indices, out.indices);

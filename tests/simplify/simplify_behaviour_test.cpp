@@ -175,6 +175,10 @@ TEST(SimplifyBehaviour, FitBringsTheResultCloserToTheInput) {
     EXPECT_EQ(fitted.vertex_origin, plain.vertex_origin);
     ASSERT_GT(fitted.fitted_positions, 0u);
     EXPECT_EQ(fitted.record.fitted.size(), fitted.fitted_positions);
+    // The fit's time is reported apart from the collapses', and only when there is a fit.
+    EXPECT_EQ(plain.seconds_fit, 0.0);
+    EXPECT_GT(fitted.seconds_fit, 0.0);
+    EXPECT_LE(fitted.seconds_setup + fitted.seconds_collapse + fitted.seconds_fit, fitted.seconds_total);
     const Deviation d0 = compare(mesh, plain.mesh, {.samples = 100'000});
     const Deviation d1 = compare(mesh, fitted.mesh, {.samples = 100'000});
     RecordProperty("rms", std::to_string(d0.relative_rms) + " -> " + std::to_string(d1.relative_rms));
