@@ -1296,6 +1296,10 @@ namespace collapse {
 // skinned meshes, whose chosen influences then replace the output's joints and weights.
 namespace {
 
+// Inputs from this size up return the heap's free pages after the call (core::release_free_memory):
+// their arrays (a few MB) are above glibc's mmap threshold.
+constexpr size_t trim_triangles = size_t(1) << 16;
+
 SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, const MultiposeInput* multipose) {
   const auto start = clock::now();
   check_options(mesh, options);
@@ -1417,7 +1421,10 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
 
 SimplifyResult simplify_with(const Mesh& mesh, const SimplifyOptions& options, const MultiposeInput* multipose) {
   SimplifyResult result = simplify_once(mesh, options, multipose);
-  core::release_free_memory();  // the working state is gone: a LOD chain's next call starts afresh
+  // The working state is gone: a LOD chain's next call starts afresh. Only after large calls: a
+  // small one's arrays stay below glibc's mmap threshold (and trimming scans the whole heap, which
+  // in a host simplifying thousands of small meshes would cost more than it saves).
+  if (mesh.triangle_count() >= trim_triangles) core::release_free_memory();
   return result;
 }
 
