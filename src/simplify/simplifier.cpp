@@ -1292,14 +1292,14 @@ void check_options(const Mesh& mesh, const SimplifyOptions& o) {
 
 namespace collapse {
 
-// The engine around any metric: the quadric family, or (with `multipose`) the multi-pose metric of
-// skinned meshes, whose chosen influences then replace the output's joints and weights.
 namespace {
 
 // Inputs from this size up return the heap's free pages after the call (core::release_free_memory):
 // their arrays (a few MB) are above glibc's mmap threshold.
 constexpr size_t trim_triangles = size_t(1) << 16;
 
+// The engine around any metric: the quadric family, or (with `multipose`) the multi-pose metric of
+// skinned meshes, whose chosen influences then replace the output's joints and weights.
 SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, const MultiposeInput* multipose) {
   const auto start = clock::now();
   check_options(mesh, options);
