@@ -36,9 +36,7 @@ constexpr float prune_slack = 1.0f + 1.0f / (1 << 18);
 // closest_group gives up on a group after scanning this many triangles (the points are too far apart).
 constexpr size_t max_group_scanned = 128;
 
-// A triangle's bounds as the build stores them: six floats (24 bytes a triangle). Box::grow reads
-// each corner with one unaligned four-float load; the fourth float is the next one in memory, so
-// arrays of these (and of centroids) have a spare element at the end.
+// A binary node's bounds: six floats.
 struct Bounds {
   float lo[3], hi[3];
   // Half the surface area, which is all SAH needs (ratios).
@@ -52,7 +50,6 @@ struct Bounds {
 struct alignas(16) Box {
   float lo[4] = {inf, inf, inf, inf}, hi[4] = {-inf, -inf, -inf, -inf};
   void grow(const Box& b) { grow(b.lo, b.hi); }
-  void grow(const Bounds& b) { grow(b.lo, b.hi); }
   void grow(const vec3f& p) { grow(&p.x, &p.x); }
   void grow(const float* blo, const float* bhi) {
 #if defined(__SSE2__)
@@ -147,27 +144,52 @@ struct BinaryNode {
   uint32_t begin = 0, count = 0;  // leaf: range of the triangle order (count > 0)
 };
 
+// A triangle as the build files it: its bounds and its mesh index, 32 bytes. The build moves these
+// with its partitions, so each pass over a node's range reads them in sequence (an index array into
+// per-triangle boxes made every pass a gather: most of the build's cache misses). Box::grow reads lo
+// and hi as four floats each; the fourth (the index's bits, the padding) is ignored.
+struct alignas(16) Ref {
+  float lo[3];
+  uint32_t triangle;
+  float hi[3];
+  float unused = 0;
+  float centroid(int axis) const { return (lo[axis] + hi[axis]) * 0.5f; }
+};
+
 struct Bin {
-  Box box;
+  Box box, centroids;
   uint32_t count = 0;
 };
 
+// A node to build over refs[begin, end), with its triangles' box and their centroids' box (known
+// from the parent's bins, so no pass over the range is needed for them).
 struct BuildTask {
   uint32_t node, begin, end, depth;
+  Box box, centroids;
 };
 
+// The boxes of refs[begin, end) and of their centroids.
+void bound_range(const std::vector<Ref>& refs, uint32_t begin, uint32_t end, Box& box, Box& centroids) {
+  for (uint32_t i = begin; i < end; ++i) {
+    const Ref& r = refs[i];
+    box.grow(r.lo, r.hi);
+    const float c[3] = {r.centroid(0), r.centroid(1), r.centroid(2)};
+    centroids.grow_point(c);
+  }
+}
+
 // Binned SAH over triangle centroids, building a binary tree (root at index 0) whose leaves are ranges
-// of `order`, over order[begin, end). Nodes at `defer_depth` are left empty and listed in `deferred`.
-// `bin` is per-triangle scratch: the binning pass leaves each triangle's bin there for the partition
-// (each call touches only its own range's triangles).
-std::vector<BinaryNode> build_binary(const std::vector<Bounds>& boxes, const std::vector<vec3f>& centroids,
-                                     std::vector<uint32_t>& order, std::vector<uint8_t>& bin, uint32_t begin,
-                                     uint32_t end, uint32_t depth, uint32_t defer_depth, std::vector<BuildTask>& deferred) {
+// of `refs`, over refs[task.begin, task.end). Nodes at `defer_depth` are left empty and listed in
+// `deferred`.
+std::vector<BinaryNode> build_binary(std::vector<Ref>& refs, const BuildTask& root, uint32_t defer_depth,
+                                     std::vector<BuildTask>& deferred) {
   std::vector<BinaryNode> nodes;
   // At most a node per triangle (leaves of a few); a call that defers stops after a few levels.
-  nodes.reserve(defer_depth < 32 ? std::min<size_t>(end - begin, size_t(2) << (defer_depth - depth)) : end - begin);
+  const uint32_t size = root.end - root.begin;
+  nodes.reserve(defer_depth < 32 ? std::min<size_t>(size, size_t(2) << (defer_depth - root.depth)) : size);
   nodes.emplace_back();
-  std::vector<BuildTask> tasks{{0, begin, end, depth}};
+  std::vector<BuildTask> tasks{root};
+  tasks.back().node = 0;
   while (!tasks.empty()) {
     const BuildTask task = tasks.back();
     tasks.pop_back();
@@ -176,12 +198,8 @@ std::vector<BinaryNode> build_binary(const std::vector<Bounds>& boxes, const std
       continue;
     }
     const uint32_t n = task.end - task.begin;
-    Box box, centroid_box;
-    for (uint32_t i = task.begin; i < task.end; ++i) {
-      box.grow(boxes[order[i]]);
-      centroid_box.grow(centroids[order[i]]);
-    }
-    nodes[task.node].box = box.bounds();
+    const Box& centroid_box = task.centroids;
+    nodes[task.node].box = task.box.bounds();
     auto make_leaf = [&] {
       nodes[task.node].begin = task.begin;
       nodes[task.node].count = n;
@@ -199,20 +217,20 @@ std::vector<BinaryNode> build_binary(const std::vector<Bounds>& boxes, const std
       if (centroid_box.hi[a] - centroid_box.lo[a] > centroid_box.hi[axis] - centroid_box.lo[axis]) axis = a;
     const float extent = centroid_box.hi[axis] - centroid_box.lo[axis];
     const float scale = extent > 0 ? float(bin_count) / extent : 0.0f;
-    auto bin_of = [&](const vec3f& c) {
-      const float t = ((&c.x)[axis] - centroid_box.lo[axis]) * scale;
+    auto bin_of = [&](const Ref& r) {
+      const float t = (r.centroid(axis) - centroid_box.lo[axis]) * scale;
       return std::min(bin_count - 1, std::max(0, int(t)));
     };
     float best_cost = inf;
     int best_split = 0;  // left side: bins [0, best_split)
+    Bin bins[bin_count];
     if (scale > 0) {
-      Bin bins[bin_count];
       for (uint32_t i = task.begin; i < task.end; ++i) {
-        const uint32_t t = order[i];
-        const int k = bin_of(centroids[t]);
-        bin[t] = uint8_t(k);
-        Bin& b = bins[k];
-        b.box.grow(boxes[t]);
+        const Ref& r = refs[i];
+        Bin& b = bins[bin_of(r)];
+        b.box.grow(r.lo, r.hi);
+        const float c[3] = {r.centroid(0), r.centroid(1), r.centroid(2)};
+        b.centroids.grow_point(c);
         ++b.count;
       }
       float right_area[bin_count];
@@ -236,47 +254,53 @@ std::vector<BinaryNode> build_binary(const std::vector<Bounds>& boxes, const std
     }
     const int best_axis = best_cost < inf ? axis : -1;
     // SAH in units of one triangle test, relative to this node's area.
-    const float area = box.half_area();
+    const float area = task.box.half_area();
     const float split_cost = traversal_cost + (area > 0 ? best_cost / area : float(n));
     if (n <= max_leaf && (best_axis < 0 || float(n) <= split_cost)) {
       make_leaf();
       continue;
     }
     uint32_t mid;
+    BuildTask left_task{0, task.begin, 0, task.depth + 1, {}, {}}, right_task{0, 0, task.end, task.depth + 1, {}, {}};
     if (best_axis < 0 || task.depth >= max_binned_depth) {
       // Coincident centroids (or a pathological chain of thin splits): halve the range.
       mid = task.begin + n / 2;
+      bound_range(refs, task.begin, mid, left_task.box, left_task.centroids);
+      bound_range(refs, mid, task.end, right_task.box, right_task.centroids);
     } else {
-      auto* first = order.data() + task.begin;
-      auto* cut = std::partition(first, order.data() + task.end,
-                                 [&](uint32_t t) { return bin[t] < best_split; });
-      mid = uint32_t(cut - order.data());
+      Ref* first = refs.data() + task.begin;
+      mid = uint32_t(std::partition(first, refs.data() + task.end, [&](const Ref& r) { return bin_of(r) < best_split; }) -
+                     refs.data());
+      for (int k = 0; k < bin_count; ++k) {
+        BuildTask& side = k < best_split ? left_task : right_task;
+        side.box.grow(bins[k].box), side.centroids.grow(bins[k].centroids);
+      }
     }
     const uint32_t left = uint32_t(nodes.size());
     nodes[task.node].left = left;
     nodes.emplace_back();
     nodes.emplace_back();
+    left_task.node = left, left_task.end = mid;
+    right_task.node = left + 1, right_task.begin = mid;
     // Right pushed first so the left subtree is built (and numbered) first.
-    tasks.push_back({left + 1, mid, task.end, task.depth + 1});
-    tasks.push_back({left, task.begin, mid, task.depth + 1});
+    tasks.push_back(right_task);
+    tasks.push_back(left_task);
   }
   return nodes;
 }
 
 // The same tree built in parts: the top levels first, then the subtrees below `split_depth` side by
-// side (they own disjoint ranges of `order`), spliced in list order. The split depth is fixed, so the
+// side (they own disjoint ranges of `refs`), spliced in list order. The split depth is fixed, so the
 // layout does not depend on the thread count.
-std::vector<BinaryNode> build_binary(const std::vector<Bounds>& boxes, const std::vector<vec3f>& centroids,
-                                     std::vector<uint32_t>& order, unsigned threads) {
+std::vector<BinaryNode> build_binary(std::vector<Ref>& refs, unsigned threads) {
   constexpr uint32_t split_depth = 3;  // up to 8 subtrees
+  BuildTask root{0, 0, uint32_t(refs.size()), 0, {}, {}};
+  bound_range(refs, root.begin, root.end, root.box, root.centroids);
   std::vector<BuildTask> deferred, none;
-  std::vector<uint8_t> bin(order.size());
-  std::vector<BinaryNode> nodes =
-      build_binary(boxes, centroids, order, bin, 0, uint32_t(order.size()), 0, split_depth, deferred);
+  std::vector<BinaryNode> nodes = build_binary(refs, root, split_depth, deferred);
   std::vector<std::vector<BinaryNode>> parts(deferred.size());
   core::parallel_blocks(deferred.size(), 1, threads, [&](size_t k, size_t, size_t) {
-    const BuildTask& t = deferred[k];
-    parts[k] = build_binary(boxes, centroids, order, bin, t.begin, t.end, t.depth, UINT32_MAX, none);
+    parts[k] = build_binary(refs, deferred[k], UINT32_MAX, none);
   });
   size_t total = nodes.size();
   for (const std::vector<BinaryNode>& part : parts) total += part.size() - 1;
@@ -544,20 +568,19 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
   if (triangles == 0) throw_internal("TriangleBvh: no triangles");
   if (triangles >= (size_t(1) << 27)) throw_bad_input("mesh", "more than 2^27 triangles to measure");
 
-  std::vector<Bounds> boxes(triangles + 1);  // + 1: Box::grow's four-float loads
-  std::vector<vec3f> centroids(triangles + 1);
+  std::vector<Ref> refs(triangles);
   core::parallel_for(triangles, threads, [&](size_t t) {
     Box b;
     for (int k = 0; k < 3; ++k) b.grow_point(&mesh.positions[mesh.indices[3 * t + k]].x);
-    for (int k = 0; k < 3; ++k) boxes[t].lo[k] = b.lo[k], boxes[t].hi[k] = b.hi[k];
-    centroids[t] = {(b.lo[0] + b.hi[0]) * 0.5f, (b.lo[1] + b.hi[1]) * 0.5f, (b.lo[2] + b.hi[2]) * 0.5f};
+    Ref& r = refs[t];
+    for (int k = 0; k < 3; ++k) r.lo[k] = b.lo[k], r.hi[k] = b.hi[k];
+    r.triangle = uint32_t(t);
   });
+  const std::vector<BinaryNode> binary = build_binary(refs, threads);
   std::vector<uint32_t> order(triangles);
-  for (uint32_t t = 0; t < triangles; ++t) order[t] = t;
-  const std::vector<BinaryNode> binary = build_binary(boxes, centroids, order, threads);
-  // Freed before the per-triangle arrays are made: a third less peak memory on large meshes.
-  std::vector<Bounds>().swap(boxes);
-  std::vector<vec3f>().swap(centroids);
+  for (size_t s = 0; s < triangles; ++s) order[s] = refs[s].triangle;
+  // Freed before the per-triangle arrays are made: less peak memory on large meshes.
+  std::vector<Ref>().swap(refs);
 
   original_ = order;
   slot_.resize(triangles);
