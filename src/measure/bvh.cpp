@@ -319,6 +319,26 @@ std::vector<BinaryNode> build_binary(std::vector<Ref>& refs, unsigned threads) {
   return nodes;
 }
 
+// The tree over refs in their given order: each node halves its range, down to leaves of at most
+// max_leaf triangles; boxes come back up from the leaves. One pass over the refs, no binning.
+Box build_in_order(const std::vector<Ref>& refs, uint32_t begin, uint32_t end, uint32_t node,
+                   std::vector<BinaryNode>& nodes) {
+  Box box;
+  if (end - begin <= max_leaf) {
+    for (uint32_t i = begin; i < end; ++i) box.grow(refs[i].lo, refs[i].hi);
+    nodes[node].begin = begin, nodes[node].count = end - begin;
+  } else {
+    const uint32_t left = uint32_t(nodes.size()), mid = begin + (end - begin) / 2;
+    nodes[node].left = left;
+    nodes.emplace_back();
+    nodes.emplace_back();
+    box = build_in_order(refs, begin, mid, left, nodes);
+    box.grow(build_in_order(refs, mid, end, left + 1, nodes));
+  }
+  nodes[node].box = box.bounds();
+  return box;
+}
+
 // closest_group's points in lanes: per point (padded to whole batches) x, y, z, the squared distance
 // to its best triangle so far and that triangle's mesh index.
 struct LaneArrays {
@@ -563,20 +583,37 @@ bool use_wide_lanes() { return false; }
 
 }  // namespace
 
-TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) {
+TriangleBvh::TriangleBvh(const Mesh& mesh, unsigned threads) : TriangleBvh(mesh, {}, threads) {}
+
+TriangleBvh::TriangleBvh(const Mesh& mesh, std::span<const uint32_t> coherent_order, unsigned threads) {
   const size_t triangles = mesh.triangle_count();
   if (triangles == 0) throw_internal("TriangleBvh: no triangles");
   if (triangles >= (size_t(1) << 27)) throw_bad_input("mesh", "more than 2^27 triangles to measure");
+  const bool in_order = !coherent_order.empty();
+  if (in_order) {
+    std::vector<uint8_t> seen(triangles, 0);
+    for (const uint32_t t : coherent_order)
+      if (t >= triangles || seen[t]++) throw_internal("TriangleBvh: the coherent order is not a permutation of the triangles");
+    if (coherent_order.size() != triangles) throw_internal("TriangleBvh: the coherent order misses triangles");
+  }
 
   std::vector<Ref> refs(triangles);
-  core::parallel_for(triangles, threads, [&](size_t t) {
+  core::parallel_for(triangles, threads, [&](size_t i) {
+    const uint32_t t = in_order ? coherent_order[i] : uint32_t(i);
     Box b;
-    for (int k = 0; k < 3; ++k) b.grow_point(&mesh.positions[mesh.indices[3 * t + k]].x);
-    Ref& r = refs[t];
+    for (int k = 0; k < 3; ++k) b.grow_point(&mesh.positions[mesh.indices[3 * size_t(t) + k]].x);
+    Ref& r = refs[i];
     for (int k = 0; k < 3; ++k) r.lo[k] = b.lo[k], r.hi[k] = b.hi[k];
-    r.triangle = uint32_t(t);
+    r.triangle = t;
   });
-  const std::vector<BinaryNode> binary = build_binary(refs, threads);
+  std::vector<BinaryNode> binary;
+  if (in_order) {
+    binary.reserve(4 * (triangles / max_leaf + 1));
+    binary.emplace_back();
+    build_in_order(refs, 0, uint32_t(triangles), 0, binary);
+  } else {
+    binary = build_binary(refs, threads);
+  }
   std::vector<uint32_t> order(triangles);
   for (size_t s = 0; s < triangles; ++s) order[s] = refs[s].triangle;
   // Freed before the per-triangle arrays are made: less peak memory on large meshes.

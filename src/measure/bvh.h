@@ -1,10 +1,12 @@
 // Internal: a 4-wide bounding volume hierarchy over a mesh's triangles for exact closest-point
-// queries. Built with binned SAH (binary), then collapsed to 4-wide nodes whose child boxes are
-// structure-of-arrays floats, so one SSE pass measures the point's distance to all four.
+// queries. Built with binned SAH (binary; or by halving a given spatially coherent order, for few
+// queries), then collapsed to 4-wide nodes whose child boxes are structure-of-arrays floats, so one
+// SSE pass measures the point's distance to all four.
 #pragma once
 
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <vector>
 
 #include "lodkit/mesh.h"
@@ -37,6 +39,11 @@ class TriangleBvh {
   // Builds over every triangle of `mesh` (at least one; at most 2^27). Positions are copied, so the
   // mesh may go away. The layout depends only on the mesh, never on `threads`.
   explicit TriangleBvh(const Mesh& mesh, unsigned threads = 0);
+  // The same queries over a tree built by halving `coherent_order`, which lists every triangle once in
+  // a spatially coherent order (such as the Morton order of a corner), down to leaves of a few: one
+  // pass instead of the SAH search, for many triangles and few queries. The answers are the same (a
+  // brute-force scan's); a looser tree only makes each query visit more nodes.
+  TriangleBvh(const Mesh& mesh, std::span<const uint32_t> coherent_order, unsigned threads = 0);
 
   // The exact closest point over all triangles; ties go to the lowest triangle index, so the answer
   // equals a brute-force scan's. `hint` is a triangle whose distance starts the search (the previous

@@ -66,6 +66,20 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
     std::vector<uint32_t> fill(first.begin(), first.end() - 1);
     for (size_t t = 0; t < triangles; ++t) order[fill[chunk_of(t)]++] = uint32_t(t);  // increasing within a chunk
   }
+  // Each chunk's tree is built over its triangles in the Morton order of their first corners (by
+  // position id, then triangle) by halving, not by SAH: about 2^17 triangles per tree against one
+  // query per result edge, so the build was most of this search's time. Chunks are ranges of
+  // position ids, so that order lists chunk c's triangles in [first[c], first[c + 1]) too; `coherent`
+  // holds them as indices within the chunk (their rank in `order`).
+  std::vector<uint32_t> coherent(triangles);
+  {
+    std::vector<uint32_t> start(s.position_count + 1, 0), local(triangles);
+    for (size_t t = 0; t < triangles; ++t) ++start[s.position_of[input.indices[3 * t]] + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    for (size_t c = 0; c < chunks; ++c)
+      for (uint32_t i = first[c]; i < first[c + 1]; ++i) local[order[i]] = i - first[c];
+    for (size_t t = 0; t < triangles; ++t) coherent[start[s.position_of[input.indices[3 * t]]]++] = local[t];
+  }
   Mesh part;
   part.positions = input.positions;
   for (size_t c = 0; c < chunks; ++c) {
@@ -82,7 +96,7 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
         lo = {std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z)};
         hi = {std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z)};
       }
-    const measure::TriangleBvh bvh(part, s.threads);
+    const measure::TriangleBvh bvh(part, std::span<const uint32_t>(coherent).subspan(first[c], first[c + 1] - first[c]), s.threads);
     // Groups of consecutive points (neighbours on the result) share one traversal (closest_group,
     // same answers as closest()).
     const auto local = [&](uint32_t triangle) {  // its index in this chunk, or 0 (any start)

@@ -42,8 +42,9 @@ constexpr size_t fit_chunk_triangles = size_t(1) << 17;
 // The exact closest point of state.mesh (the input) to each of `points`, ties going to the lowest
 // input triangle, as a scan of all would find it. `hits` holds a first answer per point (squared
 // distance, input triangle and point, or an infinite distance) and is improved in place. The input
-// is searched through a BVH over about `chunk_triangles` of its triangles at a time (nearby ones),
-// skipping a chunk whose box is farther from a point than its best so far. Reads state.position_of
+// is searched through a BVH over about `chunk_triangles` of its triangles at a time (nearby ones; the
+// tree built by halving their Morton order), skipping a chunk whose box is farther from a point than
+// its best so far. Reads state.position_of
 // and position_count (to group the triangles) and state.threads; the answers never depend on these.
 void closest_on_input(const State& state, const std::vector<measure::vec3f>& points,
                       std::vector<measure::ClosestHit>& hits, size_t chunk_triangles);

@@ -6,7 +6,9 @@
 #include <cmath>
 
 #include <algorithm>
+#include <numeric>
 #include <random>
+#include <span>
 #include <vector>
 
 #include "core/shapes.h"
@@ -209,20 +211,22 @@ ClosestHit brute_force(const Mesh& m, const vec3f& p) {
   return best;
 }
 
-void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed);
+// With a build order: the tree built by halving it (TriangleBvh's coherent-order constructor).
+void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed, std::span<const uint32_t> order);
 
 // closest_group at both lane widths (8 falls back to 4 without AVX2).
-void expect_matches_brute_force_both_widths(const Mesh& m, uint32_t points, uint32_t seed) {
+void expect_matches_brute_force_both_widths(const Mesh& m, uint32_t points, uint32_t seed,
+                                            std::span<const uint32_t> order = {}) {
   for (const unsigned width : {4u, 8u}) {
     SCOPED_TRACE(width);
     TriangleBvh::set_lane_width(width);
-    expect_matches_brute_force(m, points, seed);
+    expect_matches_brute_force(m, points, seed, order);
   }
   TriangleBvh::set_lane_width(0);
 }
 
-void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed) {
-  const TriangleBvh bvh(m);
+void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed, std::span<const uint32_t> order) {
+  const TriangleBvh bvh = order.empty() ? TriangleBvh(m) : TriangleBvh(m, order);
   float3 lo, hi;
   bounding_box(m, lo, hi);
   std::mt19937 rng(seed);
@@ -341,6 +345,57 @@ TEST(MeasureBvh, LargeMeshStaysShallowAndExact) {
   EXPECT_EQ(one.depth(), four.depth());
   EXPECT_GE(bvh.node_count(), sphere.triangle_count() / (4 * 8));
   expect_matches_brute_force_both_widths(sphere, 300, 13);
+}
+
+// The tree built by halving a given order answers as the SAH tree does, whatever the order: coherent
+// (triangles by their centroids' x, then y), reversed, or shuffled (a poor tree, but still exact).
+TEST(MeasureBvh, CoherentOrderBuildMatchesBruteForce) {
+  const auto orders = [](const Mesh& m) {
+    const uint32_t n = uint32_t(m.triangle_count());
+    std::vector<uint32_t> by_x(n), reversed(n), shuffled(n);
+    std::iota(by_x.begin(), by_x.end(), 0u);
+    const auto centroid = [&](uint32_t t, int axis) {
+      float sum = 0;
+      for (int k = 0; k < 3; ++k) sum += (&m.positions[m.indices[3 * size_t(t) + k]].x)[axis];
+      return sum;
+    };
+    std::sort(by_x.begin(), by_x.end(), [&](uint32_t a, uint32_t b) {
+      return std::pair{centroid(a, 0), centroid(a, 1)} < std::pair{centroid(b, 0), centroid(b, 1)};
+    });
+    std::iota(reversed.rbegin(), reversed.rend(), 0u);
+    std::iota(shuffled.begin(), shuffled.end(), 0u);
+    std::shuffle(shuffled.begin(), shuffled.end(), std::mt19937(5));
+    return std::vector{by_x, reversed, shuffled};
+  };
+  Mesh ties = shapes::grid(16, 16);  // every triangle twice: ties go to the lower index
+  const size_t n = ties.indices.size();
+  for (size_t i = 0; i < n; ++i) ties.indices.push_back(ties.indices[i]);
+  for (const Mesh& m : {shapes::torus(1.0f, 0.3f, 48, 24), ties, shapes::cube()}) {
+    int which = 0;
+    for (const std::vector<uint32_t>& order : orders(m)) {
+      SCOPED_TRACE(which++);
+      expect_matches_brute_force_both_widths(m, 600, 17, order);
+    }
+  }
+  // One triangle: a leaf at the root.
+  Mesh one;
+  one.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  one.indices = {0, 1, 2};
+  const uint32_t only[] = {0};
+  EXPECT_EQ(TriangleBvh(one, only).closest({0.25f, 0.25f, 1}).triangle, 0u);
+}
+
+TEST(MeasureBvh, CoherentOrderMustListEveryTriangleOnce) {
+  const Mesh m = shapes::cube();  // 12 triangles
+  std::vector<uint32_t> order(12);
+  std::iota(order.begin(), order.end(), 0u);
+  EXPECT_NO_THROW(TriangleBvh(m, order));
+  std::vector<uint32_t> twice = order, short_one(order.begin(), order.end() - 1), out_of_range = order;
+  twice[3] = 4;
+  out_of_range[0] = 12;
+  EXPECT_ANY_THROW(TriangleBvh(m, twice));
+  EXPECT_ANY_THROW(TriangleBvh(m, short_one));
+  EXPECT_ANY_THROW(TriangleBvh(m, out_of_range));
 }
 
 }  // namespace
