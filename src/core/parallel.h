@@ -14,6 +14,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
 namespace lod::core {
@@ -61,6 +62,16 @@ void parallel_for(size_t count, unsigned threads, Fn&& fn, size_t block_size = 4
   parallel_blocks(count, block_size, threads, [&](size_t, size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) fn(i);
   });
+}
+
+// std::sort on up to `threads` threads. Elements that compare equal may end up in any order, so the
+// result is the same on any thread count only when they are identical (such as distinct keys).
+template <class It>
+void parallel_sort(It begin, It end, unsigned threads) {
+  const size_t workers = parallel_workers(size_t(end - begin), size_t(1) << 14, threads);
+  if (workers <= 1) return std::sort(begin, end);
+  tbb::task_arena arena{static_cast<int>(workers)};
+  arena.execute([&] { tbb::parallel_sort(begin, end); });
 }
 
 // Runs side() on a worker alongside main(), which runs on the calling thread itself (so it may report
