@@ -97,7 +97,9 @@ class Engine {
       // Candidates as (cost, position) keys: sorting the integers orders them by cost, then position,
       // without an indirection per comparison (NaN costs never pass the limit test).
       std::vector<uint64_t>& order = order_;
-      collect_candidates(cost_limit);
+      order.clear();
+      for (uint32_t u = 0; u < s_.position_count; ++u)
+        if (best_[u].other != none && best_[u].cost <= cost_limit) order.push_back(sort_key(best_[u].cost, u));
       if (order.empty() && guard_ > 0 && release_held()) continue;
       if (order.empty()) break;
 
@@ -217,22 +219,6 @@ class Engine {
   static uint64_t sort_key(float cost, uint32_t u) {
     const uint32_t bits = std::bit_cast<uint32_t>(cost + 0.0f);
     return uint64_t(bits & 0x80000000u ? ~bits : bits | 0x80000000u) << 32 | u;
-  }
-
-  // order_: every position's candidate within the cost limit as a sort_key, in position order (blocks
-  // collected side by side, joined in block order).
-  void collect_candidates(double cost_limit) {
-    constexpr size_t block = size_t(1) << 15;
-    const size_t blocks = (size_t(s_.position_count) + block - 1) / block;
-    block_keys_.resize(blocks);
-    core::parallel_blocks(s_.position_count, block, s_.threads, [&](size_t b, size_t begin, size_t end) {
-      std::vector<uint64_t>& keys = block_keys_[b];
-      keys.clear();
-      for (size_t u = begin; u < end; ++u)
-        if (best_[u].other != none && best_[u].cost <= cost_limit) keys.push_back(sort_key(best_[u].cost, uint32_t(u)));
-    });
-    order_.clear();
-    for (const std::vector<uint64_t>& keys : block_keys_) order_.insert(order_.end(), keys.begin(), keys.end());
   }
 
   void build_star() {
@@ -1189,7 +1175,6 @@ class Engine {
   std::vector<uint32_t> fill_;
   std::vector<std::vector<uint32_t>> star_slots_;  // build_star_parallel: per block, per position
   std::vector<uint64_t> order_;  // the pass's candidates, cheapest first (sort_key)
-  std::vector<std::vector<uint64_t>> block_keys_;  // collect_candidates: per block of positions
   std::vector<Decision> decisions_;  // per candidate of the pass
   std::vector<Reject> verdicts_;
   std::vector<Best> fallback_;
