@@ -68,18 +68,9 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
   }
   // Each chunk's tree is built over its triangles in the Morton order of their first corners (by
   // position id, then triangle) by halving, not by SAH: about 2^17 triangles per tree against one
-  // query per result edge, so the build was most of this search's time. Chunks are ranges of
-  // position ids, so that order lists chunk c's triangles in [first[c], first[c + 1]) too; `coherent`
-  // holds them as indices within the chunk (their rank in `order`).
-  std::vector<uint32_t> coherent(triangles);
-  {
-    std::vector<uint32_t> start(s.position_count + 1, 0), local(triangles);
-    for (size_t t = 0; t < triangles; ++t) ++start[s.position_of[input.indices[3 * t]] + 1];
-    std::partial_sum(start.begin(), start.end(), start.begin());
-    for (size_t c = 0; c < chunks; ++c)
-      for (uint32_t i = first[c]; i < first[c + 1]; ++i) local[order[i]] = i - first[c];
-    for (size_t t = 0; t < triangles; ++t) coherent[start[s.position_of[input.indices[3 * t]]]++] = local[t];
-  }
+  // query per result edge, so the build was most of this search's time. `coherent` lists the chunk's
+  // triangles so, as indices within the chunk (a counting sort over the chunk's position ids).
+  std::vector<uint32_t> coherent, start;
   Mesh part;
   part.positions = input.positions;
   for (size_t c = 0; c < chunks; ++c) {
@@ -96,7 +87,17 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
         lo = {std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z)};
         hi = {std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z)};
       }
-    const measure::TriangleBvh bvh(part, std::span<const uint32_t>(coherent).subspan(first[c], first[c + 1] - first[c]), s.threads);
+    {
+      const auto key = [&](uint32_t i) { return s.position_of[input.indices[3 * size_t(order[i])]]; };
+      uint32_t low = key(first[c]), high = low;
+      for (uint32_t i = first[c]; i < first[c + 1]; ++i) low = std::min(low, key(i)), high = std::max(high, key(i));
+      start.assign(size_t(high - low) + 2, 0);
+      for (uint32_t i = first[c]; i < first[c + 1]; ++i) ++start[key(i) - low + 1];
+      std::partial_sum(start.begin(), start.end(), start.begin());
+      coherent.resize(first[c + 1] - first[c]);
+      for (uint32_t i = first[c]; i < first[c + 1]; ++i) coherent[start[key(i) - low]++] = i - first[c];
+    }
+    const measure::TriangleBvh bvh(part, coherent, s.threads);
     // Groups of consecutive points (neighbours on the result) share one traversal (closest_group,
     // same answers as closest()).
     const auto local = [&](uint32_t triangle) {  // its index in this chunk, or 0 (any start)
