@@ -321,6 +321,9 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
         bvh.closest_group(points, count, foot[by_slot[first]].triangle, hits, scratch);
         for (uint32_t k = 0; k < count; ++k) {
           measure::ClosestHit& hit = hits[k];
+          // No triangle: every distance overflowed (coordinates near FLT_MAX); the sample keeps its
+          // last foot, which is always a triangle of the result.
+          if (hit.triangle == measure::ClosestHit{}.triangle) continue;
           bvh.resolve(hit, points[k]);
           Foot& f = foot[by_slot[first + k]];
           f.triangle = hit.triangle, f.v = hit.v, f.w = hit.w;

@@ -5,8 +5,11 @@
 #include <algorithm>
 #include <numeric>
 #include <random>
+#include <span>
+#include <string>
 
 #include "core/shapes.h"
+#include "lodkit/io.h"
 #include "lodkit/simplify.h"
 #include "measure/triangle_distance.h"
 #include "simplify/fit.h"
@@ -100,6 +103,33 @@ TEST(FitClosestOnInput, OverflowingDistancesFindNothingAndTheFitStillRuns) {
   }
   const SimplifyResult r = simplify(mesh, {.target_triangles = 4});
   EXPECT_NO_THROW(validate(r.mesh));
+}
+
+// Found by fuzz_simplify: a vertex at 1e38 makes every distance from the input samples to the result
+// overflow, so the feet search finds no triangle; the sample must keep a foot on the result (it
+// read the triangle "none" and crashed).
+TEST(FitClosestOnInput, SamplesWithoutAFootKeepTheirLastOne) {
+  const std::string off =
+      "COFF\n4 2 0\n0 0 1e38 255 0 0 2\n0 1 0 255 255 0 255\n1 1 0 0 0 255 255\n0 1 0 255 255 255 255\n"
+      "3 0 1 2 0.0 0.0 0.0\n3 0 2 3\n";
+  const Mesh mesh = read_off(std::span(reinterpret_cast<const uint8_t*>(off.data()), off.size()), "overflow.off");
+  SimplifyOptions options;  // as the fuzz input chose them
+  options.metric = Metric::qem;
+  options.target_ratio = 0;
+  options.min_normal_dot = 51 / 127.5f - 1;
+  options.distance_guard = 0;
+  options.fit_iterations = 3;
+  options.normal_weight = options.uv_weight = options.color_weight = 1.75f;
+  options.aggregate_distance = (1e38f + 2) * 255 / 1020;
+  options.aggregate_neighbours = 8;
+  options.locked = {1, 0, 0, 0};
+  options.importance = {0, 3, 6, 2};
+  for (const unsigned threads : {1u, 2u}) {
+    options.threads = threads;
+    const SimplifyResult r = simplify(mesh, options);
+    EXPECT_NO_THROW(validate(r.mesh));
+    EXPECT_EQ(replay(mesh, r.record, r.record.collapses.size()), r.mesh);
+  }
 }
 
 }  // namespace
