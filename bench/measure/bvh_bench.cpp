@@ -36,9 +36,9 @@ int main(int argc, char** argv) {
     if (file.empty()) throw std::invalid_argument("expected a mesh");
     const lod::Mesh mesh = bench::load_positions(file);
     // Query points: vertices moved by a hundredth of the bounding box's extent.
-    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
-    for (const lod::float3& p : mesh.positions)
-      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], (&p.x)[k]), hi[k] = std::max(hi[k], (&p.x)[k]);
+    lod::float3 low, high;
+    lod::bounding_box(mesh, low, high);
+    const float lo[3] = {low.x, low.y, low.z}, hi[3] = {high.x, high.y, high.z};
     const float offset = 0.01f * std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
     std::vector<uint32_t> order;
     if (coherent) {

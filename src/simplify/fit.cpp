@@ -323,7 +323,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
           measure::ClosestHit& hit = hits[k];
           // No triangle: every distance overflowed (coordinates near FLT_MAX); the sample keeps its
           // last foot, which is always a triangle of the result.
-          if (hit.triangle == measure::ClosestHit{}.triangle) continue;
+          if (hit.triangle == none) continue;
           bvh.resolve(hit, points[k]);
           Foot& f = foot[by_slot[first + k]];
           f.triangle = hit.triangle, f.v = hit.v, f.w = hit.w;

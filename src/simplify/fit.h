@@ -44,8 +44,8 @@ constexpr size_t fit_chunk_triangles = size_t(1) << 17;
 // distance, input triangle and point, or an infinite distance) and is improved in place. The input
 // is searched through a BVH over about `chunk_triangles` of its triangles at a time (nearby ones; the
 // tree built by halving their Morton order), skipping a chunk whose box is farther from a point than
-// its best so far. Reads state.position_of
-// and position_count (to group the triangles) and state.threads; the answers never depend on these.
+// its best so far. Reads state.position_of and position_count (to group the triangles) and
+// state.threads; the answers never depend on these.
 void closest_on_input(const State& state, const std::vector<measure::vec3f>& points,
                       std::vector<measure::ClosestHit>& hits, size_t chunk_triangles);
 
