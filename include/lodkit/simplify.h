@@ -86,6 +86,9 @@ struct SimplifyOptions {
   // placements. Not done with keep_vertices (positions are input vertices there) or on locked
   // positions.
   uint32_t fit_iterations = 3;
+  // Before the fit's first step, flip edges whose other diagonal lies nearer the input (Hoppe et
+  // al.'s flip step; the triangles keep their ids, each changes one corner). Part of the fit.
+  bool fit_flips = true;
 
   // Record every collapse in SimplifyResult::record (needed for replay, undo and progressive meshes).
   bool record = true;
@@ -135,6 +138,8 @@ struct SimplifyRecord {
   // Applied after the last collapse (replay of all collapses ends with them; undo starts with them).
   // Progressive meshes play collapses only: their coarsest level is the mesh before the fit.
   std::vector<FittedPosition> fitted;
+  // The fit's edge flips, applied before its moves: two corner relinks per flip (one per face).
+  std::vector<Relink> flipped;
   std::vector<uint32_t> removed_faces;
   std::vector<Relink> relinks;
   std::vector<WedgeChange> wedges;
@@ -163,6 +168,7 @@ struct SimplifyResult {
   uint64_t deferred_distance = 0;  // collapses the distance guard held back (each time it did)
   uint64_t pruned_triangles = 0;
   uint64_t fitted_positions = 0;  // positions the final fit moved
+  uint64_t flipped_edges = 0;     // edges the final fit flipped
   uint32_t passes = 0;
   // Wall-clock time: setting up, the collapses, the final fit (0 without one), and the whole call
   // (these and building the output mesh).

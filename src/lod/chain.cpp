@@ -96,6 +96,9 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
       so.target_triangles = by_error ? 0 : std::max<uint64_t>(target, 1);
       if (by_error) so.target_ratio = 0, so.max_error = errors[i] * chain.diagonal, so.max_relative_error = -1;
       so.record = o.morph;
+      // A geomorph moves a level's vertices onto the next level's: that level's triangles must be
+      // this one's after collapses alone.
+      if (o.morph) so.fit_flips = false;
       if (o.shared_vertices) {
         so.keep_vertices = true;
         so.normal_weight = so.uv_weight = so.color_weight = 0;

@@ -27,6 +27,10 @@ constexpr double step = 0.7;
 // solve it exactly). Corpus: 3 sweeps, geometric means of lodkit / best peer 10% Hausdorff 0.741 ->
 // 0.739, 1% 0.868 -> 0.855, at +2% of the time on armadillo-s2 -> 83,200 (bench/README).
 constexpr uint32_t sweeps = 3;
+// A flip must lower its samples' squared distances by this share of their sum; below flip_noise
+// (a mean squared distance, normalised frame: 1e-6 of the extent) they are float noise. Corpus at
+// 10% and 1%: margins 0.02-0.25 gave the same shares within a case (bench/README, fifteenth session).
+constexpr double flip_margin = 0.02, flip_noise = 1e-12;
 
 // An input vertex's closest point on the result (found once per iteration): the result's triangle
 // and the barycentric weights of its corners 1 and 2, which move with the triangle's corners.
@@ -138,7 +142,8 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
   }
 }
 
-void fit_positions(State& s, uint32_t iterations, double weight, std::vector<FittedPosition>* fitted) {
+void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std::vector<FittedPosition>* fitted,
+                   std::vector<Relink>* flipped) {
   const Mesh& input = s.mesh;
   const size_t triangles = s.alive.size();
 
@@ -149,9 +154,11 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
   // The result with its own compact numbering: live positions in order of first use.
   std::vector<uint32_t> slot(s.position_count, none), position;  // position id -> slot, and back
   std::vector<uint32_t> first_use;  // per slot: the first result triangle at it
+  std::vector<uint32_t> state_triangle;  // per result triangle: its (input) triangle id
   Mesh result;
   for (size_t t = 0; t < triangles; ++t) {
     if (!s.alive[t]) continue;
+    state_triangle.push_back(uint32_t(t));
     for (uint32_t k = 0; k < 3; ++k) {
       const uint32_t p = s.corner_pos[3 * t + k];
       if (slot[p] == none) {
@@ -246,28 +253,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
     for (uint32_t k = 0; k < 3; ++k)
       edge_of_side[3 * t + k] = uint32_t(std::lower_bound(edges.begin(), edges.end(), side(t, k)) - edges.begin());
   for (auto& [a, b] : edges) a = slot[a], b = slot[b];  // from here on, slots
-  std::vector<measure::vec3f> edge_target(edges.size());
-  for (size_t e = 0; e < edges.size(); ++e) {
-    const float3 &a = result.positions[edges[e].first], &b = result.positions[edges[e].second];
-    edge_target[e] = measure::vec3f((a.x + b.x) * 0.5f, (a.y + b.y) * 0.5f, (a.z + b.z) * 0.5f);
-  }
-  {
-    // A first answer from an input triangle at each end (the first of the pull's candidates): a
-    // bound that lets the exact search skip the input's far chunks, and its starting triangle.
-    std::vector<measure::ClosestHit> hits(edges.size());
-    core::parallel_for(edges.size(), s.threads, [&](size_t e) {
-      measure::ClosestHit& best = hits[e];
-      for (const uint32_t j : {edges[e].first, edges[e].second}) {
-        if (candidates_first[j] == candidates_first[j + 1]) continue;
-        const uint32_t t = candidates[candidates_first[j]];
-        const measure::TrianglePoint hit = on_input_triangle(input, t, edge_target[e]);
-        if (closer(hit.distance_squared, t, best)) best.distance_squared = hit.distance_squared, best.triangle = t, best.point = hit.point;
-      }
-    });
-    closest_on_input(s, edge_target, hits, fit_chunk_triangles);
-    for (size_t e = 0; e < edges.size(); ++e)
-      if (hits[e].triangle != none) edge_target[e] = hits[e].point;  // else the midpoint: no pull
-  }
+  std::vector<measure::vec3f> edge_target(edges.size());  // found in the first iteration, after the flips
   std::vector<vec3d> edge_residual(edges.size());
   std::vector<double> edge_area(edges.size());
   std::vector<vec3d> num(m);
@@ -309,6 +295,202 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
     }
     return c;
   };
+  // Per result triangle, the samples whose feet lie in it, and each sample's squared distance to
+  // its foot (for the flips, on the first feet).
+  std::vector<uint32_t> foot_first, foot_samples;
+  std::vector<float> foot_distance(flips ? samples.size() : 0, 0.0f);
+  const auto file_feet = [&]() {
+    foot_first.assign(result_triangles + 1, 0);
+    foot_samples.resize(samples.size());
+    for (const Foot& f : foot) ++foot_first[f.triangle + 1];
+    std::partial_sum(foot_first.begin(), foot_first.end(), foot_first.begin());
+    std::vector<uint32_t> fill(foot_first.begin(), foot_first.end() - 1);
+    for (size_t i = 0; i < foot.size(); ++i) foot_samples[fill[foot[i].triangle]++] = uint32_t(i);
+  };
+  // The triangle of result triangle t's corners, prepared for distance queries.
+  const auto prepared = [&](size_t t) {
+    const uint32_t* c = &result.indices[3 * t];
+    return measure::prepare_triangle(result.positions[c[0]], result.positions[c[1]], result.positions[c[2]]);
+  };
+  // A flip candidate: interior edge e runs p -> q on side k1 of result triangle t1 = (p, q, r) and
+  // q -> p on side k2 of t2 = (q, p, s); flipped, t1 becomes (p, s, r) and t2 (q, r, s), each
+  // changing one corner (k1 + 1 and k2 + 1).
+  struct Flip {
+    uint32_t edge, t1, k1, t2, k2;
+    double gain;  // the drop in the samples' weighted squared distance
+  };
+  const auto flip_corners = [&](const Flip& f, uint32_t& p, uint32_t& q, uint32_t& r, uint32_t& x) {
+    const uint32_t* c1 = &result.indices[3 * size_t(f.t1)];
+    p = c1[f.k1], q = c1[(f.k1 + 1) % 3], r = c1[(f.k1 + 2) % 3], x = result.indices[3 * size_t(f.t2) + (f.k2 + 2) % 3];
+  };
+  // Edges whose flip brings the input samples in its two triangles nearer (the first iteration's
+  // feet), by more than flip_margin of their sum: candidates, before the guard in apply_flips.
+  const auto propose_flips = [&]() {
+    std::vector<Flip> proposed;
+    std::vector<uint32_t> sides_of(2 * edges.size(), none);  // the two sides of each edge (none: border)
+    std::vector<uint8_t> sides(edges.size(), 0);
+    for (uint32_t i = 0; i < 3 * result_triangles; ++i) {
+      const uint32_t e = edge_of_side[i];
+      if (sides[e] < 2) sides_of[2 * e + sides[e]] = i;
+      sides[e] = uint8_t(std::min(3, sides[e] + 1));
+    }
+    std::vector<uint64_t> existing(edges.size());  // slot pairs, for "r-s is already an edge"
+    const auto key = [](uint32_t a, uint32_t b) { return (uint64_t(std::min(a, b)) << 32) | std::max(a, b); };
+    for (size_t e = 0; e < edges.size(); ++e) existing[e] = key(edges[e].first, edges[e].second);
+    std::sort(existing.begin(), existing.end());
+    file_feet();
+    std::vector<Flip> found(edges.size(), Flip{none, 0, 0, 0, 0, 0});
+    const double min_dot = s.options.min_normal_dot, scale2 = s.scale * s.scale;
+    core::parallel_for(edges.size(), s.threads, [&](size_t e) {
+      if (sides[e] != 2) return;
+      // The samples' squared distances now; below the noise level (squared, normalised frame)
+      // there is nothing to gain.
+      double old_sum = 0, weights = 0;
+      for (const uint32_t t : {sides_of[2 * e] / 3, sides_of[2 * e + 1] / 3})
+        for (uint32_t k = foot_first[t]; k < foot_first[t + 1]; ++k) {
+          const double a = share[samples[foot_samples[k]]];
+          old_sum += a * foot_distance[foot_samples[k]], weights += a;
+        }
+      if (!(old_sum * scale2 > flip_noise * weights)) return;
+      Flip f{uint32_t(e), sides_of[2 * e] / 3, sides_of[2 * e] % 3, sides_of[2 * e + 1] / 3, sides_of[2 * e + 1] % 3, 0};
+      uint32_t p, q, r, x;
+      flip_corners(f, p, q, r, x);
+      const uint32_t* c2 = &result.indices[3 * size_t(f.t2)];
+      if (c2[f.k2] != q || c2[(f.k2 + 1) % 3] != p || r == x) return;  // not an oriented manifold edge
+      for (const uint32_t j : {p, q, r, x})
+        if (s.flags[position[j]] & flag_complex) return;
+      // A seam or material boundary along p-q stays (the flipped faces take p's and q's wedges
+      // from either face).
+      const uint32_t* w1 = &s.corners[3 * size_t(state_triangle[f.t1])];
+      const uint32_t* w2 = &s.corners[3 * size_t(state_triangle[f.t2])];
+      if (w1[f.k1] != w2[(f.k2 + 1) % 3] || w1[(f.k1 + 1) % 3] != w2[f.k2] ||
+          s.material(state_triangle[f.t1]) != s.material(state_triangle[f.t2]))
+        return;
+      if (std::binary_search(existing.begin(), existing.end(), key(r, x))) return;
+      // Neither flipped face may degenerate or turn by more than the flip limit from either old
+      // face (each keeps its triangle id: the engine's rule for a face that a collapse changes).
+      const vec3d P = normalized(p), Q = normalized(q), R = normalized(r), X = normalized(x);
+      const vec3d n1 = cross(Q - P, R - P), n2 = cross(P - Q, X - Q);
+      const double l1 = length(n1), l2 = length(n2);
+      if (!(l1 > 0) || !(l2 > 0) || dot(n1, n2) >= l1 * l2) return;  // coplanar: the flip changes nothing
+      const double longest = std::max({length_squared(X - P), length_squared(R - X), length_squared(R - P),
+                                       length_squared(R - Q), length_squared(X - Q)});
+      for (const vec3d& n : {cross(X - P, R - P), cross(R - Q, X - Q)}) {
+        const double ln = length(n);
+        if (!(ln > 1e-12 * longest) || dot(n, n1) < min_dot * ln * l1 || dot(n, n2) < min_dot * ln * l2) return;
+      }
+      const measure::vec3f fp(result.positions[p]), fq(result.positions[q]), fr(result.positions[r]), fx(result.positions[x]);
+      const measure::PreparedTriangle new1 = measure::prepare_triangle(fp, fx, fr), new2 = measure::prepare_triangle(fq, fr, fx);
+      double new_sum = 0;
+      for (const uint32_t t : {f.t1, f.t2})
+        for (uint32_t k = foot_first[t]; k < foot_first[t + 1]; ++k) {
+          const uint32_t v = samples[foot_samples[k]];
+          const measure::vec3f point(input.positions[v]);
+          new_sum += share[v] * std::min(measure::closest_distance_squared(point, new1), measure::closest_distance_squared(point, new2));
+        }
+      if (new_sum < (1 - flip_margin) * old_sum) f.gain = old_sum - new_sum, found[e] = f;
+    });
+    for (const Flip& f : found)
+      if (f.edge != none) proposed.push_back(f);
+    return proposed;
+  };
+  // Result -> input: each proposed flip's old faces' centroids, then the flipped edge's midpoint and
+  // the flipped faces' centroids (the old edge's midpoint is among the edges' own points).
+  constexpr uint32_t probes_per_flip = 5;
+  const auto flip_probes = [&](const Flip& f, measure::vec3f* out) {
+    uint32_t p, q, r, x;
+    flip_corners(f, p, q, r, x);
+    const measure::vec3f fp(result.positions[p]), fq(result.positions[q]), fr(result.positions[r]), fx(result.positions[x]);
+    const float third = 1.0f / 3;
+    out[0] = (fp + fq + fr) * third, out[1] = (fq + fp + fx) * third;
+    out[2] = (fr + fx) * 0.5f, out[3] = (fp + fx + fr) * third, out[4] = (fq + fr + fx) * third;
+  };
+  // Applies, greedily by gain, the proposed flips whose points lie no farther from the input than
+  // the old pair's farthest (`hits`: the edges' closest points, then each flip's probes), none
+  // sharing a position with another: records them and moves the feet in their faces.
+  const auto apply_flips = [&](std::vector<Flip>& proposed, const std::vector<measure::ClosestHit>& hits) {
+    std::vector<uint8_t> keep(proposed.size(), 0);
+    for (size_t i = 0; i < proposed.size(); ++i) {
+      const measure::ClosestHit* h = &hits[edges.size() + probes_per_flip * i];
+      const float old_far = std::max({hits[proposed[i].edge].distance_squared, h[0].distance_squared, h[1].distance_squared});
+      const float new_far = std::max({h[2].distance_squared, h[3].distance_squared, h[4].distance_squared});
+      keep[i] = new_far <= old_far;
+    }
+    std::vector<uint32_t> order;
+    for (uint32_t i = 0; i < proposed.size(); ++i)
+      if (keep[i]) order.push_back(i);
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      return proposed[a].gain > proposed[b].gain || (proposed[a].gain == proposed[b].gain && a < b);
+    });
+    std::vector<uint8_t> taken(m, 0);
+    for (const uint32_t i : order) {
+      const Flip& f = proposed[i];
+      uint32_t p, q, r, x;
+      flip_corners(f, p, q, r, x);
+      if (taken[p] | taken[q] | taken[r] | taken[x]) continue;
+      taken[p] = taken[q] = taken[r] = taken[x] = 1;
+      const uint32_t t1 = state_triangle[f.t1], t2 = state_triangle[f.t2];
+      const uint32_t c1 = 3 * t1 + (f.k1 + 1) % 3, c2 = 3 * t2 + (f.k2 + 1) % 3;  // the corners that change
+      const uint32_t wedge_x = s.corners[3 * size_t(t2) + (f.k2 + 2) % 3], wedge_r = s.corners[3 * size_t(t1) + (f.k1 + 2) % 3];
+      if (flipped) {
+        flipped->push_back({t1, (f.k1 + 1) % 3, s.corners[c1], wedge_x});
+        flipped->push_back({t2, (f.k2 + 1) % 3, s.corners[c2], wedge_r});
+      }
+      s.corners[c1] = wedge_x, s.corners[c2] = wedge_r;
+      s.corner_pos[c1] = s.position_of[wedge_x], s.corner_pos[c2] = s.position_of[wedge_r];
+      result.indices[3 * size_t(f.t1) + (f.k1 + 1) % 3] = x;
+      result.indices[3 * size_t(f.t2) + (f.k2 + 1) % 3] = r;
+      // Sides: t1 = (p, s, r) runs p->s (was t2's) and s->r (the new edge); t2 = (q, r, s) runs
+      // q->r (was t1's) and r->s.
+      uint32_t* side1 = &edge_of_side[3 * size_t(f.t1)];
+      uint32_t* side2 = &edge_of_side[3 * size_t(f.t2)];
+      const uint32_t qr = side1[(f.k1 + 1) % 3], px = side2[(f.k2 + 1) % 3];
+      side1[f.k1] = px, side1[(f.k1 + 1) % 3] = f.edge;
+      side2[f.k2] = qr, side2[(f.k2 + 1) % 3] = f.edge;
+      edges[f.edge] = {r, x};
+      const measure::ClosestHit& mid = hits[edges.size() + probes_per_flip * i + 2];
+      if (mid.triangle != none) edge_target[f.edge] = mid.point;
+      else edge_target[f.edge] = (measure::vec3f(result.positions[r]) + measure::vec3f(result.positions[x])) * 0.5f;
+      const measure::PreparedTriangle new1 = prepared(f.t1), new2 = prepared(f.t2);
+      for (const uint32_t t : {f.t1, f.t2})
+        for (uint32_t k = foot_first[t]; k < foot_first[t + 1]; ++k) {
+          const uint32_t i_sample = foot_samples[k];
+          const measure::vec3f point(input.positions[samples[i_sample]]);
+          const measure::TrianglePoint h1 = measure::closest_on_triangle(point, new1), h2 = measure::closest_on_triangle(point, new2);
+          foot[i_sample] = h1.distance_squared <= h2.distance_squared ? Foot{f.t1, h1.v, h1.w} : Foot{f.t2, h2.v, h2.w};
+        }
+    }
+  };
+  // Each result edge's midpoint (and each proposed flip's points) against the input: the exact
+  // closest point, seeded by an input triangle at the point's corners (the first of the pull's
+  // candidates), a bound that lets the search skip the input's far chunks and its start.
+  const auto search_edges = [&](std::vector<Flip>& proposed) {
+    std::vector<measure::vec3f> points(edges.size() + probes_per_flip * proposed.size());
+    for (size_t e = 0; e < edges.size(); ++e) {
+      const float3 &a = result.positions[edges[e].first], &b = result.positions[edges[e].second];
+      points[e] = measure::vec3f((a.x + b.x) * 0.5f, (a.y + b.y) * 0.5f, (a.z + b.z) * 0.5f);
+    }
+    for (size_t i = 0; i < proposed.size(); ++i) flip_probes(proposed[i], &points[edges.size() + probes_per_flip * i]);
+    std::vector<measure::ClosestHit> hits(points.size());
+    const auto seed = [&](size_t i, std::initializer_list<uint32_t> corners) {
+      measure::ClosestHit& best = hits[i];
+      for (const uint32_t j : corners) {
+        if (candidates_first[j] == candidates_first[j + 1]) continue;
+        const uint32_t t = candidates[candidates_first[j]];
+        const measure::TrianglePoint hit = on_input_triangle(input, t, points[i]);
+        if (closer(hit.distance_squared, t, best)) best.distance_squared = hit.distance_squared, best.triangle = t, best.point = hit.point;
+      }
+    };
+    core::parallel_for(edges.size(), s.threads, [&](size_t e) { seed(e, {edges[e].first, edges[e].second}); });
+    core::parallel_for(proposed.size(), s.threads, [&](size_t i) {
+      uint32_t p, q, r, x;
+      flip_corners(proposed[i], p, q, r, x);
+      for (uint32_t k = 0; k < probes_per_flip; ++k) seed(edges.size() + probes_per_flip * i + k, {p, q, r, x});
+    });
+    closest_on_input(s, points, hits, fit_chunk_triangles);
+    for (size_t e = 0; e < edges.size(); ++e) edge_target[e] = hits[e].triangle != none ? hits[e].point : points[e];  // none: no pull
+    if (!proposed.empty()) apply_flips(proposed, hits);
+  };
   for (uint32_t iteration = 0; iteration < iterations; ++iteration) {
     const measure::TriangleBvh bvh(result, s.threads);
     core::parallel_blocks(group_first.size() - 1, 256, s.threads, [&](size_t, size_t group_begin, size_t group_end) {
@@ -327,9 +509,15 @@ void fit_positions(State& s, uint32_t iterations, double weight, std::vector<Fit
           bvh.resolve(hit, points[k]);
           Foot& f = foot[by_slot[first + k]];
           f.triangle = hit.triangle, f.v = hit.v, f.w = hit.w;
+          if (iteration == 0 && flips) foot_distance[by_slot[first + k]] = hit.distance_squared;
         }
       }
     });
+    if (iteration == 0) {
+      std::vector<Flip> proposed;
+      if (flips) proposed = propose_flips();
+      search_edges(proposed);
+    }
     for (uint32_t sweep = 0; sweep < sweeps; ++sweep) {
       // Each position's normal equation with its neighbours held still, summed in sample order (so
       // the sums do not depend on the thread count).

@@ -205,6 +205,14 @@ void Replay::undo(const SimplifyRecord& record, const Collapse& c) {
 void Replay::fit(const SimplifyRecord& record, bool forwards) {
   for (const FittedPosition& f : record.fitted)
     if (f.position >= position.size()) throw_usage("replay: the collapse record does not belong to this mesh");
+  for (const Relink& r : record.flipped)
+    if (r.triangle >= alive.size() || r.corner > 2 || r.from >= position_of.size() || r.to >= position_of.size())
+      throw_usage("replay: the collapse record does not belong to this mesh");
+  // Flips change corners and moves change positions: the two commute.
+  if (forwards)
+    for (const Relink& r : record.flipped) corners[3 * size_t(r.triangle) + r.corner] = r.to;
+  else
+    for (size_t i = record.flipped.size(); i-- > 0;) corners[3 * size_t(record.flipped[i].triangle) + record.flipped[i].corner] = record.flipped[i].from;
   for (const FittedPosition& f : record.fitted) {
     position[f.position] = forwards ? f.new_position : f.old_position;
     moves[f.position] += forwards ? 1 : -1;

@@ -1387,9 +1387,11 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
   // places positions for every pose, which a rest-pose fit would undo.
   if (options.fit_iterations > 0 && !options.keep_vertices && !multipose) {
     std::vector<FittedPosition> fitted;
-    fit_positions(state, options.fit_iterations, fit_weight, &fitted);
+    std::vector<Relink> flipped;
+    fit_positions(state, options.fit_iterations, fit_weight, options.fit_flips, &fitted, &flipped);
     result.fitted_positions = fitted.size();
-    if (options.record) result.record.fitted = std::move(fitted);
+    result.flipped_edges = flipped.size() / 2;
+    if (options.record) result.record.fitted = std::move(fitted), result.record.flipped = std::move(flipped);
     result.seconds_fit = seconds(fit_start, clock::now());
   }
 

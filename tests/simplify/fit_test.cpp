@@ -10,9 +10,11 @@
 
 #include "core/shapes.h"
 #include "lodkit/io.h"
+#include "lodkit/measure.h"
 #include "lodkit/simplify.h"
 #include "measure/triangle_distance.h"
 #include "simplify/fit.h"
+#include "simplify/record.h"
 
 namespace lod::collapse {
 namespace {
@@ -132,5 +134,107 @@ TEST(FitClosestOnInput, SamplesWithoutAFootKeepTheirLastOne) {
   }
 }
 
+
+// A roof over the unit square, z = h (1 - |x + y - 1|) (ridge from (0, 1) to (1, 0)) or, with
+// `ridge_on_main_diagonal`, z = h (1 - |x - y|) (ridge from (0, 0) to (1, 1)), finely triangulated
+// with every cell split along the ridge's direction, so the mesh is exactly the roof.
+Mesh roof(uint32_t n, float h, bool ridge_on_main_diagonal) {
+  Mesh mesh;
+  for (uint32_t j = 0; j <= n; ++j)
+    for (uint32_t i = 0; i <= n; ++i) {
+      const float x = float(i) / float(n), y = float(j) / float(n);
+      const float d = ridge_on_main_diagonal ? std::fabs(x - y) : std::fabs(x + y - 1);
+      mesh.positions.push_back({x, y, h * (1 - d)});
+    }
+  const auto at = [&](uint32_t i, uint32_t j) { return j * (n + 1) + i; };
+  for (uint32_t j = 0; j < n; ++j)
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t a = at(i, j), b = at(i + 1, j), c = at(i + 1, j + 1), d = at(i, j + 1);
+      if (ridge_on_main_diagonal) mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
+      else mesh.indices.insert(mesh.indices.end(), {a, b, d, b, c, d});
+    }
+  return mesh;
+}
+
+// The fit on a hand-made collapse state over `input`: every input vertex collapsed into the nearest
+// corner of the unit square, and the result the two triangles (p, q, r) and (q, p, s) with
+// p = (0, 0), q = (1, 1), r = (0, 1), s = (1, 0): its diagonal runs from p to q.
+struct QuadResult {
+  std::vector<uint32_t> corners;  // of the two live triangles (ids 0 and 1), after the fit
+  std::vector<Relink> flipped;
+  std::vector<FittedPosition> fitted;
+};
+QuadResult fit_quad(const Mesh& input, uint32_t n, bool flips, unsigned threads) {
+  const SimplifyOptions options;
+  State state(input, options);
+  state.threads = threads;
+  const uint32_t v = uint32_t(input.vertex_count());
+  state.position_count = v;
+  state.position_of.resize(v), state.external.resize(v);
+  std::iota(state.position_of.begin(), state.position_of.end(), 0u);
+  std::iota(state.external.begin(), state.external.end(), 0u);
+  state.position = input.positions;
+  state.moves.assign(v, 0);
+  state.flags.assign(v, 0);
+  const uint32_t p = 0, q = n * (n + 1) + n, r = n * (n + 1), s = n;
+  state.successor.resize(v);
+  for (uint32_t i = 0; i < v; ++i) {
+    const float3& x = input.positions[i];
+    state.successor[i] = x.x < 0.5f ? (x.y < 0.5f ? p : r) : (x.y < 0.5f ? s : q);
+  }
+  for (const uint32_t corner : {p, q, r, s}) state.successor[corner] = ~0u;
+  state.corners = input.indices;
+  const uint32_t live[6] = {p, q, r, q, p, s};
+  std::copy(live, live + 6, state.corners.begin());
+  state.corner_pos = state.corners;
+  state.alive.assign(input.triangle_count(), 0);
+  state.alive[0] = state.alive[1] = 1;
+  state.live_triangles = 2;
+  state.center = {0.5, 0.5, 0.5};
+  state.scale = 1.0;
+  QuadResult out;
+  fit_positions(state, 1, 0.2, flips, &out.fitted, &out.flipped);
+  out.corners.assign(state.corners.begin(), state.corners.begin() + 6);
+  return out;
+}
+
+// The quad's diagonal p-q crosses the roof's ridge r-s: the samples lie nearer the other diagonal
+// (on it, exactly), so the fit flips the edge: each triangle changes one corner (triangle 0's q to
+// s, triangle 1's p to r), the result is then the roof itself, and the fit has nothing left to
+// move. Without flips, or with the ridge along p-q already, the triangles stay.
+TEST(FitFlips, AQuadAcrossARidgeFlipsOntoIt) {
+  const uint32_t n = 8;
+  const uint32_t p = 0, q = n * (n + 1) + n, r = n * (n + 1), s = n;
+  const Mesh across = roof(n, 0.5f, false);
+  for (const unsigned threads : {1u, 2u}) {
+    const QuadResult flipped = fit_quad(across, n, true, threads);
+    ASSERT_EQ(flipped.flipped.size(), 2u);
+    EXPECT_EQ(flipped.flipped[0].triangle, 0u);
+    EXPECT_EQ(flipped.flipped[0].corner, 1u);
+    EXPECT_EQ(flipped.flipped[0].from, q);
+    EXPECT_EQ(flipped.flipped[0].to, s);
+    EXPECT_EQ(flipped.flipped[1].triangle, 1u);
+    EXPECT_EQ(flipped.flipped[1].corner, 1u);
+    EXPECT_EQ(flipped.flipped[1].from, p);
+    EXPECT_EQ(flipped.flipped[1].to, r);
+    EXPECT_EQ(flipped.corners, (std::vector<uint32_t>{p, s, r, q, r, s}));
+    for (const FittedPosition& f : flipped.fitted) {
+      EXPECT_NEAR(f.new_position.x, f.old_position.x, 1e-5f);
+      EXPECT_NEAR(f.new_position.y, f.old_position.y, 1e-5f);
+      EXPECT_NEAR(f.new_position.z, f.old_position.z, 1e-5f);
+    }
+    Mesh result;
+    result.positions = across.positions;
+    result.indices = flipped.corners;
+    EXPECT_LT(compare(across, result, {.samples = 20'000}).hausdorff, 1e-5);
+
+    const QuadResult kept = fit_quad(across, n, false, threads);
+    EXPECT_TRUE(kept.flipped.empty());
+    EXPECT_EQ(kept.corners, (std::vector<uint32_t>{p, q, r, q, p, s}));
+  }
+  const QuadResult along = fit_quad(roof(n, 0.5f, true), n, true, 1);
+  EXPECT_TRUE(along.flipped.empty());
+  EXPECT_EQ(along.corners, (std::vector<uint32_t>{p, q, r, q, p, s}));
+}
 }  // namespace
 }  // namespace lod::collapse

@@ -165,14 +165,25 @@ TEST(SimplifyBehaviour, LooseDistanceGuardChangesNothing) {
   EXPECT_EQ(a.mesh.positions, b.mesh.positions);
 }
 
-// The final fit (SimplifyOptions::fit_iterations) only moves positions: the same triangles as
-// without it, closer to the input by lod::compare's measure (an independent closest-point search).
+// The final fit (SimplifyOptions::fit_iterations) moves positions and, with fit_flips, flips
+// edges: without flips the same triangles as without the fit, with them the same vertices and
+// triangle count; either way closer to the input by lod::compare's measure (an independent
+// closest-point search).
 TEST(SimplifyBehaviour, FitBringsTheResultCloserToTheInput) {
   for (const Mesh& mesh : {shapes::torus(1.0f, 0.4f, 64, 32), shapes::icosphere(4)}) {
     const SimplifyResult plain = simplify(mesh, {.target_ratio = 0.03f, .fit_iterations = 0});
+    const SimplifyResult moved = simplify(mesh, {.target_ratio = 0.03f, .fit_flips = false});
     const SimplifyResult fitted = simplify(mesh, {.target_ratio = 0.03f});
-    EXPECT_EQ(fitted.mesh.indices, plain.mesh.indices);
-    EXPECT_EQ(fitted.vertex_origin, plain.vertex_origin);
+    EXPECT_EQ(moved.mesh.indices, plain.mesh.indices);
+    EXPECT_EQ(moved.vertex_origin, plain.vertex_origin);
+    EXPECT_EQ(moved.flipped_edges, 0u);
+    EXPECT_TRUE(moved.record.flipped.empty());
+    EXPECT_EQ(fitted.output_triangles, plain.output_triangles);
+    std::vector<uint32_t> a = fitted.vertex_origin, b = plain.vertex_origin;
+    std::sort(a.begin(), a.end()), std::sort(b.begin(), b.end());
+    EXPECT_EQ(a, b);
+    EXPECT_EQ(fitted.record.flipped.size(), 2 * fitted.flipped_edges);
+    EXPECT_NO_THROW(validate(fitted.mesh));
     ASSERT_GT(fitted.fitted_positions, 0u);
     EXPECT_EQ(fitted.record.fitted.size(), fitted.fitted_positions);
     // The fit's time is reported apart from the collapses', and only when there is a fit.
@@ -185,6 +196,10 @@ TEST(SimplifyBehaviour, FitBringsTheResultCloserToTheInput) {
     RecordProperty("hausdorff", std::to_string(d0.relative_hausdorff) + " -> " + std::to_string(d1.relative_hausdorff));
     EXPECT_LT(d1.rms, 0.9 * d0.rms);
     EXPECT_LT(d1.hausdorff, d0.hausdorff);
+    const Deviation d2 = compare(mesh, moved.mesh, {.samples = 100'000});
+    RecordProperty("flips", std::to_string(fitted.flipped_edges) + ", rms without them " + std::to_string(d2.relative_rms));
+    EXPECT_LT(d2.rms, 0.9 * d0.rms);
+    EXPECT_LT(d2.hausdorff, d0.hausdorff);
   }
 }
 

@@ -103,7 +103,8 @@ std::vector<Mesh> test_meshes() {
 }
 
 TEST(SimplifyCore, ReplayAndUndoAreExact) {
-  size_t fitted = 0;  // the final fit's moves are part of the record: replay ends with them
+  // The final fit's moves and edge flips are part of the record: replay ends with them.
+  size_t fitted = 0, flipped = 0;
   for (const Mesh& mesh : test_meshes())
     for (const Metric metric : {Metric::edge_length, Metric::qem, Metric::constrained_qem, Metric::memoryless,
                                 Metric::constrained_memoryless})
@@ -115,12 +116,14 @@ TEST(SimplifyCore, ReplayAndUndoAreExact) {
         ASSERT_GT(r.collapses, 0u);
         if (keep) {
           EXPECT_TRUE(r.record.fitted.empty());
+          EXPECT_TRUE(r.record.flipped.empty());
         }
-        fitted += r.record.fitted.size();
+        fitted += r.record.fitted.size(), flipped += r.record.flipped.size();
         EXPECT_EQ(replay(mesh, r.record, r.record.collapses.size()), r.mesh);
         EXPECT_EQ(replay_and_undo(mesh, r.record), mesh);
       }
   EXPECT_GT(fitted, 0u);
+  EXPECT_GT(flipped, 0u);
 }
 
 TEST(SimplifyCore, SameResultOnAnyThreadCount) {

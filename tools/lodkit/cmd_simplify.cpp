@@ -25,6 +25,7 @@ struct SimplifyCommand {
   bool keep_vertices = false, lock_border = false, prune = false, json = false, force = false;
   unsigned threads = 0;
   uint32_t fit = SimplifyOptions{}.fit_iterations;
+  bool no_flips = false;
   float guard = SimplifyOptions{}.distance_guard;
 };
 
@@ -80,6 +81,7 @@ Command register_simplify(CLI::App& root) {
   app->add_flag("--prune", o->prune, "Drop components smaller than the error reached");
   app->add_option("--fit", o->fit, "Iterations fitting the result's vertices to the input after the collapses (0: none)")
       ->capture_default_str();
+  app->add_flag("--no-flips", o->no_flips, "Keep the collapses' triangles: no edge flips in the fit");
   app->add_option("--distance-guard", o->guard,
                   "Hold back collapses that would leave an input point farther from the result than G times (in "
                   "squared distance) the error the other collapses reach: keeps thin parts (qem and cqem; 0: off)")
@@ -103,6 +105,7 @@ Command register_simplify(CLI::App& root) {
                 .aggregate_distance = o->aggregate,
                 .prune = o->prune,
                 .fit_iterations = o->fit,
+                .fit_flips = !o->no_flips,
                 .record = false,
                 .threads = o->threads,
             };
@@ -118,7 +121,7 @@ Command register_simplify(CLI::App& root) {
             for (Mesh* m : meshes) validate(*m, o->input), total += m->triangle_count();
             uint64_t in_triangles = 0, out_triangles = 0, in_vertices = 0, out_vertices = 0;
             float error = 0, relative_error = 0;
-            uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, fitted = 0, deferred = 0, rejected[4] = {};
+            uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, fitted = 0, flipped = 0, deferred = 0, rejected[4] = {};
             double fit_seconds = 0;  // the final fit's share of simplify_seconds
             start = std::chrono::steady_clock::now();
             {
@@ -138,7 +141,7 @@ Command register_simplify(CLI::App& root) {
                 in_vertices += r.input_vertices, out_vertices += r.output_vertices;
                 error = std::max(error, r.error);
                 passes += r.passes, collapses += r.collapses, virtual_pairs += r.virtual_pairs, pruned += r.pruned_triangles;
-                fitted += r.fitted_positions, fit_seconds += r.seconds_fit;
+                fitted += r.fitted_positions, flipped += r.flipped_edges, fit_seconds += r.seconds_fit;
                 rejected[0] += r.rejected_topology, rejected[1] += r.rejected_seam;
                 rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape, deferred += r.deferred_distance;
                 relative_error = std::max(relative_error, r.relative_error);
@@ -156,7 +159,7 @@ Command register_simplify(CLI::App& root) {
                                   {"input_vertices", in_vertices}, {"output_vertices", out_vertices},
                                   {"error", error}, {"relative_error", relative_error},
                                   {"passes", passes}, {"collapses", collapses}, {"virtual_pairs", virtual_pairs}, {"pruned_triangles", pruned},
-                                  {"fitted_positions", fitted},
+                                  {"fitted_positions", fitted}, {"flipped_edges", flipped},
                                   {"rejected", {{"topology", rejected[0]}, {"seam", rejected[1]},
                                                 {"flip", rejected[2]}, {"shape", rejected[3]}}},
                                   {"deferred_distance", deferred},
