@@ -26,6 +26,7 @@ lod::SimplifyOptions decode_options(std::span<const uint8_t, option_bytes> b, co
   o.max_aspect_ratio = (b[5] & 0x80) ? float(b[5] & 0x7f) : 0.0f;
   o.distance_guard = float(b[6] % 16);
   o.fit_iterations = b[7] % 4;
+  o.fit_flips = !(b[14] & 1);
   o.normal_weight = float(b[8] % 8) / 4.0f;
   o.uv_weight = float((b[8] >> 3) % 8) / 4.0f;
   o.color_weight = float(b[9] % 8) / 4.0f;
