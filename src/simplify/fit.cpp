@@ -339,7 +339,9 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
     for (size_t e = 0; e < edges.size(); ++e) existing[e] = key(edges[e].first, edges[e].second);
     std::sort(existing.begin(), existing.end());
     file_feet();
-    std::vector<Flip> found(edges.size(), Flip{none, 0, 0, 0, 0, 0});
+    // Per edge, the gain of its flip (0: none proposed); 8 bytes an edge, not a Flip's 32, at the
+    // fit's peak memory.
+    std::vector<double> gain(edges.size(), 0.0);
     const double min_dot = s.options.min_normal_dot, scale2 = s.scale * s.scale;
     core::parallel_for(edges.size(), s.threads, [&](size_t e) {
       if (sides[e] != 2) return;
@@ -388,10 +390,11 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
           const measure::vec3f point(input.positions[v]);
           new_sum += share[v] * std::min(measure::closest_distance_squared(point, new1), measure::closest_distance_squared(point, new2));
         }
-      if (new_sum < (1 - flip_margin) * old_sum) f.gain = old_sum - new_sum, found[e] = f;
+      if (new_sum < (1 - flip_margin) * old_sum) gain[e] = old_sum - new_sum;
     });
-    for (const Flip& f : found)
-      if (f.edge != none) proposed.push_back(f);
+    for (uint32_t e = 0; e < edges.size(); ++e)
+      if (gain[e] > 0) proposed.push_back({e, sides_of[2 * e] / 3, sides_of[2 * e] % 3, sides_of[2 * e + 1] / 3, sides_of[2 * e + 1] % 3, gain[e]});
+    std::vector<float>().swap(foot_distance);  // not needed after the proposals
     return proposed;
   };
   // Result -> input: each proposed flip's old faces' centroids, then the flipped edge's midpoint and
