@@ -339,6 +339,9 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
     for (size_t e = 0; e < edges.size(); ++e) existing[e] = key(edges[e].first, edges[e].second);
     std::sort(existing.begin(), existing.end());
     file_feet();
+    const auto flip_of = [&](uint32_t e, double gain) {  // edge e's two sides (an interior edge)
+      return Flip{e, sides_of[2 * e] / 3, sides_of[2 * e] % 3, sides_of[2 * e + 1] / 3, sides_of[2 * e + 1] % 3, gain};
+    };
     // Per edge, the gain of its flip (0: none proposed); 8 bytes an edge, not a Flip's 32, at the
     // fit's peak memory.
     std::vector<double> gain(edges.size(), 0.0);
@@ -354,7 +357,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
           old_sum += a * foot_distance[foot_samples[k]], weights += a;
         }
       if (!(old_sum * scale2 > flip_noise * weights)) return;
-      Flip f{uint32_t(e), sides_of[2 * e] / 3, sides_of[2 * e] % 3, sides_of[2 * e + 1] / 3, sides_of[2 * e + 1] % 3, 0};
+      const Flip f = flip_of(uint32_t(e), 0);
       uint32_t p, q, r, x;
       flip_corners(f, p, q, r, x);
       const uint32_t* c2 = &result.indices[3 * size_t(f.t2)];
@@ -393,7 +396,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
       if (new_sum < (1 - flip_margin) * old_sum) gain[e] = old_sum - new_sum;
     });
     for (uint32_t e = 0; e < edges.size(); ++e)
-      if (gain[e] > 0) proposed.push_back({e, sides_of[2 * e] / 3, sides_of[2 * e] % 3, sides_of[2 * e + 1] / 3, sides_of[2 * e + 1] % 3, gain[e]});
+      if (gain[e] > 0) proposed.push_back(flip_of(e, gain[e]));
     std::vector<float>().swap(foot_distance);  // not needed after the proposals
     return proposed;
   };
@@ -411,17 +414,14 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
   // Applies, greedily by gain, the proposed flips whose points lie no farther from the input than
   // the old pair's farthest (`hits`: the edges' closest points, then each flip's probes), none
   // sharing a position with another: records them and moves the feet in their faces.
-  const auto apply_flips = [&](std::vector<Flip>& proposed, const std::vector<measure::ClosestHit>& hits) {
-    std::vector<uint8_t> keep(proposed.size(), 0);
-    for (size_t i = 0; i < proposed.size(); ++i) {
+  const auto apply_flips = [&](const std::vector<Flip>& proposed, const std::vector<measure::ClosestHit>& hits) {
+    std::vector<uint32_t> order;
+    for (uint32_t i = 0; i < proposed.size(); ++i) {
       const measure::ClosestHit* h = &hits[edges.size() + probes_per_flip * i];
       const float old_far = std::max({hits[proposed[i].edge].distance_squared, h[0].distance_squared, h[1].distance_squared});
       const float new_far = std::max({h[2].distance_squared, h[3].distance_squared, h[4].distance_squared});
-      keep[i] = new_far <= old_far;
+      if (new_far <= old_far) order.push_back(i);
     }
-    std::vector<uint32_t> order;
-    for (uint32_t i = 0; i < proposed.size(); ++i)
-      if (keep[i]) order.push_back(i);
     std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
       return proposed[a].gain > proposed[b].gain || (proposed[a].gain == proposed[b].gain && a < b);
     });
@@ -467,7 +467,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
   // Each result edge's midpoint (and each proposed flip's points) against the input: the exact
   // closest point, seeded by an input triangle at the point's corners (the first of the pull's
   // candidates), a bound that lets the search skip the input's far chunks and its start.
-  const auto search_edges = [&](std::vector<Flip>& proposed) {
+  const auto search_edges = [&](const std::vector<Flip>& proposed) {
     std::vector<measure::vec3f> points(edges.size() + probes_per_flip * proposed.size());
     for (size_t e = 0; e < edges.size(); ++e) {
       const float3 &a = result.positions[edges[e].first], &b = result.positions[edges[e].second];
