@@ -84,11 +84,12 @@ struct SimplifyOptions {
   // the collapses: the record (and replay) describe the mesh before pruning.
   bool prune = false;
 
-  // After the collapses, fit the surviving positions to the input surface by this many least-squares
-  // iterations (Hoppe et al. 1993's vertex step; see src/simplify/fit.h). 0 keeps the collapse
-  // placements. Not done with keep_vertices (positions are input vertices there) or on locked
-  // positions.
-  uint32_t fit_iterations = 3;
+  // After the collapses, fit the surviving positions to the input surface by at most this many
+  // least-squares iterations (Hoppe et al. 1993's vertex step; see src/simplify/fit.h). The fit
+  // stops earlier once an iteration moves no position by more than 0.1% of the mean edge length.
+  // 0 keeps the collapse placements. Not done with keep_vertices (positions are input vertices
+  // there) or on locked positions.
+  uint32_t fit_iterations = 12;
   // Before the fit's first step, flip edges whose other diagonal lies nearer the input (Hoppe et
   // al.'s flip step; the triangles keep their ids, each changes one corner). Part of the fit.
   bool fit_flips = true;
@@ -172,6 +173,7 @@ struct SimplifyResult {
   uint64_t pruned_triangles = 0;
   uint64_t fitted_positions = 0;  // positions the final fit moved
   uint64_t flipped_edges = 0;     // edges the final fit flipped
+  uint32_t fit_iterations = 0;    // iterations the final fit ran (at most SimplifyOptions::fit_iterations)
   uint32_t passes = 0;
   // Wall-clock time: setting up, the collapses, the final fit (0 without one), and the whole call
   // (these and building the output mesh).

@@ -27,6 +27,12 @@ constexpr double step = 0.7;
 // solve it exactly). Corpus: 3 sweeps, geometric means of lodkit / best peer 10% Hausdorff 0.741 ->
 // 0.739, 1% 0.868 -> 0.855, at +2% of the time on armadillo-s2 -> 83,200 (bench/README).
 constexpr uint32_t sweeps = 3;
+// The fit stops early once an iteration moved no position by more than this share of the result's
+// mean edge length: on dense inputs simplified by 10x the result already lies on the input and the
+// moves fade within three iterations (armadillo subdivided, 832k and 3.3M triangles: largest move
+// 8.6e-4 of the mean edge in the third), while far down they stay at 1e-3 to 1e-2 and every
+// further iteration still helps (bench/README, sixteenth session).
+constexpr double converged = 1e-3;
 // A flip must lower its samples' squared distances by this share of their sum; below flip_noise
 // (a mean squared distance, normalised frame: 1e-6 of the extent) they are float noise. Corpus at
 // 10% and 1%: margins 0.02-0.25 gave the same shares within a case (bench/README, fifteenth session).
@@ -43,6 +49,22 @@ struct Foot {
 measure::TrianglePoint on_input_triangle(const Mesh& input, uint32_t t, const measure::vec3f& x) {
   const uint32_t* corner = &input.indices[3 * size_t(t)];
   return measure::closest_on_triangle(x, input.positions[corner[0]], input.positions[corner[1]], input.positions[corner[2]]);
+}
+
+// The squared distance from x to input triangle t's bounding box, widened by float rounding (never
+// more than the distance to the triangle).
+float box_gap_squared(const Mesh& input, uint32_t t, const measure::vec3f& x) {
+  const uint32_t* corner = &input.indices[3 * size_t(t)];
+  const float3& a = input.positions[corner[0]];
+  const float3& b = input.positions[corner[1]];
+  const float3& e = input.positions[corner[2]];
+  const auto gap = [](float p, float u, float v, float w) {
+    const float lo = std::min({u, v, w}), hi = std::max({u, v, w});
+    const float slack = 1e-6f * std::max(std::abs(lo), std::abs(hi)) + 1e-30f;
+    const float g = std::max({lo - slack - p, p - hi - slack, 0.0f});
+    return g * g;
+  };
+  return gap(x.x, a.x, b.x, e.x) + gap(x.y, a.y, b.y, e.y) + gap(x.z, a.z, b.z, e.z);
 }
 
 // Whether a point at squared distance d on input triangle t beats `best`: nearer, or as near on a
@@ -142,8 +164,8 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
   }
 }
 
-void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std::vector<FittedPosition>* fitted,
-                   std::vector<Relink>* flipped) {
+uint32_t fit_positions(State& s, uint32_t iterations, double weight, bool flips, std::vector<FittedPosition>* fitted,
+                       std::vector<Relink>* flipped) {
   const Mesh& input = s.mesh;
   const size_t triangles = s.alive.size();
 
@@ -169,7 +191,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
     }
   }
   const size_t m = position.size();
-  if (m == 0) return;
+  if (m == 0) return 0;
   result.positions.resize(m);
   for (size_t j = 0; j < m; ++j) result.positions[j] = s.position[position[j]];
   const size_t result_triangles = result.indices.size() / 3;
@@ -264,8 +286,24 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
   std::vector<float3> before;
   const std::vector<float3> start = result.positions;
   const auto normalized = [&](size_t j) { return s.normalized_input(result.positions[j]); };
+  // Each position's candidates sorted by their boxes' distance from its start, with that distance
+  // (`reach`): a scan in this order can stop at the first candidate whose box, less the position's
+  // move since, is beyond the bound below, and most stop after a few of the hundreds of candidates
+  // a position has far down. Ties keep triangle order.
+  std::vector<float> reach(candidates.size());
+  core::parallel_blocks(m, 256, s.threads, [&](size_t, size_t block_begin, size_t block_end) {
+    std::vector<std::pair<float, uint32_t>> order;
+    for (size_t j = block_begin; j < block_end; ++j) {
+      order.clear();
+      for (uint32_t i = candidates_first[j]; i < candidates_first[j + 1]; ++i)
+        order.push_back({std::sqrt(box_gap_squared(input, candidates[i], measure::vec3f(start[j]))), candidates[i]});
+      std::sort(order.begin(), order.end());
+      for (uint32_t i = candidates_first[j], k = 0; i < candidates_first[j + 1]; ++i, ++k)
+        reach[i] = order[k].first, candidates[i] = order[k].second;
+    }
+  });
   // The closest point to x among position j's candidate input triangles (x itself if it has none):
-  // the first candidate at the least distance, as a scan of all would find it. The last iteration's
+  // the lowest triangle at the least distance, as a scan of all would find it. The last iteration's
   // winner (moves are small) bounds that distance; a candidate whose box is farther cannot win and
   // is skipped. The box is widened by float rounding and the bound loosened by 0.1%, so a skipped
   // candidate could never have tied with the winner.
@@ -276,22 +314,16 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
     };
     const uint32_t begin = candidates_first[j], stop = candidates_first[j + 1];
     const float bound = begin < stop ? distance(std::clamp(nearest[j], begin, stop - 1)).first * 1.001f : 0.0f;
+    // The box's distance from x is at least its distance from the start less the move since.
+    const double travel = std::sqrt(double(measure::length_squared(x - measure::vec3f(start[j])))) * (1 + 1e-6);
     measure::vec3f c = x;
     float best = std::numeric_limits<float>::infinity();
     for (uint32_t i = begin; i < stop; ++i) {
-      const uint32_t* corner = &input.indices[3 * size_t(candidates[i])];
-      const float3& a = input.positions[corner[0]];
-      const float3& b = input.positions[corner[1]];
-      const float3& e = input.positions[corner[2]];
-      const auto gap = [](float p, float u, float v, float w) {
-        const float lo = std::min({u, v, w}), hi = std::max({u, v, w});
-        const float slack = 1e-6f * std::max(std::abs(lo), std::abs(hi)) + 1e-30f;
-        const float g = std::max({lo - slack - p, p - hi - slack, 0.0f});
-        return g * g;
-      };
-      if (gap(x.x, a.x, b.x, e.x) + gap(x.y, a.y, b.y, e.y) + gap(x.z, a.z, b.z, e.z) > bound) continue;
+      const double beyond = double(reach[i]) * (1 - 1e-6) - travel;
+      if (beyond > 0 && beyond * beyond > double(bound)) break;
+      if (box_gap_squared(input, candidates[i], x) > bound) continue;
       const auto [d, point] = distance(i);
-      if (d < best) best = d, c = point, nearest[j] = uint32_t(i);
+      if (d < best || (d == best && candidates[i] < candidates[nearest[j]])) best = d, c = point, nearest[j] = uint32_t(i);
     }
     return c;
   };
@@ -494,7 +526,14 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
     for (size_t e = 0; e < edges.size(); ++e) edge_target[e] = hits[e].triangle != none ? hits[e].point : points[e];  // none: no pull
     if (!proposed.empty()) apply_flips(proposed, hits);
   };
-  for (uint32_t iteration = 0; iteration < iterations; ++iteration) {
+  // Converged: an iteration moved no position by more than `converged` of the mean edge length.
+  double mean_edge = 0;
+  for (const auto& [a, b] : edges) mean_edge += length(normalized(a) - normalized(b));
+  mean_edge /= double(std::max<size_t>(edges.size(), 1));
+  std::vector<float3> iteration_start;
+  uint32_t iteration = 0;
+  while (iteration < iterations) {
+    iteration_start = result.positions;
     const measure::TriangleBvh bvh(result, s.threads);
     core::parallel_blocks(group_first.size() - 1, 256, s.threads, [&](size_t, size_t group_begin, size_t group_end) {
       measure::TriangleBvh::GroupScratch scratch;
@@ -582,8 +621,9 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
         result.positions[j] = to;
         moved[j] = 1;
       });
-      // Take back every move around a face that would turn by more than the flip limit or degenerate,
-      // until none does (each round only takes moves back, so this ends).
+      // Take back every move around a face that would degenerate or turn by more than the flip limit
+      // from where it stood before the fit (not the last sweep: over many sweeps small turns would
+      // add up), until none does (each round only takes moves back, so this ends).
       const double min_dot = s.options.min_normal_dot;
       for (bool changed = true; changed;) {
         changed = false;
@@ -595,7 +635,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
             const float3& p = from[c[k]];
             return vec3d{p.x, p.y, p.z};
           };
-          const vec3d old_corners[3] = {corner(before, 0), corner(before, 1), corner(before, 2)};
+          const vec3d old_corners[3] = {corner(start, 0), corner(start, 1), corner(start, 2)};
           const vec3d new_corners[3] = {corner(result.positions, 0), corner(result.positions, 1),
                                         corner(result.positions, 2)};
           const FaceChange change = face_change(old_corners, new_corners, min_dot);
@@ -606,6 +646,11 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
           if (revert[j]) result.positions[j] = before[j], moved[j] = 0, changed = true;
       }
     }
+    ++iteration;
+    double farthest = 0;
+    for (size_t j = 0; j < m; ++j)
+      farthest = std::max(farthest, length_squared(normalized(j) - s.normalized_input(iteration_start[j])));
+    if (std::sqrt(farthest) < converged * mean_edge) break;
   }
 
   for (size_t j = 0; j < m; ++j) {
@@ -615,6 +660,7 @@ void fit_positions(State& s, uint32_t iterations, double weight, bool flips, std
     ++s.moves[p];
     if (fitted) fitted->push_back({s.external[p], start[j], result.positions[j]});
   }
+  return iteration;
 }
 
 }  // namespace lod::collapse

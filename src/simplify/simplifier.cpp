@@ -1388,7 +1388,7 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
   if (options.fit_iterations > 0 && !options.keep_vertices && !multipose) {
     std::vector<FittedPosition> fitted;
     std::vector<Relink> flipped;
-    fit_positions(state, options.fit_iterations, fit_weight, options.fit_flips, &fitted, &flipped);
+    result.fit_iterations = fit_positions(state, options.fit_iterations, fit_weight, options.fit_flips, &fitted, &flipped);
     result.fitted_positions = fitted.size();
     result.flipped_edges = flipped.size() / 2;
     if (options.record) result.record.fitted = std::move(fitted), result.record.flipped = std::move(flipped);

@@ -212,8 +212,9 @@ TEST(SimplifyBehaviour, FitIterationsDoNotOscillate) {
   if (test::corpus_dir().empty()) GTEST_SKIP() << "data/corpus is absent (scripts/fetch-corpus.sh)";
   const Mesh mesh = read_mesh(test::corpus_dir() / "fandisk_large.off");
   double last = 0;
-  for (uint32_t iterations = 1; iterations <= 4; ++iterations) {
+  for (uint32_t iterations = 1; iterations <= 8; ++iterations) {
     const SimplifyResult r = simplify(mesh, {.target_ratio = 0.1f, .fit_iterations = iterations});
+    ASSERT_EQ(r.fit_iterations, iterations) << "fandisk_large at 10% converges after 12";
     const double rms = compare(mesh, r.mesh, {.samples = 200'000}).relative_rms;
     SCOPED_TRACE(testing::Message() << iterations << " iterations: RMS " << rms << ", before " << last);
     if (iterations > 1) {
@@ -221,6 +222,43 @@ TEST(SimplifyBehaviour, FitIterationsDoNotOscillate) {
     }
     last = rms;
   }
+}
+
+// The fit stops once an iteration moves no vertex by more than 0.1% of the mean edge length (edges
+// of the mesh before the fit). Checked against the meshes of capped fits: the iteration it stopped
+// after moved the vertices less than that, the one before more, and stopping changed nothing
+// before it (the capped fits give the same mesh).
+TEST(SimplifyBehaviour, FitStopsOnceTheMovesFade) {
+  if (test::corpus_dir().empty()) GTEST_SKIP() << "data/corpus is absent (scripts/fetch-corpus.sh)";
+  const Mesh mesh = read_mesh(test::corpus_dir() / "bunny00.off");
+  const auto fitted = [&](uint32_t cap) { return simplify(mesh, {.target_ratio = 0.5f, .fit_iterations = cap}); };
+  const SimplifyResult full = fitted(12);
+  const uint32_t k = full.fit_iterations;
+  ASSERT_GT(k, 2u) << "the bunny at 50% should need a few iterations";
+  ASSERT_LT(k, 12u) << "and converge before 12";
+  const Mesh before_fit = fitted(0).mesh, last = fitted(k).mesh, one_before = fitted(k - 1).mesh,
+             two_before = fitted(k - 2).mesh;
+  EXPECT_EQ(fitted(k).fit_iterations, k);
+  EXPECT_EQ(last, full.mesh);
+  ASSERT_EQ(one_before.positions.size(), last.positions.size());
+  ASSERT_EQ(two_before.positions.size(), last.positions.size());
+  std::set<std::pair<uint32_t, uint32_t>> edges;
+  for (size_t t = 0; t < before_fit.triangle_count(); ++t)
+    for (uint32_t c = 0; c < 3; ++c) {
+      const uint32_t a = before_fit.indices[3 * t + c], b = before_fit.indices[3 * t + (c + 1) % 3];
+      edges.insert({std::min(a, b), std::max(a, b)});
+    }
+  double mean_edge = 0;
+  for (const auto& [a, b] : edges) mean_edge += core::length(to_d(before_fit.positions[a]) - to_d(before_fit.positions[b]));
+  mean_edge /= double(edges.size());
+  const auto farthest_move = [](const Mesh& from, const Mesh& to) {
+    double d = 0;
+    for (size_t v = 0; v < from.positions.size(); ++v)
+      d = std::max(d, core::length(to_d(to.positions[v]) - to_d(from.positions[v])));
+    return d;
+  };
+  EXPECT_LT(farthest_move(one_before, last), 1e-3 * mean_edge * 1.01);
+  EXPECT_GT(farthest_move(two_before, one_before), 1e-3 * mean_edge * 0.99);
 }
 
 // Lindstrom–Turk's volume term: the memoryless metric keeps the enclosed volume closer than QEM does.

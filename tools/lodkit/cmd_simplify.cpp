@@ -79,7 +79,7 @@ Command register_simplify(CLI::App& root) {
   app->add_flag("--lock-border", o->lock_border, "Never move border vertices");
   app->add_option("--aggregate", o->aggregate, "Also merge positions closer than this distance (object space)");
   app->add_flag("--prune", o->prune, "Drop components smaller than the error reached");
-  app->add_option("--fit", o->fit, "Iterations fitting the result's vertices to the input after the collapses (0: none)")
+  app->add_option("--fit", o->fit, "Most iterations fitting the result's vertices to the input after the collapses; it stops once they barely move (0: no fit)")
       ->capture_default_str();
   app->add_flag("--no-flips", o->no_flips, "Keep the collapses' triangles: no edge flips in the fit");
   app->add_option("--distance-guard", o->guard,
@@ -122,6 +122,7 @@ Command register_simplify(CLI::App& root) {
             uint64_t in_triangles = 0, out_triangles = 0, in_vertices = 0, out_vertices = 0;
             float error = 0, relative_error = 0;
             uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, fitted = 0, flipped = 0, deferred = 0, rejected[4] = {};
+            uint32_t fit_iterations = 0;  // the most any primitive's fit ran
             double fit_seconds = 0;  // the final fit's share of simplify_seconds
             start = std::chrono::steady_clock::now();
             {
@@ -142,6 +143,7 @@ Command register_simplify(CLI::App& root) {
                 error = std::max(error, r.error);
                 passes += r.passes, collapses += r.collapses, virtual_pairs += r.virtual_pairs, pruned += r.pruned_triangles;
                 fitted += r.fitted_positions, flipped += r.flipped_edges, fit_seconds += r.seconds_fit;
+                fit_iterations = std::max(fit_iterations, r.fit_iterations);
                 rejected[0] += r.rejected_topology, rejected[1] += r.rejected_seam;
                 rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape, deferred += r.deferred_distance;
                 relative_error = std::max(relative_error, r.relative_error);
@@ -159,7 +161,7 @@ Command register_simplify(CLI::App& root) {
                                   {"input_vertices", in_vertices}, {"output_vertices", out_vertices},
                                   {"error", error}, {"relative_error", relative_error},
                                   {"passes", passes}, {"collapses", collapses}, {"virtual_pairs", virtual_pairs}, {"pruned_triangles", pruned},
-                                  {"fitted_positions", fitted}, {"flipped_edges", flipped},
+                                  {"fit_iterations", fit_iterations}, {"fitted_positions", fitted}, {"flipped_edges", flipped},
                                   {"rejected", {{"topology", rejected[0]}, {"seam", rejected[1]},
                                                 {"flip", rejected[2]}, {"shape", rejected[3]}}},
                                   {"deferred_distance", deferred},
