@@ -289,11 +289,13 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, bool flips,
   // Each position's candidates sorted by their boxes' distance from its start, with that distance
   // (`reach`): a scan in this order can stop at the first candidate whose box, less the position's
   // move since, is beyond the bound below, and most stop after a few of the hundreds of candidates
-  // a position has far down. Ties keep triangle order.
-  std::vector<float> reach(candidates.size());
+  // a position has far down. Ties keep triangle order. Short lists (a few dozen, as when the input
+  // is reduced 10x) are scanned whole: sorting them costs more than it saves (reach 0: no stop).
+  std::vector<float> reach(candidates.size(), 0.0f);
   core::parallel_blocks(m, 256, s.threads, [&](size_t, size_t block_begin, size_t block_end) {
     std::vector<std::pair<float, uint32_t>> order;
     for (size_t j = block_begin; j < block_end; ++j) {
+      if (candidates_first[j + 1] - candidates_first[j] <= 64) continue;
       order.clear();
       for (uint32_t i = candidates_first[j]; i < candidates_first[j + 1]; ++i)
         order.push_back({std::sqrt(box_gap_squared(input, candidates[i], measure::vec3f(start[j]))), candidates[i]});
