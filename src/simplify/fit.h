@@ -8,7 +8,8 @@
 // + weight * sum over positions j of m_j |x_j + d_j - c_j|^2     (the result onto the input)
 // where a_i is i's share of the input's area, i's foot its closest point on the current result,
 // m_j the area of the input vertices that ended in position j and c_j the closest point of x_j on
-// the input triangles around those vertices,
+// the input triangles around those vertices and on the input triangle nearest to x_j (found once,
+// with the edges' closest points below: a position can lie on the input beyond its own triangles),
 // + edge_weight * sum over result edges e of A_e w_e |(d_j + d_k) / 2 - (c_e - m_e)|^2
 //                                                             (the result's edges onto the input)
 // with m_e the edge's midpoint, c_e its exact closest input point (found once, through a BVH over
