@@ -30,9 +30,9 @@ constexpr double step = 0.7;
 constexpr uint32_t sweeps = 3;
 // The fit stops early once an iteration moved no position by more than this share of the result's
 // mean edge length: on dense inputs simplified by 10x the result already lies on the input and the
-// moves fade within three iterations (armadillo subdivided, 832k and 3.3M triangles: largest move
-// 8.6e-4 of the mean edge in the third), while far down they stay at 1e-3 to 1e-2 and every
-// further iteration still helps (bench/README, sixteenth session).
+// moves fade at once (armadillo subdivided, 832k and 3.3M triangles: one iteration), while far
+// down they stay at 1e-3 to 1e-2 and every further iteration still helps (bench/README, sixteenth
+// session).
 constexpr double converged = 1e-3;
 // A flip must lower its samples' squared distances by this share of their sum; below flip_noise
 // (a mean squared distance, normalised frame: 1e-6 of the extent) they are float noise. Corpus at
