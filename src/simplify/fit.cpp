@@ -558,6 +558,7 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, bool flips,
   for (const auto& [a, b] : edges) mean_edge += length(normalized(a) - normalized(b));
   mean_edge /= double(std::max<size_t>(edges.size(), 1));
   std::vector<float3> iteration_start;
+  std::vector<vec3d> sample_residual;  // per sample, in the sweeps with emphasis
   uint32_t iteration = 0;
   while (iteration < iterations) {
     iteration_start = result.positions;
@@ -600,12 +601,16 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, bool flips,
       const auto weights = [](const Foot& f) { return std::array<double, 3>{1.0 - double(f.v) - double(f.w), f.v, f.w}; };
       // From iteration emphasis_from on, a sample's weight grows with its squared residual over their
       // area-weighted mean, capped: the edge term's reweighting, on the input's side.
+      // (The residuals are kept for the sums below.)
       double sample_mean_square = 0;
-      if (iteration >= emphasis_from) {
+      const bool emphasised = iteration >= emphasis_from;
+      if (emphasised) {
+        sample_residual.resize(samples.size());
         double squares = 0, area = 0;
         for (size_t i = 0; i < samples.size(); ++i) {
           const double a = share[samples[i]];
-          squares += a * length_squared(residual(foot[i], samples[i], weights(foot[i]).data())), area += a;
+          sample_residual[i] = residual(foot[i], samples[i], weights(foot[i]).data());
+          squares += a * length_squared(sample_residual[i]), area += a;
         }
         sample_mean_square = area > 0 ? squares / area : 0;
       }
@@ -613,7 +618,7 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, bool flips,
         const Foot& f = foot[i];
         const std::array<double, 3> beta = weights(f);
         const uint32_t* c = &result.indices[3 * size_t(f.triangle)];
-        const vec3d r = residual(f, samples[i], beta.data());
+        const vec3d r = emphasised ? sample_residual[i] : residual(f, samples[i], beta.data());
         double a = share[samples[i]] * double(stride);
         if (sample_mean_square > 0) a *= 1 + sample_emphasis * std::min(sample_cap, length_squared(r) / sample_mean_square);
         for (uint32_t k = 0; k < 3; ++k) {
