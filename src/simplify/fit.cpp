@@ -599,9 +599,8 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, bool flips,
                (normalized(c[0]) * beta[0] + normalized(c[1]) * beta[1] + normalized(c[2]) * beta[2]);
       };
       const auto weights = [](const Foot& f) { return std::array<double, 3>{1.0 - double(f.v) - double(f.w), f.v, f.w}; };
-      // From iteration emphasis_from on, a sample's weight grows with its squared residual over their
-      // area-weighted mean, capped: the edge term's reweighting, on the input's side.
-      // (The residuals are kept for the sums below.)
+      // From iteration emphasis_from on, the samples' weights follow their residuals (see
+      // sample_emphasis), which are then computed once, for the mean and the sums below.
       double sample_mean_square = 0;
       const bool emphasised = iteration >= emphasis_from;
       if (emphasised) {
