@@ -33,7 +33,9 @@
 // whose two faces' input samples lie nearer, in sum of squared distances, to the other diagonal of
 // their quad, when the flipped faces' centroids and the new edge's midpoint lie no farther from the
 // input than the farthest of the old faces' (one search with the edges' midpoints). Collapses only
-// ever remove edges, so a diagonal left across a ridge or a saddle otherwise stays for good. Corpus
+// ever remove edges, so a diagonal left across a ridge or a saddle otherwise stays for good. At the
+// eleventh iteration edges are flipped again, now also those far from the input (judged by the
+// result -> input side, and against the input's normals; fit.cpp, far_edge). Corpus
 // (10% and 1%): geometric means of lodkit / best peer, Hausdorff 0.739 -> 0.72 and 0.855 -> 0.84,
 // RMS 0.754 -> 0.74 and 0.724 -> 0.71 (bench/README, fifteenth session).
 #pragma once

@@ -157,14 +157,16 @@ Mesh roof(uint32_t n, float h, bool ridge_on_main_diagonal) {
 }
 
 // The fit on a hand-made collapse state over `input`: every input vertex collapsed into the nearest
-// corner of the unit square, and the result the two triangles (p, q, r) and (q, p, s) with
-// p = (0, 0), q = (1, 1), r = (0, 1), s = (1, 0): its diagonal runs from p to q.
+// of the input vertices `kept` (the first on ties), and the result the triangles `live` over them,
+// as triangles 0, 1, ... (their corners overwrite the input's first ones).
 struct QuadResult {
-  std::vector<uint32_t> corners;  // of the two live triangles (ids 0 and 1), after the fit
+  std::vector<uint32_t> corners;  // of the live triangles, after the fit
   std::vector<Relink> flipped;
   std::vector<FittedPosition> fitted;
+  uint32_t iterations = 0;  // that ran
 };
-QuadResult fit_quad(const Mesh& input, uint32_t n, bool flips, unsigned threads) {
+QuadResult fit_collapsed(const Mesh& input, const std::vector<uint32_t>& kept, const std::vector<uint32_t>& live,
+                         bool flips, unsigned threads, uint32_t iterations) {
   const SimplifyOptions options;
   State state(input, options);
   state.threads = threads;
@@ -176,26 +178,36 @@ QuadResult fit_quad(const Mesh& input, uint32_t n, bool flips, unsigned threads)
   state.position = input.positions;
   state.moves.assign(v, 0);
   state.flags.assign(v, 0);
-  const uint32_t p = 0, q = n * (n + 1) + n, r = n * (n + 1), s = n;
   state.successor.resize(v);
   for (uint32_t i = 0; i < v; ++i) {
     const float3& x = input.positions[i];
-    state.successor[i] = x.x < 0.5f ? (x.y < 0.5f ? p : r) : (x.y < 0.5f ? s : q);
+    float best = std::numeric_limits<float>::infinity();
+    for (const uint32_t k : kept) {
+      const float3& c = input.positions[k];
+      const float d = (x.x - c.x) * (x.x - c.x) + (x.y - c.y) * (x.y - c.y) + (x.z - c.z) * (x.z - c.z);
+      if (d < best) best = d, state.successor[i] = k;
+    }
   }
-  for (const uint32_t corner : {p, q, r, s}) state.successor[corner] = ~0u;
+  for (const uint32_t k : kept) state.successor[k] = ~0u;
   state.corners = input.indices;
-  const uint32_t live[6] = {p, q, r, q, p, s};
-  std::copy(live, live + 6, state.corners.begin());
+  std::copy(live.begin(), live.end(), state.corners.begin());
   state.corner_pos = state.corners;
   state.alive.assign(input.triangle_count(), 0);
-  state.alive[0] = state.alive[1] = 1;
-  state.live_triangles = 2;
+  std::fill_n(state.alive.begin(), live.size() / 3, uint8_t(1));
+  state.live_triangles = live.size() / 3;
   state.center = {0.5, 0.5, 0.5};
   state.scale = 1.0;
   QuadResult out;
-  fit_positions(state, 1, 0.2, flips, &out.fitted, &out.flipped);
-  out.corners.assign(state.corners.begin(), state.corners.begin() + 6);
+  out.iterations = fit_positions(state, iterations, 0.2, flips, &out.fitted, &out.flipped);
+  out.corners.assign(state.corners.begin(), state.corners.begin() + live.size());
   return out;
+}
+
+// fit_collapsed on an n x n grid over the unit square: the result is the two triangles (p, q, r)
+// and (q, p, s) with p = (0, 0), q = (1, 1), r = (0, 1), s = (1, 0): its diagonal runs from p to q.
+QuadResult fit_quad(const Mesh& input, uint32_t n, bool flips, unsigned threads, uint32_t iterations = 1) {
+  const uint32_t p = 0, q = n * (n + 1) + n, r = n * (n + 1), s = n;
+  return fit_collapsed(input, {p, q, r, s}, {p, q, r, q, p, s}, flips, threads, iterations);
 }
 
 // The quad's diagonal p-q crosses the roof's ridge r-s: the samples lie nearer the other diagonal
@@ -235,6 +247,62 @@ TEST(FitFlips, AQuadAcrossARidgeFlipsOntoIt) {
   const QuadResult along = fit_quad(roof(n, 0.5f, true), n, true, 1);
   EXPECT_TRUE(along.flipped.empty());
   EXPECT_EQ(along.corners, (std::vector<uint32_t>{p, q, r, q, p, s}));
+}
+
+// A strip of cells [k, k + 1] x [0, 1] of a surface: on the first a steep roof z = h (1 - |x + y - 1|)
+// (h = 1.5, ridge from (0, 1) to (1, 0)), on the others the plane z = h (1 - y) that meets it along
+// x = 1; finely triangulated along the ridge's direction, so the mesh is exact. The result: each
+// cell as two triangles, the first across the ridge (diagonal p-q). Flipping p-q would turn the
+// faces from the old ones by more than the flip limit (cos = 1 / (2 h^2 + 1) = 0.18 < 0.2), so the
+// first flip round keeps it. Its midpoint lies far below the ridge while the other cells lie on
+// the input: a far edge. The second round (iteration 10) flips it, since the flipped faces follow
+// the input triangles under them (their normals are the roof's), and the first cell is then the
+// roof itself; a fit stopped before iteration 10, or without flips, keeps the diagonal.
+TEST(FitFlips, AFarEdgeAcrossASteepRidgeFlipsInTheSecondRound) {
+  const uint32_t n = 8, cells = 6, w = cells * n + 1;  // grid steps per unit, vertices per row
+  const float h = 1.5f;
+  Mesh input;
+  for (uint32_t j = 0; j <= n; ++j)
+    for (uint32_t i = 0; i < w; ++i) {
+      const float x = float(i) / float(n), y = float(j) / float(n);
+      input.positions.push_back({x, y, x <= 1 ? h * (1 - std::fabs(x + y - 1)) : h * (1 - y)});
+    }
+  const auto at = [&](uint32_t i, uint32_t j) { return j * w + i; };
+  for (uint32_t j = 0; j < n; ++j)
+    for (uint32_t i = 0; i + 1 < w; ++i) {
+      const uint32_t a = at(i, j), b = at(i + 1, j), c = at(i + 1, j + 1), d = at(i, j + 1);
+      input.indices.insert(input.indices.end(), {a, b, d, b, c, d});  // along the anti-diagonal
+    }
+  // Corners: (k, 0) and (k, 1) for k = 0 .. cells.
+  std::vector<uint32_t> kept, live;
+  for (uint32_t k = 0; k <= cells; ++k) kept.push_back(at(k * n, 0)), kept.push_back(at(k * n, n));
+  const uint32_t p = at(0, 0), q = at(n, n), r = at(0, n), s = at(n, 0);
+  live = {p, q, r, q, p, s};
+  for (uint32_t k = 1; k < cells; ++k) {
+    const uint32_t a = at(k * n, 0), b = at((k + 1) * n, 0), c = at((k + 1) * n, n), d = at(k * n, n);
+    live.insert(live.end(), {a, b, c, a, c, d});
+  }
+  const auto first_cell = [](const QuadResult& fit) { return std::vector<uint32_t>(fit.corners.begin(), fit.corners.begin() + 6); };
+  const auto distance = [&](const QuadResult& fit) {
+    Mesh result;
+    result.positions = input.positions;
+    for (const FittedPosition& f : fit.fitted) result.positions[f.position] = f.new_position;
+    result.indices = fit.corners;
+    return compare(input, result, {.samples = 20'000}).hausdorff;
+  };
+  for (const unsigned threads : {1u, 2u}) {
+    const QuadResult early = fit_collapsed(input, kept, live, true, threads, 10);
+    EXPECT_EQ(first_cell(early), (std::vector<uint32_t>{p, q, r, q, p, s}));
+
+    const QuadResult late = fit_collapsed(input, kept, live, true, threads, 12);
+    ASSERT_GT(late.iterations, 10u) << "the fit must still be running at iteration 10";
+    EXPECT_EQ(first_cell(late), (std::vector<uint32_t>{p, s, r, q, r, s}));
+    const QuadResult unflipped = fit_collapsed(input, kept, live, false, threads, 12);
+    EXPECT_EQ(first_cell(unflipped), (std::vector<uint32_t>{p, q, r, q, p, s}));
+    const double late_distance = distance(late), unflipped_distance = distance(unflipped);
+    SCOPED_TRACE(testing::Message() << "Hausdorff distance " << late_distance << ", unflipped " << unflipped_distance);
+    EXPECT_LT(late_distance, 0.5 * unflipped_distance);
+  }
 }
 }  // namespace
 }  // namespace lod::collapse
