@@ -651,6 +651,7 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, bool flips,
   mean_edge /= double(std::max<size_t>(edges.size(), 1));
   std::vector<float3> iteration_start;
   std::vector<vec3d> sample_residual;  // per sample, in the sweeps with emphasis
+  double edge_mean_square = 0;  // of the edges' residuals, area-weighted, in the last sweep
   uint32_t iteration = 0;
   while (iteration < iterations) {
     iteration_start = result.positions;
@@ -680,10 +681,7 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, bool flips,
       if (flips) proposed = propose_flips(0);
       search_edges(proposed);
     } else if (flip_round(iteration)) {
-      // Far edges, by the last sweep's residuals against their area-weighted mean.
-      double squares = 0, area = 0;
-      for (size_t e = 0; e < edges.size(); ++e) squares += edge_area[e] * length_squared(edge_residual[e]), area += edge_area[e];
-      flip_again(area > 0 ? far_edge * squares / area : 0);
+      flip_again(far_edge * edge_mean_square);  // far by the last sweep's residuals
     }
     for (uint32_t sweep = 0; sweep < sweeps; ++sweep) {
       // Each position's normal equation with its neighbours held still, summed in sample order (so
@@ -739,7 +737,7 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, bool flips,
         if (!std::isfinite(length_squared(edge_residual[e]))) edge_residual[e] = {};  // overflowed: no pull
         squares += edge_area[e] * length_squared(edge_residual[e]), area += edge_area[e];
       }
-      const double mean_square = area > 0 ? squares / area : 0;
+      const double mean_square = edge_mean_square = area > 0 ? squares / area : 0;
       for (size_t e = 0; e < edges.size(); ++e) {
         const double emphasis = mean_square > 0 ? std::min(edge_cap, length_squared(edge_residual[e]) / mean_square) : 0;
         const double a = edge_weight * edge_area[e] * emphasis;
