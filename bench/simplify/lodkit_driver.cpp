@@ -1,8 +1,10 @@
 // lodkit's side of the simplification benchmark, timed exactly like the peers (bench/peers/harness.h).
 //
-//   lodkit_bench_simplify METRIC IN OUT TARGET_TRIANGLES RUNS [--json] [--budget S] [--threads N]
+//   lodkit_bench_simplify METRIC IN OUT TARGET_TRIANGLES RUNS [--json] [--budget S] [--threads N] [--search 0|1]
 //       METRIC: edge, qem, cqem, memoryless, cmemoryless. The timed call is lod::simplify with
 //       record = false (no collapse record: the peers keep none either) and threads N (0: all).
+//       --search 0 turns SimplifyOptions' search off (the metric-family table times the metrics
+//       themselves); by default it is on, as a user gets it.
 //       lod::simplify takes the mesh by const reference, so nothing is rebuilt between runs.
 //   lodkit_bench_simplify make-inputs MESH OUT_DIR LEVEL...
 //       for each LEVEL, MESH subdivided 1->4 LEVEL times (lod::subdivide_midpoint), positions only,
@@ -56,11 +58,13 @@ int main(int argc, char** argv) {
     }
     const bench::Args args = bench::parse_args(argc, argv, {"edge", "qem", "cqem", "memoryless", "cmemoryless"});
     const unsigned threads = unsigned(std::stoul(bench::option(args, "--threads", "0")));
+    const bool search = bench::option(args, "--search", "1") != "0";
     const lod::Mesh input = bench::load_positions(args.input);
     const lod::SimplifyOptions options{
         .target_ratio = 0.0f,
         .target_triangles = args.target_triangles,
         .metric = parse_metric(args.mode),
+        .search_triangles = search ? lod::SimplifyOptions{}.search_triangles : 0,
         .record = false,
         .threads = threads,
     };

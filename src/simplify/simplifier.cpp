@@ -21,6 +21,7 @@
 #include "core/parallel.h"
 #include "core/union_find.h"
 #include "lodkit/error.h"
+#include "lodkit/measure.h"
 #include "measure/triangle_distance.h"
 #include "simplify/edge_length.h"
 #include "simplify/fit.h"
@@ -171,7 +172,8 @@ class Engine {
       if (applied == 0 && deferred == 0) break;
       std::erase_if(s_.live, [&](uint32_t t) { return !s_.alive[t]; });
       if (s_.options.progress && start_triangles > target_triangles)
-        s_.options.progress(double(start_triangles - s_.live_triangles) / double(start_triangles - target_triangles));
+        // A collapse removes up to two triangles: the last may pass the target by one.
+        s_.options.progress(std::min(1.0, double(start_triangles - s_.live_triangles) / double(start_triangles - target_triangles)));
     }
   }
 
@@ -1202,6 +1204,7 @@ void run(State& state, MetricT& metric, const std::vector<Channel>& channels, ui
     if (m == Metric::qem || m == Metric::constrained_qem) engine.guard_ = state.options.distance_guard;
     if (engine.guard_ > 0) engine.origin_ = state.position, engine.held_.assign(state.position_count, 0.0);
   }
+  result.distance_guard = float(engine.guard_);
   engine.aggregate_ = state.options.aggregate_distance > 0;
   engine.keep_borders_ = state.options.metric == Metric::qem || state.options.metric == Metric::edge_length;
   for (const Channel& c : channels) engine.channel_floats_ += c.size;
@@ -1272,6 +1275,12 @@ std::vector<uint32_t> spatial_order(const Mesh& mesh, const PositionIds& ids, co
 // The final fit's pull of each position towards its closest input point, against the input
 // vertices' pull on the result (fit.h); chosen on the corpus at 10% and 1% among 0.05 to 1.
 constexpr double fit_weight = 0.2;
+
+uint64_t target_triangles(const Mesh& mesh, const SimplifyOptions& o) {
+  const uint64_t triangles = mesh.triangle_count();
+  return o.target_triangles ? std::min<uint64_t>(o.target_triangles, triangles)
+                            : uint64_t(std::llround(double(o.target_ratio) * double(triangles)));
+}
 
 void check_options(const Mesh& mesh, const SimplifyOptions& o) {
   if (!(o.target_ratio >= 0 && o.target_ratio <= 1)) throw_usage("simplify: target_ratio must be in [0, 1]");
@@ -1345,9 +1354,7 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
   state.attributes = gather_attributes(mesh, state.layout);
 
   const uint64_t triangles = mesh.triangle_count();
-  const uint64_t target = options.target_triangles
-                              ? std::min<uint64_t>(options.target_triangles, triangles)
-                              : uint64_t(std::llround(double(options.target_ratio) * double(triangles)));
+  const uint64_t target = target_triangles(mesh, options);
   double limit = std::numeric_limits<double>::infinity();
   if (options.max_error >= 0) limit = std::min(limit, double(options.max_error) * state.scale);
   if (options.max_relative_error >= 0)
@@ -1411,6 +1418,7 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
       }
     }
   result.relative_error = result.diagonal > 0 ? result.error / result.diagonal : 0;
+  result.metric = options.metric;
   result.input_triangles = triangles;
   result.input_vertices = mesh.vertex_count();
   result.output_triangles = result.mesh.triangle_count();
@@ -1421,8 +1429,59 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
 
 }  // namespace
 
+// The ways the search (SimplifyOptions::search_triangles) tries: the options as set first.
+std::vector<SimplifyOptions> search_ways(const Mesh& mesh, const SimplifyOptions& o) {
+  std::vector<SimplifyOptions> ways{o};
+  const bool quadric = o.metric == Metric::qem || o.metric == Metric::constrained_qem;
+  // An error limit stops each way at a different count; aggregation merges parts, which the
+  // Hausdorff distance does not reward.
+  if (!quadric || mesh.triangle_count() > o.search_triangles || o.max_error >= 0 || o.max_relative_error >= 0 ||
+      o.aggregate_distance > 0)
+    return ways;
+  for (const float guard : {0.0f, 2.0f})
+    if (guard != o.distance_guard) ways.push_back(o), ways.back().distance_guard = guard;
+  ways.push_back(o);
+  ways.back().metric = o.metric == Metric::qem ? Metric::memoryless : Metric::constrained_memoryless;
+  return ways;
+}
+
+// The search's own samples: not the seed a caller's lod::compare uses by default, so that the choice
+// is not tuned to the samples it is later judged by. Two per input triangle: the vertices and edges
+// are sampled as well, where the largest distances mostly lie.
+constexpr uint64_t search_seed = 0x5ea6c4;
+constexpr uint64_t search_samples_per_triangle = 2;
+
+SimplifyResult search(const Mesh& mesh, const std::vector<SimplifyOptions>& ways) {
+  const auto start = clock::now();
+  const SimplifyOptions& first = ways.front();
+  const CompareOptions measure{.samples = std::max<uint64_t>(10'000, search_samples_per_triangle * mesh.triangle_count()),
+                               .seed = search_seed,
+                               .attributes = false,
+                               .threads = first.threads};
+  SimplifyResult best;
+  uint64_t most_triangles = target_triangles(mesh, first);
+  double best_distance = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < ways.size(); ++i) {
+    SimplifyOptions way = ways[i];
+    if (first.progress)
+      way.progress = [&, i](double f) { first.progress((double(i) + f) / double(ways.size())); };
+    SimplifyResult r = simplify_once(mesh, way, nullptr);
+    // A way that stopped shorter than the first (the topology held it) had an easier job.
+    if (i == 0) most_triangles = std::max(most_triangles, r.output_triangles);
+    if (r.output_triangles > most_triangles) continue;
+    const double distance = r.mesh.triangle_count() ? compare(mesh, r.mesh, measure).relative_hausdorff
+                                                    : std::numeric_limits<double>::infinity();
+    if (i == 0 || distance < best_distance) best = std::move(r), best_distance = distance;
+  }
+  best.search_ways = uint32_t(ways.size());
+  best.search_hausdorff = std::isfinite(best_distance) ? best_distance : 0;
+  best.seconds_total = seconds(start, clock::now());
+  return best;
+}
+
 SimplifyResult simplify_with(const Mesh& mesh, const SimplifyOptions& options, const MultiposeInput* multipose) {
-  SimplifyResult result = simplify_once(mesh, options, multipose);
+  const std::vector<SimplifyOptions> ways = multipose ? std::vector<SimplifyOptions>{options} : search_ways(mesh, options);
+  SimplifyResult result = ways.size() > 1 ? search(mesh, ways) : simplify_once(mesh, options, multipose);
   // The working state is gone: a LOD chain's next call starts afresh. Only after large calls: a
   // small one's arrays stay below glibc's mmap threshold (and trimming scans the whole heap, which
   // in a host simplifying thousands of small meshes would cost more than it saves).

@@ -54,6 +54,28 @@ TEST(CliSimplify, AggregateJoinsParts) {
   }
 }
 
+// The search (SimplifyOptions::search_triangles) is on by default and reported; --no-search turns it
+// off and gives the library's result for the options as set.
+TEST(CliSimplify, ReportsTheSearchAndTurnsItOff) {
+  test::TempDir dir;
+  const Mesh torus = shapes::torus(1.0f, 0.3f, 40, 20);
+  write_mesh(torus, dir / "torus.ply");
+  for (const bool search : {true, false}) {
+    std::vector<std::string> args{"simplify", (dir / "torus.ply").string(), "-o", (dir / "out.ply").string(),
+                                  "--ratio", "0.05", "--force", "--json"};
+    if (!search) args.push_back("--no-search");
+    const test::RunResult r = test::run_cli(args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["search_ways"].get<uint32_t>(), search ? 4u : 1u);
+    ASSERT_EQ(j["kept"].size(), 1u);
+    const SimplifyResult lib = simplify(torus, {.target_ratio = 0.05f, .search_triangles = search ? 1u << 16 : 0u});
+    EXPECT_EQ(j["kept"][0]["metric"].get<std::string>(), metric_name(lib.metric));
+    EXPECT_EQ(j["kept"][0]["distance_guard"].get<float>(), lib.distance_guard);
+    EXPECT_EQ(read_mesh(dir / "out.ply").indices, lib.mesh.indices);
+  }
+}
+
 TEST(CliSimplify, NeedsATarget) {
   test::TempDir dir;
   write_mesh(shapes::icosphere(1), dir / "s.ply");

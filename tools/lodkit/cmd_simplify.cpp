@@ -25,7 +25,7 @@ struct SimplifyCommand {
   bool keep_vertices = false, lock_border = false, prune = false, json = false, force = false;
   unsigned threads = 0;
   uint32_t fit = SimplifyOptions{}.fit_iterations;
-  bool no_flips = false;
+  bool no_flips = false, no_search = false;
   float guard = SimplifyOptions{}.distance_guard;
 };
 
@@ -86,6 +86,9 @@ Command register_simplify(CLI::App& root) {
                   "Hold back collapses that would leave an input point farther from the result than G times (in "
                   "squared distance) the error the other collapses reach: keeps thin parts (qem and cqem; 0: off)")
       ->capture_default_str();
+  app->add_flag("--no-search", o->no_search,
+                "Use exactly the options given: no search over distance guards and the memoryless metric on inputs "
+                "up to 65,536 triangles (qem and cqem, keeps the result nearest the input)");
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
@@ -106,6 +109,7 @@ Command register_simplify(CLI::App& root) {
                 .prune = o->prune,
                 .fit_iterations = o->fit,
                 .fit_flips = !o->no_flips,
+                .search_triangles = o->no_search ? 0 : SimplifyOptions{}.search_triangles,
                 .record = false,
                 .threads = o->threads,
             };
@@ -124,6 +128,8 @@ Command register_simplify(CLI::App& root) {
             uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, fitted = 0, flipped = 0, deferred = 0, rejected[4] = {};
             uint32_t fit_iterations = 0;  // the most any primitive's fit ran
             double fit_seconds = 0;  // the final fit's share of simplify_seconds
+            uint32_t search_ways = 1;  // the most any primitive's search tried
+            nlohmann::json kept = nlohmann::json::array();  // per primitive: the way its result was made
             start = std::chrono::steady_clock::now();
             {
               ProgressBar bar("simplifying");
@@ -144,6 +150,9 @@ Command register_simplify(CLI::App& root) {
                 passes += r.passes, collapses += r.collapses, virtual_pairs += r.virtual_pairs, pruned += r.pruned_triangles;
                 fitted += r.fitted_positions, flipped += r.flipped_edges, fit_seconds += r.seconds_fit;
                 fit_iterations = std::max(fit_iterations, r.fit_iterations);
+                search_ways = std::max(search_ways, r.search_ways);
+                kept.push_back({{"metric", metric_name(r.metric)}, {"distance_guard", r.distance_guard},
+                                {"ways", r.search_ways}, {"relative_hausdorff", r.search_hausdorff}});
                 rejected[0] += r.rejected_topology, rejected[1] += r.rejected_seam;
                 rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape, deferred += r.deferred_distance;
                 relative_error = std::max(relative_error, r.relative_error);
@@ -164,7 +173,7 @@ Command register_simplify(CLI::App& root) {
                                   {"fit_iterations", fit_iterations}, {"fitted_positions", fitted}, {"flipped_edges", flipped},
                                   {"rejected", {{"topology", rejected[0]}, {"seam", rejected[1]},
                                                 {"flip", rejected[2]}, {"shape", rejected[3]}}},
-                                  {"deferred_distance", deferred},
+                                  {"deferred_distance", deferred}, {"search_ways", search_ways}, {"kept", kept},
                                   {"load_seconds", load_seconds}, {"simplify_seconds", simplify_seconds},
                                   {"fit_seconds", fit_seconds},
                                   {"write_seconds", write_seconds}};
@@ -173,8 +182,15 @@ Command register_simplify(CLI::App& root) {
               fmt::print("{:<10}{:>12}{:>12}{:>14}{:>10}  {}\n", "step", "triangles", "vertices", "error", "time", "");
               fmt::print("{:<10}{:>12}{:>12}{:>14}{:>9.3f}s  {}\n", "read", in_triangles, in_vertices, "", load_seconds,
                          o->input);
+              // With a search, the way kept (one primitive) or how many ways were tried.
+              std::string way = o->metric;
+              if (search_ways > 1 && kept.size() == 1)
+                way = fmt::format("{}, guard {}: best of {} ways, Hausdorff {:.4f}%", kept[0]["metric"].get<std::string>(),
+                                  kept[0]["distance_guard"].get<float>(), search_ways, 100.0 * kept[0]["relative_hausdorff"].get<double>());
+              else if (search_ways > 1)
+                way = fmt::format("{}, best of up to {} ways per primitive", o->metric, search_ways);
               fmt::print("{:<10}{:>12}{:>12}{:>13.4f}%{:>9.3f}s  {} ({} = {:.6g}, final fit {:.3f}s)\n", "simplify", out_triangles,
-                         out_vertices, 100.0 * relative_error, simplify_seconds, o->metric, "error", error, fit_seconds);
+                         out_vertices, 100.0 * relative_error, simplify_seconds, way, "error", error, fit_seconds);
               fmt::print("{:<10}{:>12}{:>12}{:>14}{:>9.3f}s  {}\n", "write", out_triangles, out_vertices, "",
                          write_seconds, o->output);
             }
