@@ -15,6 +15,7 @@
 #include <limits>
 #include <numeric>
 #include <tuple>
+#include <thread>
 #include <type_traits>
 
 #include "core/heap.h"
@@ -1454,29 +1455,47 @@ constexpr uint64_t search_samples_per_triangle = 2;
 SimplifyResult search(const Mesh& mesh, const std::vector<SimplifyOptions>& ways) {
   const auto start = clock::now();
   const SimplifyOptions& first = ways.front();
+  const size_t n = ways.size();
+  // With several threads the ways run side by side, one thread each (a small mesh keeps two threads
+  // busy with one way each better than with one way at a time); each result is the same on any
+  // thread count, so the choice is too.
+  const unsigned threads = core::thread_count(first.threads);
+  const unsigned each_threads = threads > 1 ? 1 : first.threads;
   const CompareOptions measure{.samples = std::max<uint64_t>(10'000, search_samples_per_triangle * mesh.triangle_count()),
                                .seed = search_seed,
                                .attributes = false,
-                               .threads = first.threads};
-  SimplifyResult best;
-  uint64_t most_triangles = target_triangles(mesh, first);
-  double best_distance = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i < ways.size(); ++i) {
+                               .threads = each_threads};
+  std::vector<SimplifyResult> results(n);
+  std::vector<double> distance(n, std::numeric_limits<double>::infinity());
+  // Progress comes from the calling thread only: (ways finished + the current way's fraction) / n.
+  const std::thread::id caller = std::this_thread::get_id();
+  std::atomic<size_t> finished{0};
+  double reported = 0;
+  core::parallel_for(n, threads, [&](size_t i) {
     SimplifyOptions way = ways[i];
+    way.threads = each_threads;
+    way.progress = nullptr;
     if (first.progress)
-      way.progress = [&, i](double f) { first.progress((double(i) + f) / double(ways.size())); };
-    SimplifyResult r = simplify_once(mesh, way, nullptr);
-    // A way that stopped shorter than the first (the topology held it) had an easier job.
-    if (i == 0) most_triangles = std::max(most_triangles, r.output_triangles);
-    if (r.output_triangles > most_triangles) continue;
-    const double distance = r.mesh.triangle_count() ? compare(mesh, r.mesh, measure).relative_hausdorff
-                                                    : std::numeric_limits<double>::infinity();
-    if (i == 0 || distance < best_distance) best = std::move(r), best_distance = distance;
-  }
-  best.search_ways = uint32_t(ways.size());
-  best.search_hausdorff = std::isfinite(best_distance) ? best_distance : 0;
-  best.seconds_total = seconds(start, clock::now());
-  return best;
+      way.progress = [&](double f) {
+        if (std::this_thread::get_id() != caller) return;
+        reported = std::max(reported, std::min(1.0, (double(finished.load()) + f) / double(n)));
+        first.progress(reported);
+      };
+    results[i] = simplify_once(mesh, way, nullptr);
+    if (results[i].mesh.triangle_count()) distance[i] = compare(mesh, results[i].mesh, measure).relative_hausdorff;
+    ++finished;
+  }, 1);
+  if (first.progress) first.progress(1.0);
+  // A way that stopped shorter than the first (the topology held it) had an easier job.
+  const uint64_t most_triangles = std::max(target_triangles(mesh, first), results[0].output_triangles);
+  size_t best = 0;
+  for (size_t i = 1; i < n; ++i)
+    if (results[i].output_triangles <= most_triangles && distance[i] < distance[best]) best = i;
+  SimplifyResult result = std::move(results[best]);
+  result.search_ways = uint32_t(n);
+  result.search_hausdorff = std::isfinite(distance[best]) ? distance[best] : 0;
+  result.seconds_total = seconds(start, clock::now());
+  return result;
 }
 
 SimplifyResult simplify_with(const Mesh& mesh, const SimplifyOptions& options, const MultiposeInput* multipose) {
