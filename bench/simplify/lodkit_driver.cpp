@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
         .target_ratio = 0.0f,
         .target_triangles = args.target_triangles,
         .metric = parse_metric(args.mode),
-        .search_triangles = search ? lod::SimplifyOptions{}.search_triangles : 0,
+        .search_input_triangles = search ? lod::SimplifyOptions{}.search_input_triangles : 0,
         .record = false,
         .threads = threads,
     };

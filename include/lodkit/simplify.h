@@ -94,17 +94,18 @@ struct SimplifyOptions {
   // al.'s flip step; the triangles keep their ids, each changes one corner). Part of the fit.
   bool fit_flips = true;
 
-  // Search (qem and cqem, a triangle target, no error limit, no aggregation, inputs of at most this
-  // many triangles): the distance guard's best strength depends on the mesh, and at strong reductions the
-  // memoryless form of the metric sometimes keeps the shape better (a torus handle: Hausdorff 0.070
-  // instead of 0.076 of the diagonal at 1%). So the input is simplified up to four ways: as set,
-  // with distance_guard 0, with 2, and with the memoryless metric of the same family. The result
-  // nearest the input by symmetric Hausdorff distance (lod::compare with its own sample seed) is
-  // kept, provided it has no more triangles than the first way's or the target; ties go to the
-  // earlier way. Costs 4 simplifications and 4 measures; on the corpus at 1%, Hausdorff at most the
-  // better peer's on 90% of the cases instead of 80% (bench/README, nineteenth session).
-  // 0: off, the options exactly as set.
-  uint64_t search_triangles = uint64_t(1) << 16;
+  // Search, for coarse results of small inputs (qem and cqem with a triangle target of at most
+  // search_output_triangles, an input of at most search_input_triangles, no error limit and no
+  // aggregation): the distance guard's best strength depends on the mesh, and far down the
+  // memoryless form of the metric sometimes keeps the shape better. So the input is simplified up to
+  // four ways: as set, with distance_guard 0, with 2, and with the memoryless metric of the same
+  // family. The result nearest the input by symmetric Hausdorff distance (lod::compare with its own
+  // sample seed) is kept, provided it has no more triangles than the first way's or the target;
+  // ties go to the earlier way. With several threads the ways run side by side. About 5x the time
+  // on one thread; on the corpus at 1%, Hausdorff at most the better peer's on 90% of the cases
+  // instead of 80% (bench/README, nineteenth session). Either limit 0: off, the options exactly as set.
+  uint64_t search_input_triangles = uint64_t(1) << 16;
+  uint64_t search_output_triangles = uint64_t(1) << 10;
 
   // Record every collapse in SimplifyResult::record (needed for replay, undo and progressive meshes).
   bool record = true;
@@ -187,7 +188,7 @@ struct SimplifyResult {
   uint64_t flipped_edges = 0;     // edges the final fit flipped
   uint32_t fit_iterations = 0;    // iterations the final fit ran (at most SimplifyOptions::fit_iterations)
   uint32_t passes = 0;
-  // The way this result was made (SimplifyOptions::search_triangles): out of how many tried (1
+  // The way this result was made (SimplifyOptions::search_input_triangles and _output_triangles): out of how many tried (1
   // without a search), with which metric and distance guard, and its measured Hausdorff distance
   // over the diagonal (0 when there was no search).
   uint32_t search_ways = 1;

@@ -1430,14 +1430,16 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
 
 }  // namespace
 
-// The ways the search (SimplifyOptions::search_triangles) tries: the options as set first.
+// The ways the search (SimplifyOptions::search_input_triangles) tries: the options as set first.
+// Its cost grows with the input, its gain with how far down the result is (one collapse's choice
+// shows more among few triangles): at 10% on the corpus it won one case more, at 1% five.
 std::vector<SimplifyOptions> search_ways(const Mesh& mesh, const SimplifyOptions& o) {
   std::vector<SimplifyOptions> ways{o};
   const bool quadric = o.metric == Metric::qem || o.metric == Metric::constrained_qem;
   // An error limit stops each way at a different count; aggregation merges parts, which the
   // Hausdorff distance does not reward.
-  if (!quadric || mesh.triangle_count() > o.search_triangles || o.max_error >= 0 || o.max_relative_error >= 0 ||
-      o.aggregate_distance > 0)
+  if (!quadric || mesh.triangle_count() > o.search_input_triangles || target_triangles(mesh, o) > o.search_output_triangles ||
+      o.max_error >= 0 || o.max_relative_error >= 0 || o.aggregate_distance > 0)
     return ways;
   for (const float guard : {0.0f, 2.0f})
     if (guard != o.distance_guard) ways.push_back(o), ways.back().distance_guard = guard;

@@ -54,7 +54,7 @@ TEST(CliSimplify, AggregateJoinsParts) {
   }
 }
 
-// The search (SimplifyOptions::search_triangles) is on by default and reported; --no-search turns it
+// The search (SimplifyOptions::search_input_triangles) is on by default and reported; --no-search turns it
 // off and gives the library's result for the options as set.
 TEST(CliSimplify, ReportsTheSearchAndTurnsItOff) {
   test::TempDir dir;
@@ -69,7 +69,7 @@ TEST(CliSimplify, ReportsTheSearchAndTurnsItOff) {
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_EQ(j["search_ways"].get<uint32_t>(), search ? 4u : 1u);
     ASSERT_EQ(j["kept"].size(), 1u);
-    const SimplifyResult lib = simplify(torus, {.target_ratio = 0.05f, .search_triangles = search ? 1u << 16 : 0u});
+    const SimplifyResult lib = simplify(torus, {.target_ratio = 0.05f, .search_input_triangles = search ? SimplifyOptions{}.search_input_triangles : 0});
     EXPECT_EQ(j["kept"][0]["metric"].get<std::string>(), metric_name(lib.metric));
     EXPECT_EQ(j["kept"][0]["distance_guard"].get<float>(), lib.distance_guard);
     EXPECT_EQ(read_mesh(dir / "out.ply").indices, lib.mesh.indices);

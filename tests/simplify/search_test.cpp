@@ -1,4 +1,4 @@
-// The search (SimplifyOptions::search_triangles): the input is simplified several ways and the
+// The search (SimplifyOptions::search_input_triangles): the input is simplified several ways and the
 // result nearest the input is kept. Checked against the ways run one by one with the search off,
 // and measured by lod::compare with its default samples, which are not the search's own.
 #include <gtest/gtest.h>
@@ -17,7 +17,7 @@ namespace {
 
 // The four ways of the default options, each alone: as set, guard 0, guard 2, memoryless.
 std::vector<SimplifyOptions> default_ways(uint64_t target) {
-  const SimplifyOptions as_set{.target_triangles = target, .search_triangles = 0};
+  const SimplifyOptions as_set{.target_triangles = target, .search_input_triangles = 0};
   std::vector<SimplifyOptions> ways(4, as_set);
   ways[1].distance_guard = 0;
   ways[2].distance_guard = 2;
@@ -60,12 +60,12 @@ TEST(SimplifySearch, FindsABetterGuardOnTheHandle) {
   const Mesh mesh = read_mesh(test::corpus_dir() / "handle.off");
   const uint64_t target = mesh.triangle_count() / 100;
   expect_nearest_way(mesh, target);
-  const SimplifyResult as_set = simplify(mesh, {.target_triangles = target, .search_triangles = 0});
+  const SimplifyResult as_set = simplify(mesh, {.target_triangles = target, .search_input_triangles = 0});
   const SimplifyResult searched = simplify(mesh, {.target_triangles = target});
   EXPECT_LT(compare(mesh, searched.mesh).hausdorff, 0.8 * compare(mesh, as_set.mesh).hausdorff);
 }
 
-// Only qem and cqem with a triangle target, no error limit and no aggregation, up to the size limit.
+// Only qem and cqem with a triangle target, no error limit and no aggregation, within both size limits.
 TEST(SimplifySearch, OnlyWhereItApplies) {
   const Mesh mesh = shapes::torus(1.0f, 0.3f, 32, 16);
   const SimplifyOptions base{.target_ratio = 0.1f};
@@ -81,11 +81,13 @@ TEST(SimplifySearch, OnlyWhereItApplies) {
     EXPECT_EQ(ways([m](SimplifyOptions& o) { o.metric = m; }), 1u) << metric_name(m);
   EXPECT_EQ(ways([](SimplifyOptions& o) { o.max_relative_error = 0.5f; }), 1u);
   EXPECT_EQ(ways([](SimplifyOptions& o) { o.aggregate_distance = 0.01f; }), 1u);
-  EXPECT_EQ(ways([&](SimplifyOptions& o) { o.search_triangles = mesh.triangle_count() - 1; }), 1u);
-  EXPECT_EQ(ways([&](SimplifyOptions& o) { o.search_triangles = mesh.triangle_count(); }), 4u);
+  EXPECT_EQ(ways([&](SimplifyOptions& o) { o.search_input_triangles = mesh.triangle_count() - 1; }), 1u);
+  EXPECT_EQ(ways([&](SimplifyOptions& o) { o.search_input_triangles = mesh.triangle_count(); }), 4u);
+  EXPECT_EQ(ways([&](SimplifyOptions& o) { o.search_output_triangles = 101; }), 1u);  // the target is 102
+  EXPECT_EQ(ways([&](SimplifyOptions& o) { o.search_output_triangles = 102; }), 4u);
 
   // Without a search the report names the options as set, and there is no measure.
-  const SimplifyResult a = simplify(mesh, {.target_ratio = 0.1f, .distance_guard = 3, .search_triangles = 0});
+  const SimplifyResult a = simplify(mesh, {.target_ratio = 0.1f, .distance_guard = 3, .search_input_triangles = 0});
   EXPECT_EQ(a.search_ways, 1u);
   EXPECT_EQ(a.search_hausdorff, 0.0);
   EXPECT_EQ(a.metric, Metric::constrained_qem);

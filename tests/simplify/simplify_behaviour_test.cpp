@@ -121,7 +121,7 @@ TEST(SimplifyBehaviour, DistanceGuardKeepsTheElksAntlerProngs) {
   const Mesh mesh = read_mesh(test::corpus_dir() / "elk.off");
   double hausdorff[2];
   for (const int guarded : {0, 1}) {
-    SimplifyOptions o{.target_triangles = mesh.triangle_count() / 10, .fit_iterations = 0, .search_triangles = 0};
+    SimplifyOptions o{.target_triangles = mesh.triangle_count() / 10, .fit_iterations = 0, .search_input_triangles = 0};
     if (!guarded) o.distance_guard = 0;
     const SimplifyResult r = simplify(mesh, o);
     ASSERT_LE(r.output_triangles, o.target_triangles);  // a collapse removes two
@@ -143,7 +143,7 @@ TEST(SimplifyBehaviour, DistanceGuardGetsAsFarAsWithout) {
   const Mesh mesh = read_mesh(test::corpus_dir() / "elephant-with-holes.off");
   for (const Metric metric : {Metric::qem, Metric::constrained_qem}) {
     SCOPED_TRACE(metric_name(metric));
-    SimplifyOptions o{.target_triangles = mesh.triangle_count() / 100, .metric = metric, .fit_iterations = 0, .search_triangles = 0};
+    SimplifyOptions o{.target_triangles = mesh.triangle_count() / 100, .metric = metric, .fit_iterations = 0, .search_input_triangles = 0};
     const SimplifyResult guarded = simplify(mesh, o);
     o.distance_guard = 0;
     const SimplifyResult plain = simplify(mesh, o);
@@ -156,7 +156,7 @@ TEST(SimplifyBehaviour, DistanceGuardGetsAsFarAsWithout) {
 // A guard too loose to ever hold a collapse back changes nothing: the same result as without it.
 TEST(SimplifyBehaviour, LooseDistanceGuardChangesNothing) {
   const Mesh mesh = shapes::torus(1.0f, 0.3f, 48, 24);
-  SimplifyOptions off{.target_ratio = 0.05f, .distance_guard = 0, .search_triangles = 0};
+  SimplifyOptions off{.target_ratio = 0.05f, .distance_guard = 0, .search_input_triangles = 0};
   SimplifyOptions loose = off;
   loose.distance_guard = 1e30f;
   const SimplifyResult a = simplify(mesh, off), b = simplify(mesh, loose);
@@ -171,9 +171,9 @@ TEST(SimplifyBehaviour, LooseDistanceGuardChangesNothing) {
 // closest-point search).
 TEST(SimplifyBehaviour, FitBringsTheResultCloserToTheInput) {
   for (const Mesh& mesh : {shapes::torus(1.0f, 0.4f, 64, 32), shapes::icosphere(4)}) {
-    const SimplifyResult plain = simplify(mesh, {.target_ratio = 0.03f, .fit_iterations = 0, .search_triangles = 0});
-    const SimplifyResult moved = simplify(mesh, {.target_ratio = 0.03f, .fit_flips = false, .search_triangles = 0});
-    const SimplifyResult fitted = simplify(mesh, {.target_ratio = 0.03f, .search_triangles = 0});
+    const SimplifyResult plain = simplify(mesh, {.target_ratio = 0.03f, .fit_iterations = 0, .search_input_triangles = 0});
+    const SimplifyResult moved = simplify(mesh, {.target_ratio = 0.03f, .fit_flips = false, .search_input_triangles = 0});
+    const SimplifyResult fitted = simplify(mesh, {.target_ratio = 0.03f, .search_input_triangles = 0});
     EXPECT_EQ(moved.mesh.indices, plain.mesh.indices);
     EXPECT_EQ(moved.vertex_origin, plain.vertex_origin);
     EXPECT_EQ(moved.flipped_edges, 0u);
@@ -292,7 +292,7 @@ TEST(SimplifyBehaviour, MemorylessKeepsVolumeBetterThanQem) {
   const Mesh mesh = shapes::torus(1.0f, 0.4f, 48, 24);
   const double v0 = volume(mesh);
   // The metrics' own placements: no final fit.
-  const double qem = volume(simplify(mesh, {.target_ratio = 0.05f, .metric = Metric::qem, .fit_iterations = 0, .search_triangles = 0}).mesh);
+  const double qem = volume(simplify(mesh, {.target_ratio = 0.05f, .metric = Metric::qem, .fit_iterations = 0, .search_input_triangles = 0}).mesh);
   const double lt =
       volume(simplify(mesh, {.target_ratio = 0.05f, .metric = Metric::memoryless, .fit_iterations = 0}).mesh);
   EXPECT_LT(std::fabs(lt - v0), std::fabs(qem - v0));

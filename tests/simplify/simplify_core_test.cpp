@@ -136,7 +136,7 @@ TEST(SimplifyCore, FitTurnsNoFacePastTheLimit) {
   const Mesh mesh = read_mesh(test::corpus_dir() / "elephant.off");
   for (const float ratio : {0.1f, 0.01f})
     for (const float limit : {0.2f, 0.9f}) {
-      const SimplifyOptions o{.target_ratio = ratio, .min_normal_dot = limit, .fit_flips = false, .search_triangles = 0};
+      const SimplifyOptions o{.target_ratio = ratio, .min_normal_dot = limit, .fit_flips = false, .search_input_triangles = 0};
       SimplifyOptions no_fit = o;
       no_fit.fit_iterations = 0;
       const SimplifyResult collapsed = simplify(mesh, no_fit), fitted = simplify(mesh, o);

@@ -128,7 +128,7 @@ TEST(SimplifySkinned, MultiposeWithTheIdentityPoseIsConstrainedQem) {
   plain.metric = Metric::constrained_qem;
   plain.fit_iterations = 0;  // the multi-pose metric is not followed by the rest-pose fit
   plain.distance_guard = 0;  // nor guarded by rest-pose distances (qem and cqem only)
-  plain.search_triangles = 0;  // and is made one way only
+  plain.search_input_triangles = 0;  // and is made one way only
   const SimplifyResult s = simplify(m, plain);
   EXPECT_EQ(r.mesh.indices, s.mesh.indices);
   EXPECT_EQ(r.mesh.positions, s.mesh.positions);
