@@ -188,9 +188,9 @@ struct SimplifyResult {
   uint64_t flipped_edges = 0;     // edges the final fit flipped
   uint32_t fit_iterations = 0;    // iterations the final fit ran (at most SimplifyOptions::fit_iterations)
   uint32_t passes = 0;
-  // The way this result was made (SimplifyOptions::search_input_triangles and _output_triangles): out of how many tried (1
-  // without a search), with which metric and distance guard, and its measured Hausdorff distance
-  // over the diagonal (0 when there was no search).
+  // The way this result was made (the search, SimplifyOptions::search_input_triangles): out of how
+  // many tried (1 without a search), with which metric and distance guard, and its measured
+  // Hausdorff distance over the diagonal (0 when there was no search).
   uint32_t search_ways = 1;
   Metric metric = Metric::constrained_qem;
   float distance_guard = 0;

@@ -1428,8 +1428,6 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
   return result;
 }
 
-}  // namespace
-
 // The ways the search (SimplifyOptions::search_input_triangles) tries: the options as set first.
 // Its cost grows with the input, its gain with how far down the result is (one collapse's choice
 // shows more among few triangles): at 10% on the corpus it won one case more, at 1% five.
@@ -1499,6 +1497,8 @@ SimplifyResult search(const Mesh& mesh, const std::vector<SimplifyOptions>& ways
   result.seconds_total = seconds(start, clock::now());
   return result;
 }
+
+}  // namespace
 
 SimplifyResult simplify_with(const Mesh& mesh, const SimplifyOptions& options, const MultiposeInput* multipose) {
   const std::vector<SimplifyOptions> ways = multipose ? std::vector<SimplifyOptions>{options} : search_ways(mesh, options);
