@@ -101,10 +101,10 @@ struct SimplifyOptions {
   // four ways: as set, with distance_guard 0, with 2, and with the memoryless metric of the same
   // family. The result nearest the input by symmetric Hausdorff distance (lod::compare with its own
   // sample seed) is kept, provided it has no more triangles than the first way's or the target;
-  // ties go to the earlier way. With several threads the ways run side by side. About 5x the time
+  // ties go to the earlier way. With several threads the ways run side by side. About 7x the time
   // on one thread; on the corpus at 1%, Hausdorff at most the better peer's on 90% of the cases
   // instead of 80% (bench/README, nineteenth session). Either limit 0: off, the options exactly as set.
-  uint64_t search_input_triangles = uint64_t(1) << 16;
+  uint64_t search_input_triangles = uint64_t(1) << 15;
   uint64_t search_output_triangles = uint64_t(1) << 10;
 
   // Record every collapse in SimplifyResult::record (needed for replay, undo and progressive meshes).

@@ -311,7 +311,8 @@ struct Plan {
 
 Plan plan_samples(Surface& from, uint64_t samples, bool edge_samples, uint64_t stream_seed) {
   Plan plan;
-  plan.area_samples = from.area > 0 ? samples : 0;
+  // An area that overflowed (coordinates near float's limit) would make every share NaN.
+  plan.area_samples = from.area > 0 && std::isfinite(from.area) ? samples : 0;
   const size_t triangles = from.mesh->triangle_count();
   plan.phase = double(splitmix64(stream_seed ^ 0x5bd1e995ull) >> 11) * 0x1p-53;
   plan.area_start.resize(triangles + 1);
@@ -334,7 +335,8 @@ Plan plan_samples(Surface& from, uint64_t samples, bool edge_samples, uint64_t s
   for (size_t i = 0; i < from.edges.size(); ++i) {
     plan.edge_start[i] = sum;
     const double length = distance(from.position(from.edges[i].lo), from.position(from.edges[i].hi));
-    if (spacing > 0) sum += uint64_t(length / spacing);
+    // NaN (an overflowed length over an overflowed spacing) is skipped, not converted.
+    if (const double n = length / spacing; spacing > 0 && n > 0) sum += uint64_t(std::min(n, double(samples)));
   }
   plan.edge_start.back() = sum;
   return plan;
@@ -502,15 +504,18 @@ Direction measure_direction(const Surface& from, const Surface& to, const Triang
       const float side = std::sqrt(0.5f * length * height / float(count));
       const float per_side = side > 0 ? 1 / side : 0.0f;
       constexpr float max_cells = 4096;  // per axis (a sliver's long side)
-      const uint32_t columns = uint32_t(std::min(length * per_side, max_cells)) + 1;
-      const uint32_t rows = uint32_t(std::min(height * per_side, max_cells)) + 1;
+      // NaN (an overflowed side: infinity times 0) gives one cell, never a conversion out of range.
+      const auto cells = [&](float x) { return x >= 1 ? uint32_t(std::min(x, max_cells)) : 0u; };
+      const uint32_t columns = cells(length * per_side) + 1, rows = cells(height * per_side) + 1;
       const uint32_t strips = (rows + patch_strip - 1) / patch_strip;
       cell.resize(count);
       cell_start.assign(size_t(strips) * columns * patch_strip + 1, 0);
       for (uint32_t o = a; o < b; ++o) {
         const vec3f d = at[o] - origin;
-        const uint32_t cu = std::min(columns - 1, uint32_t(std::max(0.0f, dot(d, u_axis) * per_side)));
-        const uint32_t cv = std::min(rows - 1, uint32_t(std::max(0.0f, dot(d, v_axis) * per_side)));
+        // Bounded before the conversion: on a tiny patch a coordinate in cells can pass 2^32 (or be
+        // NaN, 0 times an infinite per_side, which max(0, NaN) turns into 0).
+        const uint32_t cu = uint32_t(std::min(std::max(0.0f, dot(d, u_axis) * per_side), float(columns - 1)));
+        const uint32_t cv = uint32_t(std::min(std::max(0.0f, dot(d, v_axis) * per_side), float(rows - 1)));
         // Strips alternate direction, and so do the columns within a strip: each cell's successor
         // is a neighbour.
         const uint32_t strip = cv / patch_strip, column = strip & 1 ? columns - 1 - cu : cu;

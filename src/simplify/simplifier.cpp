@@ -1447,10 +1447,11 @@ std::vector<SimplifyOptions> search_ways(const Mesh& mesh, const SimplifyOptions
 }
 
 // The search's own samples: not the seed a caller's lod::compare uses by default, so that the choice
-// is not tuned to the samples it is later judged by. Two per input triangle: the vertices and edges
-// are sampled as well, where the largest distances mostly lie.
+// is not tuned to the samples it is later judged by. Two per input triangle, at least 1,000 (not
+// lod::compare's 10,000: on a tiny mesh that floor cost more than the four simplifications): the
+// vertices and edges are sampled as well, where the largest distances mostly lie.
 constexpr uint64_t search_seed = 0x5ea6c4;
-constexpr uint64_t search_samples_per_triangle = 2;
+constexpr uint64_t search_samples_per_triangle = 2, search_min_samples = 1'000;
 
 SimplifyResult search(const Mesh& mesh, const std::vector<SimplifyOptions>& ways) {
   const auto start = clock::now();
@@ -1461,7 +1462,7 @@ SimplifyResult search(const Mesh& mesh, const std::vector<SimplifyOptions>& ways
   // thread count, so the choice is too.
   const unsigned threads = core::thread_count(first.threads);
   const unsigned each_threads = threads > 1 ? 1 : first.threads;
-  const CompareOptions measure{.samples = std::max<uint64_t>(10'000, search_samples_per_triangle * mesh.triangle_count()),
+  const CompareOptions measure{.samples = std::max<uint64_t>(search_min_samples, search_samples_per_triangle * mesh.triangle_count()),
                                .seed = search_seed,
                                .attributes = false,
                                .threads = each_threads};

@@ -161,6 +161,18 @@ TEST(MeasureCompare, IdenticalMeshesGiveZero) {
   EXPECT_LE(d.a_to_b.attributes.max_normal_angle, 0.01);
 }
 
+// A sliver 1e20 times longer than its height: its samples' cell coordinates along the long side
+// once passed 2^32 before being clamped to the grid (a float to uint32 conversion out of range,
+// undefined; found by fuzz_simplify through the simplifier's search). Against itself: zero.
+TEST(MeasureCompare, ExtremeSliverAgainstItself) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1e15f, 0, 0}, {0, 1e-5f, 0}, {0, 0, 1}};
+  m.indices = {0, 1, 2, 0, 2, 3};
+  const Deviation d = compare(m, m, {.samples = 20'000, .threads = 1});
+  EXPECT_TRUE(std::isfinite(d.hausdorff));
+  EXPECT_LE(d.hausdorff, 1e-6 * d.diagonal);
+}
+
 TEST(MeasureCompare, AttributeDifferencesAtTheClosestPoint) {
   // b is a lifted above itself, with every normal tilted by 30 degrees, UVs shifted by (0.1, 0) and
   // colours halved in red; the closest point of every sample is straight above it, at the same

@@ -88,7 +88,7 @@ Command register_simplify(CLI::App& root) {
       ->capture_default_str();
   app->add_flag("--no-search", o->no_search,
                 "Use exactly the options given: no search over distance guards and the memoryless metric on inputs "
-                "up to 65,536 triangles simplified to 1,024 or fewer (qem and cqem; keeps the result nearest the input)");
+                "up to 32,768 triangles simplified to 1,024 or fewer (qem and cqem; keeps the result nearest the input)");
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
