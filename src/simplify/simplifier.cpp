@@ -133,10 +133,11 @@ class Engine {
       // The candidates whose neighbourhoods (both stars and their rings) are disjoint from those of
       // all before them in the chunk are "taken" and checked in parallel first; any other, held
       // back by an earlier one's neighbourhood, is checked when the applying loop reaches it
-      // unlocked (the earlier ones failed their checks). So no check is wasted on a candidate that
-      // ends locked, and none waits on verdicts to know whether it will be reached: checks in
-      // rounds did, and on two threads took as long as on one (armadillo-s2 -> 83,200: 0.85 s of
-      // checks, 562k of them for 448k needed). Same result on any number of threads.
+      // unlocked (the earlier ones failed their checks; if it fails too, its fallback edge may lead
+      // around the collapses applied before it, and is checked on them). So no check is wasted on a
+      // candidate that ends locked, and none waits on verdicts to know whether it will be reached:
+      // checks in rounds did, and on two threads took as long as on one (armadillo-s2 -> 83,200:
+      // 0.85 s of checks, 562k of them for 448k needed). Same result on any number of threads.
       size_t applied = 0, deferred = 0;
       // Chunks: big enough to keep the workers busy, small enough that few of a chunk's candidates
       // get locked by earlier ones in it.
