@@ -140,7 +140,7 @@ class Engine {
       // 0.85 s of checks, 562k of them for 448k needed). Same result on any number of threads.
       size_t applied = 0, deferred = 0;
       // Chunks: big enough to keep the workers busy, small enough that few of a chunk's candidates
-      // get locked by earlier ones in it.
+      // are held back by earlier ones in it (their checks run on one thread).
       const size_t chunk = std::clamp<size_t>(order.size() / 64, 256, 4096);
       std::vector<uint32_t>& batch = batch_;
       for (size_t next = 0; next < order.size() && s_.live_triangles > target_triangles;) {
@@ -155,10 +155,7 @@ class Engine {
           const uint32_t u = batch[i], v = best_[u].other;
           if (claimed_[u] == stamp || claimed_[v] == stamp) continue;
           taken_.push_back(i);
-          for (const uint32_t x : {u, v}) {
-            claimed_[x] = stamp;
-            for (const Wing& w : s_.wings_of(x)) claimed_[w.next] = stamp, claimed_[w.prev] = stamp;
-          }
+          around(u, v, [&](uint32_t x) { claimed_[x] = stamp; });
         }
         decisions_.resize(batch.size());
         verdicts_.resize(batch.size());
@@ -301,6 +298,17 @@ class Engine {
         }
       }
     });
+  }
+
+  // fn(x) for u, v and every position of their stars' rings (some more than once): the
+  // neighbourhood a collapse of edge (u, v) changes, which a chunk's candidate claims and an applied
+  // collapse locks (see run).
+  template <class Fn>
+  void around(uint32_t u, uint32_t v, Fn&& fn) const {
+    for (const uint32_t x : {u, v}) {
+      fn(x);
+      for (const Wing& w : s_.wings_of(x)) fn(w.next), fn(w.prev);
+    }
   }
 
   // Checks candidate i of the chunk (see run) and, if it fails, finds u's fallback edge.
@@ -1046,13 +1054,9 @@ class Engine {
 
     mark_changed_edges(d);
     // Lock the neighbourhood for the rest of the pass.
-    const auto lock = [&](uint32_t x) {
+    around(d.kept, d.removed, [&](uint32_t x) {
       if (!(s_.flags[x] & flag_pass_locked)) s_.flags[x] |= flag_pass_locked, locked_in_[x] = chunk_;
-    };
-    for (const uint32_t x : {d.kept, d.removed}) {
-      lock(x);
-      for (const Wing& w : s_.wings_of(x)) lock(w.next), lock(w.prev);
-    }
+    });
 
     c.removed_face_count = uint32_t(record.removed_faces.size()) - c.faces_begin;
     c.relink_count = uint32_t(record.relinks.size()) - c.relinks_begin;
