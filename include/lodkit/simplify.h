@@ -88,7 +88,8 @@ struct SimplifyOptions {
   // least-squares iterations (Hoppe et al. 1993's vertex step; see src/simplify/fit.h). The fit
   // stops earlier once an iteration moves no position by more than 0.1% of the mean edge length.
   // 0 keeps the collapse placements. Not done with keep_vertices (positions are input vertices
-  // there) or on locked positions.
+  // there), on locked positions, or when the collapses' error is below 1e-6 of the bounding-box
+  // diagonal (the result then lies on the input already).
   uint32_t fit_iterations = 12;
   // Before the fit's first step, flip edges whose other diagonal lies nearer the input (Hoppe et
   // al.'s flip step; the triangles keep their ids, each changes one corner). Part of the fit.

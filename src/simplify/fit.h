@@ -54,6 +54,15 @@ namespace lod::collapse {
 uint32_t fit_positions(State& state, uint32_t iterations, double weight, bool flips, std::vector<FittedPosition>* fitted,
                        std::vector<Relink>* flipped);
 
+// The fit is skipped when the collapses' largest error (a distance) is below this share of the
+// input's bounding-box diagonal: every position then lies on the planes of the input faces it
+// merged, to float precision, and the result on the input. Such results come from inputs
+// subdivided without smoothing and simplified back (armadillo-s2 -> 83,200: relative error 1.2e-8,
+// Hausdorff distance 7.6e-8 of the diagonal without the fit, 7.4e-8 with it, and the fit was a
+// quarter of the time) and from flat or boxy corpus meshes, whose errors are 0. The next corpus
+// error is 1.6e-5 (bench/README, twenty-first session).
+constexpr double fit_skip_error = 1e-6;
+
 // Input triangles per BVH in closest_on_input, as the fit uses it.
 constexpr size_t fit_chunk_triangles = size_t(1) << 17;
 

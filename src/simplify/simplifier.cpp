@@ -1376,7 +1376,8 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
   result.seconds_collapse = seconds(engine_start, fit_start);
   // The fit moves positions only: keep_vertices promises input vertices, and the multi-pose metric
   // places positions for every pose, which a rest-pose fit would undo.
-  if (options.fit_iterations > 0 && !options.keep_vertices && !multipose) {
+  const bool on_input = result.error < fit_skip_error * result.diagonal;
+  if (options.fit_iterations > 0 && !options.keep_vertices && !multipose && !on_input) {
     std::vector<FittedPosition> fitted;
     std::vector<Relink> flipped;
     result.fit_iterations = fit_positions(state, options.fit_iterations, fit_weight, options.fit_flips, &fitted, &flipped);
