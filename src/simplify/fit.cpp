@@ -47,8 +47,9 @@ constexpr double sample_emphasis = 0.1, sample_cap = 50;
 // every vertex (bench/README, eighteenth session).
 constexpr size_t sample_budget = size_t(1) << 16;
 // The fit stops early once an iteration moved no position by more than this share of the result's
-// mean edge length: on dense inputs simplified by 10x the result already lies on the input and the
-// moves fade at once (armadillo subdivided, 832k and 3.3M triangles: one iteration), while far
+// mean edge length: on dense inputs simplified by 10x the result already lies near the input and
+// the moves fade at once (armadillo subdivided, 832k and 3.3M triangles: one iteration, before the
+// fit was skipped on results that lie on the input; fit_skip_error in fit.h), while far
 // down they stay at 1e-3 to 1e-2 and every further iteration still helps (bench/README, sixteenth
 // session).
 constexpr double converged = 1e-3;

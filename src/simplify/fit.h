@@ -22,7 +22,9 @@
 // before the fit. From the fifth iteration on, the input samples are reweighted the same way (a_i
 // times 1 + 0.1 min(50, r_i^2 / mean r^2)), towards the input's farthest points. The iterations
 // stop once one moved no position by more than 0.1% of the mean edge length: after one on dense
-// inputs simplified 10x, where the result already lies on the input; far down, where each further iteration still helps, at the cap (12 by default). Corpus
+// inputs simplified 10x, where the result already lies near the input (and none run when the
+// collapses left it on the input: fit_skip_error below); far down, where each further iteration
+// still helps, at the cap (12 by default). Corpus
 // meshes (10% and 1%, with the finer late passes): Hausdorff distance about -8%, RMS about -20%
 // (10%) and -25% (1%), geometric means; the edge term takes the corpus's 10% Hausdorff distance
 // further down where it was worst (bench/README, eleventh session). The feet come from measure's BVH over the (small) result,
