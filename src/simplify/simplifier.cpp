@@ -149,7 +149,7 @@ class Engine {
           const uint32_t u = uint32_t(order[next]), v = best_[u].other;  // none: u died in this pass
           if (v != none && !((s_.flags[u] | s_.flags[v]) & flag_pass_locked)) batch.push_back(u);
         }
-        const uint32_t stamp = chunk_ = ++stamp_;  // claimed_[x] == stamp: x is around a taken candidate
+        const uint32_t stamp = ++chunk_;  // claimed_[x] == stamp: x is around a taken candidate
         taken_.clear();
         for (uint32_t i = 0; i < batch.size(); ++i) {
           const uint32_t u = batch[i], v = best_[u].other;
@@ -1167,12 +1167,11 @@ class Engine {
   double level_ = 0, least_excess_ = std::numeric_limits<double>::infinity();
   bool stalled_ = false;  // the last pass applied nothing
   // The chunk's candidates, which of them are checked (in parallel: taken_, by index), and per
-  // position the chunk (stamp_) whose taken candidates' neighbourhoods hold it (claimed_) or
-  // whose collapse locked it (locked_in_; chunk_ is the current chunk).
+  // position the chunk whose taken candidates' neighbourhoods hold it (claimed_) or whose collapse
+  // locked it (locked_in_). chunk_ numbers the current chunk, counting on across passes.
   std::vector<uint32_t> batch_, taken_, claimed_, locked_in_;
   std::vector<uint8_t> checked_;
   uint32_t chunk_ = 0;
-  uint32_t stamp_ = 0;
 };
 
 template <class MetricT>
