@@ -199,6 +199,21 @@ struct SimplifyResult {
   // Wall-clock time: setting up, the collapses, the final fit (0 without one), and the whole call
   // (these, building the output mesh and, with a search, the other ways and the measures).
   double seconds_setup = 0, seconds_collapse = 0, seconds_fit = 0, seconds_total = 0;
+  // seconds_collapse by step, summed over the passes (they add up to it, less a few loop ends):
+  //   stars     building the per-position stars of the live triangles;
+  //   ranking   the quadrics (first pass; memoryless metrics every pass) and each position's
+  //             cheapest edge, where a collapse changed it;
+  //   ordering  picking and sorting the pass's candidates;
+  //   checks    choosing the candidates to check together and checking them, on all threads;
+  //   applying  the collapses, in cost order on one thread (with the checks of candidates held
+  //             back from the parallel ones).
+  struct CollapseSteps {
+    double stars = 0, ranking = 0, ordering = 0, checks = 0, applying = 0;
+    CollapseSteps& operator+=(const CollapseSteps& o) {
+      stars += o.stars, ranking += o.ranking, ordering += o.ordering, checks += o.checks, applying += o.applying;
+      return *this;
+    }
+  } seconds_steps;
 };
 
 // Simplifies `mesh` (which must pass lod::validate). Throws lod::Error (usage) on invalid options.

@@ -83,8 +83,17 @@ class Engine {
     for (uint32_t t = 0; t < s_.alive.size(); ++t)
       if (s_.alive[t]) s_.live.push_back(t);
     bool first = true;
+    SimplifyResult::CollapseSteps& steps = result_.seconds_steps;
     while (s_.live_triangles > target_triangles) {
+      clock::time_point mark = clock::now();
+      // Adds the time since the last step's end to `step`.
+      const auto lap = [&](double& step) {
+        const clock::time_point now = clock::now();
+        step += seconds(mark, now);
+        mark = now;
+      };
       build_star();
+      lap(steps.stars);
       roll_flags(first);
       if (first) classify();
       if (aggregate_) {
@@ -95,6 +104,7 @@ class Engine {
       else metric_.begin_pass(s_);
       ++result_.passes;
       evaluate_all(first);
+      lap(steps.ranking);
       first = false;
       // Candidates as (cost, position) keys: sorting the integers orders them by cost, then position,
       // without an indirection per comparison (NaN costs never pass the limit test).
@@ -138,6 +148,7 @@ class Engine {
       // candidate that ends locked, and none waits on verdicts to know whether it will be reached:
       // checks in rounds did, and on two threads took as long as on one (armadillo-s2 -> 83,200:
       // 0.85 s of checks, 562k of them for 448k needed). Same result on any number of threads.
+      lap(steps.ordering);
       size_t applied = 0, deferred = 0;
       // Chunks: big enough to keep the workers busy, small enough that few of a chunk's candidates
       // are held back by earlier ones in it (their checks run on one thread).
@@ -166,6 +177,7 @@ class Engine {
           Scratch& scratch = block_scratch();
           for (size_t j = begin; j < end; ++j) check_candidate(batch, taken_[j], scratch);
         });
+        lap(steps.checks);
         for (size_t i = 0; i < batch.size(); ++i) {
           if (s_.live_triangles <= target_triangles) break;
           const uint32_t u = batch[i], v = best_[u].other;
@@ -187,10 +199,12 @@ class Engine {
           apply(decisions_[i], scratch_);
           ++applied;
         }
+        lap(steps.applying);
       }
       stalled_ = applied == 0;
       if (applied == 0 && deferred == 0) break;
       std::erase_if(s_.live, [&](uint32_t t) { return !s_.alive[t]; });
+      lap(steps.stars);
       if (s_.options.progress && start_triangles > target_triangles)
         // A collapse removes up to two triangles: the last may pass the target by one.
         s_.options.progress(std::min(1.0, double(start_triangles - s_.live_triangles) / double(start_triangles - target_triangles)));

@@ -26,6 +26,12 @@ TEST(CliSimplify, WritesTheLibraryResultAndReportsIt) {
   EXPECT_LE(out.triangle_count(), torus.triangle_count() / 10);
   EXPECT_GT(j["fit_seconds"].get<double>(), 0.0);  // the default final fit, part of simplify_seconds
   EXPECT_LE(j["fit_seconds"].get<double>(), j["simplify_seconds"].get<double>());
+  double steps = 0;  // the collapses' steps, also part of simplify_seconds
+  for (const char* step : {"stars", "ranking", "ordering", "checks", "applying"}) {
+    EXPECT_GT(j["collapse_step_seconds"][step].get<double>(), 0.0) << step;
+    steps += j["collapse_step_seconds"][step].get<double>();
+  }
+  EXPECT_LE(steps + j["fit_seconds"].get<double>(), j["simplify_seconds"].get<double>());
   // The same call through the library gives the same mesh (the PLY round trip is exact).
   const SimplifyResult lib = simplify(read_mesh(dir / "torus.ply"), {.target_ratio = 0.1f, .metric = Metric::constrained_qem});
   EXPECT_EQ(lib.mesh.indices, out.indices);

@@ -190,6 +190,10 @@ TEST(SimplifyBehaviour, FitBringsTheResultCloserToTheInput) {
     EXPECT_EQ(plain.seconds_fit, 0.0);
     EXPECT_GT(fitted.seconds_fit, 0.0);
     EXPECT_LE(fitted.seconds_setup + fitted.seconds_collapse + fitted.seconds_fit, fitted.seconds_total);
+    // The collapses' steps are parts of their time: each ran, and together they are within it.
+    const SimplifyResult::CollapseSteps& steps = fitted.seconds_steps;
+    for (const double step : {steps.stars, steps.ranking, steps.ordering, steps.checks, steps.applying}) EXPECT_GT(step, 0.0);
+    EXPECT_LE(steps.stars + steps.ranking + steps.ordering + steps.checks + steps.applying, fitted.seconds_collapse);
     const Deviation d0 = compare(mesh, plain.mesh, {.samples = 100'000});
     const Deviation d1 = compare(mesh, fitted.mesh, {.samples = 100'000});
     RecordProperty("rms", std::to_string(d0.relative_rms) + " -> " + std::to_string(d1.relative_rms));

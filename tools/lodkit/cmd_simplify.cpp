@@ -128,6 +128,7 @@ Command register_simplify(CLI::App& root) {
             uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, fitted = 0, flipped = 0, deferred = 0, rejected[4] = {};
             uint32_t fit_iterations = 0;  // the most any primitive's fit ran
             double fit_seconds = 0;  // the final fit's share of simplify_seconds
+            SimplifyResult::CollapseSteps steps;  // the collapses' share, by step
             uint32_t search_ways = 1;  // the most any primitive's search tried
             nlohmann::json kept = nlohmann::json::array();  // per primitive: the way its result was made
             start = std::chrono::steady_clock::now();
@@ -149,6 +150,7 @@ Command register_simplify(CLI::App& root) {
                 error = std::max(error, r.error);
                 passes += r.passes, collapses += r.collapses, virtual_pairs += r.virtual_pairs, pruned += r.pruned_triangles;
                 fitted += r.fitted_positions, flipped += r.flipped_edges, fit_seconds += r.seconds_fit;
+                steps += r.seconds_steps;
                 fit_iterations = std::max(fit_iterations, r.fit_iterations);
                 search_ways = std::max(search_ways, r.search_ways);
                 kept.push_back({{"metric", metric_name(r.metric)}, {"distance_guard", r.distance_guard},
@@ -176,6 +178,9 @@ Command register_simplify(CLI::App& root) {
                                   {"deferred_distance", deferred}, {"search_ways", search_ways}, {"kept", kept},
                                   {"load_seconds", load_seconds}, {"simplify_seconds", simplify_seconds},
                                   {"fit_seconds", fit_seconds},
+                                  {"collapse_step_seconds", {{"stars", steps.stars}, {"ranking", steps.ranking},
+                                                             {"ordering", steps.ordering}, {"checks", steps.checks},
+                                                             {"applying", steps.applying}}},
                                   {"write_seconds", write_seconds}};
               fmt::print("{}\n", j.dump(2));
             } else {
