@@ -8,8 +8,10 @@
 // replayed from the input or undone back to it (progressive meshes are built from this record).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
+#include <utility>
 #include <vector>
 
 #include "lodkit/mesh.h"
@@ -209,6 +211,10 @@ struct SimplifyResult {
   //             back from the parallel ones).
   struct CollapseSteps {
     double stars = 0, ranking = 0, ordering = 0, checks = 0, applying = 0;
+    // The steps by name, in order (for reports).
+    std::array<std::pair<const char*, double>, 5> named() const {
+      return {{{"stars", stars}, {"ranking", ranking}, {"ordering", ordering}, {"checks", checks}, {"applying", applying}}};
+    }
     CollapseSteps& operator+=(const CollapseSteps& o) {
       stars += o.stars, ranking += o.ranking, ordering += o.ordering, checks += o.checks, applying += o.applying;
       return *this;

@@ -178,10 +178,8 @@ Command register_simplify(CLI::App& root) {
                                   {"deferred_distance", deferred}, {"search_ways", search_ways}, {"kept", kept},
                                   {"load_seconds", load_seconds}, {"simplify_seconds", simplify_seconds},
                                   {"fit_seconds", fit_seconds},
-                                  {"collapse_step_seconds", {{"stars", steps.stars}, {"ranking", steps.ranking},
-                                                             {"ordering", steps.ordering}, {"checks", steps.checks},
-                                                             {"applying", steps.applying}}},
                                   {"write_seconds", write_seconds}};
+              for (const auto& [name, value] : steps.named()) j["collapse_step_seconds"][name] = value;
               fmt::print("{}\n", j.dump(2));
             } else {
               fmt::print("{:<10}{:>12}{:>12}{:>14}{:>10}  {}\n", "step", "triangles", "vertices", "error", "time", "");
