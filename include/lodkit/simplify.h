@@ -96,17 +96,23 @@ struct SimplifyOptions {
   // Before the fit's first step, flip edges whose other diagonal lies nearer the input (Hoppe et
   // al.'s flip step; the triangles keep their ids, each changes one corner). Part of the fit.
   bool fit_flips = true;
+  // The weight of the fit's edge term, which pulls the midpoints of the result's edges towards the
+  // input, most strongly the farthest (src/simplify/fit.h): it trades a little RMS distance for
+  // Hausdorff distance. 0: a plain least-squares fit of the input's samples.
+  float fit_edge_weight = 0.1f;
 
   // Search, for coarse results of small inputs (qem and cqem with a triangle target of at most
   // search_output_triangles, an input of at most search_input_triangles, no error limit and no
   // aggregation): the distance guard's best strength depends on the mesh, and far down the
-  // memoryless form of the metric sometimes keeps the shape better. So the input is simplified up to
-  // four ways: as set, with distance_guard 0, with 2, and with the memoryless metric of the same
-  // family. The result nearest the input by symmetric Hausdorff distance (lod::compare with its own
-  // sample seed) is kept, provided it has no more triangles than the first way's or the target;
-  // ties go to the earlier way. With several threads the ways run side by side. About 7x the time
-  // on one thread; on the corpus at 1%, Hausdorff at most the better peer's on 90% of the cases
-  // instead of 80% (bench/README, nineteenth session). Either limit 0: off, the options exactly as set.
+  // memoryless form of the metric sometimes keeps the shape better, and the fit's edge term and
+  // flips, which help most meshes, cost some. So the input is simplified up to five ways: as set,
+  // with distance_guard 0, with 2, with the memoryless metric of the same family, and (when the fit
+  // runs) with a plain fit: no flips, fit_edge_weight 0. The result nearest the input by symmetric
+  // Hausdorff distance (lod::compare with its own sample seed) is kept, provided it has no more
+  // triangles than the first way's or the target; ties go to the earlier way. With several threads
+  // the ways run side by side. About 8x the time on one thread; on the corpus at 1%, Hausdorff at
+  // most the better peer's on 92% of the cases instead of 80% (bench/README, nineteenth and
+  // twenty-third sessions). Either limit 0: off, the options exactly as set.
   uint64_t search_input_triangles = uint64_t(1) << 15;
   uint64_t search_output_triangles = uint64_t(1) << 10;
 
@@ -192,11 +198,13 @@ struct SimplifyResult {
   uint32_t fit_iterations = 0;    // iterations the final fit ran (at most SimplifyOptions::fit_iterations)
   uint32_t passes = 0;
   // The way this result was made (the search, SimplifyOptions::search_input_triangles): out of how
-  // many tried (1 without a search), with which metric and distance guard, and its measured
-  // Hausdorff distance over the diagonal (0 when there was no search).
+  // many tried (1 without a search), with which metric, distance guard and fit options, and its
+  // measured Hausdorff distance over the diagonal (0 when there was no search).
   uint32_t search_ways = 1;
   Metric metric = Metric::constrained_qem;
   float distance_guard = 0;
+  bool fit_flips = true;
+  float fit_edge_weight = 0;
   double search_hausdorff = 0;
   // Wall-clock time: setting up, the collapses, the final fit (0 without one), and the whole call
   // (these, building the output mesh and, with a search, the other ways and the measures).

@@ -15,13 +15,13 @@ namespace {
 
 constexpr uint32_t none = ~0u;
 constexpr uint32_t max_group = 32;  // samples per closest_group query
-// The edge term (see fit_positions): its weight against the input samples', and the cap of its
-// emphasis on large residuals.
-constexpr double edge_weight = 0.1, edge_cap = 30;
+// The cap of the edge term's emphasis on large residuals (its weight against the input samples' is
+// SimplifyOptions::fit_edge_weight, 0.1 by default).
+constexpr double edge_cap = 30;
 // Each Jacobi move is this share of the solution of its own equation: neighbours solve theirs at
 // the same time, towards the same residuals, so full moves overshoot and the fit oscillates (on
 // fandisk_large at 10%, RMS after 1, 2 and 3 iterations 1.66, 1.44, 1.58e-4; 1.40e-4 before the
-// fit). Chosen with edge_weight on the corpus at 10% and 1% (bench/README, twelfth session).
+// fit). Chosen with the edge weight on the corpus at 10% and 1% (bench/README, twelfth session).
 constexpr double step = 0.7;
 // Jacobi sweeps per iteration: the feet, the edges' closest points and the pull's closest points
 // stay fixed, the residuals follow the moves. The searches are most of an iteration's cost; more
@@ -198,8 +198,8 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
   }
 }
 
-uint32_t fit_positions(State& s, uint32_t iterations, double weight, bool flips, std::vector<FittedPosition>* fitted,
-                       std::vector<Relink>* flipped) {
+uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge_weight, bool flips,
+                       std::vector<FittedPosition>* fitted, std::vector<Relink>* flipped) {
   const Mesh& input = s.mesh;
   const size_t triangles = s.alive.size();
 

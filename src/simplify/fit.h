@@ -52,9 +52,10 @@ namespace lod::collapse {
 // Moves state.position of live positions (never locked ones), counts each moved position in
 // state.moves and appends it to `fitted` (public ids), if given. With `flips`, first flips edges
 // (state.corners and corner_pos), each as two corner relinks appended to `flipped`, if given.
+// `weight` weighs the positions' pull onto the input, `edge_weight` the edge term (0: none).
 // Runs at most `iterations` iterations and returns how many ran (fewer once the moves fade).
-uint32_t fit_positions(State& state, uint32_t iterations, double weight, bool flips, std::vector<FittedPosition>* fitted,
-                       std::vector<Relink>* flipped);
+uint32_t fit_positions(State& state, uint32_t iterations, double weight, double edge_weight, bool flips,
+                       std::vector<FittedPosition>* fitted, std::vector<Relink>* flipped);
 
 // The fit is skipped when the collapses' largest error (a distance) is below this share of the
 // input's bounding-box diagonal: every position then lies on the planes of the input faces it

@@ -73,13 +73,38 @@ TEST(CliSimplify, ReportsTheSearchAndTurnsItOff) {
     const test::RunResult r = test::run_cli(args);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const auto j = nlohmann::json::parse(r.out);
-    EXPECT_EQ(j["search_ways"].get<uint32_t>(), search ? 4u : 1u);
+    EXPECT_EQ(j["search_ways"].get<uint32_t>(), search ? 5u : 1u);
     ASSERT_EQ(j["kept"].size(), 1u);
     const SimplifyResult lib = simplify(torus, {.target_ratio = 0.05f, .search_input_triangles = search ? SimplifyOptions{}.search_input_triangles : 0});
     EXPECT_EQ(j["kept"][0]["metric"].get<std::string>(), metric_name(lib.metric));
     EXPECT_EQ(j["kept"][0]["distance_guard"].get<float>(), lib.distance_guard);
+    EXPECT_EQ(j["kept"][0]["fit_flips"].get<bool>(), lib.fit_flips);
+    EXPECT_EQ(j["kept"][0]["fit_edge_weight"].get<float>(), lib.fit_edge_weight);
     EXPECT_EQ(read_mesh(dir / "out.ply").indices, lib.mesh.indices);
   }
+}
+
+// --fit-edge-weight and --no-flips reach the library: a plain fit, as simplify() gives it; a negative
+// weight is a usage error.
+TEST(CliSimplify, FitOptionsReachTheLibrary) {
+  test::TempDir dir;
+  const Mesh torus = shapes::torus(1.0f, 0.3f, 40, 20);
+  write_mesh(torus, dir / "torus.ply");
+  const test::RunResult r = test::run_cli({"simplify", (dir / "torus.ply").string(), "-o", (dir / "out.ply").string(), "--ratio",
+                                           "0.05", "--no-search", "--no-flips", "--fit-edge-weight", "0", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const SimplifyResult lib =
+      simplify(torus, {.target_ratio = 0.05f, .fit_flips = false, .fit_edge_weight = 0, .search_input_triangles = 0});
+  const Mesh out = read_mesh(dir / "out.ply");
+  EXPECT_EQ(out.indices, lib.mesh.indices);
+  EXPECT_EQ(out.positions, lib.mesh.positions);
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["kept"][0]["fit_flips"].get<bool>());
+  EXPECT_EQ(j["kept"][0]["fit_edge_weight"].get<float>(), 0.0f);
+  const test::RunResult bad = test::run_cli({"simplify", (dir / "torus.ply").string(), "-o", (dir / "bad.ply").string(),
+                                             "--ratio", "0.05", "--fit-edge-weight", "-1"});
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("fit_edge_weight"), std::string::npos) << bad.err;
 }
 
 TEST(CliSimplify, NeedsATarget) {

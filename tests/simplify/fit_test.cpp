@@ -198,7 +198,7 @@ QuadResult fit_collapsed(const Mesh& input, const std::vector<uint32_t>& kept, c
   state.center = {0.5, 0.5, 0.5};
   state.scale = 1.0;
   QuadResult out;
-  out.iterations = fit_positions(state, iterations, 0.2, flips, &out.fitted, &out.flipped);
+  out.iterations = fit_positions(state, iterations, 0.2, SimplifyOptions{}.fit_edge_weight, flips, &out.fitted, &out.flipped);
   out.corners.assign(state.corners.begin(), state.corners.begin() + live.size());
   return out;
 }

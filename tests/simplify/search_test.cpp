@@ -15,19 +15,20 @@
 namespace lod {
 namespace {
 
-// The four ways of the default options, each alone: as set, guard 0, guard 2, memoryless.
+// The five ways of the default options, each alone: as set, guard 0, guard 2, memoryless, plain fit.
 std::vector<SimplifyOptions> default_ways(uint64_t target) {
   const SimplifyOptions as_set{.target_triangles = target, .search_input_triangles = 0};
-  std::vector<SimplifyOptions> ways(4, as_set);
+  std::vector<SimplifyOptions> ways(5, as_set);
   ways[1].distance_guard = 0;
   ways[2].distance_guard = 2;
   ways[3].metric = Metric::constrained_memoryless;
+  ways[4].fit_flips = false, ways[4].fit_edge_weight = 0;
   return ways;
 }
 
 void expect_nearest_way(const Mesh& mesh, uint64_t target) {
   const SimplifyResult searched = simplify(mesh, {.target_triangles = target});
-  EXPECT_EQ(searched.search_ways, 4u);
+  EXPECT_EQ(searched.search_ways, 5u);
   double nearest = 1e30, kept = -1;
   int same = 0;
   for (const SimplifyOptions& way : default_ways(target)) {
@@ -40,6 +41,8 @@ void expect_nearest_way(const Mesh& mesh, uint64_t target) {
       // The report names the way it kept.
       EXPECT_EQ(searched.metric, way.metric);
       EXPECT_EQ(searched.distance_guard, way.metric == Metric::constrained_qem ? way.distance_guard : 0.0f);
+      EXPECT_EQ(searched.fit_flips, way.fit_flips);
+      EXPECT_EQ(searched.fit_edge_weight, way.fit_edge_weight);
     }
   }
   ASSERT_GE(same, 1) << "the search's result is none of its ways";
@@ -74,17 +77,22 @@ TEST(SimplifySearch, OnlyWhereItApplies) {
     change(o);
     return simplify(mesh, o).search_ways;
   };
-  EXPECT_EQ(ways([](SimplifyOptions&) {}), 4u);
-  EXPECT_EQ(ways([](SimplifyOptions& o) { o.metric = Metric::qem; }), 4u);
-  EXPECT_EQ(ways([](SimplifyOptions& o) { o.distance_guard = 2; }), 3u);  // guard 2 is the way as set
+  EXPECT_EQ(ways([](SimplifyOptions&) {}), 5u);
+  EXPECT_EQ(ways([](SimplifyOptions& o) { o.metric = Metric::qem; }), 5u);
+  EXPECT_EQ(ways([](SimplifyOptions& o) { o.distance_guard = 2; }), 4u);  // guard 2 is the way as set
+  // The plain fit is a way only where there is a fit, and not when it is the way as set.
+  EXPECT_EQ(ways([](SimplifyOptions& o) { o.fit_iterations = 0; }), 4u);
+  EXPECT_EQ(ways([](SimplifyOptions& o) { o.keep_vertices = true; }), 4u);
+  EXPECT_EQ(ways([](SimplifyOptions& o) { o.fit_flips = false, o.fit_edge_weight = 0; }), 4u);
+  EXPECT_EQ(ways([](SimplifyOptions& o) { o.fit_flips = false; }), 5u);
   for (const Metric m : {Metric::edge_length, Metric::memoryless, Metric::constrained_memoryless})
     EXPECT_EQ(ways([m](SimplifyOptions& o) { o.metric = m; }), 1u) << metric_name(m);
   EXPECT_EQ(ways([](SimplifyOptions& o) { o.max_relative_error = 0.5f; }), 1u);
   EXPECT_EQ(ways([](SimplifyOptions& o) { o.aggregate_distance = 0.01f; }), 1u);
   EXPECT_EQ(ways([&](SimplifyOptions& o) { o.search_input_triangles = mesh.triangle_count() - 1; }), 1u);
-  EXPECT_EQ(ways([&](SimplifyOptions& o) { o.search_input_triangles = mesh.triangle_count(); }), 4u);
+  EXPECT_EQ(ways([&](SimplifyOptions& o) { o.search_input_triangles = mesh.triangle_count(); }), 5u);
   EXPECT_EQ(ways([&](SimplifyOptions& o) { o.search_output_triangles = 101; }), 1u);  // the target is 102
-  EXPECT_EQ(ways([&](SimplifyOptions& o) { o.search_output_triangles = 102; }), 4u);
+  EXPECT_EQ(ways([&](SimplifyOptions& o) { o.search_output_triangles = 102; }), 5u);
 
   // Without a search the report names the options as set, and there is no measure.
   const SimplifyResult a = simplify(mesh, {.target_ratio = 0.1f, .distance_guard = 3, .search_input_triangles = 0});
@@ -92,6 +100,8 @@ TEST(SimplifySearch, OnlyWhereItApplies) {
   EXPECT_EQ(a.search_hausdorff, 0.0);
   EXPECT_EQ(a.metric, Metric::constrained_qem);
   EXPECT_EQ(a.distance_guard, 3.0f);
+  EXPECT_TRUE(a.fit_flips);
+  EXPECT_EQ(a.fit_edge_weight, SimplifyOptions{}.fit_edge_weight);
 }
 
 // The progress callback runs through the ways: never backwards, never past 1, ending at 1.
@@ -99,7 +109,7 @@ TEST(SimplifySearch, ProgressGoesThroughTheWays) {
   std::vector<double> seen;
   SimplifyOptions o{.target_ratio = 0.05f};
   o.progress = [&](double f) { seen.push_back(f); };
-  ASSERT_EQ(simplify(shapes::torus(1.0f, 0.3f, 32, 16), o).search_ways, 4u);
+  ASSERT_EQ(simplify(shapes::torus(1.0f, 0.3f, 32, 16), o).search_ways, 5u);
   ASSERT_FALSE(seen.empty());
   EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end()));
   EXPECT_GT(seen.front(), 0.0 - 1e-12);

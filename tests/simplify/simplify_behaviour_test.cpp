@@ -204,6 +204,15 @@ TEST(SimplifyBehaviour, FitBringsTheResultCloserToTheInput) {
     RecordProperty("flips", std::to_string(fitted.flipped_edges) + ", rms without them " + std::to_string(d2.relative_rms));
     EXPECT_LT(d2.rms, 0.9 * d0.rms);
     EXPECT_LT(d2.hausdorff, d0.hausdorff);
+    // Without the edge term (fit_edge_weight 0) the fit is a plain least-squares one: the same
+    // triangles, other positions, and still nearer the input than no fit.
+    const SimplifyResult plain_fit =
+        simplify(mesh, {.target_ratio = 0.03f, .fit_flips = false, .fit_edge_weight = 0, .search_input_triangles = 0});
+    EXPECT_EQ(plain_fit.mesh.indices, plain.mesh.indices);
+    EXPECT_NE(plain_fit.mesh.positions, moved.mesh.positions) << "the edge term moved nothing";
+    const Deviation d3 = compare(mesh, plain_fit.mesh, {.samples = 100'000});
+    EXPECT_LT(d3.rms, 0.9 * d0.rms);
+    EXPECT_LT(d3.hausdorff, d0.hausdorff);
   }
 }
 

@@ -26,6 +26,7 @@ struct SimplifyCommand {
   unsigned threads = 0;
   uint32_t fit = SimplifyOptions{}.fit_iterations;
   bool no_flips = false, no_search = false;
+  float fit_edge_weight = SimplifyOptions{}.fit_edge_weight;
   float guard = SimplifyOptions{}.distance_guard;
 };
 
@@ -82,12 +83,15 @@ Command register_simplify(CLI::App& root) {
   app->add_option("--fit", o->fit, "Most iterations fitting the result's vertices to the input after the collapses; it stops once they barely move (0: no fit)")
       ->capture_default_str();
   app->add_flag("--no-flips", o->no_flips, "Keep the collapses' triangles: no edge flips in the fit");
+  app->add_option("--fit-edge-weight", o->fit_edge_weight,
+                  "Weight of the fit's pull on the result's edge midpoints, farthest first (0: a plain least-squares fit)")
+      ->capture_default_str();
   app->add_option("--distance-guard", o->guard,
                   "Hold back collapses that would leave an input point farther from the result than G times (in "
                   "squared distance) the error the other collapses reach: keeps thin parts (qem and cqem; 0: off)")
       ->capture_default_str();
   app->add_flag("--no-search", o->no_search,
-                "Use exactly the options given: no search over distance guards and the memoryless metric on inputs "
+                "Use exactly the options given: no search over distance guards, the memoryless metric and a plain fit on inputs "
                 "up to 32,768 triangles simplified to 1,024 or fewer (qem and cqem; keeps the result nearest the input)");
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
@@ -109,6 +113,7 @@ Command register_simplify(CLI::App& root) {
                 .prune = o->prune,
                 .fit_iterations = o->fit,
                 .fit_flips = !o->no_flips,
+                .fit_edge_weight = o->fit_edge_weight,
                 .search_input_triangles = o->no_search ? 0 : SimplifyOptions{}.search_input_triangles,
                 .record = false,
                 .threads = o->threads,
@@ -154,6 +159,7 @@ Command register_simplify(CLI::App& root) {
                 fit_iterations = std::max(fit_iterations, r.fit_iterations);
                 search_ways = std::max(search_ways, r.search_ways);
                 kept.push_back({{"metric", metric_name(r.metric)}, {"distance_guard", r.distance_guard},
+                                {"fit_flips", r.fit_flips}, {"fit_edge_weight", r.fit_edge_weight},
                                 {"ways", r.search_ways}, {"relative_hausdorff", r.search_hausdorff}});
                 rejected[0] += r.rejected_topology, rejected[1] += r.rejected_seam;
                 rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape, deferred += r.deferred_distance;
@@ -188,8 +194,10 @@ Command register_simplify(CLI::App& root) {
               // With a search, the way kept (one primitive) or how many ways were tried.
               std::string way = o->metric;
               if (search_ways > 1 && kept.size() == 1)
-                way = fmt::format("{}, guard {}: best of {} ways, Hausdorff {:.4f}%", kept[0]["metric"].get<std::string>(),
-                                  kept[0]["distance_guard"].get<float>(), search_ways, 100.0 * kept[0]["relative_hausdorff"].get<double>());
+                way = fmt::format("{}, guard {}{}: best of {} ways, Hausdorff {:.4f}%", kept[0]["metric"].get<std::string>(),
+                                  kept[0]["distance_guard"].get<float>(),
+                                  kept[0]["fit_flips"].get<bool>() ? "" : ", plain fit", search_ways,
+                                  100.0 * kept[0]["relative_hausdorff"].get<double>());
               else if (search_ways > 1)
                 way = fmt::format("{}, best of up to {} ways per primitive", o->metric, search_ways);
               fmt::print("{:<10}{:>12}{:>12}{:>13.4f}%{:>9.3f}s  {} ({} = {:.6g}, final fit {:.3f}s)\n", "simplify", out_triangles,
