@@ -196,7 +196,10 @@ Command register_simplify(CLI::App& root) {
               if (search_ways > 1 && kept.size() == 1)
                 way = fmt::format("{}, guard {}{}: best of {} ways, Hausdorff {:.4f}%", kept[0]["metric"].get<std::string>(),
                                   kept[0]["distance_guard"].get<float>(),
-                                  kept[0]["fit_flips"].get<bool>() ? "" : ", plain fit", search_ways,
+                                  // "plain fit": the search's fifth way (no flips, no edge term), not
+                                  // merely --no-flips, which every way keeps.
+                                  !kept[0]["fit_flips"].get<bool>() && kept[0]["fit_edge_weight"].get<float>() == 0 ? ", plain fit" : "",
+                                  search_ways,
                                   100.0 * kept[0]["relative_hausdorff"].get<double>());
               else if (search_ways > 1)
                 way = fmt::format("{}, best of up to {} ways per primitive", o->metric, search_ways);
