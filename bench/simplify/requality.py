@@ -9,11 +9,11 @@ target with the default metric (as the full run does; outputs under DATA_DIR/out
 `lodkit compare` measures every result against its input. The verdicts follow report.py: lodkit at
 most the better of the peers that reached the target, lodkit short of the target counting against
 it (verdict.py, shared with report.py). The peers' distances are kept in DATA_DIR/out/peer-distances.json,
-keyed by file size and time and by a digest of the measuring code (src/measure), so only the first call
-after a full run or a change to the measure measures them. Prints the share and worst ratio
-per target and quantity, the geometric mean of lodkit's value over the best peer's (cases where
-both are above the tie level: a share moves by whole cases, the mean shows smaller changes), and
-the cases lodkit loses; exits 1 when a tool fails.
+keyed by the input's path, the output's file size and time and a digest of the measuring code
+(src/measure), so only the first call after a full run or a change to the measure measures them.
+Prints the share and worst ratio per target and quantity, the geometric mean of lodkit's value over
+the best peer's (cases where both are above the tie level: a share moves by whole cases, the mean
+shows smaller changes), and the cases lodkit loses; exits 1 when a tool fails.
 
 Quick feedback while working on quality; the full run remains the reference (it also times and
 measures memory)."""
@@ -25,6 +25,7 @@ import os
 import subprocess
 import sys
 
+from run import MIN_TRIANGLES
 from verdict import QUALITY_PEERS, TIE, judge, stopped_short
 
 CORPUS = "data/corpus"
@@ -37,11 +38,28 @@ if not os.path.isdir(out_dir):
 own_dir = os.path.join(out_dir, "requality")
 os.makedirs(own_dir, exist_ok=True)
 
-inputs = {}
-for f in os.listdir(CORPUS):
+# The full run names its outputs by stem, and two corpus meshes share some stems (pig.off and
+# pig.stl): the mesh is the one the full run simplified, the one with at least MIN_TRIANGLES.
+by_stem = {}
+for f in sorted(os.listdir(CORPUS)):
     stem, _, ext = f.rpartition(".")
     if ext.lower() in ("off", "ply", "stl"):
-        inputs[stem] = os.path.join(CORPUS, f)
+        by_stem.setdefault(stem, []).append(os.path.join(CORPUS, f))
+
+
+def triangle_count(path):
+    p = subprocess.run([cli, "info", path, "--json"], capture_output=True, text=True)
+    return json.loads(p.stdout)["stats"]["triangles"] if p.returncode == 0 else 0
+
+
+inputs = {}
+for stem, paths in by_stem.items():
+    if len(paths) > 1:
+        paths = [path for path in paths if triangle_count(path) >= MIN_TRIANGLES]
+        if len(paths) > 1:
+            sys.exit(f"requality: {' and '.join(paths)} share a name: the full run's outputs do not say which")
+    if paths:
+        inputs[stem] = paths[0]
 
 cases = set()
 for f in os.listdir(out_dir):
@@ -89,7 +107,7 @@ def peer_distances(case):
         if not os.path.exists(path):
             continue
         st = os.stat(path)
-        key = f"{os.path.basename(path)}:{st.st_size}:{int(st.st_mtime)}:{measure_digest}"
+        key = f"{inputs[stem]}:{os.path.basename(path)}:{st.st_size}:{int(st.st_mtime)}:{measure_digest}"
         found[peer] = cache[key] if key in cache else distance(inputs[stem], path)
         found[peer]["key"] = key
     return found
