@@ -600,29 +600,34 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
   };
   // Each result edge's midpoint (each proposed flip's points, each position) against the input: the
   // exact closest point, seeded by seed_hit with the point's corners.
+  // Without flips or the edge term (the search's plain fit) the edges' targets are never read: only
+  // the positions are searched (each point's search is exact and alone, so the positions' answers
+  // are the same either way).
+  const bool edge_targets = flips || edge_weight > 0;
+  const size_t edge_points = edge_targets ? edges.size() : 0;
   const auto search_edges = [&](const std::vector<Flip>& proposed) {
-    const size_t first_position = edges.size() + probes_per_flip * proposed.size();
+    const size_t first_position = edge_points + probes_per_flip * proposed.size();
     std::vector<measure::vec3f> points(first_position + m);
     for (size_t j = 0; j < m; ++j) points[first_position + j] = measure::vec3f(result.positions[j]);
-    for (size_t e = 0; e < edges.size(); ++e) points[e] = midpoint(e);
-    for (size_t i = 0; i < proposed.size(); ++i) flip_probes(proposed[i], &points[edges.size() + probes_per_flip * i]);
+    for (size_t e = 0; e < edge_points; ++e) points[e] = midpoint(e);
+    for (size_t i = 0; i < proposed.size(); ++i) flip_probes(proposed[i], &points[edge_points + probes_per_flip * i]);
     std::vector<measure::ClosestHit> hits(points.size());
     const auto seed = [&](size_t i, std::initializer_list<uint32_t> corners) { seed_hit(points[i], hits[i], corners); };
-    core::parallel_for(edges.size(), s.threads, [&](size_t e) { seed(e, {edges[e].first, edges[e].second}); });
+    core::parallel_for(edge_points, s.threads, [&](size_t e) { seed(e, {edges[e].first, edges[e].second}); });
     core::parallel_for(proposed.size(), s.threads, [&](size_t i) {
       uint32_t p, q, r, x;
       flip_corners(proposed[i], p, q, r, x);
-      for (uint32_t k = 0; k < probes_per_flip; ++k) seed(edges.size() + probes_per_flip * i + k, {p, q, r, x});
+      for (uint32_t k = 0; k < probes_per_flip; ++k) seed(edge_points + probes_per_flip * i + k, {p, q, r, x});
     });
     core::parallel_for(m, s.threads, [&](size_t j) { seed(first_position + j, {uint32_t(j)}); });
     closest_on_input(s, points, hits, fit_chunk_triangles);
     for (size_t j = 0; j < m; ++j) nearest_input[j] = hits[first_position + j].triangle;
-    for (size_t e = 0; e < edges.size(); ++e) edge_target[e] = hits[e].triangle != none ? hits[e].point : points[e];  // none: no pull
+    for (size_t e = 0; e < edge_points; ++e) edge_target[e] = hits[e].triangle != none ? hits[e].point : points[e];  // none: no pull
     if (proposed.empty()) return;
     std::vector<measure::ClosestHit> flip_hits(hits_per_flip * proposed.size());
     for (size_t i = 0; i < proposed.size(); ++i) {
       flip_hits[hits_per_flip * i] = hits[proposed[i].edge];
-      std::copy_n(&hits[edges.size() + probes_per_flip * i], probes_per_flip, &flip_hits[hits_per_flip * i + 1]);
+      std::copy_n(&hits[edge_points + probes_per_flip * i], probes_per_flip, &flip_hits[hits_per_flip * i + 1]);
     }
     apply_flips(proposed, flip_hits);
   };
@@ -722,29 +727,31 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
           den[j] += a * beta[k] * beta[k];
         }
       }
-      // Each edge stands for a third of its faces' area, scaled by (residual / rms)^2 up to a cap:
-      // reweighted towards the largest residuals, which decide the Hausdorff distance (an
-      // iteratively reweighted least-squares step towards the maximum).
-      std::fill(edge_area.begin(), edge_area.end(), 0.0);
-      for (size_t t = 0; t < result_triangles; ++t) {
-        const uint32_t* c = &result.indices[3 * t];
-        const double third = length(cross(normalized(c[1]) - normalized(c[0]), normalized(c[2]) - normalized(c[0]))) / 6;
-        for (uint32_t k = 0; k < 3; ++k) edge_area[edge_of_side[3 * t + k]] += third;
-      }
-      double squares = 0, area = 0;
-      for (size_t e = 0; e < edges.size(); ++e) {
-        const measure::vec3f& c = edge_target[e];
-        edge_residual[e] = s.normalized_input(float3{c.x, c.y, c.z}) - (normalized(edges[e].first) + normalized(edges[e].second)) * 0.5;
-        if (!std::isfinite(length_squared(edge_residual[e]))) edge_residual[e] = {};  // overflowed: no pull
-        squares += edge_area[e] * length_squared(edge_residual[e]), area += edge_area[e];
-      }
-      const double mean_square = edge_mean_square = area > 0 ? squares / area : 0;
-      for (size_t e = 0; e < edges.size(); ++e) {
-        const double emphasis = mean_square > 0 ? std::min(edge_cap, length_squared(edge_residual[e]) / mean_square) : 0;
-        const double a = edge_weight * edge_area[e] * emphasis;
-        // The midpoint moves by half of each end's move: (d_j + d_k) / 2 against the residual.
-        for (const uint32_t j : {edges[e].first, edges[e].second})
-          num[j] = num[j] + edge_residual[e] * (a * 0.5), den[j] += a * 0.25;
+      if (edge_targets) {  // else no edge term and no far edges (edge_mean_square) to find
+        // Each edge stands for a third of its faces' area, scaled by (residual / rms)^2 up to a cap:
+        // reweighted towards the largest residuals, which decide the Hausdorff distance (an
+        // iteratively reweighted least-squares step towards the maximum).
+        std::fill(edge_area.begin(), edge_area.end(), 0.0);
+        for (size_t t = 0; t < result_triangles; ++t) {
+          const uint32_t* c = &result.indices[3 * t];
+          const double third = length(cross(normalized(c[1]) - normalized(c[0]), normalized(c[2]) - normalized(c[0]))) / 6;
+          for (uint32_t k = 0; k < 3; ++k) edge_area[edge_of_side[3 * t + k]] += third;
+        }
+        double squares = 0, area = 0;
+        for (size_t e = 0; e < edges.size(); ++e) {
+          const measure::vec3f& c = edge_target[e];
+          edge_residual[e] = s.normalized_input(float3{c.x, c.y, c.z}) - (normalized(edges[e].first) + normalized(edges[e].second)) * 0.5;
+          if (!std::isfinite(length_squared(edge_residual[e]))) edge_residual[e] = {};  // overflowed: no pull
+          squares += edge_area[e] * length_squared(edge_residual[e]), area += edge_area[e];
+        }
+        const double mean_square = edge_mean_square = area > 0 ? squares / area : 0;
+        for (size_t e = 0; e < edges.size(); ++e) {
+          const double emphasis = mean_square > 0 ? std::min(edge_cap, length_squared(edge_residual[e]) / mean_square) : 0;
+          const double a = edge_weight * edge_area[e] * emphasis;
+          // The midpoint moves by half of each end's move: (d_j + d_k) / 2 against the residual.
+          for (const uint32_t j : {edges[e].first, edges[e].second})
+            num[j] = num[j] + edge_residual[e] * (a * 0.5), den[j] += a * 0.25;
+        }
       }
       before = result.positions;
       core::parallel_for(m, s.threads, [&](size_t j) {
