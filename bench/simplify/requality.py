@@ -38,6 +38,18 @@ if not os.path.isdir(out_dir):
 own_dir = os.path.join(out_dir, "requality")
 os.makedirs(own_dir, exist_ok=True)
 
+
+def run_json(command):
+    """The JSON report a tool prints: all of stdout (`lodkit compare`) or its last line (bench programs)."""
+    p = subprocess.run(command, capture_output=True, text=True)
+    if p.returncode != 0:
+        sys.exit(f"requality: {' '.join(command)} failed: {p.stderr.strip()[:300]}")
+    try:
+        return json.loads(p.stdout)
+    except json.JSONDecodeError:
+        return json.loads([l for l in p.stdout.splitlines() if l.startswith("{")][-1])
+
+
 # The full run names its outputs by stem, and two corpus meshes share some stems (pig.off and
 # pig.stl): the mesh is the one the full run simplified, the one with at least MIN_TRIANGLES.
 by_stem = {}
@@ -45,17 +57,10 @@ for f in sorted(os.listdir(CORPUS)):
     stem, _, ext = f.rpartition(".")
     if ext.lower() in ("off", "ply", "stl"):
         by_stem.setdefault(stem, []).append(os.path.join(CORPUS, f))
-
-
-def triangle_count(path):
-    p = subprocess.run([cli, "info", path, "--json"], capture_output=True, text=True)
-    return json.loads(p.stdout)["stats"]["triangles"] if p.returncode == 0 else 0
-
-
 inputs = {}
 for stem, paths in by_stem.items():
     if len(paths) > 1:
-        paths = [path for path in paths if triangle_count(path) >= MIN_TRIANGLES]
+        paths = [path for path in paths if run_json([cli, "info", path, "--json"])["stats"]["triangles"] >= MIN_TRIANGLES]
         if len(paths) > 1:
             sys.exit(f"requality: {' and '.join(paths)} share a name: the full run's outputs do not say which")
     if paths:
@@ -71,17 +76,6 @@ for f in os.listdir(out_dir):
 cases = sorted(cases)
 if not cases:
     sys.exit(f"requality: no peer outputs under {out_dir}: run `scripts/bench.sh simplify` once first")
-
-
-def run_json(command):
-    """The JSON report a tool prints: all of stdout (`lodkit compare`) or its last line (bench programs)."""
-    p = subprocess.run(command, capture_output=True, text=True)
-    if p.returncode != 0:
-        sys.exit(f"requality: {' '.join(command)} failed: {p.stderr.strip()[:300]}")
-    try:
-        return json.loads(p.stdout)
-    except json.JSONDecodeError:
-        return json.loads([l for l in p.stdout.splitlines() if l.startswith("{")][-1])
 
 
 def distance(input_path, output_path):

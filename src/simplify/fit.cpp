@@ -310,9 +310,14 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
     for (uint32_t k = 0; k < 3; ++k)
       edge_of_side[3 * t + k] = uint32_t(std::lower_bound(edges.begin(), edges.end(), side(t, k)) - edges.begin());
   for (auto& [a, b] : edges) a = slot[a], b = slot[b];  // from here on, slots
-  std::vector<measure::vec3f> edge_target(edges.size());  // found in the first iteration, after the flips
-  std::vector<vec3d> edge_residual(edges.size());
-  std::vector<double> edge_area(edges.size());
+  // Without flips or the edge term (the search's plain fit) the edges' targets are never read: the
+  // edges are not searched (each point's search is exact and alone, so the positions' answers are
+  // the same either way) and have no residuals.
+  const bool edge_targets = flips || edge_weight > 0;
+  const size_t edge_points = edge_targets ? edges.size() : 0;
+  std::vector<measure::vec3f> edge_target(edge_points);  // found in the first iteration, after the flips
+  std::vector<vec3d> edge_residual(edge_points);
+  std::vector<double> edge_area(edge_points);
   std::vector<vec3d> num(m);
   std::vector<double> den(m);
   std::vector<uint8_t> moved(m), revert(m);
@@ -600,11 +605,6 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
   };
   // Each result edge's midpoint (each proposed flip's points, each position) against the input: the
   // exact closest point, seeded by seed_hit with the point's corners.
-  // Without flips or the edge term (the search's plain fit) the edges' targets are never read: only
-  // the positions are searched (each point's search is exact and alone, so the positions' answers
-  // are the same either way).
-  const bool edge_targets = flips || edge_weight > 0;
-  const size_t edge_points = edge_targets ? edges.size() : 0;
   const auto search_edges = [&](const std::vector<Flip>& proposed) {
     const size_t first_position = edge_points + probes_per_flip * proposed.size();
     std::vector<measure::vec3f> points(first_position + m);
