@@ -9,6 +9,7 @@
 #include <emmintrin.h>
 #endif
 
+#include "core/heap.h"
 #include "core/parallel.h"
 #include "lodkit/error.h"
 
@@ -597,7 +598,7 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, std::span<const uint32_t> coherent_or
     if (coherent_order.size() != triangles) throw_internal("TriangleBvh: the coherent order misses triangles");
   }
 
-  std::vector<Ref> refs(triangles);
+  std::vector<Ref> refs = core::make_huge<Ref>(triangles);
   core::parallel_for(triangles, threads, [&](size_t i) {
     const uint32_t t = in_order ? coherent_order[i] : uint32_t(i);
     Box b;
@@ -614,13 +615,16 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, std::span<const uint32_t> coherent_or
   } else {
     binary = build_binary(refs, threads);
   }
-  std::vector<uint32_t> order(triangles);
+  std::vector<uint32_t> order = core::make_huge<uint32_t>(triangles);
   for (size_t s = 0; s < triangles; ++s) order[s] = refs[s].triangle;
   // Freed before the per-triangle arrays are made: less peak memory on large meshes.
   std::vector<Ref>().swap(refs);
 
-  original_ = order;
+  core::reserve_huge(original_, triangles);
+  original_.assign(order.begin(), order.end());
+  core::reserve_huge(slot_, triangles);
   slot_.resize(triangles);
+  core::reserve_huge(triangles_, triangles);
   triangles_.resize(triangles);
   // Growth of every box: a few ulps of the largest coordinate.
   float magnitude = 0;

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <tuple>
 
+#include "core/heap.h"
 #include "core/parallel.h"
 #include "core/union_find.h"
 #include "measure/bvh.h"
@@ -119,7 +120,7 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
   if (triangles == 0 || n == 0) return;
   const size_t chunks = (triangles + chunk_triangles - 1) / chunk_triangles;
   const auto chunk_of = [&](size_t t) { return size_t(s.position_of[input.indices[3 * t]]) * chunks / s.position_count; };
-  std::vector<uint32_t> first(chunks + 1, 0), order(triangles);
+  std::vector<uint32_t> first(chunks + 1, 0), order = core::make_huge<uint32_t>(triangles);
   for (size_t t = 0; t < triangles; ++t) ++first[chunk_of(t) + 1];
   std::partial_sum(first.begin(), first.end(), first.begin());
   {
@@ -132,7 +133,8 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
   // triangles so, as indices within the chunk (a counting sort over the chunk's position ids).
   std::vector<uint32_t> coherent, start;
   Mesh part;
-  part.positions = input.positions;
+  core::reserve_huge(part.positions, input.positions.size());
+  part.positions.assign(input.positions.begin(), input.positions.end());
   for (size_t c = 0; c < chunks; ++c) {
     if (first[c] == first[c + 1]) continue;
     part.indices.clear();
@@ -204,11 +206,13 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
   const size_t triangles = s.alive.size();
 
   // The live position each position ended in: its collapse chain, shortened as it is walked.
-  std::vector<uint32_t> end = s.successor;
+  std::vector<uint32_t> end;
+  core::reserve_huge(end, s.successor.size());
+  end.assign(s.successor.begin(), s.successor.end());
   const auto last = [&](uint32_t p) { return core::chain_end(end, p); };
 
   // The result with its own compact numbering: live positions in order of first use.
-  std::vector<uint32_t> slot(s.position_count, none), position;  // position id -> slot, and back
+  std::vector<uint32_t> slot = core::make_huge<uint32_t>(s.position_count, none), position;  // position id -> slot, and back
   std::vector<uint32_t> first_use;  // per slot: the first result triangle at it
   std::vector<uint32_t> state_triangle;  // per result triangle: its (input) triangle id
   Mesh result;
@@ -235,9 +239,9 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
   // The pull's candidates are the input triangles with a corner that ended in the position.
   // The slot each input vertex ended in is looked up once: per corner, the chain walks and slot
   // reads were most of this setup.
-  std::vector<uint32_t> vertex_slot(input.vertex_count());
+  std::vector<uint32_t> vertex_slot = core::make_huge<uint32_t>(input.vertex_count());
   for (size_t v = 0; v < input.vertex_count(); ++v) vertex_slot[v] = slot[last(s.position_of[v])];
-  std::vector<double> share(input.vertex_count(), 0.0), mass(m, 0.0);
+  std::vector<double> share = core::make_huge<double>(input.vertex_count(), 0.0), mass(m, 0.0);
   std::vector<uint32_t> candidates_first(m + 1, 0), candidates;
   for (int fill = 0; fill < 2; ++fill) {
     for (size_t t = 0; t < triangles; ++t) {

@@ -12,6 +12,7 @@
 
 #include <vector>
 
+#include "core/heap.h"
 #include "core/parallel.h"
 #include "simplify/attribute_quadric.h"
 #include "simplify/metric.h"
@@ -63,6 +64,7 @@ class QuadricMetric {
       : constrained_(constrained), memoryless_(memoryless), attributes_(std::move(channels)) {}
 
   void initialize(State& state) {
+    core::reserve_huge(quadric_, state.position_count);
     quadric_.assign(state.position_count, {});
     attributes_.allocate(state.mesh.vertex_count());
     rebuild(state);
