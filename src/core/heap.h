@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <type_traits>
 #include <vector>
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -61,12 +62,28 @@ void reserve_huge(std::vector<T>& v, size_t count) {
   v.swap(room);
 }
 
-// A large working array of `count` copies of `value`, on huge pages (reserve_huge).
+// v.resize(count) and v.assign(count, value), with reserve_huge's advice first.
 template <class T>
-std::vector<T> make_huge(size_t count, const T& value = T()) {
-  std::vector<T> v;
+void resize_huge(std::vector<T>& v, size_t count) {
+  reserve_huge(v, count);
+  v.resize(count);
+}
+template <class T>
+void assign_huge(std::vector<T>& v, size_t count, const std::type_identity_t<T>& value) {
   reserve_huge(v, count);
   v.assign(count, value);
+}
+// v = from, with reserve_huge's advice first.
+template <class T>
+void copy_huge(std::vector<T>& v, const std::vector<T>& from) {
+  reserve_huge(v, from.size());
+  v.assign(from.begin(), from.end());
+}
+// A large working array of `count` copies of `value`.
+template <class T>
+std::vector<T> make_huge(size_t count, const std::type_identity_t<T>& value = T()) {
+  std::vector<T> v;
+  assign_huge(v, count, value);
   return v;
 }
 

@@ -9,16 +9,14 @@ namespace core {
 PositionWelder::PositionWelder(size_t expected) {
   size_t cap = 64;
   while (cap < expected * 2) cap <<= 1;
-  reserve_huge(slots_, cap);
-  slots_.assign(cap, 0);
+  assign_huge(slots_, cap, 0);
   mask_ = cap - 1;
   reserve_huge(unique_, expected);
 }
 
 void PositionWelder::grow() {
   std::vector<uint32_t> old = std::move(slots_);
-  reserve_huge(slots_, old.size() * 2);
-  slots_.assign(old.size() * 2, 0);
+  assign_huge(slots_, old.size() * 2, 0);
   mask_ = slots_.size() - 1;
   for (uint32_t s : old) {
     if (!s) continue;
@@ -47,8 +45,7 @@ uint32_t PositionWelder::insert(const float3& p) {
 
 PositionIds position_ids(const Mesh& mesh) {
   PositionIds result;
-  core::reserve_huge(result.id, mesh.positions.size());
-  result.id.resize(mesh.positions.size());
+  core::resize_huge(result.id, mesh.positions.size());
   core::PositionWelder welder(mesh.positions.size());
   for (size_t v = 0; v < mesh.positions.size(); ++v) result.id[v] = welder.insert(mesh.positions[v]);
   result.count = welder.count();

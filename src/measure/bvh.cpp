@@ -620,12 +620,9 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, std::span<const uint32_t> coherent_or
   // Freed before the per-triangle arrays are made: less peak memory on large meshes.
   std::vector<Ref>().swap(refs);
 
-  core::reserve_huge(original_, triangles);
-  original_.assign(order.begin(), order.end());
-  core::reserve_huge(slot_, triangles);
-  slot_.resize(triangles);
-  core::reserve_huge(triangles_, triangles);
-  triangles_.resize(triangles);
+  core::copy_huge(original_, order);
+  core::resize_huge(slot_, triangles);
+  core::resize_huge(triangles_, triangles);
   // Growth of every box: a few ulps of the largest coordinate.
   float magnitude = 0;
   for (const float3& p : mesh.positions)

@@ -133,8 +133,7 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
   // triangles so, as indices within the chunk (a counting sort over the chunk's position ids).
   std::vector<uint32_t> coherent, start;
   Mesh part;
-  core::reserve_huge(part.positions, input.positions.size());
-  part.positions.assign(input.positions.begin(), input.positions.end());
+  core::copy_huge(part.positions, input.positions);
   for (size_t c = 0; c < chunks; ++c) {
     if (first[c] == first[c + 1]) continue;
     part.indices.clear();
@@ -207,8 +206,7 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
 
   // The live position each position ended in: its collapse chain, shortened as it is walked.
   std::vector<uint32_t> end;
-  core::reserve_huge(end, s.successor.size());
-  end.assign(s.successor.begin(), s.successor.end());
+  core::copy_huge(end, s.successor);
   const auto last = [&](uint32_t p) { return core::chain_end(end, p); };
 
   // The result with its own compact numbering: live positions in order of first use.

@@ -64,8 +64,7 @@ class QuadricMetric {
       : constrained_(constrained), memoryless_(memoryless), attributes_(std::move(channels)) {}
 
   void initialize(State& state) {
-    core::reserve_huge(quadric_, state.position_count);
-    quadric_.assign(state.position_count, {});
+    core::assign_huge(quadric_, state.position_count, {});
     attributes_.allocate(state.mesh.vertex_count());
     rebuild(state);
   }

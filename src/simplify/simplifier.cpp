@@ -263,13 +263,11 @@ class Engine {
     const size_t live = s_.live.size();
     const size_t workers = core::parallel_workers(live, size_t(1) << 16, s_.threads);
     if (workers > 1) return build_star_parallel(workers);
-    core::reserve_huge(s_.first, s_.position_count + 1);
-    s_.first.assign(s_.position_count + 1, 0);
+    core::assign_huge(s_.first, s_.position_count + 1, 0);
     for (const uint32_t t : s_.live)
       for (uint32_t k = 0; k < 3; ++k) ++s_.first[s_.corner_position(t, k) + 1];
     for (uint32_t p = 0; p < s_.position_count; ++p) s_.first[p + 1] += s_.first[p];
-    core::reserve_huge(s_.wings, s_.first[s_.position_count]);
-    s_.wings.resize(s_.first[s_.position_count]);
+    core::resize_huge(s_.wings, s_.first[s_.position_count]);
     core::reserve_huge(fill_, s_.position_count);
     fill_.assign(s_.first.begin(), s_.first.end() - 1);
     for (const uint32_t t : s_.live) {
@@ -290,13 +288,11 @@ class Engine {
     star_slots_.resize(blocks);
     core::parallel_blocks(live, block, s_.threads, [&](size_t b, size_t begin, size_t end) {
       std::vector<uint32_t>& count = star_slots_[b];
-      core::reserve_huge(count, positions);
-      count.assign(positions, 0);
+      core::assign_huge(count, positions, 0);
       for (size_t i = begin; i < end; ++i)
         for (uint32_t k = 0; k < 3; ++k) ++count[s_.corner_position(s_.live[i], k)];
     });
-    core::reserve_huge(s_.first, size_t(positions) + 1);
-    s_.first.resize(size_t(positions) + 1);
+    core::resize_huge(s_.first, size_t(positions) + 1);
     uint32_t slot = 0;
     for (uint32_t p = 0; p < positions; ++p) {
       s_.first[p] = slot;
@@ -307,8 +303,7 @@ class Engine {
       }
     }
     s_.first[positions] = slot;
-    core::reserve_huge(s_.wings, slot);
-    s_.wings.resize(slot);
+    core::resize_huge(s_.wings, slot);
     core::parallel_blocks(live, block, s_.threads, [&](size_t b, size_t begin, size_t end) {
       std::vector<uint32_t>& fill = star_slots_[b];
       for (size_t i = begin; i < end; ++i) {
@@ -488,17 +483,14 @@ class Engine {
 
   // Each live position's cheapest edge to a higher position, by cost alone (no checks).
   void evaluate_all(bool first) {
-    core::reserve_huge(best_, s_.position_count);
-    best_.resize(s_.position_count);
+    core::resize_huge(best_, s_.position_count);
     mark_.resize(s_.position_count);
-    core::reserve_huge(claimed_, s_.position_count);
-    claimed_.resize(s_.position_count);
-    core::reserve_huge(locked_in_, s_.position_count);
-    locked_in_.resize(s_.position_count);
+    core::resize_huge(claimed_, s_.position_count);
+    core::resize_huge(locked_in_, s_.position_count);
     const bool wide = first || metric_.reads_neighbourhood();
     // Cheapest-edge lists are kept where a collapse changes only the edges at its kept position.
     const bool lists = lists_ = !aggregate_ && !metric_.reads_neighbourhood();
-    if (lists) core::reserve_huge(edges_, s_.position_count), edges_.resize(s_.position_count);
+    if (lists) core::resize_huge(edges_, s_.position_count);
     core::parallel_blocks(s_.position_count, 4096, s_.threads, [&](size_t, size_t begin, size_t end) {
      Scratch& scratch = block_scratch();
      for (size_t i = begin; i < end; ++i) {
@@ -1211,10 +1203,8 @@ void run(State& state, MetricT& metric, const std::vector<Channel>& channels, ui
     const Metric m = state.options.metric;
     if (m == Metric::qem || m == Metric::constrained_qem) engine.guard_ = state.options.distance_guard;
     if (engine.guard_ > 0) {
-      core::reserve_huge(engine.origin_, state.position_count);
-      engine.origin_.assign(state.position.begin(), state.position.end());
-      core::reserve_huge(engine.held_, state.position_count);
-      engine.held_.assign(state.position_count, 0.0);
+      core::copy_huge(engine.origin_, state.position);
+      core::assign_huge(engine.held_, state.position_count, 0.0);
     }
   }
   result.distance_guard = float(engine.guard_);
@@ -1263,8 +1253,7 @@ uint64_t prune_components(State& state, double size) {
 // accesses (positions, quadrics, flags of neighbours) then mostly hit the cache.
 std::vector<uint32_t> spatial_order(const Mesh& mesh, const PositionIds& ids, const State& state) {
   std::vector<uint64_t> key;
-  core::reserve_huge(key, ids.count);
-  key.resize(ids.count);
+  core::resize_huge(key, ids.count);
   const auto spread = [](uint64_t x) {  // 21 bits -> every third bit of 63
     x &= 0x1fffff;
     x = (x | x << 32) & 0x1f00000000ffffull;
@@ -1280,13 +1269,11 @@ std::vector<uint32_t> spatial_order(const Mesh& mesh, const PositionIds& ids, co
     key[ids.id[v]] = spread(cell(q.x)) | spread(cell(q.y)) << 1 | spread(cell(q.z)) << 2;
   }
   std::vector<uint32_t> order;
-  core::reserve_huge(order, ids.count);
-  order.resize(ids.count);
+  core::resize_huge(order, ids.count);
   std::iota(order.begin(), order.end(), 0u);
   std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key[a] < key[b] || (key[a] == key[b] && a < b); });
   std::vector<uint32_t> internal;
-  core::reserve_huge(internal, ids.count);
-  internal.resize(ids.count);
+  core::resize_huge(internal, ids.count);
   for (uint32_t i = 0; i < ids.count; ++i) internal[order[i]] = i;
   return internal;
 }
@@ -1349,19 +1336,14 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
   state.position_count = ids.count;
   const std::vector<uint32_t> internal = spatial_order(mesh, ids, state);
   // The working arrays of a large input ask for huge pages before their first touch (core/heap.h).
-  core::reserve_huge(state.external, ids.count);
-  state.external.resize(ids.count);
+  core::resize_huge(state.external, ids.count);
   for (uint32_t p = 0; p < ids.count; ++p) state.external[internal[p]] = p;
-  core::reserve_huge(state.position_of, mesh.vertex_count());
-  state.position_of.resize(mesh.vertex_count());
+  core::resize_huge(state.position_of, mesh.vertex_count());
   for (size_t v = 0; v < mesh.vertex_count(); ++v) state.position_of[v] = internal[ids.id[v]];
-  core::reserve_huge(state.position, ids.count);
-  state.position.resize(ids.count);
+  core::resize_huge(state.position, ids.count);
   for (size_t v = mesh.vertex_count(); v-- > 0;) state.position[state.position_of[v]] = mesh.positions[v];
-  core::reserve_huge(state.moves, ids.count);
-  state.moves.assign(ids.count, 0);
-  core::reserve_huge(state.successor, ids.count);
-  state.successor.assign(ids.count, none);
+  core::assign_huge(state.moves, ids.count, 0);
+  core::assign_huge(state.successor, ids.count, none);
   state.flags.assign(ids.count, 0);
   for (size_t v = 0; v < options.locked.size(); ++v)
     if (options.locked[v]) state.flags[state.position_of[v]] |= flag_locked;
@@ -1372,10 +1354,8 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
       w = std::max(w, options.importance[v]);
     }
   }
-  core::reserve_huge(state.corners, mesh.indices.size());
-  state.corners.assign(mesh.indices.begin(), mesh.indices.end());
-  core::reserve_huge(state.corner_pos, state.corners.size());
-  state.corner_pos.resize(state.corners.size());
+  core::copy_huge(state.corners, mesh.indices);
+  core::resize_huge(state.corner_pos, state.corners.size());
   for (size_t i = 0; i < state.corners.size(); ++i) state.corner_pos[i] = state.position_of[state.corners[i]];
   state.alive.assign(mesh.triangle_count(), 1);
   state.live_triangles = mesh.triangle_count();

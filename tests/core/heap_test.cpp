@@ -40,6 +40,25 @@ TEST(Heap, MakeHugeFills) {
   EXPECT_TRUE(core::make_huge<float>(0).empty());
 }
 
+TEST(Heap, ResizeAssignCopyAsTheVectorOnesDo) {
+  const size_t large = (size_t(3) << 20) / sizeof(uint32_t);  // above the huge-array size
+  for (const size_t count : {size_t(10), large}) {
+    std::vector<uint32_t> v = {1, 2, 3};
+    core::resize_huge(v, count);  // keeps the prefix, zero-fills the rest
+    ASSERT_EQ(v.size(), count);
+    EXPECT_EQ(v[0], 1u);
+    EXPECT_EQ(v[2], 3u);
+    EXPECT_EQ(v[count - 1], 0u);
+    core::assign_huge(v, count / 2, 9);
+    ASSERT_EQ(v.size(), count / 2);
+    for (const uint32_t x : v) ASSERT_EQ(x, 9u);
+    std::vector<uint32_t> from(count);
+    std::iota(from.begin(), from.end(), 0u);
+    core::copy_huge(v, from);
+    EXPECT_EQ(v, from);
+  }
+}
+
 #if defined(__linux__)
 // The VmFlags line of the mapping holding `address`, or "" if none is listed.
 std::string vm_flags_at(uintptr_t address) {
