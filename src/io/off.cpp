@@ -4,6 +4,7 @@
 #include <string>
 
 #include "io/text_reader.h"
+#include "core/heap.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
 
@@ -59,9 +60,9 @@ Mesh read_off(std::span<const uint8_t> bytes, const std::string& name, const Rea
   in.next_line();
 
   Mesh mesh;
-  mesh.positions.reserve(vertex_count);
-  if (header.normal) mesh.normals.reserve(vertex_count);
-  if (header.color) mesh.colors.reserve(vertex_count);
+  core::reserve_huge(mesh.positions, vertex_count);
+  if (header.normal) core::reserve_huge(mesh.normals, vertex_count);
+  if (header.color) core::reserve_huge(mesh.colors, vertex_count);
   if (header.uv) mesh.uvs[0].reserve(vertex_count);
 
   float values[13];
@@ -99,7 +100,7 @@ Mesh read_off(std::span<const uint8_t> bytes, const std::string& name, const Rea
     in.next_line();
   }
 
-  mesh.indices.reserve(face_count * 3);
+  core::reserve_huge(mesh.indices, face_count * 3);
   std::vector<uint32_t> polygon;
   for (uint64_t f = 0; f < face_count; ++f) {
     in.skip_empty_lines('#');

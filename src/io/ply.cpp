@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "io/text_reader.h"
+#include "core/heap.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
 
@@ -262,7 +263,7 @@ void bind_vertex_properties(Element& e, Mesh& mesh, const io::TextReader& in) {
     std::vector<Property*> found;
     for (auto alternatives : names) found.push_back(find(alternatives));
     if (std::none_of(found.begin(), found.end(), [](Property* p) { return p; })) return false;
-    stream.assign(e.count, {});
+    core::assign_huge(stream, e.count, {});  // huge pages: the stream is filled once, front to back
     if (stream.empty()) return true;  // no records: nothing to point at
     for (size_t c = 0; c < found.size(); ++c) {
       if (!found[c]) continue;
@@ -457,7 +458,7 @@ Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const Rea
       }
     }
     if (!have_indices && f.count > 0) throw_bad_input_at_line(name, f.line, "the face element has no vertex_indices list");
-    mesh.indices.reserve(f.count * 3);
+    core::reserve_huge(mesh.indices, f.count * 3);
   }
 
   const size_t data_offset = in.offset();

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "lodkit/error.h"
+#include "core/heap.h"
 #include "lodkit/io.h"
 
 namespace lod {
@@ -135,8 +136,8 @@ Mesh flatten(const Scene& scene) {
     vertices += prim.mesh.vertex_count();
     corners += prim.mesh.indices.size();
   }
-  out.positions.reserve(vertices);
-  out.indices.reserve(corners);
+  core::reserve_huge(out.positions, vertices);
+  core::reserve_huge(out.indices, corners);
 
   for (const Instance& inst : instances) {
     const Primitive& prim = scene.primitives[inst.primitive];

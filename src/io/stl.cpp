@@ -11,6 +11,7 @@
 #include <string>
 
 #include "core/hash.h"
+#include "core/heap.h"
 #include "io/text_reader.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
@@ -44,7 +45,7 @@ Mesh read_binary(std::span<const uint8_t> bytes, const std::string& name, const 
   in.require(count, triangle_bytes, "triangles");
   core::PositionWelder welder(size_t(count) * 3 / 2 + 16);
   Mesh mesh;
-  mesh.indices.resize(size_t(count) * 3);
+  core::resize_huge(mesh.indices, size_t(count) * 3);
   for (uint32_t t = 0; t < count; ++t) {
     if (options.progress && (t & 0x3ffff) == 0x3ffff) options.progress(double(t) / count);
     const uint8_t* record = in.take(triangle_bytes, "a triangle");
