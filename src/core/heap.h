@@ -1,4 +1,5 @@
-// Internal: how the engine's large working arrays use the system's memory.
+// Internal: how large working arrays (the readers' meshes, the simplifier's and the BVH's arrays)
+// use the system's memory.
 #pragma once
 
 #include <cstddef>

@@ -18,8 +18,8 @@
 #include <thread>
 #include <unordered_map>
 
-#include "io/text_reader.h"
 #include "core/heap.h"
+#include "io/text_reader.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
 

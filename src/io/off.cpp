@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <string>
 
-#include "io/text_reader.h"
 #include "core/heap.h"
+#include "io/text_reader.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
 

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "io/text_reader.h"
 #include "core/heap.h"
+#include "io/text_reader.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
 

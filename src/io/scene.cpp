@@ -5,8 +5,8 @@
 #include <map>
 #include <vector>
 
-#include "lodkit/error.h"
 #include "core/heap.h"
+#include "lodkit/error.h"
 #include "lodkit/io.h"
 
 namespace lod {
