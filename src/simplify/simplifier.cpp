@@ -1301,7 +1301,10 @@ void check_options(const Mesh& mesh, const SimplifyOptions& o) {
                         o.fit_edge_weight})
     if (!(w >= 0) || !std::isfinite(w))
       throw_usage("simplify: weights, max_aspect_ratio, distance_guard and fit_edge_weight must be finite and >= 0");
-  if (!(o.aggregate_distance >= 0)) throw_usage("simplify: aggregate_distance must be >= 0");
+  if (!(o.aggregate_distance >= 0)) throw_usage("simplify: aggregate_distance must be >= 0");  // infinity: any pair
+  // Negative means no limit; NaN is a mistake, not "no limit".
+  if (std::isnan(o.max_error) || std::isnan(o.max_relative_error))
+    throw_usage("simplify: max_error and max_relative_error must be numbers (negative: no limit)");
 }
 
 }  // namespace

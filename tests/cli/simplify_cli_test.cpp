@@ -3,6 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
+#include <filesystem>
+#include <string>
+#include <tuple>
+#include <vector>
 
 #include "core/shapes.h"
 #include "lodkit/io.h"
@@ -116,6 +120,43 @@ TEST(CliSimplify, NeedsATarget) {
   const test::RunResult bad = test::run_cli(
       {"simplify", (dir / "s.ply").string(), "-o", (dir / "o.ply").string(), "--ratio", "0.5", "--metric", "nope"});
   EXPECT_EQ(bad.exit_code, 1);
+}
+
+// Targets given together stop at whichever is reached first: the larger triangle count. A torus of
+// 40 x 20 quads has 1,600 triangles, so --ratio 0.5 means 800 and --ratio 0.01 means 16.
+TEST(CliSimplify, TargetsStopAtWhicheverIsReachedFirst) {
+  test::TempDir dir;
+  const Mesh torus = shapes::torus(1.0f, 0.3f, 40, 20);
+  ASSERT_EQ(torus.triangle_count(), 1600u);
+  write_mesh(torus, dir / "torus.ply");
+  const auto run = [&](std::vector<std::string> target) {
+    std::vector<std::string> args = {"simplify", (dir / "torus.ply").string(), "-o", (dir / "out.ply").string(), "--json"};
+    args.insert(args.end(), target.begin(), target.end());
+    const test::RunResult r = test::run_cli(args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return read_mesh(dir / "out.ply");
+  };
+  const Mesh half = run({"--ratio", "0.5", "--triangles", "10"});
+  EXPECT_EQ(half.indices, simplify(torus, {.target_triangles = 800, .record = false}).mesh.indices);
+  EXPECT_GE(half.triangle_count(), 799u);  // a collapse removes two triangles: one below at most
+  const Mesh sixteen = run({"--triangles", "10", "--ratio", "0.01"});
+  EXPECT_EQ(sixteen.indices, simplify(torus, {.target_triangles = 16, .record = false}).mesh.indices);
+  // --triangles 0 is a target (as few as the mesh allows), the same as --ratio 0.
+  EXPECT_EQ(run({"--triangles", "0"}).indices, run({"--ratio", "0"}).indices);
+}
+
+TEST(CliSimplify, RejectsTargetsThatAreNotNumbersInRange) {
+  test::TempDir dir;
+  write_mesh(shapes::icosphere(1), dir / "s.ply");
+  for (const auto& [option, value, message] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"--ratio", "nan", "--ratio"}, {"--ratio", "1.5", "--ratio"}, {"--ratio", "-0.1", "--ratio"},
+           {"--error", "nan", "--error"}, {"--error", "-1", "--error"}}) {
+    const test::RunResult r =
+        test::run_cli({"simplify", (dir / "s.ply").string(), "-o", (dir / "o.ply").string(), option, value});
+    EXPECT_EQ(r.exit_code, 1) << option << " " << value;
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "o.ply")) << option << " " << value;
+  }
 }
 
 }  // namespace

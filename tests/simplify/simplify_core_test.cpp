@@ -2,6 +2,8 @@
 // thread-count independence, invariants after every collapse, seams and locks.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <cmath>
 #include <set>
 #include <tuple>
@@ -297,6 +299,13 @@ TEST(SimplifyCore, BadOptionsAreUsageErrors) {
   EXPECT_EQ(category({.target_ratio = 2.0f}), ErrorCategory::usage);
   EXPECT_EQ(category({.locked = std::vector<uint8_t>(3, 1)}), ErrorCategory::usage);
   EXPECT_EQ(category({.aggregate_distance = -0.1f}), ErrorCategory::usage);
+  constexpr float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(category({.target_ratio = nan}), ErrorCategory::usage);
+  EXPECT_EQ(category({.aggregate_distance = nan}), ErrorCategory::usage);
+  // NaN is not "no limit" (only a negative limit is).
+  EXPECT_EQ(category({.max_error = nan}), ErrorCategory::usage);
+  EXPECT_EQ(category({.max_relative_error = nan}), ErrorCategory::usage);
+  EXPECT_EQ(category({.target_ratio = 0.5f, .max_relative_error = -1.0f}), ErrorCategory::internal);  // no error
 }
 
 }  // namespace

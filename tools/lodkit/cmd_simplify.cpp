@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -19,8 +20,9 @@ namespace {
 
 struct SimplifyCommand {
   std::string input, output;
-  float ratio = -1, error = -1, aggregate = 0;
+  float ratio = 0, error = 0, aggregate = 0;
   uint64_t triangles = 0;
+  bool has_ratio = false, has_triangles = false, has_error = false;  // which targets were given
   std::string metric = "cqem", attributes;
   bool keep_vertices = false, lock_border = false, prune = false, json = false, force = false;
   unsigned threads = 0;
@@ -71,9 +73,12 @@ Command register_simplify(CLI::App& root) {
   CLI::App* app = root.add_subcommand("simplify", "Simplify a mesh by edge collapses (quadric error metrics)");
   app->add_option("input", o->input, "Input mesh file")->required();
   app->add_option("-o,--output", o->output, "Output mesh file; the format follows the extension")->required();
+  // Given together, the targets stop the simplification at whichever is reached first.
   app->add_option("--ratio", o->ratio, "Fraction of the triangles to keep, in [0, 1]");
-  app->add_option("--triangles", o->triangles, "Number of triangles to keep");
-  app->add_option("--error", o->error, "Stop before the error exceeds this fraction of the bounding-box diagonal");
+  app->add_option("--triangles", o->triangles, "Number of triangles to keep (0: as few as the mesh allows)");
+  app->add_option("--error", o->error,
+                  "Stop before the error exceeds this fraction of the bounding-box diagonal; with --ratio or --triangles, "
+                  "whichever is reached first");
   app->add_option("--metric", o->metric, "edge, qem, cqem (default), memoryless or cmemoryless");
   app->add_option("--attributes", o->attributes, "Attribute weights, e.g. normal=1,uv=1,color=1");
   app->add_flag("--keep-vertices", o->keep_vertices, "Use only input vertices (LODs can share one vertex buffer)");
@@ -96,15 +101,19 @@ Command register_simplify(CLI::App& root) {
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
-  return {app, [o] {
-            if (o->ratio < 0 && o->triangles == 0 && o->error < 0)
+  return {app, [o, app] {
+            o->has_ratio = app->count("--ratio") > 0;
+            o->has_triangles = app->count("--triangles") > 0;
+            o->has_error = app->count("--error") > 0;
+            if (!o->has_ratio && !o->has_triangles && !o->has_error)
               throw_usage("simplify needs a target: --ratio R, --triangles N or --error E");
-            if (o->ratio > 1) throw_usage("--ratio must be in [0, 1]");
+            if (o->has_ratio && !(o->ratio >= 0 && o->ratio <= 1)) throw_usage("--ratio must be in [0, 1]");
+            if (o->has_error && !(o->error >= 0)) throw_usage("--error must be >= 0 (a fraction of the bounding-box diagonal)");
             check_not_input(o->input, o->output, o->force);
             SimplifyOptions options{
-                .target_ratio = o->ratio >= 0 ? o->ratio : 0.0f,
-                .target_triangles = o->triangles,
-                .max_relative_error = o->error,
+                // Only --error: as far as the error allows.
+                .target_ratio = o->has_ratio ? o->ratio : 0.0f,
+                .max_relative_error = o->has_error ? o->error : -1.0f,
                 .metric = parse_metric(o->metric),
                 .keep_vertices = o->keep_vertices,
                 .distance_guard = o->guard,
@@ -119,7 +128,6 @@ Command register_simplify(CLI::App& root) {
                 .threads = o->threads,
             };
             if (!o->attributes.empty()) parse_attributes(o->attributes, options);
-            if (o->ratio < 0 && o->triangles == 0) options.target_ratio = 0;  // error only
 
             auto start = std::chrono::steady_clock::now();
             GeometryFile file(o->input, o->output);
@@ -142,11 +150,18 @@ Command register_simplify(CLI::App& root) {
               uint64_t done = 0;
               for (Mesh* m : meshes) {
                 SimplifyOptions each = options;
-                // A triangle budget is shared in proportion to each primitive's size.
-                if (o->triangles)
-                  each.target_triangles =
-                      std::max<uint64_t>(1, uint64_t(double(o->triangles) * double(m->triangle_count()) / double(total)));
                 const uint64_t size = m->triangle_count();
+                // A triangle budget is shared in proportion to each primitive's size. With a ratio
+                // too, the larger target is reached first and stops the primitive.
+                if (o->has_triangles) {
+                  // (At least one each: a share of 0 would mean "no count" to the library.)
+                  const uint64_t share = o->triangles == 0 || total == 0
+                                             ? 0
+                                             : std::max<uint64_t>(1, uint64_t(double(o->triangles) * double(size) / double(total)));
+                  const uint64_t by_ratio = o->has_ratio ? uint64_t(std::llround(double(o->ratio) * double(size))) : 0;
+                  each.target_triangles = std::max(share, by_ratio);
+                  if (each.target_triangles == 0) each.target_ratio = 0;  // --triangles 0: as few as the mesh allows
+                }
                 each.progress = [&, size](double f) { bar.update((double(done) + f * double(size)) / double(total)); };
                 SimplifyResult r = simplify(*m, each);
                 done += size;
