@@ -622,24 +622,8 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, std::span<const uint32_t> coherent_or
 
   core::copy_huge(original_, order);
   core::resize_huge(slot_, triangles);
-  core::resize_huge(triangles_, triangles);
-  // Growth of every box: a few ulps of the largest coordinate.
-  float magnitude = 0;
-  for (const float3& p : mesh.positions)
-    magnitude = std::max({magnitude, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
-  const float grow = magnitude * 1e-6f + std::numeric_limits<float>::min();
-  plane_slack_ = 4 * grow;
-  triangle_box_.resize(6 * triangles);
-  // Per leaf-order triangle, each slot written by its own item: the prepared triangle and its grown box.
-  core::parallel_for(triangles, threads, [&](size_t s) {
-    slot_[order[s]] = uint32_t(s);
-    const uint32_t* corner = &mesh.indices[3 * size_t(order[s])];
-    const vec3f c[3] = {mesh.positions[corner[0]], mesh.positions[corner[1]], mesh.positions[corner[2]]};
-    triangles_[s] = prepare_triangle(c[0], c[1], c[2]);
-    Box b;
-    for (int k = 0; k < 3; ++k) b.grow_point(&c[k].x);
-    for (int k = 0; k < 3; ++k) triangle_box_[6 * s + k] = b.lo[k] - grow, triangle_box_[6 * s + 3 + k] = b.hi[k] + grow;
-  });
+  for (size_t s = 0; s < triangles; ++s) slot_[order[s]] = uint32_t(s);
+  const float grow = place_triangles(mesh, threads);
 
   // Collapse: each 4-wide node takes a binary node's children and opens the largest inner ones until
   // it has four.
@@ -699,6 +683,56 @@ TriangleBvh::TriangleBvh(const Mesh& mesh, std::span<const uint32_t> coherent_or
     fill(job.node, children, count, job.depth);
   }
   if (depth_ > max_depth) throw_internal("TriangleBvh: tree deeper than the traversal stack");
+}
+
+float TriangleBvh::place_triangles(const Mesh& mesh, unsigned threads) {
+  const size_t triangles = original_.size();
+  core::resize_huge(triangles_, triangles);
+  // Growth of every box: a few ulps of the largest coordinate.
+  float magnitude = 0;
+  for (const float3& p : mesh.positions)
+    magnitude = std::max({magnitude, std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)});
+  const float grow = magnitude * 1e-6f + std::numeric_limits<float>::min();
+  plane_slack_ = 4 * grow;
+  triangle_box_.resize(6 * triangles);
+  // Per leaf-order triangle, each slot written by its own item: the prepared triangle and its grown box.
+  core::parallel_for(triangles, threads, [&](size_t s) {
+    const uint32_t* corner = &mesh.indices[3 * size_t(original_[s])];
+    const vec3f c[3] = {mesh.positions[corner[0]], mesh.positions[corner[1]], mesh.positions[corner[2]]};
+    triangles_[s] = prepare_triangle(c[0], c[1], c[2]);
+    Box b;
+    for (int k = 0; k < 3; ++k) b.grow_point(&c[k].x);
+    for (int k = 0; k < 3; ++k) triangle_box_[6 * s + k] = b.lo[k] - grow, triangle_box_[6 * s + 3 + k] = b.hi[k] + grow;
+  });
+  return grow;
+}
+
+void TriangleBvh::refit(const Mesh& mesh, unsigned threads) {
+  if (mesh.triangle_count() != original_.size())
+    throw_internal("TriangleBvh::refit: the mesh has other triangles than the tree was built over");
+  place_triangles(mesh, threads);
+  // Bottom-up: a node's children come after it in nodes_ (the build appends them as it fills it).
+  // Each lane's box is the union of its grown triangle boxes or of its child's lanes, which is the
+  // build's box of that subtree minus and plus the same growth, to the bit (rounding is monotonic).
+  for (size_t i = nodes_.size(); i-- > 0;) {
+    Node& n = nodes_[i];
+    for (int lane = 0; lane < 4; ++lane) {
+      const uint32_t child = n.child[lane];
+      if (child == empty_child) continue;
+      float lo[3] = {inf, inf, inf}, hi[3] = {-inf, -inf, -inf};
+      if (child & leaf_bit) {
+        const uint32_t first = (child & ~leaf_bit) >> 4, count = (child & 15) + 1;
+        for (uint32_t s = first; s < first + count; ++s)
+          for (int k = 0; k < 3; ++k)
+            lo[k] = std::min(lo[k], triangle_box_[6 * size_t(s) + k]), hi[k] = std::max(hi[k], triangle_box_[6 * size_t(s) + 3 + k]);
+      } else {
+        const Node& c = nodes_[child];  // its empty lanes are +inf to -inf: no part of the union
+        for (int l = 0; l < 4; ++l)
+          for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], c.box[4 * k + l]), hi[k] = std::max(hi[k], c.box[4 * (k + 3) + l]);
+      }
+      for (int k = 0; k < 3; ++k) n.box[4 * k + lane] = lo[k], n.box[4 * (k + 3) + lane] = hi[k];
+    }
+  }
 }
 
 void TriangleBvh::set_lane_width(unsigned width) { lane_width.store(width, std::memory_order_relaxed); }

@@ -45,6 +45,11 @@ class TriangleBvh {
   // brute-force scan's); a looser tree only makes each query visit more nodes.
   TriangleBvh(const Mesh& mesh, std::span<const uint32_t> coherent_order, unsigned threads = 0);
 
+  // Moves the tree to `mesh`, which has the triangles (indices) it was built over at new positions:
+  // the boxes are recomputed bottom-up, the tree kept. The answers stay exact; after large moves a
+  // query only visits more nodes. Much cheaper than a build, for a mesh that moves a little at a time.
+  void refit(const Mesh& mesh, unsigned threads = 0);
+
   // The exact closest point over all triangles; ties go to the lowest triangle index, so the answer
   // equals a brute-force scan's. `hint` is a triangle whose distance starts the search (the previous
   // query's answer is a good one); it changes only the speed. With a `bound` (squared distance) only
@@ -91,6 +96,10 @@ class TriangleBvh {
   // Takes leaf-order triangle `slot` into `best` when it is closer to p (ties: the lower mesh index wins,
   // as in a brute-force scan), its point left to resolve(); true when it did.
   bool consider(const vec3f& p, uint32_t slot, ClosestHit& best) const;
+
+  // triangles_, triangle_box_ and plane_slack_ from `mesh`'s positions, for the leaf order in
+  // original_; returns the growth of the boxes.
+  float place_triangles(const Mesh& mesh, unsigned threads);
 
   using Node = BvhNode;
   static constexpr uint32_t leaf_bit = bvh_leaf_bit;

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <tuple>
 
 #include "core/heap.h"
@@ -661,9 +662,14 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
   std::vector<vec3d> sample_residual;  // per sample, in the sweeps with emphasis
   double edge_mean_square = 0;  // of the edges' residuals, area-weighted, in the last sweep
   uint32_t iteration = 0;
+  // The feet's tree over the result: built once, then refitted as the positions move (the same
+  // answers at a fraction of a build's cost; bunny00 to half, one thread: the fit 0.691 -> 0.622 s,
+  // medians of 7); built again after the iterations that flip edges, which change the triangles.
+  std::optional<measure::TriangleBvh> bvh;
   while (iteration < iterations) {
     iteration_start = result.positions;
-    const measure::TriangleBvh bvh(result, s.threads);
+    if (!bvh || (iteration > 0 && flip_round(iteration - 1))) bvh.emplace(result, s.threads);
+    else bvh->refit(result, s.threads);
     core::parallel_blocks(group_first.size() - 1, 256, s.threads, [&](size_t, size_t group_begin, size_t group_end) {
       measure::TriangleBvh::GroupScratch scratch;
       measure::vec3f points[max_group];
@@ -671,13 +677,13 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
       for (size_t g = group_begin; g < group_end; ++g) {
         const uint32_t first = group_first[g], count = group_first[g + 1] - first;
         for (uint32_t k = 0; k < count; ++k) points[k] = measure::vec3f(input.positions[samples[by_slot[first + k]]]);
-        bvh.closest_group(points, count, foot[by_slot[first]].triangle, hits, scratch);
+        bvh->closest_group(points, count, foot[by_slot[first]].triangle, hits, scratch);
         for (uint32_t k = 0; k < count; ++k) {
           measure::ClosestHit& hit = hits[k];
           // No triangle: every distance overflowed (coordinates near FLT_MAX); the sample keeps its
           // last foot, which is always a triangle of the result.
           if (hit.triangle == none) continue;
-          bvh.resolve(hit, points[k]);
+          bvh->resolve(hit, points[k]);
           Foot& f = foot[by_slot[first + k]];
           f.triangle = hit.triangle, f.v = hit.v, f.w = hit.w;
           if (flip_round(iteration)) foot_distance[by_slot[first + k]] = hit.distance_squared;

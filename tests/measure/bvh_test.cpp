@@ -211,22 +211,27 @@ ClosestHit brute_force(const Mesh& m, const vec3f& p) {
   return best;
 }
 
-// With a build order: the tree built by halving it (TriangleBvh's coherent-order constructor).
-void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed, std::span<const uint32_t> order);
+// With a build order: the tree built by halving it (TriangleBvh's coherent-order constructor). With
+// `built_over` (the same triangles elsewhere): the tree built over that mesh, then refitted to m.
+void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed, std::span<const uint32_t> order,
+                                const Mesh* built_over);
 
 // closest_group at both lane widths (8 falls back to 4 without AVX2).
 void expect_matches_brute_force_both_widths(const Mesh& m, uint32_t points, uint32_t seed,
-                                            std::span<const uint32_t> order = {}) {
+                                            std::span<const uint32_t> order = {}, const Mesh* built_over = nullptr) {
   for (const unsigned width : {4u, 8u}) {
     SCOPED_TRACE(width);
     TriangleBvh::set_lane_width(width);
-    expect_matches_brute_force(m, points, seed, order);
+    expect_matches_brute_force(m, points, seed, order, built_over);
   }
   TriangleBvh::set_lane_width(0);
 }
 
-void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed, std::span<const uint32_t> order) {
-  const TriangleBvh bvh = order.empty() ? TriangleBvh(m) : TriangleBvh(m, order);
+void expect_matches_brute_force(const Mesh& m, uint32_t points, uint32_t seed, std::span<const uint32_t> order,
+                                const Mesh* built_over) {
+  const Mesh& first = built_over ? *built_over : m;
+  TriangleBvh bvh = order.empty() ? TriangleBvh(first) : TriangleBvh(first, order);
+  if (built_over) bvh.refit(m, seed % 2 ? 1 : 0);
   float3 lo, hi;
   bounding_box(m, lo, hi);
   std::mt19937 rng(seed);
@@ -383,6 +388,39 @@ TEST(MeasureBvh, CoherentOrderBuildMatchesBruteForce) {
   one.indices = {0, 1, 2};
   const uint32_t only[] = {0};
   EXPECT_EQ(TriangleBvh(one, only).closest({0.25f, 0.25f, 1}).triangle, 0u);
+}
+
+// A tree refitted to moved positions answers as a scan of the moved mesh does: small moves (a fit's),
+// large ones (every vertex anywhere in the box), a scale that changes the boxes' growth, ties, and
+// the coherent-order tree. Refitting to other triangles is refused.
+TEST(MeasureBvh, RefitToMovedPositionsMatchesBruteForce) {
+  const auto moved = [](Mesh m, float amount, float scale, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> move(-amount, amount);
+    for (float3& p : m.positions) p = {scale * (p.x + move(rng)), scale * (p.y + move(rng)), scale * (p.z + move(rng))};
+    return m;
+  };
+  const Mesh torus = shapes::torus(1.0f, 0.3f, 48, 24);
+  for (const auto& [amount, scale] : {std::pair{0.01f, 1.0f}, {0.5f, 1.0f}, {0.02f, 1000.0f}, {0.0f, 1e-3f}}) {
+    SCOPED_TRACE(amount);
+    SCOPED_TRACE(scale);
+    const Mesh m = moved(torus, amount, scale, 3);
+    expect_matches_brute_force_both_widths(m, 1500, 19, {}, &torus);
+  }
+  Mesh ties = shapes::grid(16, 16);  // every triangle twice: ties go to the lower index
+  const size_t n = ties.indices.size();
+  for (size_t i = 0; i < n; ++i) ties.indices.push_back(ties.indices[i]);
+  Mesh wavy = ties;
+  for (float3& p : wavy.positions) p.z = 0.1f * std::sin(7 * p.x) * std::cos(5 * p.y);
+  expect_matches_brute_force_both_widths(wavy, 800, 23, {}, &ties);
+  std::vector<uint32_t> reversed(torus.triangle_count());
+  std::iota(reversed.rbegin(), reversed.rend(), 0u);
+  expect_matches_brute_force_both_widths(moved(torus, 0.05f, 1.0f, 9), 800, 29, reversed, &torus);
+
+  TriangleBvh bvh(torus);
+  Mesh fewer = torus;
+  fewer.indices.resize(fewer.indices.size() - 3);
+  EXPECT_ANY_THROW(bvh.refit(fewer));
 }
 
 TEST(MeasureBvh, CoherentOrderMustListEveryTriangleOnce) {
