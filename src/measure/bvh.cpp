@@ -737,13 +737,6 @@ void TriangleBvh::refit(const Mesh& mesh, unsigned threads) {
 
 void TriangleBvh::set_lane_width(unsigned width) { lane_width.store(width, std::memory_order_relaxed); }
 
-ClosestHit TriangleBvh::to_triangle(const vec3f& p, uint32_t triangle) const {
-  ClosestHit hit;  // no triangle yet: the first one considered is taken
-  consider(p, slot_[triangle], hit);
-  resolve(hit, p);
-  return hit;
-}
-
 bool TriangleBvh::consider(const vec3f& p, uint32_t slot, ClosestHit& best) const {
   const float d = closest_distance_squared(p, triangles_[slot]);
   if (d > best.distance_squared) return false;

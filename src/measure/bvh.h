@@ -64,8 +64,10 @@ class TriangleBvh {
     hit.point = tp.point, hit.v = tp.v, hit.w = tp.w;
     hit.resolved = true;
   }
-  // The exact closest point on one triangle (mesh index).
-  ClosestHit to_triangle(const vec3f& p, uint32_t triangle) const;
+  // The squared distance from p to one triangle (mesh index), as the searches compute it.
+  float distance_squared(const vec3f& p, uint32_t triangle) const {
+    return closest_distance_squared(p, triangles_[slot_[triangle]]);
+  }
 
   // Reusable memory for closest_group (one per thread).
   struct GroupScratch {

@@ -77,7 +77,7 @@ float piecewise_bound(const vec3f corners[3], const uint32_t* candidate, const f
       const std::array<float, 3>& b = buffer[cur][v];
       float d;
       if (b[0] == 1 || b[1] == 1 || b[2] == 1) d = f[k][b[0] == 1 ? 0 : b[1] == 1 ? 1 : 2];
-      else d = std::sqrt(to.to_triangle(corners[0] * b[0] + corners[1] * b[1] + corners[2] * b[2], candidate[k]).distance_squared);
+      else d = std::sqrt(to.distance_squared(corners[0] * b[0] + corners[1] * b[1] + corners[2] * b[2], candidate[k]));
       bound = std::max(bound, d);
     }
   }
@@ -102,7 +102,7 @@ float patch_bound(const vec3f corners[3], const float distances[3], const uint32
       return;
     candidate[count] = t;
     for (int i = 0; i < 3; ++i)
-      f[count][i] = closest[i] == t ? distances[i] : std::sqrt(to.to_triangle(corners[i], t).distance_squared);
+      f[count][i] = closest[i] == t ? distances[i] : std::sqrt(to.distance_squared(corners[i], t));
     ++count;
   };
   for (uint32_t t : {closest[0], closest[1], closest[2], extra}) add(t);
