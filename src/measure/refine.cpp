@@ -223,6 +223,9 @@ RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& 
     for (size_t i = batch; i < open.size(); ++i) keep(open[i]);
     open.swap(next);
   }
+  // Patches still open when the budget ran out bound the rest of the surface: without them the
+  // bound would be only the sampled maximum there (a few of them hold the true one).
+  for (const Patch& p : open) settled = std::max(settled, p.bound);
   result.bound = std::max(result.max, settled);
   return result;
 }
