@@ -144,11 +144,14 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
       LodLevel& level = chain.levels[i];
       if (level.mesh.triangle_count() && !identity[i]) {
         // Two samples per input triangle find the maximum well on meshes of that density; the
-        // refinement then certifies a bound (it stops within its tolerance or at its budget).
+        // refinement then certifies a bound (it stops within its tolerance or at its budget). The
+        // budget is eight times the samples: the default (as many) ran out on bunny00's levels,
+        // leaving bounds 2-4x the error; four times closed them within the tolerance, for 1.2x the
+        // build time. Where even this runs out, the bound is still certified, only looser.
         const uint64_t samples = std::clamp<uint64_t>(2 * input_triangles, 20'000, 1'000'000);
         const Deviation d = compare(input, level.mesh,
                                     {.samples = samples, .refine = true, .refine_tolerance = 1e-5f,
-                                     .attributes = false, .threads = o.simplify.threads});
+                                     .refine_budget = 8 * samples, .attributes = false, .threads = o.simplify.threads});
         level.error = float(d.hausdorff);
         level.error_bound = float(d.hausdorff_bound);
       } else if (!level.mesh.triangle_count()) {
