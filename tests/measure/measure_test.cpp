@@ -228,17 +228,21 @@ double dense_max_distance(const Mesh& a, const Mesh& b, int n) {
   return dense;
 }
 
-// A bowl under a flat triangle: the largest distance is inside the triangle, off every sample.
-TEST(MeasureRefine, BoundHoldsAgainstADenseBruteForceScan) {
-  Mesh a;
+// A bowl (b) under a flat triangle (a): the largest distance is inside the triangle, off every sample.
+void bowl_under_triangle(Mesh& a, Mesh& b) {
   a.positions = {{0, 0, 0}, {1, 0, 0}, {0.3f, 0.9f, 0}};
   a.indices = {0, 1, 2};
-  Mesh b = shapes::grid(24, 24);
+  b = shapes::grid(24, 24);
   for (float3& p : b.positions) {
     const float x = p.x - 0.43f, y = p.y - 0.31f;
     p.z = -0.3f * std::exp(-(x * x + y * y) * 20) - 0.05f;
   }
   b.normals.clear();
+}
+
+TEST(MeasureRefine, BoundHoldsAgainstADenseBruteForceScan) {
+  Mesh a, b;
+  bowl_under_triangle(a, b);
   const Deviation d = compare(a, b, {.samples = 3, .edge_samples = false, .refine = true,
                                      .refine_tolerance = 1e-4f, .refine_budget = 200'000});
   // The distance over a dense grid of a's points, by brute force over b's triangles.
@@ -259,15 +263,8 @@ TEST(MeasureRefine, BoundHoldsAgainstADenseBruteForceScan) {
 // The same bowl with a budget too small to close in on the maximum: the patches still open when it
 // runs out must count in the bound, which then stays certified, only looser.
 TEST(MeasureRefine, BoundHoldsWhenTheBudgetRunsOut) {
-  Mesh a;
-  a.positions = {{0, 0, 0}, {1, 0, 0}, {0.3f, 0.9f, 0}};
-  a.indices = {0, 1, 2};
-  Mesh b = shapes::grid(24, 24);
-  for (float3& p : b.positions) {
-    const float x = p.x - 0.43f, y = p.y - 0.31f;
-    p.z = -0.3f * std::exp(-(x * x + y * y) * 20) - 0.05f;
-  }
-  b.normals.clear();
+  Mesh a, b;
+  bowl_under_triangle(a, b);
   const double dense = dense_max_distance(a, b, 200);
   for (const uint64_t budget : {3u, 30u}) {
     const Deviation d = compare(a, b, {.samples = 3, .edge_samples = false, .refine = true,
