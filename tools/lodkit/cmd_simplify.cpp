@@ -22,7 +22,6 @@ struct SimplifyCommand {
   std::string input, output;
   float ratio = 0, error = 0, aggregate = 0;
   uint64_t triangles = 0;
-  bool has_ratio = false, has_triangles = false, has_error = false;  // which targets were given
   std::string metric = "cqem", attributes;
   bool keep_vertices = false, lock_border = false, prune = false, json = false, force = false;
   unsigned threads = 0;
@@ -102,18 +101,18 @@ Command register_simplify(CLI::App& root) {
   app->add_flag("--force", o->force, "Allow writing over the input file");
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
   return {app, [o, app] {
-            o->has_ratio = app->count("--ratio") > 0;
-            o->has_triangles = app->count("--triangles") > 0;
-            o->has_error = app->count("--error") > 0;
-            if (!o->has_ratio && !o->has_triangles && !o->has_error)
+            // Which targets were given (every value is meaningful, so no sentinel tells).
+            const bool has_ratio = app->count("--ratio") > 0, has_triangles = app->count("--triangles") > 0,
+                       has_error = app->count("--error") > 0;
+            if (!has_ratio && !has_triangles && !has_error)
               throw_usage("simplify needs a target: --ratio R, --triangles N or --error E");
-            if (o->has_ratio && !(o->ratio >= 0 && o->ratio <= 1)) throw_usage("--ratio must be in [0, 1]");
-            if (o->has_error && !(o->error >= 0)) throw_usage("--error must be >= 0 (a fraction of the bounding-box diagonal)");
+            if (has_ratio && !(o->ratio >= 0 && o->ratio <= 1)) throw_usage("--ratio must be in [0, 1]");
+            if (has_error && !(o->error >= 0)) throw_usage("--error must be >= 0 (a fraction of the bounding-box diagonal)");
             check_not_input(o->input, o->output, o->force);
             SimplifyOptions options{
                 // Only --error: as far as the error allows.
-                .target_ratio = o->has_ratio ? o->ratio : 0.0f,
-                .max_relative_error = o->has_error ? o->error : -1.0f,
+                .target_ratio = has_ratio ? o->ratio : 0.0f,
+                .max_relative_error = has_error ? o->error : -1.0f,
                 .metric = parse_metric(o->metric),
                 .keep_vertices = o->keep_vertices,
                 .distance_guard = o->guard,
@@ -153,14 +152,14 @@ Command register_simplify(CLI::App& root) {
                 const uint64_t size = m->triangle_count();
                 // A triangle budget is shared in proportion to each primitive's size. With a ratio
                 // too, the larger target is reached first and stops the primitive.
-                if (o->has_triangles) {
+                if (has_triangles) {
                   // (At least one each: a share of 0 would mean "no count" to the library.)
                   const uint64_t share = o->triangles == 0 || total == 0
                                              ? 0
                                              : std::max<uint64_t>(1, uint64_t(double(o->triangles) * double(size) / double(total)));
-                  const uint64_t by_ratio = o->has_ratio ? uint64_t(std::llround(double(o->ratio) * double(size))) : 0;
+                  const uint64_t by_ratio = has_ratio ? uint64_t(std::llround(double(o->ratio) * double(size))) : 0;
+                  // 0 (--triangles 0): the library falls back on target_ratio, which gives 0 too.
                   each.target_triangles = std::max(share, by_ratio);
-                  if (each.target_triangles == 0) each.target_ratio = 0;  // --triangles 0: as few as the mesh allows
                 }
                 each.progress = [&, size](double f) { bar.update((double(done) + f * double(size)) / double(total)); };
                 SimplifyResult r = simplify(*m, each);
