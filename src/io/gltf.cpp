@@ -1485,7 +1485,10 @@ void set_lod_and_extras(tg::Model& model, const Node& in, tg::Node& node) {
     if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), "MSFT_lod") == model.extensionsUsed.end())
       model.extensionsUsed.push_back("MSFT_lod");
   }
-  if (!in.extras_json.empty()) node.extras = json_to_value(nlohmann::json::parse(in.extras_json));
+  if (in.extras_json.empty()) return;
+  const nlohmann::json extras = nlohmann::json::parse(in.extras_json);
+  // An empty object removes the source's extras rather than writing "extras": {}.
+  node.extras = extras.is_object() && extras.empty() ? tg::Value() : json_to_value(extras);
 }
 
 void set_transform(const Node& in, tg::Node& node) {

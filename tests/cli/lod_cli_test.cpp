@@ -66,6 +66,43 @@ TEST(CliLod, WritesAValidMsftLodChain) {
   EXPECT_NE(v.output.find(": 0 errors"), std::string::npos) << v.output;
 }
 
+// lodkit simplify on a chain: the levels it changes lose the facts lodkit lod wrote about them
+// (their triangles and errors, and the geomorph whose morph target goes with the old vertices),
+// the chain itself (MSFT_lod) stays; a run that changes nothing keeps them all.
+TEST(CliLod, SimplifyingAChainDropsItsStaleFacts) {
+  test::TempDir dir;
+  write_mesh(shapes::torus(1.0f, 0.3f, 32, 16), dir / "torus.ply");
+  ASSERT_EQ(test::run_cli({"lod", (dir / "torus.ply").string(), "-o", (dir / "m.glb").string(), "--ratios", "1,0.4,0.1",
+                           "--morph"}).exit_code, 0);
+  const nlohmann::json before = glb_json(dir / "m.glb");
+  ASSERT_TRUE(before["nodes"][0]["extras"].contains("lodkit"));
+  ASSERT_TRUE(before["nodes"][0]["extras"].contains("LODKIT_geomorph"));
+
+  test::RunResult r = test::run_cli({"simplify", (dir / "m.glb").string(), "-o", (dir / "same.glb").string(), "--ratio", "1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json same = glb_json(dir / "same.glb");
+  for (size_t i = 0; i < 3; ++i) EXPECT_EQ(same["nodes"][i]["extras"], before["nodes"][i]["extras"]) << i;
+
+  r = test::run_cli({"simplify", (dir / "m.glb").string(), "-o", (dir / "half.glb").string(), "--ratio", "0.5"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json half = glb_json(dir / "half.glb");
+  ASSERT_EQ(half["nodes"].size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    const nlohmann::json extras = half["nodes"][i].value("extras", nlohmann::json::object());
+    EXPECT_FALSE(extras.contains("lodkit")) << i;
+    EXPECT_FALSE(extras.contains("LODKIT_geomorph")) << i;
+    EXPECT_FALSE(half["meshes"][i]["primitives"][0].contains("targets")) << i;
+  }
+  EXPECT_EQ(half["nodes"][0]["extensions"]["MSFT_lod"]["ids"], before["nodes"][0]["extensions"]["MSFT_lod"]["ids"]);
+  EXPECT_EQ(half["nodes"][0]["extras"]["MSFT_screencoverage"], before["nodes"][0]["extras"]["MSFT_screencoverage"]);
+  EXPECT_FALSE(half["nodes"][1].contains("extras"));  // nothing left: no empty object either
+
+  if (!test::validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
+  const test::ValidatorRun v = test::run_validator({dir / "half.glb"});
+  EXPECT_EQ(v.status, 0) << v.output;
+  EXPECT_NE(v.output.find(": 0 errors"), std::string::npos) << v.output;
+}
+
 // --morph: level i's morph target 0 at weight 1 lands exactly on level i + 1 (its proper triangles).
 TEST(CliLod, GeomorphsAreMorphTargets) {
   test::TempDir dir;

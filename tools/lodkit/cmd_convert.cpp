@@ -55,6 +55,25 @@ void GeometryFile::write(const std::string& output) const {
   else write_mesh(mesh_, output);
 }
 
+void GeometryFile::forget_lod_facts(const std::vector<bool>& changed) {
+  if (!as_scene_) return;
+  std::vector<bool> stale;  // per glTF mesh
+  for (size_t i = 0; i < scene_.primitives.size(); ++i) {
+    const uint32_t m = scene_.primitives[i].gltf_mesh;
+    if (m >= stale.size()) stale.resize(size_t(m) + 1, false);
+    if (changed[i]) stale[m] = true;
+  }
+  for (Node& node : scene_.nodes) {
+    if (node.mesh < 0 || size_t(node.mesh) >= stale.size() || !stale[size_t(node.mesh)] || node.extras_json.empty())
+      continue;
+    nlohmann::json extras = nlohmann::json::parse(node.extras_json);
+    if (!extras.is_object()) continue;
+    extras.erase("lodkit");
+    extras.erase("LODKIT_geomorph");
+    node.extras_json = extras.dump();  // "{}", not "": an empty text would keep the source's extras
+  }
+}
+
 Command register_convert(CLI::App& root) {
   auto options = std::make_shared<ConvertOptions>();
   CLI::App* app = root.add_subcommand("convert", "Convert a mesh between OBJ, PLY, OFF, STL, glTF and GLB");

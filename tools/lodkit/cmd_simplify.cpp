@@ -143,6 +143,7 @@ Command register_simplify(CLI::App& root) {
             SimplifyResult::CollapseSteps steps;  // the collapses' share, by step
             uint32_t search_ways = 1;  // the most any primitive's search tried
             nlohmann::json kept = nlohmann::json::array();  // per primitive: the way its result was made
+            std::vector<bool> changed;  // per primitive: its geometry is not the input's
             start = std::chrono::steady_clock::now();
             {
               ProgressBar bar("simplifying");
@@ -178,9 +179,11 @@ Command register_simplify(CLI::App& root) {
                 rejected[0] += r.rejected_topology, rejected[1] += r.rejected_seam;
                 rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape, deferred += r.deferred_distance;
                 relative_error = std::max(relative_error, r.relative_error);
+                changed.push_back(r.mesh.positions != m->positions || r.mesh.indices != m->indices);
                 *m = std::move(r.mesh);
               }
             }
+            file.forget_lod_facts(changed);
             const double simplify_seconds = seconds_since(start);
             start = std::chrono::steady_clock::now();
             file.write(o->output);

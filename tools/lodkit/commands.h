@@ -38,6 +38,10 @@ class GeometryFile {
   GeometryFile(const GeometryFile&) = delete;
   GeometryFile& operator=(const GeometryFile&) = delete;
   void write(const std::string& output) const;
+  // After meshes[i] changed for each i where changed[i]: the facts `lodkit lod` wrote on the glTF
+  // nodes that draw them (extras "lodkit": triangles, errors, switch distance; "LODKIT_geomorph": a
+  // morph target the writer drops with the old vertex count) no longer hold, and are removed.
+  void forget_lod_facts(const std::vector<bool>& changed);
 
   std::vector<Mesh*> meshes;
 
