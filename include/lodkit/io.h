@@ -54,6 +54,12 @@ struct Primitive {
   // mesh's) this one reuses, so the file holds one vertex buffer and an index buffer per primitive
   // (lodkit lod --shared-vertices). -1: its own.
   int32_t shares_vertices_with = -1;
+  // Each vertex's vertex in the source glTF primitive, for the streams lodkit does not model
+  // (morph targets, attributes such as TEXCOORD_4 or _ID): the writer gathers them through it. Set
+  // by whatever renumbers the vertices (lodkit optimize, the skinned chain's level 0). Empty: the
+  // vertices are the source's own, in order, while their count is unchanged, and otherwise those
+  // streams are dropped.
+  std::vector<uint32_t> source_vertices;
   uint32_t gltf_mesh = 0;       // index of the glTF mesh this primitive belongs to
   uint32_t gltf_primitive = 0;  // index within that mesh
   int32_t material = -1;        // glTF material index, -1 for none

@@ -80,6 +80,9 @@ struct LodLevel {
   // e_obj and the switch distances. With measure off, engine_error (not certified).
   float error_bound = 0;
   float relative_error = 0;  // error / bounding-box diagonal
+  // Per vertex: the input vertex it continues (for streams the Mesh does not hold, such as a glTF
+  // primitive's morph targets).
+  std::vector<uint32_t> vertex_origin;
 };
 
 // With shared_vertices: one vertex buffer for all levels, and per level its indices into it; level i

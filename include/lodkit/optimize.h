@@ -232,6 +232,9 @@ struct OptimizeOptions {
 
 struct OptimizeResult {
   Mesh mesh;
+  // Each output vertex's input vertex (the first of those welded into it): carries streams the Mesh
+  // does not hold, such as a glTF primitive's morph targets (Primitive::source_vertices).
+  std::vector<uint32_t> source_vertices;
   WeldResult weld;      // when welded (its mesh is moved out, remap kept)
   OrientResult orient;  // when oriented (its mesh is moved out)
   Strips strips;        // when strips were built, over the output mesh's vertices

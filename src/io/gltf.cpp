@@ -127,6 +127,23 @@ const char* type_name(int type) {
 }
 
 // Matrix columns start on 4-byte boundaries, which pads 1- and 2-byte MAT2/MAT3 elements.
+// One component's value as stored (integers not normalized: accessor bounds are in stored units).
+double component_value(const uint8_t* p, int component_type) {
+  const auto load = [p](auto v) {
+    std::memcpy(&v, p, sizeof v);
+    return double(v);
+  };
+  switch (component_type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: return load(int8_t{});
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return load(uint8_t{});
+    case TINYGLTF_COMPONENT_TYPE_SHORT: return load(int16_t{});
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return load(uint16_t{});
+    case TINYGLTF_COMPONENT_TYPE_INT: return load(int32_t{});
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return load(uint32_t{});
+    default: return load(float{});
+  }
+}
+
 size_t element_bytes(int component_type, int type) {
   const size_t c = component_bytes(component_type);
   if (type == TINYGLTF_TYPE_MAT2 && c == 1) return 8;
@@ -365,6 +382,56 @@ class Document {
     validate_references();
   }
 
+  // Calls at(k, element) for each sparse substitution k of an accessor (none when dense): the
+  // element it replaces, checked against the count.
+  template <class At>
+  void for_each_sparse(int index, At&& at) const {
+    const tg::Accessor& acc = accessor(index);
+    if (!acc.sparse.isSparse) return;
+    const auto& sparse = acc.sparse;
+    const uint8_t* indices = view_bytes(sparse.indices.bufferView) + sparse.indices.byteOffset;
+    const size_t index_bytes = component_bytes(sparse.indices.componentType);
+    for (size_t k = 0; k < size_t(sparse.count); ++k) {
+      uint32_t target = 0;
+      if (index_bytes == 1) {
+        target = indices[k];
+      } else if (index_bytes == 2) {
+        uint16_t v;
+        std::memcpy(&v, indices + 2 * k, 2);
+        target = v;
+      } else {
+        std::memcpy(&target, indices + 4 * k, 4);
+      }
+      if (target >= acc.count)
+        fail("accessors[" + str(size_t(index)) + "]: sparse index " + str(target) + " is out of range (count " +
+             str(acc.count) + ")");
+      at(k, target);
+    }
+  }
+
+  // The sparse substitutions' values (after for_each_sparse's checks, only where there are some).
+  const uint8_t* sparse_values(int index) const {
+    const auto& sparse = accessor(index).sparse;
+    return view_bytes(sparse.values.bufferView) + sparse.values.byteOffset;
+  }
+
+  // Every element of an accessor as tightly packed bytes of its own type, sparse substitutions made.
+  std::vector<uint8_t> packed_elements(int index) const {
+    const tg::Accessor& acc = accessor(index);
+    const size_t element = element_bytes(acc.componentType, acc.type);
+    std::vector<uint8_t> out(acc.count * element, 0);
+    if (acc.bufferView >= 0) {
+      const tg::BufferView& view = model_.bufferViews[size_t(acc.bufferView)];
+      const uint8_t* base = view_bytes(acc.bufferView) + acc.byteOffset;
+      const size_t stride = view.byteStride ? view.byteStride : element;
+      for (size_t i = 0; i < acc.count; ++i) std::memcpy(out.data() + i * element, base + i * stride, element);
+    }
+    for_each_sparse(index, [&](size_t k, uint32_t target) {
+      std::memcpy(out.data() + target * element, sparse_values(index) + k * element, element);
+    });
+    return out;
+  }
+
   // Reads every element of an accessor as N components of its component type (dense data or zeros,
   // then the sparse substitutions) and calls store(element_index, const T* components).
   template <size_t N, class Store>
@@ -374,7 +441,7 @@ class Document {
       using T = decltype(tag);
       if (acc.bufferView >= 0) {
         const tg::BufferView& view = model_.bufferViews[size_t(acc.bufferView)];
-        const uint8_t* base = model_.buffers[size_t(view.buffer)].data.data() + view.byteOffset + acc.byteOffset;
+        const uint8_t* base = view_bytes(acc.bufferView) + acc.byteOffset;
         const size_t stride = view.byteStride ? view.byteStride : element_bytes(acc.componentType, acc.type);
         for (size_t i = 0; i < acc.count; ++i) {
           T raw[N];
@@ -385,29 +452,11 @@ class Document {
         const T zeros[N] = {};
         for (size_t i = 0; i < acc.count; ++i) store(i, static_cast<const T*>(zeros));
       }
-      if (!acc.sparse.isSparse) return;
-      const auto& sparse = acc.sparse;
-      const uint8_t* indices = view_bytes(sparse.indices.bufferView) + sparse.indices.byteOffset;
-      const uint8_t* values = view_bytes(sparse.values.bufferView) + sparse.values.byteOffset;
-      const size_t index_bytes = component_bytes(sparse.indices.componentType);
-      for (size_t k = 0; k < size_t(sparse.count); ++k) {
-        uint32_t target = 0;
-        if (index_bytes == 1) {
-          target = indices[k];
-        } else if (index_bytes == 2) {
-          uint16_t v;
-          std::memcpy(&v, indices + 2 * k, 2);
-          target = v;
-        } else {
-          std::memcpy(&target, indices + 4 * k, 4);
-        }
-        if (target >= acc.count)
-          fail("accessors[" + str(size_t(index)) + "]: sparse index " + str(target) + " is out of range (count " +
-               str(acc.count) + ")");
+      for_each_sparse(index, [&](size_t k, uint32_t target) {
         T raw[N];
-        std::memcpy(raw, values + k * sizeof raw, sizeof raw);
+        std::memcpy(raw, sparse_values(index) + k * sizeof raw, sizeof raw);
         store(target, static_cast<const T*>(raw));
-      }
+      });
     };
     switch (acc.componentType) {
       case TINYGLTF_COMPONENT_TYPE_BYTE: run(int8_t{}); break;
@@ -989,6 +1038,35 @@ class BinWriter {
     return int(model_.accessors.size() - 1);
   }
 
+  // A vertex stream of `like`'s type from tightly packed elements; each element padded to 4 bytes
+  // (glTF's vertex attribute alignment). Bounds where `like` had them (a POSITION must).
+  int add_vertex_stream(const std::vector<uint8_t>& packed, const tg::Accessor& like) {
+    const size_t element = element_bytes(like.componentType, like.type), stride = (element + 3) & ~size_t(3);
+    const size_t count = element ? packed.size() / element : 0;
+    std::vector<uint8_t> bytes(count * stride, 0);
+    for (size_t i = 0; i < count; ++i) std::memcpy(bytes.data() + i * stride, packed.data() + i * element, element);
+    tg::Accessor acc;
+    acc.bufferView = add_view(bytes.data(), bytes.size(), TINYGLTF_TARGET_ARRAY_BUFFER);
+    if (stride != element) model_.bufferViews.back().byteStride = stride;
+    acc.componentType = like.componentType;
+    acc.type = like.type;
+    acc.count = count;
+    acc.normalized = like.normalized;
+    acc.name = like.name;
+    if (!like.minValues.empty() && !like.maxValues.empty() && count) {
+      const size_t n = type_components(like.type), size = component_bytes(like.componentType);
+      acc.minValues.assign(n, INFINITY);
+      acc.maxValues.assign(n, -INFINITY);
+      for (size_t i = 0; i < count; ++i)
+        for (size_t c = 0; c < n; ++c) {
+          const double v = component_value(packed.data() + i * element + c * size, like.componentType);
+          acc.minValues[c] = std::min(acc.minValues[c], v), acc.maxValues[c] = std::max(acc.maxValues[c], v);
+        }
+    }
+    model_.accessors.push_back(std::move(acc));
+    return int(model_.accessors.size() - 1);
+  }
+
   // Appends the Mesh's streams and indices; returns nothing, fills the primitive's references.
   void add_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim) {
     const int array = TINYGLTF_TARGET_ARRAY_BUFFER;
@@ -1120,11 +1198,22 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
   }
 
   // Rebuild each mesh's primitive list. A triangle primitive that no scene primitive replaces, or
-  // whose new mesh has no triangle, is removed. Morph targets survive only where the vertex count
-  // is unchanged, for every primitive of the mesh (glTF requires equal target counts).
+  // whose new mesh has no triangle, is removed. The streams lodkit does not model (morph targets,
+  // other attributes) survive where the scene primitive maps its vertices to the source's (gathered
+  // now, from the source's accessors, and written with the geometry) or their count is unchanged;
+  // otherwise they are dropped, the morph targets for every primitive of the mesh (glTF requires
+  // equal target counts).
   struct Pending {
     size_t mesh, primitive, scene_primitive;
   };
+  struct Gathered {
+    int target;  // -1: a vertex attribute; else the morph target
+    std::string semantic;
+    tg::Accessor like;  // a copy of the source accessor (its type; the source's are pruned below)
+    std::vector<uint8_t> bytes;
+  };
+  std::vector<std::vector<Gathered>> gathered(scene.primitives.size());
+  const Document source(model, "cannot write glTF: the source document");
   std::vector<Pending> pending;
   std::vector<bool> mesh_lost_morphs(mesh_count, false), mesh_removed(mesh_count, false);
   for (size_t m = 0; m < mesh_count; ++m) {
@@ -1142,9 +1231,32 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
       const Mesh& geometry = scene.primitives[size_t(owner)].mesh;
       if (geometry.indices.empty()) continue;
       auto position = prim.attributes.find("POSITION");
-      const bool same_count =
-          position != prim.attributes.end() && model.accessors[size_t(position->second)].count == geometry.vertex_count();
-      if (!same_count && !prim.targets.empty()) drop_morphs = true;
+      const std::vector<uint32_t>& map = scene.primitives[size_t(owner)].source_vertices;
+      const size_t source_count = position != prim.attributes.end() ? model.accessors[size_t(position->second)].count : 0;
+      if (!map.empty()) {
+        const std::string where = "cannot write glTF: scene primitive " + str(size_t(owner)) + "'s source_vertices";
+        if (map.size() != geometry.vertex_count())
+          throw_usage(where + " has " + str(map.size()) + " entries for " + str(geometry.vertex_count()) + " vertices");
+        for (const uint32_t v : map)
+          if (v >= source_count)
+            throw_usage(where + " names vertex " + str(v) + " of a source primitive with " + str(source_count));
+        const auto gather = [&](int target, const std::string& semantic, int& index) {
+          const tg::Accessor& like = model.accessors[size_t(index)];
+          const std::vector<uint8_t> all = source.packed_elements(index);
+          const size_t element = element_bytes(like.componentType, like.type);
+          std::vector<uint8_t> bytes(map.size() * element);
+          for (size_t v = 0; v < map.size(); ++v)
+            std::memcpy(bytes.data() + v * element, all.data() + size_t(map[v]) * element, element);
+          gathered[size_t(owner)].push_back({target, semantic, like, std::move(bytes)});
+          index = -1;  // written anew: the source accessor is not kept for it
+        };
+        for (auto& [semantic, index] : prim.attributes)
+          if (!is_regenerated_semantic(semantic)) gather(-1, semantic, index);
+        for (size_t k = 0; k < prim.targets.size(); ++k)
+          for (auto& [semantic, index] : prim.targets[k]) gather(int(k), semantic, index);
+      }
+      const bool same_count = map.empty() && source_count == geometry.vertex_count();
+      if (!same_count && map.empty() && !prim.targets.empty()) drop_morphs = true;
       for (auto it = prim.attributes.begin(); it != prim.attributes.end();)
         it = (is_regenerated_semantic(it->first) || !same_count) ? prim.attributes.erase(it) : std::next(it);
       prim.indices = -1;
@@ -1282,11 +1394,18 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     const Primitive& in = scene.primitives[p.scene_primitive];
     tg::Primitive& out = model.meshes[p.mesh].primitives[p.primitive];
     const int32_t shared = in.shares_vertices_with;
-    if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && in.targets.empty()) {
+    const std::vector<Gathered>& extra = gathered[p.scene_primitive];
+    if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && in.targets.empty() && extra.empty()) {
       out.attributes = written[size_t(shared)]->attributes;  // one vertex buffer, several index buffers
       writer.add_indices(in.mesh, out);
     } else {
       writer.add_geometry(in.mesh, in.targets, out);
+    }
+    for (const Gathered& g : extra) {
+      if (g.target >= int(out.targets.size())) continue;  // the mesh lost its morph targets (another primitive)
+      const int index = writer.add_vertex_stream(g.bytes, g.like);
+      if (g.target < 0) out.attributes[g.semantic] = index;
+      else out.targets[size_t(g.target)][g.semantic] = index;
     }
     written[p.scene_primitive] = &out;
   }

@@ -161,6 +161,7 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
     }
   for (LodLevel& level : chain.levels) level.relative_error = chain.diagonal > 0 ? level.error / chain.diagonal : 0;
   if (o.shared_vertices) chain.shared = share_vertices(input, chain.levels, origin);
+  for (size_t i = 0; i < count; ++i) chain.levels[i].vertex_origin = std::move(origin[i]);
   return chain;
 }
 

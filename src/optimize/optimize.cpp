@@ -2,6 +2,7 @@
 // (or as strips; optionally then for overdraw), then vertices by first use.
 #include <algorithm>
 #include <chrono>
+#include <numeric>
 
 #include "lodkit/error.h"
 #include "lodkit/optimize.h"
@@ -18,11 +19,18 @@ OptimizeResult optimize(const Mesh& mesh, const OptimizeOptions& options) {
   if (options.overdraw && options.strips) throw_usage("optimize: the overdraw order and strips exclude each other");
   OptimizeResult r;
   Mesh m = mesh;
+  r.source_vertices.resize(m.vertex_count());
+  std::iota(r.source_vertices.begin(), r.source_vertices.end(), 0u);
   auto start = std::chrono::steady_clock::now();
   if (options.weld) {
     r.weld = weld(m, options.weld_options);
     m = std::move(r.weld.mesh);
     r.weld.mesh = {};
+    // Kept vertices come in order of first appearance, so the first input vertex of each is met first.
+    std::vector<uint32_t> source(m.vertex_count(), UINT32_MAX);
+    for (uint32_t v = 0; v < r.weld.remap.size(); ++v)
+      if (source[r.weld.remap[v]] == UINT32_MAX) source[r.weld.remap[v]] = v;
+    r.source_vertices = std::move(source);
     r.weld_seconds = seconds_since(start);
   }
   start = std::chrono::steady_clock::now();
@@ -94,6 +102,9 @@ OptimizeResult optimize(const Mesh& mesh, const OptimizeOptions& options) {
   if (options.vertex_fetch) {
     const std::vector<uint32_t> remap = vertex_fetch_remap(m.indices, m.vertex_count());
     m = remap_vertices(m, remap, m.vertex_count());
+    std::vector<uint32_t> source(r.source_vertices.size());
+    for (size_t v = 0; v < remap.size(); ++v) source[remap[v]] = r.source_vertices[v];
+    r.source_vertices = std::move(source);
     for (uint32_t& i : r.strips.indices)
       if (!(r.strips.use_restart && i == r.strips.restart_index)) i = remap[i];
     r.fetch_seconds = seconds_since(start);

@@ -103,71 +103,83 @@ TEST(CliLod, SimplifyingAChainDropsItsStaleFacts) {
   EXPECT_NE(v.output.find(": 0 errors"), std::string::npos) << v.output;
 }
 
-// --morph: level i's morph target 0 at weight 1 lands exactly on level i + 1 (its proper triangles).
+// --morph: level i's morph target 0 at weight 1 lands exactly on level i + 1 (its proper triangles),
+// also after lodkit optimize has renumbered the vertices.
 TEST(CliLod, GeomorphsAreMorphTargets) {
   test::TempDir dir;
   write_mesh(shapes::torus(1.0f, 0.3f, 32, 16), dir / "torus.ply");
   const test::RunResult r = test::run_cli({"lod", (dir / "torus.ply").string(), "-o", (dir / "m.glb").string(),
                                            "--ratios", "1,0.4,0.1", "--morph"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const nlohmann::json doc = glb_json(dir / "m.glb");
-  const Scene scene = read_scene(dir / "m.glb");
-  const FileBytes bytes = read_file_bytes(dir / "m.glb");
-  uint32_t json_length = 0;
-  std::memcpy(&json_length, bytes.data() + 12, 4);
-  const uint8_t* bin = bytes.data() + 20 + json_length + 8;  // the BIN chunk's data
-  const auto proper = [](const Mesh& m) {
-    std::vector<std::array<float3, 3>> out;
-    for (size_t t = 0; t < m.triangle_count(); ++t) {
-      std::array<float3, 3> tri = {m.positions[m.indices[3 * t]], m.positions[m.indices[3 * t + 1]], m.positions[m.indices[3 * t + 2]]};
-      // Corners that should coincide may differ by rounding (P + (P_target - P) in float).
-      const auto same = [](const float3& a, const float3& b) {
-        return std::fabs(a.x - b.x) < 1e-6f && std::fabs(a.y - b.y) < 1e-6f && std::fabs(a.z - b.z) < 1e-6f;
-      };
-      if (same(tri[0], tri[1]) || same(tri[1], tri[2]) || same(tri[2], tri[0])) continue;
-      const auto less = [](const float3& a, const float3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); };
-      std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end(), less), tri.end());
-      out.push_back(tri);
-    }
-    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
-      return std::tie(a[0].x, a[0].y, a[0].z, a[1].x, a[1].y, a[1].z, a[2].x, a[2].y, a[2].z) <
-             std::tie(b[0].x, b[0].y, b[0].z, b[1].x, b[1].y, b[1].z, b[2].x, b[2].y, b[2].z);
-    });
-    return out;
-  };
-  for (size_t i = 0; i < 2; ++i) {
-    EXPECT_EQ(doc["nodes"][i]["extras"]["LODKIT_geomorph"]["to_node"], i + 1);
-    const auto& target = doc["meshes"][i]["primitives"][0]["targets"][0];
-    const auto& accessor = doc["accessors"][target["POSITION"].get<size_t>()];
-    const auto& view = doc["bufferViews"][accessor["bufferView"].get<size_t>()];
-    Mesh moved = scene.primitives[i].mesh;
-    ASSERT_EQ(accessor["count"].get<size_t>(), moved.vertex_count());
-    const uint8_t* data = bin + view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0));
-    for (size_t v = 0; v < moved.vertex_count(); ++v) {
-      float d[3];
-      std::memcpy(d, data + 12 * v, 12);
-      moved.positions[v] = {moved.positions[v].x + d[0], moved.positions[v].y + d[1], moved.positions[v].z + d[2]};
-    }
-    // P + (P_target - P) in float may differ from P_target by an ulp: compare after the same rounding
-    // the viewer would do, i.e. allow the coarser level's triangles to match within 1e-6.
-    const auto a = proper(moved), b = proper(scene.primitives[i + 1].mesh);
-    ASSERT_EQ(a.size(), b.size()) << "level " << i;
-    // Each morphed triangle matches one coarser triangle (same winding) within rounding.
-    const auto near = [](const float3& p, const float3& q) {
-      return std::fabs(p.x - q.x) < 1e-6f && std::fabs(p.y - q.y) < 1e-6f && std::fabs(p.z - q.z) < 1e-6f;
+  // lodkit optimize renumbers each level's vertices (for another cache than lod's): the morph targets
+  // must follow them.
+  const test::RunResult o = test::run_cli(
+      {"optimize", (dir / "m.glb").string(), "-o", (dir / "opt.glb").string(), "--lru", "--cache", "8"});
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  for (const char* name : {"m.glb", "opt.glb"}) {
+    SCOPED_TRACE(name);
+    const nlohmann::json doc = glb_json(dir / name);
+    const Scene scene = read_scene(dir / name);
+    if (std::string(name) == "opt.glb")  // really renumbered (else this case would prove nothing)
+      for (size_t i = 0; i < 2; ++i)
+        EXPECT_NE(scene.primitives[i].mesh.positions, read_scene(dir / "m.glb").primitives[i].mesh.positions) << i;
+    const FileBytes bytes = read_file_bytes(dir / name);
+    uint32_t json_length = 0;
+    std::memcpy(&json_length, bytes.data() + 12, 4);
+    const uint8_t* bin = bytes.data() + 20 + json_length + 8;  // the BIN chunk's data
+    const auto proper = [](const Mesh& m) {
+      std::vector<std::array<float3, 3>> out;
+      for (size_t t = 0; t < m.triangle_count(); ++t) {
+        std::array<float3, 3> tri = {m.positions[m.indices[3 * t]], m.positions[m.indices[3 * t + 1]], m.positions[m.indices[3 * t + 2]]};
+        // Corners that should coincide may differ by rounding (P + (P_target - P) in float).
+        const auto same = [](const float3& a, const float3& b) {
+          return std::fabs(a.x - b.x) < 1e-6f && std::fabs(a.y - b.y) < 1e-6f && std::fabs(a.z - b.z) < 1e-6f;
+        };
+        if (same(tri[0], tri[1]) || same(tri[1], tri[2]) || same(tri[2], tri[0])) continue;
+        const auto less = [](const float3& a, const float3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); };
+        std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end(), less), tri.end());
+        out.push_back(tri);
+      }
+      std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+        return std::tie(a[0].x, a[0].y, a[0].z, a[1].x, a[1].y, a[1].z, a[2].x, a[2].y, a[2].z) <
+               std::tie(b[0].x, b[0].y, b[0].z, b[1].x, b[1].y, b[1].z, b[2].x, b[2].y, b[2].z);
+      });
+      return out;
     };
-    std::vector<bool> used(b.size(), false);
-    for (const auto& t : a) {
-      bool found = false;
-      for (size_t k = 0; k < b.size() && !found; ++k)
-        for (int rot = 0; rot < 3 && !found && !used[k]; ++rot)
-          if (near(t[0], b[k][rot]) && near(t[1], b[k][(rot + 1) % 3]) && near(t[2], b[k][(rot + 2) % 3]))
-            used[k] = found = true;
-      ASSERT_TRUE(found) << "level " << i << ": a morphed triangle is not in the next level";
+    for (size_t i = 0; i < 2; ++i) {
+      EXPECT_EQ(doc["nodes"][i]["extras"]["LODKIT_geomorph"]["to_node"], i + 1);
+      const auto& target = doc["meshes"][i]["primitives"][0]["targets"][0];
+      const auto& accessor = doc["accessors"][target["POSITION"].get<size_t>()];
+      const auto& view = doc["bufferViews"][accessor["bufferView"].get<size_t>()];
+      Mesh moved = scene.primitives[i].mesh;
+      ASSERT_EQ(accessor["count"].get<size_t>(), moved.vertex_count());
+      const uint8_t* data = bin + view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0));
+      for (size_t v = 0; v < moved.vertex_count(); ++v) {
+        float d[3];
+        std::memcpy(d, data + 12 * v, 12);
+        moved.positions[v] = {moved.positions[v].x + d[0], moved.positions[v].y + d[1], moved.positions[v].z + d[2]};
+      }
+      // P + (P_target - P) in float may differ from P_target by an ulp: compare after the same rounding
+      // the viewer would do, i.e. allow the coarser level's triangles to match within 1e-6.
+      const auto a = proper(moved), b = proper(scene.primitives[i + 1].mesh);
+      ASSERT_EQ(a.size(), b.size()) << "level " << i;
+      // Each morphed triangle matches one coarser triangle (same winding) within rounding.
+      const auto near = [](const float3& p, const float3& q) {
+        return std::fabs(p.x - q.x) < 1e-6f && std::fabs(p.y - q.y) < 1e-6f && std::fabs(p.z - q.z) < 1e-6f;
+      };
+      std::vector<bool> used(b.size(), false);
+      for (const auto& t : a) {
+        bool found = false;
+        for (size_t k = 0; k < b.size() && !found; ++k)
+          for (int rot = 0; rot < 3 && !found && !used[k]; ++rot)
+            if (near(t[0], b[k][rot]) && near(t[1], b[k][(rot + 1) % 3]) && near(t[2], b[k][(rot + 2) % 3]))
+              used[k] = found = true;
+        ASSERT_TRUE(found) << "level " << i << ": a morphed triangle is not in the next level";
+      }
     }
   }
   if (!test::validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
-  const test::ValidatorRun v = test::run_validator({dir / "m.glb"});
+  const test::ValidatorRun v = test::run_validator({dir / "m.glb", dir / "opt.glb"});
   EXPECT_EQ(v.status, 0) << v.output;
 }
 
@@ -263,6 +275,49 @@ TEST(CliLod, SkinnedCharacterKeepsItsSkeletonAndClips) {
       EXPECT_NEAR(double(w.x) + w.y + w.z + w.w, 1.0, 1e-6);
       for (size_t k = 0; k < 4; ++k) EXPECT_LT(m.joints[v][k], out.skins[0].joints.size());
     }
+  }
+  if (!test::validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
+  const test::ValidatorRun v = test::run_validator({dir / "lod.glb"});
+  EXPECT_EQ(v.status, 0) << v.output;
+}
+
+// A skinned character's blend shape: level 0 replaces the source primitive with its vertices
+// reordered for the vertex cache, and the morph target follows them (each vertex keeps its own
+// offset, here a function of its position).
+TEST(CliLod, SkinnedLevelZeroKeepsItsMorphTargets) {
+  test::TempDir dir;
+  Scene input = fixtures::humanoid_scene();
+  const std::vector<SkinnedPrimitive> skinned = skinned_primitives(input);
+  ASSERT_EQ(skinned.size(), 1u);
+  Primitive& body = input.primitives[skinned[0].primitive];
+  const auto offset = [](const float3& p) { return float3{0.0f, 0.0f, 0.25f * p.x + 0.5f * p.y}; };
+  MorphTarget blend;
+  for (const float3& p : body.mesh.positions) blend.positions.push_back(offset(p));
+  body.targets.push_back(blend);
+  write_scene(input, dir / "humanoid.glb");
+  const test::RunResult r = test::run_cli({"lod", (dir / "humanoid.glb").string(), "-o", (dir / "lod.glb").string(),
+                                           "--ratios", "1,0.4", "--poses", "4"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+
+  const Scene out = read_scene(dir / "lod.glb");
+  const Mesh& level0 = out.primitives[skinned[0].primitive].mesh;
+  ASSERT_EQ(level0.vertex_count(), body.mesh.vertex_count());
+  EXPECT_NE(level0.positions, read_scene(dir / "humanoid.glb").primitives[skinned[0].primitive].mesh.positions);
+  const nlohmann::json doc = glb_json(dir / "lod.glb");
+  const FileBytes bytes = read_file_bytes(dir / "lod.glb");
+  uint32_t json_length = 0;
+  std::memcpy(&json_length, bytes.data() + 12, 4);
+  const uint8_t* bin = bytes.data() + 20 + json_length + 8;
+  const auto& prim = doc["meshes"][out.primitives[skinned[0].primitive].gltf_mesh]["primitives"][0];
+  ASSERT_EQ(prim["targets"].size(), 1u);
+  const auto& accessor = doc["accessors"][prim["targets"][0]["POSITION"].get<size_t>()];
+  ASSERT_EQ(accessor["count"].get<size_t>(), level0.vertex_count());
+  const auto& view = doc["bufferViews"][accessor["bufferView"].get<size_t>()];
+  const uint8_t* data = bin + view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0));
+  for (size_t v = 0; v < level0.vertex_count(); ++v) {
+    float3 d;
+    std::memcpy(&d, data + 12 * v, 12);
+    ASSERT_EQ(d, offset(level0.positions[v])) << "vertex " << v;
   }
   if (!test::validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
   const test::ValidatorRun v = test::run_validator({dir / "lod.glb"});

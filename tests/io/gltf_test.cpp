@@ -683,6 +683,83 @@ TEST(GltfWrite, MorphTargetsKeptWhileTheVertexCountIsUnchanged) {
   EXPECT_EQ(w.doc["accessors"].size(), 2u);  // POSITION + indices
 }
 
+// Primitive::source_vertices: a renumbered subset of the source's vertices keeps the streams lodkit
+// does not model (a sparse morph target, a 2-byte application attribute), each vertex's own values,
+// with the target's POSITION bounds recomputed and elements padded to 4 bytes.
+TEST(GltfWrite, SourceVerticesCarryMorphTargetsAndOtherAttributes) {
+  HandBuilt f;
+  const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0});
+  const std::vector<float> dense = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+  const int target = f.positions(dense);
+  const std::vector<uint8_t> sparse_indices = {1, 3};
+  const std::vector<float> sparse_values = {0, 0, 2, 0, 0, 3};  // vertex 1 up by 2, vertex 3 by 3
+  const int idx_view = f.view(sparse_indices.data(), sparse_indices.size());
+  const int val_view = f.view(sparse_values.data(), sparse_values.size() * 4);
+  f.doc["accessors"][size_t(target)]["sparse"] = {{"count", 2},
+                                                  {"indices", {{"bufferView", idx_view}, {"componentType", kUByte}}},
+                                                  {"values", {{"bufferView", val_view}}}};
+  f.doc["accessors"][size_t(target)]["max"] = {0, 0, 3};
+  const std::vector<uint16_t> ids = {10, 0, 11, 0, 12, 0, 13, 0};  // 4 elements, each padded to 4 bytes
+  const int id = f.accessor(ids, kUShort, "SCALAR", 1, kArrayBuffer);
+  f.doc["accessors"][size_t(id)]["count"] = 4;
+  f.doc["bufferViews"][f.doc["accessors"][size_t(id)]["bufferView"].get<size_t>()]["byteStride"] = 4;
+  const std::vector<uint8_t> quad = {0, 1, 2, 1, 3, 2};
+  const int indices = f.accessor(quad, kUByte, "SCALAR", 1, kElementArrayBuffer);
+  f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", pos}, {"_ID", id}}},
+                                                   {"indices", indices},
+                                                   {"targets", {{{"POSITION", target}}}}}}},
+                                  {"weights", {0.5}}}});
+  f.doc["nodes"] = Json::array({{{"mesh", 0}}});
+  f.doc["scenes"] = Json::array({{{"nodes", {0}}}});
+  TempDir dir;
+  test::write_bytes(dir / "in.glb", f.glb());
+  Scene scene = read_scene(dir / "in.glb");
+  ASSERT_EQ(scene.primitives.size(), 1u);
+
+  // The triangle (1 3 2) alone, its vertices renumbered 3 -> 0, 2 -> 1, 1 -> 2.
+  Primitive& p = scene.primitives[0];
+  const std::vector<uint32_t> source = {3, 2, 1};
+  Mesh m;
+  for (const uint32_t v : source) m.positions.push_back(p.mesh.positions[v]);
+  m.indices = {2, 0, 1};
+  p.mesh = m;
+  p.source_vertices = source;
+  write_scene(scene, dir / "out.glb");
+  const Written w = load_written(dir / "out.glb");
+  const Json& prim = w.doc["meshes"][0]["primitives"][0];
+  ASSERT_EQ(prim["targets"].size(), 1u);
+  EXPECT_EQ(accessor_floats(w, prim["targets"][0]["POSITION"]), (std::vector<float>{0, 0, 3, 0, 0, 0, 0, 0, 2}));
+  const Json& bounds = w.doc["accessors"][prim["targets"][0]["POSITION"].get<size_t>()];
+  EXPECT_EQ(bounds["min"], Json::array({0, 0, 0}));
+  EXPECT_EQ(bounds["max"], Json::array({0, 0, 3}));
+  const Json& ida = w.doc["accessors"][prim["attributes"]["_ID"].get<size_t>()];
+  EXPECT_EQ(ida["componentType"], kUShort);
+  ASSERT_EQ(ida["count"], 3);
+  const Json& idv = w.doc["bufferViews"][ida["bufferView"].get<size_t>()];
+  ASSERT_EQ(idv["byteStride"], 4);
+  const std::vector<uint8_t> id_bytes = view_bytes(w, ida["bufferView"]);
+  std::vector<uint16_t> got(3);
+  for (size_t v = 0; v < 3; ++v) std::memcpy(&got[v], &id_bytes[4 * v], 2);
+  EXPECT_EQ(got, (std::vector<uint16_t>{13, 12, 11}));
+  EXPECT_EQ(w.doc["meshes"][0]["weights"], Json::array({0.5}));
+
+  if (test::validator_available()) {
+    const test::ValidatorRun v = test::run_validator({dir / "in.glb", dir / "out.glb"});
+    EXPECT_EQ(v.status, 0) << v.output;
+    EXPECT_NE(v.output.find("in.glb: 0 errors"), std::string::npos) << v.output;
+    EXPECT_NE(v.output.find("out.glb: 0 errors"), std::string::npos) << v.output;
+  }
+
+  // A map that names a vertex the source does not have is the caller's mistake.
+  p.source_vertices = {3, 2, 4};
+  try {
+    write_scene(scene, dir / "bad.glb");
+    FAIL() << "expected lod::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("source_vertices names vertex 4"), std::string::npos) << e.what();
+  }
+}
+
 TEST(GltfRead, ExternalBinAndImagesResolveAgainstTheBaseDir) {
   HandBuilt f;
   const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});

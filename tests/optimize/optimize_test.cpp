@@ -43,8 +43,16 @@ TEST(Optimize, EveryStepKeepsTheTriangles) {
         if (!strips && input.materials.empty()) {
           EXPECT_LE(r.cache_after.misses, r.cache_before.misses);
         }
-        // Every output vertex carries the streams of some input vertex at the same position.
+        // Every output vertex carries the streams of the input vertex source_vertices names.
         EXPECT_EQ(r.mesh.normals.empty(), input.normals.empty());
+        ASSERT_EQ(r.source_vertices.size(), r.mesh.vertex_count());
+        for (size_t v = 0; v < r.mesh.vertex_count(); ++v) {
+          const uint32_t s = r.source_vertices[v];
+          ASSERT_LT(s, input.vertex_count());
+          ASSERT_EQ(r.mesh.positions[v], input.positions[s]) << v;
+          if (!input.normals.empty()) ASSERT_EQ(r.mesh.normals[v], input.normals[s]) << v;
+          if (!input.uvs[0].empty()) ASSERT_EQ(r.mesh.uvs[0][v], input.uvs[0][s]) << v;
+        }
         if (strips) {
           // The strip buffer draws the output mesh's triangles, over its vertices.
           EXPECT_EQ(test::position_triangles(r.mesh.positions, unstripify(r.strips.indices, r.strips.use_restart, r.strips.restart_index)),
@@ -116,6 +124,13 @@ TEST(Optimize, WeldAndOrientRepairASoup) {
   EXPECT_EQ(r.weld.output_vertices, sphere.vertex_count());
   EXPECT_EQ(r.orient.flipped_triangles, (sphere.triangle_count() + 2) / 3);
   EXPECT_EQ(test::position_triangles(r.mesh), test::position_triangles(sphere));
+  // Each output vertex names the first soup corner welded into it.
+  ASSERT_EQ(r.source_vertices.size(), r.mesh.vertex_count());
+  for (size_t v = 0; v < r.mesh.vertex_count(); ++v) {
+    const uint32_t s = r.source_vertices[v];
+    ASSERT_EQ(broken.positions[s], r.mesh.positions[v]);
+    for (uint32_t u = 0; u < s; ++u) ASSERT_NE(broken.positions[u], broken.positions[s]) << v;
+  }
   // The cache order makes a real difference on a shuffled soup.
   EXPECT_LT(r.cache_after.acmr, 0.5 * r.cache_before.acmr);
 }

@@ -74,6 +74,18 @@ void GeometryFile::forget_lod_facts(const std::vector<bool>& changed) {
   }
 }
 
+void GeometryFile::renumbered(size_t i, const std::vector<uint32_t>& source) {
+  if (!as_scene_) return;
+  std::vector<uint32_t>& map = scene_.primitives[i].source_vertices;
+  if (map.empty()) {
+    map = source;
+  } else {
+    std::vector<uint32_t> composed(source.size());
+    for (size_t v = 0; v < source.size(); ++v) composed[v] = map[source[v]];
+    map = std::move(composed);
+  }
+}
+
 Command register_convert(CLI::App& root) {
   auto options = std::make_shared<ConvertOptions>();
   CLI::App* app = root.add_subcommand("convert", "Convert a mesh between OBJ, PLY, OFF, STL, glTF and GLB");

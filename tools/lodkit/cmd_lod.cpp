@@ -194,6 +194,11 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
     done[sp.primitive] = true;
     const ChainReport& r = reports[report++];
     const Primitive source = scene.primitives[sp.primitive];
+    // Level 0 is the source's vertices reordered for the vertex cache, unless it was simplified: its
+    // morph targets and other streams follow a reordering, and are dropped with a simplification (as
+    // by lodkit simplify: a vertex that moved has no exact morph).
+    if (r.chain.levels[0].mesh.vertex_count() == source.mesh.vertex_count())
+      scene.primitives[sp.primitive].source_vertices = r.chain.levels[0].vertex_origin;
     scene.primitives[sp.primitive].mesh = r.chain.levels[0].mesh;
     const std::string owner = scene.nodes[sp.node].name;  // a copy: scene.nodes grows below
     // The source node's own extras are kept; its MSFT_lod (an earlier chain's) gives way to this one.

@@ -114,7 +114,8 @@ Command register_optimize(CLI::App& root) {
             StripStats strip_stats;
             double seconds[5] = {};
             std::vector<uint32_t> strip_buffer;
-            for (Mesh* m : meshes) {
+            for (size_t i = 0; i < meshes.size(); ++i) {
+              Mesh* m = meshes[i];
               validate(*m, o->input);
               in_triangles += m->triangle_count(), in_vertices += m->vertex_count();
               if (overdraw) add_overdraw(overdraw_before, *m);
@@ -137,6 +138,7 @@ Command register_optimize(CLI::App& root) {
               seconds[0] += r.weld_seconds, seconds[1] += r.orient_seconds, seconds[2] += r.order_seconds - r.overdraw_seconds;
               seconds[3] += r.fetch_seconds, seconds[4] += r.overdraw_seconds;
               *m = std::move(r.mesh);
+              file.renumbered(i, r.source_vertices);
               if (overdraw) add_overdraw(overdraw_after, *m);
               out_triangles += m->triangle_count(), out_vertices += m->vertex_count();
             }

@@ -42,6 +42,9 @@ class GeometryFile {
   // nodes that draw them (extras "lodkit": triangles, errors, switch distance; "LODKIT_geomorph": a
   // morph target the writer drops with the old vertex count) no longer hold, and are removed.
   void forget_lod_facts(const std::vector<bool>& changed);
+  // meshes[i]'s vertices were renumbered: its vertex v was vertex source[v]. The glTF streams lodkit
+  // does not model (morph targets, other attributes) follow them (Primitive::source_vertices).
+  void renumbered(size_t i, const std::vector<uint32_t>& source);
 
   std::vector<Mesh*> meshes;
 
