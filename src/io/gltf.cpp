@@ -126,7 +126,6 @@ const char* type_name(int type) {
   }
 }
 
-// Matrix columns start on 4-byte boundaries, which pads 1- and 2-byte MAT2/MAT3 elements.
 // One component's value as stored (integers not normalized: accessor bounds are in stored units).
 double component_value(const uint8_t* p, int component_type) {
   const auto load = [p](auto v) {
@@ -144,6 +143,7 @@ double component_value(const uint8_t* p, int component_type) {
   }
 }
 
+// Matrix columns start on 4-byte boundaries, which pads 1- and 2-byte MAT2/MAT3 elements.
 size_t element_bytes(int component_type, int type) {
   const size_t c = component_bytes(component_type);
   if (type == TINYGLTF_TYPE_MAT2 && c == 1) return 8;
@@ -779,6 +779,15 @@ class SceneBuilder {
     }
     if ((!mesh.joints1.empty() || !mesh.weights1.empty()) && (mesh.joints.empty() || mesh.weights.empty()))
       doc_.fail(where + " has JOINTS_1 or WEIGHTS_1 without JOINTS_0 and WEIGHTS_0");
+    // The streams lodkit does not decode (other attributes, morph targets) are written back through
+    // the vertices (Primitive::source_vertices): one entry per vertex as well, as glTF requires.
+    const auto one_per_vertex = [&](int index, const std::string& what) {
+      const size_t count = doc_.accessor(index).count;
+      if (count != vertex_count) doc_.fail(where + " " + what + " has " + str(count) + " entries for " + str(vertex_count) + " vertices");
+    };
+    for (const auto& [semantic, index] : prim.attributes) one_per_vertex(index, semantic);
+    for (size_t k = 0; k < prim.targets.size(); ++k)
+      for (const auto& [semantic, index] : prim.targets[k]) one_per_vertex(index, "morph target " + str(k) + " " + semantic);
 
     std::vector<uint32_t> corners;
     if (prim.indices >= 0) {

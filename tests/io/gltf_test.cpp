@@ -952,6 +952,16 @@ TEST(GltfMalformed, Geometry) {
   f = valid_triangle();
   f.doc["meshes"][0]["primitives"][0]["mode"] = 9;
   expect_bad_input(f.glb(), "mode.glb", "mode 9");
+
+  // Streams lodkit does not decode still need one entry per vertex (they are written back per vertex).
+  f = valid_triangle();
+  f.doc["meshes"][0]["primitives"][0]["attributes"]["_ID"] = 1;  // the 3 indices: right count
+  EXPECT_NO_THROW(read_gltf(f.glb(), "id.glb"));
+  f.doc["meshes"][0]["primitives"][0]["attributes"]["_ID"] = f.accessor(std::vector<float>{1, 2}, kFloat, "SCALAR", 1);
+  expect_bad_input(f.glb(), "idcount.glb", "_ID has 2 entries for 3 vertices");
+  f = valid_triangle();
+  f.doc["meshes"][0]["primitives"][0]["targets"] = {{{"POSITION", f.positions({0, 0, 1, 0, 0, 1})}}};
+  expect_bad_input(f.glb(), "targetcount.glb", "morph target 0 POSITION has 2 entries for 3 vertices");
 }
 
 TEST(GltfMalformed, References) {
