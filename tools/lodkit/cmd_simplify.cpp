@@ -1,6 +1,7 @@
 // lodkit simplify IN -o OUT: one simplification to a target ratio, triangle count or error.
 // A glTF written from a glTF keeps everything else (nodes, skins, animations, materials); each
-// primitive is simplified on its own, and a skinned one keeps its survivors' joints and weights.
+// primitive is simplified on its own, and a skinned one keeps its survivors' joints and weights
+// (with --keep-vertices, their morph targets too).
 #include <fmt/format.h>
 
 #include <chrono>
@@ -148,7 +149,8 @@ Command register_simplify(CLI::App& root) {
             {
               ProgressBar bar("simplifying");
               uint64_t done = 0;
-              for (Mesh* m : meshes) {
+              for (size_t i = 0; i < meshes.size(); ++i) {
+                Mesh* m = meshes[i];
                 SimplifyOptions each = options;
                 const uint64_t size = m->triangle_count();
                 // A triangle budget is shared in proportion to each primitive's size. With a ratio
@@ -181,6 +183,9 @@ Command register_simplify(CLI::App& root) {
                 relative_error = std::max(relative_error, r.relative_error);
                 changed.push_back(r.mesh.positions != m->positions || r.mesh.indices != m->indices);
                 *m = std::move(r.mesh);
+                // Input vertices only: each survivor is its origin, unmoved, so the glTF streams lodkit does
+                // not model (morph targets, other attributes) stay exact for it.
+                if (o->keep_vertices) file.renumbered(i, r.vertex_origin);
               }
             }
             file.forget_lod_facts(changed);
