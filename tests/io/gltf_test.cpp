@@ -83,6 +83,14 @@ struct HandBuilt {
     doc["accessors"].push_back(a);
     return int(doc["accessors"].size() - 1);
   }
+  // A sparse part for a float accessor: its elements `indices` (u8) become `values`.
+  void make_sparse(int accessor, const std::vector<uint8_t>& indices, const std::vector<float>& values) {
+    const int index_view = view(indices.data(), indices.size());
+    const int value_view = view(values.data(), values.size() * 4);
+    doc["accessors"][size_t(accessor)]["sparse"] = {{"count", indices.size()},
+                                                     {"indices", {{"bufferView", index_view}, {"componentType", kUByte}}},
+                                                     {"values", {{"bufferView", value_view}}}};
+  }
   // POSITION with the min/max glTF requires.
   int positions(const std::vector<float>& xyz) {
     Json lo = Json::array(), hi = Json::array();
@@ -593,13 +601,7 @@ TEST(GltfRead, InterleavedStreamsWithByteStride) {
 TEST(GltfRead, SparseAccessorsAreApplied) {
   HandBuilt f;
   const int base = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0});
-  const std::vector<uint8_t> sparse_indices = {1, 3};
-  const std::vector<float> sparse_values = {5, 6, 7, 8, 9, 10};
-  const int idx_view = f.view(sparse_indices.data(), sparse_indices.size());
-  const int val_view = f.view(sparse_values.data(), sparse_values.size() * 4);
-  f.doc["accessors"][size_t(base)]["sparse"] = {{"count", 2},
-                                                {"indices", {{"bufferView", idx_view}, {"componentType", kUByte}}},
-                                                {"values", {{"bufferView", val_view}}}};
+  f.make_sparse(base, {1, 3}, {5, 6, 7, 8, 9, 10});
   f.doc["accessors"][size_t(base)]["max"] = {8, 9, 10};
   // A sparse accessor without a bufferView: zeros, with one element replaced.
   const std::vector<uint16_t> one = {2};
@@ -691,13 +693,7 @@ TEST(GltfWrite, SourceVerticesCarryMorphTargetsAndOtherAttributes) {
   const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0});
   const std::vector<float> dense = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
   const int target = f.positions(dense);
-  const std::vector<uint8_t> sparse_indices = {1, 3};
-  const std::vector<float> sparse_values = {0, 0, 2, 0, 0, 3};  // vertex 1 up by 2, vertex 3 by 3
-  const int idx_view = f.view(sparse_indices.data(), sparse_indices.size());
-  const int val_view = f.view(sparse_values.data(), sparse_values.size() * 4);
-  f.doc["accessors"][size_t(target)]["sparse"] = {{"count", 2},
-                                                  {"indices", {{"bufferView", idx_view}, {"componentType", kUByte}}},
-                                                  {"values", {{"bufferView", val_view}}}};
+  f.make_sparse(target, {1, 3}, {0, 0, 2, 0, 0, 3});  // vertex 1 up by 2, vertex 3 by 3
   f.doc["accessors"][size_t(target)]["max"] = {0, 0, 3};
   const std::vector<uint16_t> ids = {10, 0, 11, 0, 12, 0, 13, 0};  // 4 elements, each padded to 4 bytes
   const int id = f.accessor(ids, kUShort, "SCALAR", 1, kArrayBuffer);
