@@ -119,6 +119,9 @@ struct Scene {
   std::vector<std::string> material_names;  // by glTF material index
   uint32_t image_count = 0;
   uint32_t texture_count = 0;
+  // glTF meshes in the source document, points and lines included: a primitive with a gltf_mesh
+  // from here on makes a new mesh.
+  uint32_t gltf_mesh_count = 0;
   std::shared_ptr<const GltfSource> source;  // non-null when read from glTF
   std::string name;                           // the file it was read from, for messages
 };
@@ -139,6 +142,15 @@ void write_scene(const Scene& scene, const std::filesystem::path& path, const Wr
 Mesh flatten(const Scene& scene);
 // A one-primitive scene around a mesh (no source document); materials become primitives.
 Scene scene_from_mesh(const Mesh& mesh);
+// A mesh's triangles by material id, ascending, each part with only the vertices its triangles use,
+// in the mesh's order: part vertex k is mesh vertex `vertices[k]`. Without material ids: one part
+// (id 0) with every vertex. The parts drop the per-triangle streams (materials, groups).
+struct MaterialPart {
+  uint32_t material = 0;
+  Mesh mesh;
+  std::vector<uint32_t> vertices;
+};
+std::vector<MaterialPart> split_by_material(const Mesh& mesh);
 
 // ---- per format, in memory (used by the file functions, tests and fuzzers) ----------------------
 // `name` is used in error messages. Writers append to `out`.

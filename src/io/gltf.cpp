@@ -684,6 +684,7 @@ class SceneBuilder {
     for (const tg::Material& material : model_.materials) scene.material_names.push_back(material.name);
     scene.image_count = uint32_t(model_.images.size());
     scene.texture_count = uint32_t(model_.textures.size());
+    scene.gltf_mesh_count = uint32_t(model_.meshes.size());
     return scene;
   }
 
@@ -1787,6 +1788,15 @@ std::string serialize_json(const tg::Model& model, size_t bin_size, const std::s
       if (value.is_array())
         for (Json& element : value)
           if (element.is_null()) element = Json::object();
+    // It also writes a perspective camera's absent zfar (an infinite projection) as 0, which glTF
+    // forbids.
+    if (doc.contains("cameras") && doc["cameras"].is_array())
+      for (Json& camera : doc["cameras"])
+        if (camera.contains("perspective") && camera["perspective"].is_object()) {
+          Json& perspective = camera["perspective"];
+          if (perspective.contains("zfar") && perspective["zfar"].is_number() && perspective["zfar"].get<double>() == 0)
+            perspective.erase("zfar");
+        }
     if (needs_buffer) {
       Json buffer = {{"byteLength", bin_size}};
       if (!bin_uri.empty()) buffer["uri"] = bin_uri;

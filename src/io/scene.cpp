@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <vector>
 
 #include "core/heap.h"
@@ -226,19 +227,12 @@ Mesh flatten(const Scene& scene) {
   return out;
 }
 
-Scene scene_from_mesh(const Mesh& mesh) {
+std::vector<MaterialPart> split_by_material(const Mesh& mesh) {
   if (!mesh.materials.empty() && mesh.materials.size() != mesh.triangle_count())
-    throw_usage("scene_from_mesh: " + std::to_string(mesh.materials.size()) + " material ids for " +
+    throw_usage("split_by_material: " + std::to_string(mesh.materials.size()) + " material ids for " +
                 std::to_string(mesh.triangle_count()) + " triangles");
   for (uint32_t index : mesh.indices)
-    if (index >= mesh.vertex_count()) throw_usage("scene_from_mesh: index " + std::to_string(index) + " out of range");
-  Scene scene;
-  scene.material_names = mesh.material_names;
-  Node node;
-  node.mesh = 0;
-  scene.nodes.push_back(node);
-  scene.roots.push_back(0);
-
+    if (index >= mesh.vertex_count()) throw_usage("split_by_material: index " + std::to_string(index) + " out of range");
   std::vector<uint32_t> ids;  // material ids in use, ascending
   {
     std::vector<bool> used;
@@ -249,42 +243,58 @@ Scene scene_from_mesh(const Mesh& mesh) {
     for (size_t id = 0; id < used.size(); ++id)
       if (used[id]) ids.push_back(uint32_t(id));
   }
-
+  std::vector<MaterialPart> parts;
   if (ids.size() <= 1) {
-    // One material (or none): the whole mesh, unreferenced vertices included, as one primitive.
-    Primitive prim;
-    prim.mesh = mesh;
-    prim.mesh.materials.clear();
-    prim.mesh.material_names.clear();
-    prim.mesh.groups.clear();
-    prim.mesh.group_names.clear();
-    if (!ids.empty())
-      prim.material = int32_t(ids[0]);
-    else
-      prim.material = mesh.material_names.empty() ? -1 : 0;
-    scene.primitives.push_back(std::move(prim));
-  } else {
-    // One primitive per material id, each with the vertices its triangles use, in their original order.
-    std::vector<uint32_t> remap(mesh.vertex_count());
-    for (uint32_t id : ids) {
-      Primitive prim;
-      prim.material = int32_t(id);
-      prim.gltf_primitive = uint32_t(scene.primitives.size());
-      std::vector<bool> used(mesh.vertex_count(), false);
-      for (size_t t = 0; t < mesh.triangle_count(); ++t)
-        if (mesh.materials[t] == id)
-          for (int k = 0; k < 3; ++k) used[mesh.indices[3 * t + k]] = true;
-      Mesh& sub = prim.mesh;
-      for (size_t v = 0; v < mesh.vertex_count(); ++v) {
-        if (!used[v]) continue;
-        remap[v] = uint32_t(sub.positions.size());
-        append_vertex(sub, mesh, uint32_t(v));
-      }
-      for (size_t t = 0; t < mesh.triangle_count(); ++t)
-        if (mesh.materials[t] == id)
-          for (int k = 0; k < 3; ++k) sub.indices.push_back(remap[mesh.indices[3 * t + k]]);
-      scene.primitives.push_back(std::move(prim));
+    // One material (or none): the whole mesh, unreferenced vertices included.
+    MaterialPart part;
+    part.material = ids.empty() ? 0 : ids[0];
+    part.mesh = mesh;
+    part.mesh.materials.clear();
+    part.mesh.material_names.clear();
+    part.mesh.groups.clear();
+    part.mesh.group_names.clear();
+    part.vertices.resize(mesh.vertex_count());
+    std::iota(part.vertices.begin(), part.vertices.end(), 0u);
+    parts.push_back(std::move(part));
+    return parts;
+  }
+  std::vector<uint32_t> remap(mesh.vertex_count());
+  for (uint32_t id : ids) {
+    MaterialPart part;
+    part.material = id;
+    std::vector<bool> used(mesh.vertex_count(), false);
+    for (size_t t = 0; t < mesh.triangle_count(); ++t)
+      if (mesh.materials[t] == id)
+        for (int k = 0; k < 3; ++k) used[mesh.indices[3 * t + k]] = true;
+    for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+      if (!used[v]) continue;
+      remap[v] = uint32_t(part.vertices.size());
+      part.vertices.push_back(uint32_t(v));
+      append_vertex(part.mesh, mesh, uint32_t(v));
     }
+    for (size_t t = 0; t < mesh.triangle_count(); ++t)
+      if (mesh.materials[t] == id)
+        for (int k = 0; k < 3; ++k) part.mesh.indices.push_back(remap[mesh.indices[3 * t + k]]);
+    parts.push_back(std::move(part));
+  }
+  return parts;
+}
+
+Scene scene_from_mesh(const Mesh& mesh) {
+  std::vector<MaterialPart> parts = split_by_material(mesh);
+  Scene scene;
+  scene.material_names = mesh.material_names;
+  Node node;
+  node.mesh = 0;
+  scene.nodes.push_back(node);
+  scene.roots.push_back(0);
+  for (MaterialPart& part : parts) {
+    Primitive prim;
+    if (!mesh.materials.empty()) prim.material = int32_t(part.material);
+    else prim.material = mesh.material_names.empty() ? -1 : 0;
+    prim.gltf_primitive = uint32_t(scene.primitives.size());
+    prim.mesh = std::move(part.mesh);
+    scene.primitives.push_back(std::move(prim));
   }
   // Names must cover every material index a primitive uses.
   for (const Primitive& prim : scene.primitives)

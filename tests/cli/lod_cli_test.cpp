@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <tuple>
 #include <nlohmann/json.hpp>
 
@@ -101,6 +102,78 @@ TEST(CliLod, SimplifyingAChainDropsItsStaleFacts) {
   const test::ValidatorRun v = test::run_validator({dir / "half.glb"});
   EXPECT_EQ(v.status, 0) << v.output;
   EXPECT_NE(v.output.find(": 0 errors"), std::string::npos) << v.output;
+}
+
+// Materials: each level is one glTF mesh with a primitive per material. From OBJ the materials keep
+// their names; from a static glTF the chain is written into the source document, so its materials
+// (a textured one here), textures, images and other content (a camera) stay as they were.
+TEST(CliLod, LevelsKeepTheInputMaterials) {
+  test::TempDir dir;
+  Mesh torus = shapes::torus(1.0f, 0.3f, 48, 24);
+  for (size_t t = 0; t < torus.triangle_count(); ++t) torus.materials.push_back(t < torus.triangle_count() / 2 ? 0 : 1);
+  torus.material_names = {"red", "blue"};
+  write_mesh(torus, dir / "torus.obj");
+  write_scene(scene_from_mesh(torus), dir / "plain.gltf");
+  nlohmann::json in;
+  {
+    std::ifstream file(dir / "plain.gltf");
+    in = nlohmann::json::parse(file);
+  }
+  in["images"] = {{{"uri", "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg=="}}};
+  in["samplers"] = {nlohmann::json::object()};
+  in["textures"] = {{{"source", 0}, {"sampler", 0}}};
+  in["materials"][0]["pbrMetallicRoughness"] = {{"baseColorTexture", {{"index", 0}}}, {"metallicFactor", 0.25}};
+  in["cameras"] = {{{"type", "perspective"}, {"perspective", {{"yfov", 1.0}, {"znear", 0.1}}}}};  // no zfar: infinite
+  in["nodes"].push_back({{"name", "camera"}, {"camera", 0}, {"translation", {0, 0, 5}}});
+  in["scenes"][0]["nodes"].push_back(in["nodes"].size() - 1);
+  {
+    std::ofstream file(dir / "textured.gltf");
+    file << in.dump();
+  }
+
+  for (const char* input : {"torus.obj", "textured.gltf"}) {
+    SCOPED_TRACE(input);
+    const bool gltf = std::string(input) == "textured.gltf";
+    const test::RunResult r = test::run_cli({"lod", (dir / input).string(), "-o", (dir / "chain.glb").string(),
+                                             "--ratios", "1,0.5,0.2", "--force"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json doc = glb_json(dir / "chain.glb");
+    ASSERT_EQ(doc["materials"].size(), 2u);
+    EXPECT_EQ(doc["materials"][0]["name"], "red");
+    EXPECT_EQ(doc["materials"][1]["name"], "blue");
+    // The chain's nodes come after the source's; the first is a root and lists the others.
+    const size_t first = gltf ? in["nodes"].size() : 0;
+    ASSERT_EQ(doc["nodes"].size(), first + 3);
+    EXPECT_EQ(doc["nodes"][first]["extensions"]["MSFT_lod"]["ids"], nlohmann::json::array({first + 1, first + 2}));
+    const auto& roots = doc["scenes"][doc.value("scene", 0)]["nodes"];
+    EXPECT_NE(std::find(roots.begin(), roots.end(), first), roots.end());
+    uint64_t previous = 0;
+    for (size_t i = 0; i < 3; ++i) {
+      const auto& mesh = doc["meshes"][doc["nodes"][first + i]["mesh"].get<size_t>()];
+      ASSERT_EQ(mesh["primitives"].size(), 2u) << i;
+      uint64_t triangles = 0;
+      for (size_t k = 0; k < 2; ++k) {
+        EXPECT_EQ(mesh["primitives"][k]["material"], k);
+        EXPECT_TRUE(mesh["primitives"][k]["attributes"].contains("TEXCOORD_0"));
+        triangles += doc["accessors"][mesh["primitives"][k]["indices"].get<size_t>()]["count"].get<uint64_t>() / 3;
+      }
+      EXPECT_EQ(triangles, doc["nodes"][first + i]["extras"]["lodkit"]["triangles"].get<uint64_t>());
+      if (i > 0) EXPECT_LT(triangles, previous);
+      previous = triangles;
+    }
+    if (gltf) {
+      EXPECT_EQ(doc["materials"], in["materials"]);
+      EXPECT_EQ(doc["textures"], in["textures"]);
+      EXPECT_EQ(doc["images"], in["images"]);
+      EXPECT_EQ(doc["cameras"], in["cameras"]);  // zfar still absent
+      EXPECT_EQ(doc["nodes"][1]["name"], "camera");
+      EXPECT_FALSE(doc["nodes"][0].contains("mesh"));  // the source's node, its mesh now the chain's
+    }
+    if (!test::validator_available()) continue;
+    const test::ValidatorRun v = test::run_validator({dir / "chain.glb"});
+    EXPECT_EQ(v.status, 0) << v.output;
+    EXPECT_NE(v.output.find(": 0 errors"), std::string::npos) << v.output;
+  }
 }
 
 // --morph: level i's morph target 0 at weight 1 lands exactly on level i + 1 (its proper triangles),

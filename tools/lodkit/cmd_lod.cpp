@@ -4,6 +4,7 @@
 // themselves; every level's error and switch distance are in its node's extras.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -48,59 +49,97 @@ std::vector<float> parse_list(const std::string& text, const char* option) {
   return values;
 }
 
-// The glTF: one mesh and one node per level; node 0 is the scene's root and lists the others.
-Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, const std::vector<double>& coverage) {
+// The glTF: one mesh and one node per level, the first node listing the others (MSFT_lod); each
+// mesh has a primitive per material. From a static glTF (`source`, flattened into the chain's input,
+// so material id k + 1 is its material k): the source document with its triangles replaced by the
+// levels, so materials, textures and everything else stay; its nodes remain, without those meshes.
+// Otherwise a new document, with the input's material names.
+Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, const std::vector<double>& coverage,
+                  const Scene* source) {
   Scene scene;
+  uint32_t mesh_base = 0;
+  int32_t node_base = 0;
+  if (source) {
+    scene = *source;
+    scene.primitives.clear();
+    mesh_base = source->gltf_mesh_count;
+    node_base = int32_t(source->nodes.size());
+  } else {
+    scene.material_names = chain.levels.front().mesh.material_names;
+  }
+  const auto material = [&](const Mesh& level, uint32_t id) {
+    if (level.materials.empty()) return source || level.material_names.empty() ? -1 : 0;
+    return source ? int32_t(id) - 1 : int32_t(id);
+  };
   for (size_t i = 0; i < chain.levels.size(); ++i) {
-    Primitive prim;
+    const Mesh& level = chain.levels[i].mesh;
+    const auto add = [&](Primitive prim, uint32_t id) {
+      prim.material = material(level, id);
+      prim.gltf_mesh = mesh_base + uint32_t(i);
+      prim.gltf_primitive = uint32_t(std::count_if(scene.primitives.begin(), scene.primitives.end(),
+                                                   [&](const Primitive& p) { return p.gltf_mesh == prim.gltf_mesh; }));
+      scene.primitives.push_back(std::move(prim));
+    };
     if (!chain.shared.indices.empty()) {
       // One vertex buffer for the chain; level i's indices use only its first prefix[i] vertices.
-      prim.mesh = chain.shared.vertices;
-      prim.mesh.indices = chain.shared.indices[i];
-      if (i > 0) prim.shares_vertices_with = 0;
-    } else {
-      prim.mesh = chain.levels[i].mesh;
+      // Level i's triangles are its mesh's, in order, so they keep its material ids.
+      const std::vector<uint32_t>& indices = chain.shared.indices[i];
+      for (const MaterialPart& part : split_by_material(level)) {
+        Primitive prim;
+        prim.mesh = chain.shared.vertices;
+        prim.mesh.materials.clear(), prim.mesh.material_names.clear(), prim.mesh.groups.clear(), prim.mesh.group_names.clear();
+        prim.mesh.indices.clear();
+        for (size_t t = 0; t < level.triangle_count(); ++t)
+          if (level.material(t) == part.material)
+            prim.mesh.indices.insert(prim.mesh.indices.end(), indices.begin() + ptrdiff_t(3 * t), indices.begin() + ptrdiff_t(3 * t + 3));
+        if (!scene.primitives.empty()) prim.shares_vertices_with = 0;  // the chain's first primitive
+        add(std::move(prim), part.material);
+      }
+      continue;
     }
-    prim.mesh.materials.clear();
-    prim.gltf_mesh = uint32_t(i);
-    scene.primitives.push_back(std::move(prim));
+    for (MaterialPart& part : split_by_material(level)) {
+      Primitive prim;
+      prim.mesh = std::move(part.mesh);
+      if (i < chain.morphs.size()) {
+        // The geomorph as a glTF morph target: weight t gives (1 - t) P + t P_target, positions and
+        // normals, in any viewer; LODKIT_geomorph in the extras says where it leads.
+        const Mesh& coarse = chain.levels[i + 1].mesh;
+        MorphTarget target;
+        for (const uint32_t v : part.vertices) {
+          const uint32_t to = chain.morphs[i].target[v];
+          const float3 &a = level.positions[v], &b = coarse.positions[to];
+          target.positions.push_back({b.x - a.x, b.y - a.y, b.z - a.z});
+          if (!level.normals.empty() && !coarse.normals.empty()) {
+            const float3 &n = level.normals[v], &m = coarse.normals[to];
+            target.normals.push_back({m.x - n.x, m.y - n.y, m.z - n.z});
+          }
+        }
+        prim.targets.push_back(std::move(target));
+      }
+      add(std::move(prim), part.material);
+    }
+  }
+  for (size_t i = 0; i < chain.levels.size(); ++i) {
+    const LodLevel& level = chain.levels[i];
     Node node;
     node.name = fmt::format("LOD{}", i);
-    node.mesh = int32_t(i);
-    const LodLevel& level = chain.levels[i];
-    if (i < chain.morphs.size()) {
-      // The geomorph as a glTF morph target: weight t gives (1 - t) P + t P_target, positions and
-      // normals, in any viewer; LODKIT_geomorph in the extras says where it leads.
-      const Mesh& fine = chain.levels[i].mesh;
-      const Mesh& coarse = chain.levels[i + 1].mesh;
-      MorphTarget target;
-      for (size_t v = 0; v < fine.vertex_count(); ++v) {
-        const uint32_t to = chain.morphs[i].target[v];
-        const float3 &a = fine.positions[v], &b = coarse.positions[to];
-        target.positions.push_back({b.x - a.x, b.y - a.y, b.z - a.z});
-        if (!fine.normals.empty() && !coarse.normals.empty()) {
-          const float3 &n = fine.normals[v], &m = coarse.normals[to];
-          target.normals.push_back({m.x - n.x, m.y - n.y, m.z - n.z});
-        }
-      }
-      scene.primitives.back().targets.push_back(std::move(target));
-    }
+    node.mesh = int32_t(mesh_base + i);
     nlohmann::json extras = {{"lodkit", {{"level", i},
                                          {"triangles", level.mesh.triangle_count()},
                                          {"error", level.error},
                                          {"error_bound", level.error_bound},
                                          {"relative_error", level.relative_error},
                                          {"switch_distance", distances[i]}}}};
-    if (i < chain.morphs.size()) extras["LODKIT_geomorph"] = {{"target", 0}, {"to_node", i + 1}};
+    if (i < chain.morphs.size()) extras["LODKIT_geomorph"] = {{"target", 0}, {"to_node", node_base + int32_t(i) + 1}};
     if (!chain.shared.prefix.empty()) extras["lodkit"]["vertex_prefix"] = chain.shared.prefix[i];
     if (i == 0) {
-      for (size_t k = 1; k < chain.levels.size(); ++k) node.lod_ids.push_back(int32_t(k));
+      for (size_t k = 1; k < chain.levels.size(); ++k) node.lod_ids.push_back(node_base + int32_t(k));
       extras["MSFT_screencoverage"] = coverage;
     }
     node.extras_json = extras.dump();
     scene.nodes.push_back(std::move(node));
   }
-  scene.roots = {0};
+  scene.roots.push_back(node_base);
   return scene;
 }
 
@@ -185,8 +224,7 @@ std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<Ski
 // in the skinned node's MSFT_lod. Skeleton, skins, animations, materials and everything else of the
 // source are written back unchanged.
 Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, const std::vector<ChainReport>& reports) {
-  uint32_t next_mesh = 0;
-  for (const Primitive& p : scene.primitives) next_mesh = std::max(next_mesh, p.gltf_mesh + 1);
+  uint32_t next_mesh = scene.gltf_mesh_count;  // new meshes come after the source's
   std::vector<bool> done(scene.primitives.size(), false);
   size_t report = 0;
   for (const SkinnedPrimitive& sp : skinned) {
@@ -322,7 +360,8 @@ Command register_lod(CLI::App& root) {
             if (!skinned.empty()) {
               write_scene(skinned_scene(std::move(scene), skinned, reports), o->output);
             } else {
-              write_scene(chain_scene(reports[0].chain, reports[0].distances, reports[0].coverage), o->output);
+              write_scene(chain_scene(reports[0].chain, reports[0].distances, reports[0].coverage, scene.source ? &scene : nullptr),
+                          o->output);
               if (!o->lpm.empty()) {
                 // The progressive mesh spans the input down to the coarsest level's size.
                 SimplifyOptions so = options.simplify;
