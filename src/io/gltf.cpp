@@ -21,6 +21,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -39,6 +40,7 @@ namespace lod {
 // images in bufferViews stay in the buffers, which are kept whole.
 struct GltfSource {
   tinygltf::Model model;
+  std::filesystem::path base_dir;  // where its external files are (relative URIs resolve here)
 };
 
 namespace {
@@ -327,12 +329,12 @@ bool refuse_write(std::string* err, const std::string&, const std::vector<unsign
   return false;
 }
 
-// Keeps encoded images as they are. Only images from data: URIs need their bytes: bufferView images
-// stay in the buffers (copied on write) and external images keep their URI.
+// Keeps encoded images as they are. bufferView images stay in the buffers (copied on write); data:
+// URI images keep their bytes, and so do external ones, which a .glb written elsewhere embeds.
 bool keep_encoded_image(tg::Image* image, const int, std::string*, std::string*, int, int, const unsigned char* bytes,
                         int size, void*) {
   image->as_is = true;
-  if (image->bufferView < 0 && image->uri.empty() && bytes && size > 0) image->image.assign(bytes, bytes + size);
+  if (image->bufferView < 0 && bytes && size > 0) image->image.assign(bytes, bytes + size);
   return true;
 }
 
@@ -353,6 +355,22 @@ std::string base64(const std::vector<unsigned char>& bytes) {
     out += {digits[v >> 18], digits[(v >> 12) & 63], digits[(v >> 6) & 63], '='};
   }
   return out;
+}
+
+// The glTF image type of encoded bytes, by their signature ("" for none glTF knows).
+std::string image_mime_type(const std::vector<unsigned char>& b) {
+  const auto starts = [&](std::initializer_list<unsigned> sig, size_t at = 0) {
+    if (b.size() < at + sig.size()) return false;
+    size_t i = at;
+    for (const unsigned c : sig)
+      if (b[i++] != c) return false;
+    return true;
+  };
+  if (starts({0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A})) return "image/png";
+  if (starts({0xFF, 0xD8, 0xFF})) return "image/jpeg";
+  if (starts({'R', 'I', 'F', 'F'}) && starts({'W', 'E', 'B', 'P'}, 8)) return "image/webp";
+  if (starts({0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, 0x0D, 0x0A, 0x1A, 0x0A})) return "image/ktx2";
+  return "";
 }
 
 // Replaces tinygltf's writer, which re-encodes decoded pixels. External URIs: return false, so
@@ -1908,6 +1926,7 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
     throw_bad_input(name, "glTF: " + (err.empty() ? std::string("tinygltf could not load the document") : err));
   }
   if (options.progress) options.progress(0.5);
+  source->base_dir = base_dir;
 
   const Document document(source->model, name);
   document.validate();
@@ -1916,6 +1935,57 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
   scene.name = name;
   if (options.progress) options.progress(1.0);
   return scene;
+}
+
+// %XX escapes decoded (a malformed one is kept as it is).
+std::string uri_decode(const std::string& s) {
+  std::string out;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s[i] == '%' && i + 2 < s.size() && std::isxdigit(static_cast<unsigned char>(s[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(s[i + 2]))) {
+      out += char(std::stoi(s.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      out += s[i];
+    }
+  }
+  return out;
+}
+
+// The source's external images (relative URIs): a .glb (`bin` given) embeds the ones it can type in its
+// BIN chunk, one file as GLB intends; any other is referred to by its path from the output's folder,
+// so that a file written elsewhere still finds it.
+void relocate_external_images(tg::Model& model, std::vector<uint8_t>* bin, const std::filesystem::path& source_dir,
+                              const std::filesystem::path& output_dir) {
+  for (tg::Image& image : model.images) {
+    const std::string& uri = image.uri;
+    const size_t colon = uri.find(':'), slash = uri.find('/');
+    if (uri.empty() || image.bufferView >= 0 || uri[0] == '/' || (colon != std::string::npos && colon < slash)) continue;
+    if (bin && !image.image.empty()) {
+      if (const std::string mime = image_mime_type(image.image); !mime.empty()) {
+        bin->resize((bin->size() + 3) & ~size_t(3), 0);
+        tg::BufferView view;
+        view.buffer = 0;
+        view.byteOffset = bin->size();
+        view.byteLength = image.image.size();
+        bin->insert(bin->end(), image.image.begin(), image.image.end());
+        model.bufferViews.push_back(std::move(view));
+        image.bufferView = int(model.bufferViews.size() - 1);
+        image.mimeType = mime;
+        image.uri.clear();
+        image.image.clear();
+        continue;
+      }
+    }
+    std::error_code ec;
+    const std::filesystem::path file = std::filesystem::absolute(source_dir / uri_decode(uri), ec).lexically_normal();
+    const std::filesystem::path there = std::filesystem::absolute(output_dir.empty() ? "." : output_dir, ec).lexically_normal();
+    const std::filesystem::path relative = file.lexically_relative(there);
+    if (ec || relative.empty()) continue;
+    std::string escaped;
+    for (const auto& part : relative) escaped += (escaped.empty() ? "" : "/") + uri_escape(part.string());
+    image.uri = escaped;
+  }
 }
 
 void write_gltf(const Scene& scene, const std::filesystem::path& path, const WriteOptions&) {
@@ -1929,7 +1999,8 @@ void write_gltf(const Scene& scene, const std::filesystem::path& path, const Wri
   } else {
     model = model_from_scene(scene, slots);
   }
-  const std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots);
+  std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots);
+  if (scene.source) relocate_external_images(model, glb ? &bin : nullptr, scene.source->base_dir, path.parent_path());
   if (glb) {
     const std::string json_text = serialize_json(model, bin.size(), "", false);
     write_file_atomic(path, make_glb(json_text, bin, path.string()));

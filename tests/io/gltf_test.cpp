@@ -778,8 +778,26 @@ TEST(GltfRead, ExternalBinAndImagesResolveAgainstTheBaseDir) {
   const std::string data_uri = w.doc["images"][0]["uri"];
   ASSERT_EQ(data_uri.rfind("data:image/png;base64,", 0), 0u);
   EXPECT_EQ(base64_decode(data_uri.substr(22)), kPng);
-  EXPECT_EQ(w.doc["images"][1]["uri"], "textures/wood%20grain.png");  // kept verbatim, not re-encoded
+  // The external image stays where it is, not copied or re-encoded: its URI now leads there from out/.
+  EXPECT_EQ(w.doc["images"][1]["uri"], "../textures/wood%20grain.png");
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "textures"));
+  write_scene(scene, dir / "beside.gltf");
+  EXPECT_EQ(load_written(dir / "beside.gltf").doc["images"][1]["uri"], "textures/wood%20grain.png");
+  // A .glb is one file: the image's bytes go into its BIN chunk, typed by their signature.
+  write_scene(scene, dir / "out" / "packed.glb");
+  const Written g = load_written(dir / "out" / "packed.glb");
+  const Json& packed = g.doc["images"][1];
+  EXPECT_FALSE(packed.contains("uri"));
+  EXPECT_EQ(packed["mimeType"], "image/png");
+  EXPECT_EQ(view_bytes(g, packed["bufferView"]), kPng);
+  const Scene again = read_scene(dir / "out" / "packed.glb");
+  EXPECT_EQ(again.image_count, 2u);
+  if (test::validator_available()) {
+    const test::ValidatorRun v = test::run_validator({dir / "out" / "copy.gltf", dir / "out" / "packed.glb"});
+    EXPECT_EQ(v.status, 0) << v.output;
+    EXPECT_NE(v.output.find("copy.gltf: 0 errors"), std::string::npos) << v.output;
+    EXPECT_NE(v.output.find("packed.glb: 0 errors"), std::string::npos) << v.output;
+  }
 
   // Without a base dir only data: URIs and the GLB chunk are allowed.
   const FileBytes bytes = read_file_bytes(dir / "external.gltf");
