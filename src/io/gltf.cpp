@@ -1952,15 +1952,13 @@ std::string uri_decode(const std::string& s) {
   return out;
 }
 
-// The source's external images (relative URIs): a .glb (`bin` given) embeds the ones it can type in its
-// BIN chunk, one file as GLB intends; any other is referred to by its path from the output's folder,
-// so that a file written elsewhere still finds it.
-void relocate_external_images(tg::Model& model, std::vector<uint8_t>* bin, const std::filesystem::path& source_dir,
-                              const std::filesystem::path& output_dir) {
+// The source's images outside its buffers (external files, data: URIs): a .glb (`bin` given) embeds
+// the ones it can type in its BIN chunk, one file as GLB intends; an external one it does not is
+// referred to by its path from the output's folder, so that a file written elsewhere still finds it.
+void relocate_images(tg::Model& model, std::vector<uint8_t>* bin, const std::filesystem::path& source_dir,
+                     const std::filesystem::path& output_dir) {
   for (tg::Image& image : model.images) {
-    const std::string& uri = image.uri;
-    const size_t colon = uri.find(':'), slash = uri.find('/');
-    if (uri.empty() || image.bufferView >= 0 || uri[0] == '/' || (colon != std::string::npos && colon < slash)) continue;
+    if (image.bufferView >= 0) continue;
     if (bin && !image.image.empty()) {
       if (const std::string mime = image_mime_type(image.image); !mime.empty()) {
         bin->resize((bin->size() + 3) & ~size_t(3), 0);
@@ -1977,6 +1975,9 @@ void relocate_external_images(tg::Model& model, std::vector<uint8_t>* bin, const
         continue;
       }
     }
+    const std::string& uri = image.uri;  // empty for a data: URI (its bytes are in image.image)
+    const size_t colon = uri.find(':'), slash = uri.find('/');
+    if (uri.empty() || uri[0] == '/' || (colon != std::string::npos && colon < slash) || source_dir.empty()) continue;
     std::error_code ec;
     const std::filesystem::path file = std::filesystem::absolute(source_dir / uri_decode(uri), ec).lexically_normal();
     const std::filesystem::path there = std::filesystem::absolute(output_dir.empty() ? "." : output_dir, ec).lexically_normal();
@@ -2000,7 +2001,7 @@ void write_gltf(const Scene& scene, const std::filesystem::path& path, const Wri
     model = model_from_scene(scene, slots);
   }
   std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots);
-  if (scene.source) relocate_external_images(model, glb ? &bin : nullptr, scene.source->base_dir, path.parent_path());
+  if (scene.source) relocate_images(model, glb ? &bin : nullptr, scene.source->base_dir, path.parent_path());
   if (glb) {
     const std::string json_text = serialize_json(model, bin.size(), "", false);
     write_file_atomic(path, make_glb(json_text, bin, path.string()));
