@@ -179,4 +179,12 @@ ValidatorRun run_validator(const std::vector<std::filesystem::path>& files) {
   return run;
 }
 
+void expect_valid_gltf(const std::vector<std::filesystem::path>& files) {
+  if (!validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
+  const ValidatorRun v = run_validator(files);
+  EXPECT_EQ(v.status, 0) << v.output;
+  for (const std::filesystem::path& file : files)
+    EXPECT_NE(v.output.find(file.filename().string() + ": 0 errors"), std::string::npos) << v.output;
+}
+
 }  // namespace lod::test

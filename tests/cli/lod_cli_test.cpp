@@ -61,10 +61,7 @@ TEST(CliLod, WritesAValidMsftLodChain) {
   pm.set_collapses(pm.collapse_count());
   EXPECT_LE(pm.mesh().triangle_count(), chain.levels[3].mesh.triangle_count());
 
-  if (!test::validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
-  const test::ValidatorRun v = test::run_validator({dir / "chain.glb"});
-  EXPECT_EQ(v.status, 0) << v.output;
-  EXPECT_NE(v.output.find(": 0 errors"), std::string::npos) << v.output;
+  test::expect_valid_gltf({dir / "chain.glb"});
 }
 
 // lodkit simplify on a chain: the levels it changes lose the facts lodkit lod wrote about them
@@ -98,10 +95,7 @@ TEST(CliLod, SimplifyingAChainDropsItsStaleFacts) {
   EXPECT_EQ(half["nodes"][0]["extras"]["MSFT_screencoverage"], before["nodes"][0]["extras"]["MSFT_screencoverage"]);
   EXPECT_FALSE(half["nodes"][1].contains("extras"));  // nothing left: no empty object either
 
-  if (!test::validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
-  const test::ValidatorRun v = test::run_validator({dir / "half.glb"});
-  EXPECT_EQ(v.status, 0) << v.output;
-  EXPECT_NE(v.output.find(": 0 errors"), std::string::npos) << v.output;
+  test::expect_valid_gltf({dir / "half.glb"});
 }
 
 // Materials: each level is one glTF mesh with a primitive per material. From OBJ the materials keep
@@ -170,10 +164,7 @@ TEST(CliLod, LevelsKeepTheInputMaterials) {
       EXPECT_EQ(doc["nodes"][1]["name"], "camera");
       EXPECT_FALSE(doc["nodes"][0].contains("mesh"));  // the source's node, its mesh now the chain's
     }
-    if (!test::validator_available()) continue;
-    const test::ValidatorRun v = test::run_validator({dir / "chain.glb"});
-    EXPECT_EQ(v.status, 0) << v.output;
-    EXPECT_NE(v.output.find(": 0 errors"), std::string::npos) << v.output;
+    test::expect_valid_gltf({dir / "chain.glb"});
   }
 }
 
@@ -252,9 +243,7 @@ TEST(CliLod, GeomorphsAreMorphTargets) {
       }
     }
   }
-  if (!test::validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
-  const test::ValidatorRun v = test::run_validator({dir / "m.glb", dir / "opt.glb"});
-  EXPECT_EQ(v.status, 0) << v.output;
+  test::expect_valid_gltf({dir / "m.glb", dir / "opt.glb"});
 }
 
 // --shared-vertices: every level's primitive reads the same vertex accessors, and level i's indices
@@ -277,9 +266,7 @@ TEST(CliLod, SharedVerticesWriteOneVertexBuffer) {
       EXPECT_LT(scene.primitives[i].mesh.triangle_count(), scene.primitives[i - 1].mesh.triangle_count());
     }
   }
-  if (!test::validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
-  const test::ValidatorRun v = test::run_validator({dir / "s.glb"});
-  EXPECT_EQ(v.status, 0) << v.output;
+  test::expect_valid_gltf({dir / "s.glb"});
 }
 
 TEST(CliLod, RefusesNonGltfOutputAndBadLists) {
@@ -350,9 +337,7 @@ TEST(CliLod, SkinnedCharacterKeepsItsSkeletonAndClips) {
       for (size_t k = 0; k < 4; ++k) EXPECT_LT(m.joints[v][k], out.skins[0].joints.size());
     }
   }
-  if (!test::validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
-  const test::ValidatorRun v = test::run_validator({dir / "lod.glb"});
-  EXPECT_EQ(v.status, 0) << v.output;
+  test::expect_valid_gltf({dir / "lod.glb"});
 }
 
 // A skinned character's blend shape: level 0 replaces the source primitive with its vertices
@@ -393,9 +378,7 @@ TEST(CliLod, SkinnedLevelZeroKeepsItsMorphTargets) {
     std::memcpy(&d, data + 12 * v, 12);
     ASSERT_EQ(d, offset(level0.positions[v])) << "vertex " << v;
   }
-  if (!test::validator_available()) GTEST_SKIP() << "gltf-validator not installed (scripts/setup.sh installs it)";
-  const test::ValidatorRun v = test::run_validator({dir / "lod.glb"});
-  EXPECT_EQ(v.status, 0) << v.output;
+  test::expect_valid_gltf({dir / "lod.glb"});
 }
 
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {
