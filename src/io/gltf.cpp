@@ -1696,11 +1696,26 @@ void add_to_source(tg::Model& model, const Scene& scene) {
     model.nodes.push_back(std::move(node));
     if (in.parent >= 0 && size_t(in.parent) < i) model.nodes[size_t(in.parent)].children.push_back(int(i));
   }
-  if (model.scenes.empty()) return;
+  const auto is_new_root = [&](int32_t root) {
+    return root >= 0 && size_t(root) >= source_nodes && size_t(root) < model.nodes.size() && scene.nodes[size_t(root)].parent < 0;
+  };
+  if (model.scenes.empty()) {
+    // A source without scenes: viewers would show nothing of the new nodes. One scene, with the
+    // source's root nodes and the new ones.
+    if (std::none_of(scene.roots.begin(), scene.roots.end(), is_new_root)) return;
+    std::vector<bool> child(source_nodes, false);
+    for (size_t n = 0; n < source_nodes; ++n)
+      for (const int c : model.nodes[n].children)
+        if (c >= 0 && size_t(c) < source_nodes) child[size_t(c)] = true;
+    tg::Scene all;
+    for (size_t n = 0; n < source_nodes; ++n)
+      if (!child[n]) all.nodes.push_back(int(n));
+    model.scenes.push_back(std::move(all));
+    model.defaultScene = 0;
+  }
   std::vector<int>& roots = model.scenes[size_t(std::max(0, model.defaultScene))].nodes;
   for (const int32_t root : scene.roots)
-    if (root >= 0 && size_t(root) >= source_nodes && size_t(root) < model.nodes.size() && scene.nodes[size_t(root)].parent < 0)
-      roots.push_back(root);
+    if (is_new_root(root)) roots.push_back(root);
 }
 
 // A minimal document for a Scene without source: meshes by gltf_mesh, materials named from

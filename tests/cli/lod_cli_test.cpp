@@ -124,10 +124,17 @@ TEST(CliLod, LevelsKeepTheInputMaterials) {
     std::ofstream file(dir / "textured.gltf");
     file << in.dump();
   }
+  {
+    // Without a scene, the output gets one: viewers would show nothing of the chain otherwise.
+    nlohmann::json bare = in;
+    bare.erase("scenes"), bare.erase("scene");
+    std::ofstream file(dir / "sceneless.gltf");
+    file << bare.dump();
+  }
 
-  for (const char* input : {"torus.obj", "textured.gltf"}) {
+  for (const char* input : {"torus.obj", "textured.gltf", "sceneless.gltf"}) {
     SCOPED_TRACE(input);
-    const bool gltf = std::string(input) == "textured.gltf";
+    const bool gltf = std::string(input) != "torus.obj";
     const test::RunResult r = test::run_cli({"lod", (dir / input).string(), "-o", (dir / "chain.glb").string(),
                                              "--ratios", "1,0.5,0.2", "--force"});
     ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -139,8 +146,10 @@ TEST(CliLod, LevelsKeepTheInputMaterials) {
     const size_t first = gltf ? in["nodes"].size() : 0;
     ASSERT_EQ(doc["nodes"].size(), first + 3);
     EXPECT_EQ(doc["nodes"][first]["extensions"]["MSFT_lod"]["ids"], nlohmann::json::array({first + 1, first + 2}));
+    ASSERT_TRUE(doc.contains("scenes"));
     const auto& roots = doc["scenes"][doc.value("scene", 0)]["nodes"];
     EXPECT_NE(std::find(roots.begin(), roots.end(), first), roots.end());
+    if (gltf) EXPECT_NE(std::find(roots.begin(), roots.end(), 1), roots.end());  // the source's camera node
     uint64_t previous = 0;
     for (size_t i = 0; i < 3; ++i) {
       const auto& mesh = doc["meshes"][doc["nodes"][first + i]["mesh"].get<size_t>()];
