@@ -1976,14 +1976,7 @@ void relocate_images(tg::Model& model, std::vector<uint8_t>* bin, const std::fil
     if (image.bufferView >= 0) continue;
     if (bin && !image.image.empty()) {
       if (const std::string mime = image_mime_type(image.image); !mime.empty()) {
-        bin->resize((bin->size() + 3) & ~size_t(3), 0);
-        tg::BufferView view;
-        view.buffer = 0;
-        view.byteOffset = bin->size();
-        view.byteLength = image.image.size();
-        bin->insert(bin->end(), image.image.begin(), image.image.end());
-        model.bufferViews.push_back(std::move(view));
-        image.bufferView = int(model.bufferViews.size() - 1);
+        image.bufferView = BinWriter(model, *bin).add_view(image.image.data(), image.image.size(), 0);
         image.mimeType = mime;
         image.uri.clear();
         image.image.clear();

@@ -26,7 +26,7 @@ OptimizeResult optimize(const Mesh& mesh, const OptimizeOptions& options) {
     r.weld = weld(m, options.weld_options);
     m = std::move(r.weld.mesh);
     r.weld.mesh = {};
-    // Kept vertices come in order of first appearance, so the first input vertex of each is met first.
+    // Each output vertex's source: the first input vertex welded into it.
     std::vector<uint32_t> source(m.vertex_count(), UINT32_MAX);
     for (uint32_t v = 0; v < r.weld.remap.size(); ++v)
       if (source[r.weld.remap[v]] == UINT32_MAX) source[r.weld.remap[v]] = v;

@@ -4,7 +4,6 @@
 // themselves; every level's error and switch distance are in its node's extras.
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -73,11 +72,11 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
   };
   for (size_t i = 0; i < chain.levels.size(); ++i) {
     const Mesh& level = chain.levels[i].mesh;
+    uint32_t next_primitive = 0;  // of level i's glTF mesh
     const auto add = [&](Primitive prim, uint32_t id) {
       prim.material = material(level, id);
       prim.gltf_mesh = mesh_base + uint32_t(i);
-      prim.gltf_primitive = uint32_t(std::count_if(scene.primitives.begin(), scene.primitives.end(),
-                                                   [&](const Primitive& p) { return p.gltf_mesh == prim.gltf_mesh; }));
+      prim.gltf_primitive = next_primitive++;
       scene.primitives.push_back(std::move(prim));
     };
     if (!chain.shared.indices.empty()) {
