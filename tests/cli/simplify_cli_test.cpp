@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -85,6 +86,54 @@ TEST(CliSimplify, WritesTheLibraryResultAndReportsIt) {
   const SimplifyResult lib = simplify(read_mesh(dir / "torus.ply"), {.target_ratio = 0.1f, .metric = Metric::constrained_qem});
   EXPECT_EQ(lib.mesh.indices, out.indices);
   EXPECT_EQ(lib.mesh.positions, out.positions);
+}
+
+// A glTF mesh whose two materials are two primitives, each with its own copy of the border's
+// vertices: they are simplified as one mesh, so the border stays closed (welded by position, the
+// result has no boundary edge, as the torus has none) and each primitive keeps its material. With
+// --keep-vertices each primitive's vertices are its own input vertices.
+TEST(CliSimplify, PrimitivesOfOneMeshKeepTheirBordersClosed) {
+  test::TempDir dir;
+  Mesh torus = shapes::torus(1.0f, 0.3f, 40, 20);
+  torus.materials.resize(torus.triangle_count());
+  for (size_t t = 0; t < torus.triangle_count(); ++t) {
+    float x = 0;
+    for (int c = 0; c < 3; ++c) x += torus.positions[torus.indices[3 * t + c]].x;
+    torus.materials[t] = x > 0 ? 1 : 0;
+  }
+  torus.material_names = {"left", "right"};
+  const Scene in = scene_from_mesh(torus);
+  ASSERT_EQ(in.primitives.size(), 2u);
+  write_scene(in, dir / "in.glb");
+
+  for (const bool subset : {false, true}) {
+    std::vector<std::string> args = {"simplify", (dir / "in.glb").string(), "-o", (dir / "out.glb").string(),
+                                     "--ratio", "0.1", "--force"};
+    if (subset) args.push_back("--keep-vertices");
+    const test::RunResult r = test::run_cli(args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Scene out = read_scene(dir / "out.glb");
+    ASSERT_EQ(out.primitives.size(), 2u) << subset;
+    Mesh welded;  // both primitives in one mesh: compute_stats joins them by position
+    for (size_t p = 0; p < 2; ++p) {
+      const Mesh& m = out.primitives[p].mesh;
+      EXPECT_EQ(out.primitives[p].material, in.primitives[p].material) << subset;
+      EXPECT_GT(m.triangle_count(), 0u) << subset;
+      if (subset) {
+        const std::vector<float3>& own = in.primitives[p].mesh.positions;
+        for (const float3& v : m.positions)
+          ASSERT_NE(std::find(own.begin(), own.end(), v), own.end()) << "primitive " << p;
+      }
+      const uint32_t base = uint32_t(welded.positions.size());
+      welded.positions.insert(welded.positions.end(), m.positions.begin(), m.positions.end());
+      for (const uint32_t i : m.indices) welded.indices.push_back(base + i);
+    }
+    EXPECT_LE(welded.triangle_count(), torus.triangle_count() / 10 + 1) << subset;
+    const MeshStats stats = compute_stats(welded);
+    EXPECT_EQ(stats.boundary_edges, 0u) << subset;
+    EXPECT_EQ(stats.non_manifold_edges, 0u) << subset;
+    test::expect_valid_gltf({dir / "out.glb"});
+  }
 }
 
 // --aggregate: two spheres 0.05 apart come out as one part, and the report counts the virtual pairs.

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -84,6 +85,30 @@ void GeometryFile::renumbered(size_t i, const std::vector<uint32_t>& source) {
     for (size_t v = 0; v < source.size(); ++v) composed[v] = map[source[v]];
     map = std::move(composed);
   }
+}
+
+std::vector<std::vector<size_t>> GeometryFile::joint_groups() const {
+  if (!as_scene_) return {{0}};
+  // Primitives with other streams stay apart: joining them would drop or invent values (see flatten).
+  const auto layout = [](const Mesh& m) {
+    uint32_t bits = 0, bit = 1;
+    for (const bool empty : {m.normals.empty(), m.tangents.empty(), m.uvs[0].empty(), m.uvs[1].empty(),
+                               m.uvs[2].empty(), m.uvs[3].empty(), m.colors.empty(), m.joints.empty(),
+                               m.weights.empty(), m.joints1.empty(), m.weights1.empty()}) {
+      if (!empty) bits |= bit;
+      bit <<= 1;
+    }
+    return bits;
+  };
+  std::vector<std::vector<size_t>> groups;
+  std::map<std::pair<uint32_t, uint32_t>, size_t> group_of;  // (glTF mesh, layout) -> group
+  for (size_t i = 0; i < scene_.primitives.size(); ++i) {
+    const Primitive& p = scene_.primitives[i];
+    const auto [it, added] = group_of.try_emplace({p.gltf_mesh, layout(p.mesh)}, groups.size());
+    if (added) groups.emplace_back();
+    groups[it->second].push_back(i);
+  }
+  return groups;
 }
 
 Command register_convert(CLI::App& root) {

@@ -1,7 +1,8 @@
 // lodkit simplify IN -o OUT: one simplification to a target ratio, triangle count or error.
-// A glTF written from a glTF keeps everything else (nodes, skins, animations, materials); each
-// primitive is simplified on its own, and a skinned one keeps its survivors' joints and weights
-// (with --keep-vertices, their morph targets too).
+// A glTF written from a glTF keeps everything else (nodes, skins, animations, materials). The
+// primitives of one glTF mesh are simplified together, their material borders kept closed like
+// seams; a skinned one keeps its survivors' joints and weights (with --keep-vertices, their morph
+// targets too).
 #include <fmt/format.h>
 
 #include <chrono>
@@ -31,6 +32,66 @@ struct SimplifyCommand {
   float fit_edge_weight = SimplifyOptions{}.fit_edge_weight;
   float guard = SimplifyOptions{}.distance_guard;
 };
+
+// A group of meshes (GeometryFile::joint_groups) as one mesh for the simplifier: member k is
+// material id k + 1 (flatten's numbering) and its vertices start at offsets[k]. A group of one is
+// the mesh itself, not a copy.
+struct Joined {
+  const Mesh& mesh() const { return alone ? *alone : joined; }
+  const Mesh* alone = nullptr;
+  Mesh joined;
+  std::vector<uint32_t> offsets;
+};
+
+Joined join(const std::vector<Mesh*>& meshes, const std::vector<size_t>& group) {
+  Joined j;
+  if (group.size() == 1) {
+    j.alone = meshes[group[0]];
+    j.offsets = {0};
+    return j;
+  }
+  Scene scene;  // no nodes: flatten takes each primitive once, untransformed, in order
+  uint32_t offset = 0;
+  for (size_t k = 0; k < group.size(); ++k) {
+    Primitive p;
+    p.mesh = *meshes[group[k]];
+    p.material = int32_t(k);
+    j.offsets.push_back(offset);
+    offset += uint32_t(p.mesh.vertex_count());
+    scene.primitives.push_back(std::move(p));
+  }
+  j.joined = flatten(scene);
+  return j;
+}
+
+// The simplified group back in its members, each with (when `origins`) its output vertices'
+// input vertices among its own. A member whose triangles all collapsed is left empty (the glTF
+// writer drops it).
+struct Member {
+  Mesh mesh;
+  std::vector<uint32_t> origin;
+};
+std::vector<Member> unjoin(const Joined& j, SimplifyResult& r, bool origins) {
+  std::vector<Member> members(j.offsets.size());
+  if (j.alone) {
+    members[0] = {std::move(r.mesh), std::move(r.vertex_origin)};
+    return members;
+  }
+  for (MaterialPart& part : split_by_material(r.mesh)) {
+    const size_t k = size_t(part.material) - 1;
+    if (part.material == 0 || k >= members.size()) throw_internal("simplify: a joined mesh's part has material id " + std::to_string(part.material));
+    members[k].mesh = std::move(part.mesh);
+    if (!origins) continue;
+    const uint32_t begin = j.offsets[k], end = k + 1 < j.offsets.size() ? j.offsets[k + 1] : uint32_t(j.joined.vertex_count());
+    for (const uint32_t v : part.vertices) {
+      // Wedges continue within their material, so a member's vertex comes from its own input.
+      const uint32_t from = r.vertex_origin[v];
+      if (from < begin || from >= end) throw_internal("simplify: a joined mesh's vertex continues another member's");
+      members[k].origin.push_back(from - begin);
+    }
+  }
+  return members;
+}
 
 }  // namespace
 
@@ -139,22 +200,24 @@ Command register_simplify(CLI::App& root) {
             uint64_t in_triangles = 0, out_triangles = 0, in_vertices = 0, out_vertices = 0;
             float error = 0, relative_error = 0;
             uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, fitted = 0, flipped = 0, deferred = 0, rejected[4] = {};
-            uint32_t fit_iterations = 0;  // the most any primitive's fit ran
+            uint32_t fit_iterations = 0;  // the most any group's fit ran
             double fit_seconds = 0;  // the final fit's share of simplify_seconds
             SimplifyResult::CollapseSteps steps;  // the collapses' share, by step
-            uint32_t search_ways = 1;  // the most any primitive's search tried
-            nlohmann::json kept = nlohmann::json::array();  // per primitive: the way its result was made
+            uint32_t search_ways = 1;  // the most any group's search tried
+            nlohmann::json kept = nlohmann::json::array();  // per joint group: the way its result was made
             std::vector<bool> changed;  // per primitive: its geometry is not the input's
             start = std::chrono::steady_clock::now();
             {
               ProgressBar bar("simplifying");
               uint64_t done = 0;
-              for (size_t i = 0; i < meshes.size(); ++i) {
-                Mesh* m = meshes[i];
+              changed.assign(meshes.size(), false);
+              for (const std::vector<size_t>& group : file.joint_groups()) {
+                const Joined joined = join(meshes, group);
+                const Mesh& m = joined.mesh();
                 SimplifyOptions each = options;
-                const uint64_t size = m->triangle_count();
-                // A triangle budget is shared in proportion to each primitive's size. With a ratio
-                // too, the larger target is reached first and stops the primitive.
+                const uint64_t size = m.triangle_count();
+                // A triangle budget is shared in proportion to each group's size. With a ratio
+                // too, the larger target is reached first and stops the group.
                 if (has_triangles) {
                   // (At least one each: a share of 0 would mean "no count" to the library.)
                   const uint64_t share = o->triangles == 0 || total == 0
@@ -165,7 +228,7 @@ Command register_simplify(CLI::App& root) {
                   each.target_triangles = std::max(share, by_ratio);
                 }
                 each.progress = [&, size](double f) { bar.update((double(done) + f * double(size)) / double(total)); };
-                SimplifyResult r = simplify(*m, each);
+                SimplifyResult r = simplify(m, each);
                 done += size;
                 in_triangles += r.input_triangles, out_triangles += r.output_triangles;
                 in_vertices += r.input_vertices, out_vertices += r.output_vertices;
@@ -181,11 +244,16 @@ Command register_simplify(CLI::App& root) {
                 rejected[0] += r.rejected_topology, rejected[1] += r.rejected_seam;
                 rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape, deferred += r.deferred_distance;
                 relative_error = std::max(relative_error, r.relative_error);
-                changed.push_back(r.mesh.positions != m->positions || r.mesh.indices != m->indices);
-                *m = std::move(r.mesh);
-                // Input vertices only: each survivor is its origin, unmoved, so the glTF streams lodkit does
-                // not model (morph targets, other attributes) stay exact for it.
-                if (o->keep_vertices) file.renumbered(i, r.vertex_origin);
+                std::vector<Member> members = unjoin(joined, r, o->keep_vertices);
+                for (size_t k = 0; k < group.size(); ++k) {
+                  const size_t i = group[k];
+                  Member& out = members[k];
+                  changed[i] = out.mesh.positions != meshes[i]->positions || out.mesh.indices != meshes[i]->indices;
+                  *meshes[i] = std::move(out.mesh);
+                  // Input vertices only: each survivor is its origin, unmoved, so the glTF streams lodkit does
+                  // not model (morph targets, other attributes) stay exact for it.
+                  if (o->keep_vertices) file.renumbered(i, out.origin);
+                }
               }
             }
             file.forget_lod_facts(changed);
@@ -213,7 +281,7 @@ Command register_simplify(CLI::App& root) {
               fmt::print("{:<10}{:>12}{:>12}{:>14}{:>10}  {}\n", "step", "triangles", "vertices", "error", "time", "");
               fmt::print("{:<10}{:>12}{:>12}{:>14}{:>9.3f}s  {}\n", "read", in_triangles, in_vertices, "", load_seconds,
                          o->input);
-              // With a search, the way kept (one primitive) or how many ways were tried.
+              // With a search, the way kept (one group) or how many ways were tried.
               std::string way = o->metric;
               if (search_ways > 1 && kept.size() == 1)
                 way = fmt::format("{}, guard {}{}: best of {} ways, Hausdorff {:.4f}%", kept[0]["metric"].get<std::string>(),
@@ -224,7 +292,7 @@ Command register_simplify(CLI::App& root) {
                                   search_ways,
                                   100.0 * kept[0]["relative_hausdorff"].get<double>());
               else if (search_ways > 1)
-                way = fmt::format("{}, best of up to {} ways per primitive", o->metric, search_ways);
+                way = fmt::format("{}, best of up to {} ways per mesh", o->metric, search_ways);
               fmt::print("{:<10}{:>12}{:>12}{:>13.4f}%{:>9.3f}s  {} ({} = {:.6g}, final fit {:.3f}s)\n", "simplify", out_triangles,
                          out_vertices, 100.0 * relative_error, simplify_seconds, way, "error", error, fit_seconds);
               fmt::print("{:<10}{:>12}{:>12}{:>14}{:>9.3f}s  {}\n", "write", out_triangles, out_vertices, "",

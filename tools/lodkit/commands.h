@@ -45,6 +45,9 @@ class GeometryFile {
   // meshes[i]'s vertices were renumbered: its vertex v was vertex source[v]. The glTF streams lodkit
   // does not model (morph targets, other attributes) follow them (Primitive::source_vertices).
   void renumbered(size_t i, const std::vector<uint32_t>& source);
+  // meshes[] in groups to simplify as one: the primitives of one glTF mesh with the same vertex
+  // streams, so that the borders between their materials stay closed. In order of first member.
+  std::vector<std::vector<size_t>> joint_groups() const;
 
   std::vector<Mesh*> meshes;
 
