@@ -4,13 +4,15 @@
 // silently dropped a buffer). Then every primitive must validate, flatten() must give a valid mesh,
 // and write_gltf (.glb in a per-process temporary folder) -> read_gltf must give back the same
 // primitives (minus those without a triangle, which the writer drops), positions bit for bit; so
-// must the same scene with every primitive's vertices renumbered (Primitive::source_vertices).
+// must the same scene with every primitive's vertices renumbered (Primitive::source_vertices), and
+// both must give the same vertex classes (source_vertex_classes).
 // The shared oracle lives in fuzz_common.h.
 #include <unistd.h>
 
 #include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <unordered_map>
 #include <vector>
 
 #include "fuzz_common.h"
@@ -131,6 +133,26 @@ Scene reversed(Scene scene) {
   return scene;
 }
 
+// lod::source_vertex_classes on the scene and on its reversed copy: one class per vertex (or none)
+// and the same partition of the source's vertices, read through source_vertices.
+void check_vertex_classes(const Scene& scene, const Scene& reversed_scene) {
+  const std::string stage = "gltf vertex classes";
+  for (size_t p = 0; p < scene.primitives.size(); ++p) {
+    const std::string where = stage + ": primitive " + std::to_string(p);
+    const auto a = run_step(where, false, [&] { return source_vertex_classes(scene, p); });
+    const auto b = run_step(where + ", vertices reversed", false, [&] { return source_vertex_classes(reversed_scene, p); });
+    const size_t n = scene.primitives[p].mesh.vertex_count();
+    if (a->size() != b->size() || (!a->empty() && a->size() != n))
+      fail(where, std::to_string(a->size()) + " and " + std::to_string(b->size()) + " classes for " + std::to_string(n) + " vertices");
+    std::unordered_map<uint32_t, uint32_t> a_to_b, b_to_a;
+    for (size_t v = 0; v < a->size(); ++v) {
+      const uint32_t x = (*a)[v], y = (*b)[n - 1 - v];
+      if (a_to_b.try_emplace(x, y).first->second != y || b_to_a.try_emplace(y, x).first->second != x)
+        fail(where, "vertex " + std::to_string(v) + "'s class differs once its vertices are reversed");
+    }
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -145,6 +167,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   check_flatten(*scene);
   if (total_vertices(*scene) > max_round_trip_vertices) return 0;
   check_round_trip(*scene, "gltf round trip");
-  check_round_trip(reversed(*scene), "gltf round trip, vertices reversed");
+  const Scene backwards = reversed(*scene);
+  check_round_trip(backwards, "gltf round trip, vertices reversed");
+  check_vertex_classes(*scene, backwards);
   return 0;
 }

@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "lodkit/error.h"
+#include "lodkit/io.h"
 
 extern char** environ;
 
@@ -185,6 +186,29 @@ void expect_valid_gltf(const std::vector<std::filesystem::path>& files) {
   EXPECT_EQ(v.status, 0) << v.output;
   for (const std::filesystem::path& file : files)
     EXPECT_NE(v.output.find(file.filename().string() + ": 0 errors"), std::string::npos) << v.output;
+}
+
+nlohmann::json glb_json(const std::filesystem::path& path) {
+  const FileBytes bytes = read_file_bytes(path);
+  uint32_t length = 0;
+  std::memcpy(&length, bytes.data() + 12, 4);
+  return nlohmann::json::parse(std::string(reinterpret_cast<const char*>(bytes.data()) + 20, length));
+}
+
+std::vector<float3> glb_morph_positions(const std::filesystem::path& path, size_t mesh, size_t primitive, size_t target) {
+  const FileBytes bytes = read_file_bytes(path);
+  uint32_t length = 0;
+  std::memcpy(&length, bytes.data() + 12, 4);
+  const nlohmann::json doc = glb_json(path);
+  const auto& prim = doc["meshes"][mesh]["primitives"][primitive];
+  if (!prim.contains("targets") || prim["targets"].size() <= target) return {};
+  const auto& accessor = doc["accessors"][prim["targets"][target]["POSITION"].get<size_t>()];
+  const auto& view = doc["bufferViews"][accessor["bufferView"].get<size_t>()];
+  const uint8_t* data =
+      bytes.data() + 20 + length + 8 + view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0));
+  std::vector<float3> out(accessor["count"].get<size_t>());
+  std::memcpy(out.data(), data, out.size() * sizeof(float3));
+  return out;
 }
 
 }  // namespace lod::test

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "lodkit/mesh.h"
 
 namespace lod::test {
@@ -59,6 +61,14 @@ inline std::span<const uint8_t> bytes_of(const std::string& s) {
 // (so it names the file and a line or byte offset). Returns the message, or "" after a test failure.
 using Reader = std::function<void(std::span<const uint8_t>, const std::string&)>;
 std::string expect_bad_input(const Reader& read, const std::string& input, const std::string& name);
+
+// The JSON chunk of a .glb (little-endian header, then the first chunk).
+nlohmann::json glb_json(const std::filesystem::path& path);
+// Morph target `target`'s POSITION offsets of a .glb's mesh `mesh`, primitive `primitive`, read
+// straight from the file's JSON and BIN chunk (lodkit's reader does not model targets). Empty when
+// that primitive has no such target.
+std::vector<float3> glb_morph_positions(const std::filesystem::path& path, size_t mesh = 0, size_t primitive = 0,
+                                        size_t target = 0);
 
 // Describes the first difference between two meshes ("" when equal, bitwise on floats).
 std::string mesh_difference(const Mesh& a, const Mesh& b);

@@ -152,6 +152,13 @@ struct MaterialPart {
 };
 std::vector<MaterialPart> split_by_material(const Mesh& mesh);
 
+// Per vertex of a glTF-read scene primitive, a class: two vertices share one exactly when the
+// streams lodkit does not model (morph targets, attributes such as TEXCOORD_4 or _ID) are
+// byte-identical for their source vertices (Primitive::source_vertices, or the vertices themselves
+// while their count is the source's). Empty when the primitive has no such streams, or they will
+// not be written. A weld that keeps classes apart (WeldOptions::vertex_classes) keeps them exact.
+std::vector<uint32_t> source_vertex_classes(const Scene& scene, size_t primitive);
+
 // ---- per format, in memory (used by the file functions, tests and fuzzers) ----------------------
 // `name` is used in error messages. Writers append to `out`.
 Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});

@@ -38,6 +38,11 @@ struct WeldOptions {
   bool ignore_attributes = false;
   // Remove triangles that lost a corner to the weld (two corners became one vertex). Counted either way.
   bool remove_degenerate = false;
+  // Empty, or one per input vertex: vertices merge only within one class, whatever the tolerances and
+  // ignore_attributes say. For streams the Mesh does not hold, such as a glTF primitive's morph
+  // targets (lod::source_vertex_classes): merging vertices whose targets differ would move them
+  // together in every blend shape.
+  std::span<const uint32_t> vertex_classes;
 };
 
 struct WeldResult {

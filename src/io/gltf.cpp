@@ -28,6 +28,7 @@
 #include <sstream>
 #include <string>
 #include <type_traits>
+#include <unordered_map>
 #include <vector>
 
 #include "io/text_reader.h"
@@ -1031,6 +1032,16 @@ bool is_regenerated_semantic(const std::string& semantic) {
          semantic == "JOINTS_0" || semantic == "WEIGHTS_0" || semantic == "JOINTS_1" || semantic == "WEIGHTS_1";
 }
 
+// Calls f(target, semantic, accessor index) for each stream of a primitive that lodkit does not
+// model: the attributes it does not regenerate (target -1), then every morph target's attributes.
+template <class GltfPrimitive, class F>
+void for_each_unmodelled_stream(GltfPrimitive& prim, F&& f) {
+  for (auto& [semantic, index] : prim.attributes)
+    if (!is_regenerated_semantic(semantic)) f(-1, semantic, index);
+  for (size_t k = 0; k < prim.targets.size(); ++k)
+    for (auto& [semantic, index] : prim.targets[k]) f(int(k), semantic, index);
+}
+
 struct Slot {
   int mesh = 0, primitive = 0;  // where a Scene primitive lives in the model being written
 };
@@ -1278,10 +1289,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
           gathered[size_t(owner)].push_back({target, semantic, like, std::move(bytes)});
           index = -1;  // written anew: the source accessor is not kept for it
         };
-        for (auto& [semantic, index] : prim.attributes)
-          if (!is_regenerated_semantic(semantic)) gather(-1, semantic, index);
-        for (size_t k = 0; k < prim.targets.size(); ++k)
-          for (auto& [semantic, index] : prim.targets[k]) gather(int(k), semantic, index);
+        for_each_unmodelled_stream(prim, gather);
       }
       const bool same_count = map.empty() && source_count == geometry.vertex_count();
       if (!same_count && map.empty() && !prim.targets.empty()) drop_morphs = true;
@@ -1995,6 +2003,41 @@ void relocate_images(tg::Model& model, std::vector<uint8_t>* bin, const std::fil
     for (const auto& part : relative) escaped += (escaped.empty() ? "" : "/") + uri_escape(part.string());
     image.uri = escaped;
   }
+}
+
+std::vector<uint32_t> source_vertex_classes(const Scene& scene, size_t primitive) {
+  if (!scene.source || primitive >= scene.primitives.size()) return {};
+  const Primitive& prim = scene.primitives[primitive];
+  const tg::Model& model = scene.source->model;
+  if (prim.gltf_mesh >= model.meshes.size() || prim.gltf_primitive >= model.meshes[prim.gltf_mesh].primitives.size())
+    return {};
+  const tg::Primitive& source = model.meshes[prim.gltf_mesh].primitives[prim.gltf_primitive];
+  const Document doc(model, scene.name);
+  std::vector<std::vector<uint8_t>> streams;
+  std::vector<size_t> element_sizes;
+  for_each_unmodelled_stream(source, [&](int, const std::string&, int index) {
+    streams.push_back(doc.packed_elements(index));
+    element_sizes.push_back(element_bytes(model.accessors[size_t(index)].componentType, model.accessors[size_t(index)].type));
+  });
+  const auto position = source.attributes.find("POSITION");
+  if (streams.empty() || position == source.attributes.end()) return {};
+  const size_t source_count = model.accessors[size_t(position->second)].count;
+  const std::vector<uint32_t>& map = prim.source_vertices;
+  const size_t n = prim.mesh.vertex_count();
+  if (map.empty() && n != source_count) return {};  // the writer drops those streams
+  if (!map.empty() && map.size() != n) throw_usage("source_vertex_classes: primitive " + str(primitive) + "'s source_vertices do not match its vertices");
+  std::unordered_map<std::string, uint32_t> ids;  // the streams' bytes -> class, in order of first appearance
+  std::vector<uint32_t> classes(n);
+  std::string key;
+  for (size_t v = 0; v < n; ++v) {
+    const size_t s = map.empty() ? v : map[v];
+    if (s >= source_count) throw_usage("source_vertex_classes: primitive " + str(primitive) + " names source vertex " + str(s));
+    key.clear();
+    for (size_t k = 0; k < streams.size(); ++k)
+      key.append(reinterpret_cast<const char*>(streams[k].data() + s * element_sizes[k]), element_sizes[k]);
+    classes[v] = ids.try_emplace(key, uint32_t(ids.size())).first->second;
+  }
+  return classes;
 }
 
 void write_gltf(const Scene& scene, const std::filesystem::path& path, const WriteOptions&) {

@@ -28,6 +28,7 @@ bool near(const float4& a, const float4& b, float t) {
 
 // Every attribute stream of v within its tolerance of r's.
 bool attributes_match(const Mesh& m, uint32_t v, uint32_t r, const WeldOptions& o) {
+  if (!o.vertex_classes.empty() && o.vertex_classes[v] != o.vertex_classes[r]) return false;
   if (o.ignore_attributes) return true;
   if (!m.normals.empty() && !near(m.normals[v], m.normals[r], o.normal_tolerance)) return false;
   if (!m.tangents.empty()) {
@@ -134,6 +135,9 @@ WeldResult weld(const Mesh& mesh, const WeldOptions& options) {
   check_tolerance(options.uv_tolerance, "uv_tolerance");
   check_tolerance(options.color_tolerance, "color_tolerance");
   check_tolerance(options.weight_tolerance, "weight_tolerance");
+  if (!options.vertex_classes.empty() && options.vertex_classes.size() != mesh.vertex_count())
+    throw_usage("weld: " + std::to_string(options.vertex_classes.size()) + " vertex classes for " +
+                std::to_string(mesh.vertex_count()) + " vertices");
   const std::vector<uint32_t> kept_of = options.position_tolerance > 0 ? weld_tolerant_positions(mesh, options)
                                                                        : weld_exact_positions(mesh, options);
   WeldResult r;

@@ -20,13 +20,7 @@
 namespace lod {
 namespace {
 
-// The JSON chunk of a .glb (little-endian header, then the first chunk).
-nlohmann::json glb_json(const std::filesystem::path& path) {
-  const FileBytes bytes = read_file_bytes(path);
-  uint32_t length = 0;
-  std::memcpy(&length, bytes.data() + 12, 4);
-  return nlohmann::json::parse(std::string(reinterpret_cast<const char*>(bytes.data()) + 20, length));
-}
+using test::glb_json;
 
 TEST(CliLod, WritesAValidMsftLodChain) {
   test::TempDir dir;
@@ -149,7 +143,9 @@ TEST(CliLod, LevelsKeepTheInputMaterials) {
     ASSERT_TRUE(doc.contains("scenes"));
     const auto& roots = doc["scenes"][doc.value("scene", 0)]["nodes"];
     EXPECT_NE(std::find(roots.begin(), roots.end(), first), roots.end());
-    if (gltf) EXPECT_NE(std::find(roots.begin(), roots.end(), 1), roots.end());  // the source's camera node
+    if (gltf) {
+      EXPECT_NE(std::find(roots.begin(), roots.end(), 1), roots.end());  // the source's camera node
+    }
     uint64_t previous = 0;
     for (size_t i = 0; i < 3; ++i) {
       const auto& mesh = doc["meshes"][doc["nodes"][first + i]["mesh"].get<size_t>()];
@@ -161,7 +157,9 @@ TEST(CliLod, LevelsKeepTheInputMaterials) {
         triangles += doc["accessors"][mesh["primitives"][k]["indices"].get<size_t>()]["count"].get<uint64_t>() / 3;
       }
       EXPECT_EQ(triangles, doc["nodes"][first + i]["extras"]["lodkit"]["triangles"].get<uint64_t>());
-      if (i > 0) EXPECT_LT(triangles, previous);
+      if (i > 0) {
+        EXPECT_LT(triangles, previous);
+      }
       previous = triangles;
     }
     if (gltf) {
@@ -194,13 +192,10 @@ TEST(CliLod, GeomorphsAreMorphTargets) {
     SCOPED_TRACE(name);
     const nlohmann::json doc = glb_json(dir / name);
     const Scene scene = read_scene(dir / name);
-    if (std::string(name) == "opt.glb")  // really renumbered (else this case would prove nothing)
+    if (std::string(name) == "opt.glb") {  // really renumbered (else this case would prove nothing)
       for (size_t i = 0; i < 2; ++i)
         EXPECT_NE(scene.primitives[i].mesh.positions, read_scene(dir / "m.glb").primitives[i].mesh.positions) << i;
-    const FileBytes bytes = read_file_bytes(dir / name);
-    uint32_t json_length = 0;
-    std::memcpy(&json_length, bytes.data() + 12, 4);
-    const uint8_t* bin = bytes.data() + 20 + json_length + 8;  // the BIN chunk's data
+    }
     const auto proper = [](const Mesh& m) {
       std::vector<std::array<float3, 3>> out;
       for (size_t t = 0; t < m.triangle_count(); ++t) {
@@ -222,16 +217,12 @@ TEST(CliLod, GeomorphsAreMorphTargets) {
     };
     for (size_t i = 0; i < 2; ++i) {
       EXPECT_EQ(doc["nodes"][i]["extras"]["LODKIT_geomorph"]["to_node"], i + 1);
-      const auto& target = doc["meshes"][i]["primitives"][0]["targets"][0];
-      const auto& accessor = doc["accessors"][target["POSITION"].get<size_t>()];
-      const auto& view = doc["bufferViews"][accessor["bufferView"].get<size_t>()];
+      const std::vector<float3> offsets = test::glb_morph_positions(dir / name, i);
       Mesh moved = scene.primitives[i].mesh;
-      ASSERT_EQ(accessor["count"].get<size_t>(), moved.vertex_count());
-      const uint8_t* data = bin + view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0));
+      ASSERT_EQ(offsets.size(), moved.vertex_count());
       for (size_t v = 0; v < moved.vertex_count(); ++v) {
-        float d[3];
-        std::memcpy(d, data + 12 * v, 12);
-        moved.positions[v] = {moved.positions[v].x + d[0], moved.positions[v].y + d[1], moved.positions[v].z + d[2]};
+        const float3& d = offsets[v];
+        moved.positions[v] = {moved.positions[v].x + d.x, moved.positions[v].y + d.y, moved.positions[v].z + d.z};
       }
       // P + (P_target - P) in float may differ from P_target by an ulp: compare after the same rounding
       // the viewer would do, i.e. allow the coarser level's triangles to match within 1e-6.
@@ -371,22 +362,11 @@ TEST(CliLod, SkinnedLevelZeroKeepsItsMorphTargets) {
   const Mesh& level0 = out.primitives[skinned[0].primitive].mesh;
   ASSERT_EQ(level0.vertex_count(), body.mesh.vertex_count());
   EXPECT_NE(level0.positions, read_scene(dir / "humanoid.glb").primitives[skinned[0].primitive].mesh.positions);
-  const nlohmann::json doc = glb_json(dir / "lod.glb");
-  const FileBytes bytes = read_file_bytes(dir / "lod.glb");
-  uint32_t json_length = 0;
-  std::memcpy(&json_length, bytes.data() + 12, 4);
-  const uint8_t* bin = bytes.data() + 20 + json_length + 8;
-  const auto& prim = doc["meshes"][out.primitives[skinned[0].primitive].gltf_mesh]["primitives"][0];
-  ASSERT_EQ(prim["targets"].size(), 1u);
-  const auto& accessor = doc["accessors"][prim["targets"][0]["POSITION"].get<size_t>()];
-  ASSERT_EQ(accessor["count"].get<size_t>(), level0.vertex_count());
-  const auto& view = doc["bufferViews"][accessor["bufferView"].get<size_t>()];
-  const uint8_t* data = bin + view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0));
-  for (size_t v = 0; v < level0.vertex_count(); ++v) {
-    float3 d;
-    std::memcpy(&d, data + 12 * v, 12);
-    ASSERT_EQ(d, offset(level0.positions[v])) << "vertex " << v;
-  }
+  const size_t mesh = out.primitives[skinned[0].primitive].gltf_mesh;
+  ASSERT_EQ(glb_json(dir / "lod.glb")["meshes"][mesh]["primitives"][0]["targets"].size(), 1u);
+  const std::vector<float3> offsets = test::glb_morph_positions(dir / "lod.glb", mesh);
+  ASSERT_EQ(offsets.size(), level0.vertex_count());
+  for (size_t v = 0; v < level0.vertex_count(); ++v) ASSERT_EQ(offsets[v], offset(level0.positions[v])) << "vertex " << v;
   test::expect_valid_gltf({dir / "lod.glb"});
 }
 

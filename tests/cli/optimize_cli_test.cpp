@@ -2,6 +2,7 @@
 // the reports agree with it, a Möbius strip is a warning, bad options are usage errors.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
@@ -38,6 +39,46 @@ TEST(CliOptimize, WeldsOrientsAndWritesTheLibraryResult) {
   const OptimizeResult lib = optimize(read_mesh(dir / "soup.ply"), {.weld = true, .orient = true});
   EXPECT_EQ(lib.mesh.indices, out.indices);
   EXPECT_EQ(lib.mesh.positions, out.positions);
+}
+
+// Two unit squares side by side as a triangle soup (12 vertices, one normal), with a morph target
+// that opens a crease between them: a copy moves down on the left square, up on the right. A weld
+// joins copies whose targets agree (4 vertices per square), never a left copy with a right one at
+// the shared edge, even by position alone, so each vertex keeps its own offset.
+TEST(CliOptimize, WeldKeepsVerticesWhoseMorphTargetsDiffer) {
+  test::TempDir dir;
+  Mesh squares;
+  for (const float x0 : {0.0f, 1.0f})
+    for (const auto& tri : {std::array<float3, 3>{{{x0, 0, 0}, {x0 + 1, 0, 0}, {x0 + 1, 1, 0}}},
+                            std::array<float3, 3>{{{x0, 0, 0}, {x0 + 1, 1, 0}, {x0, 1, 0}}}})
+      for (const float3& p : tri) {
+        squares.indices.push_back(uint32_t(squares.positions.size()));
+        squares.positions.push_back(p);
+        squares.normals.push_back({0, 0, 1});
+      }
+  // Which square a vertex belongs to, from the triangles that use it (centroid left or right of x = 1).
+  const auto offsets_by_square = [](const Mesh& m) {
+    std::vector<float3> expected(m.vertex_count());
+    for (size_t t = 0; t < m.triangle_count(); ++t) {
+      float x = 0;
+      for (int c = 0; c < 3; ++c) x += m.positions[m.indices[3 * t + c]].x;
+      for (int c = 0; c < 3; ++c) expected[m.indices[3 * t + c]] = {0, 0, x < 3 ? -0.5f : 0.5f};
+    }
+    return expected;
+  };
+  Scene scene = scene_from_mesh(squares);
+  scene.primitives[0].targets.push_back({.positions = offsets_by_square(squares)});
+  write_scene(scene, dir / "in.glb");
+  for (const char* how : {"--weld", "--weld-positions", "--weld=0.01"}) {
+    SCOPED_TRACE(how);
+    const test::RunResult r = test::run_cli({"optimize", (dir / "in.glb").string(), "-o", (dir / "out.glb").string(), how, "--force"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Mesh out = read_scene(dir / "out.glb").primitives[0].mesh;
+    EXPECT_EQ(out.vertex_count(), 8u);  // 6 without the target: the shared edge's two positions
+    EXPECT_EQ(out.triangle_count(), 4u);
+    EXPECT_EQ(test::glb_morph_positions(dir / "out.glb"), offsets_by_square(out));
+  }
+  test::expect_valid_gltf({dir / "out.glb"});
 }
 
 TEST(CliOptimize, StripIndicesDecodeToTheWrittenMesh) {

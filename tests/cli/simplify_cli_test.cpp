@@ -18,22 +18,6 @@
 namespace lod {
 namespace {
 
-// Morph target 0 of a .glb's first primitive, read straight from the file (empty: none).
-std::vector<float3> first_morph_target(const std::filesystem::path& path) {
-  const FileBytes bytes = read_file_bytes(path);
-  uint32_t length = 0;
-  std::memcpy(&length, bytes.data() + 12, 4);
-  const auto doc = nlohmann::json::parse(std::string(reinterpret_cast<const char*>(bytes.data()) + 20, length));
-  const auto& prim = doc["meshes"][0]["primitives"][0];
-  if (!prim.contains("targets")) return {};
-  const auto& accessor = doc["accessors"][prim["targets"][0]["POSITION"].get<size_t>()];
-  const auto& view = doc["bufferViews"][accessor["bufferView"].get<size_t>()];
-  const uint8_t* data = bytes.data() + 20 + length + 8 + view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0));
-  std::vector<float3> out(accessor["count"].get<size_t>());
-  std::memcpy(out.data(), data, out.size() * sizeof(float3));
-  return out;
-}
-
 // A glTF morph target (here each vertex's offset is a function of its position): --keep-vertices
 // keeps input vertices unmoved, so it keeps their offsets; moved vertices have none, and the target
 // is dropped.
@@ -45,20 +29,20 @@ TEST(CliSimplify, KeepVerticesKeepsMorphTargets) {
   for (const float3& p : scene.primitives[0].mesh.positions) target.positions.push_back(offset(p));
   scene.primitives[0].targets.push_back(target);
   write_scene(scene, dir / "in.glb");
-  ASSERT_EQ(first_morph_target(dir / "in.glb").size(), scene.primitives[0].mesh.vertex_count());
+  ASSERT_EQ(test::glb_morph_positions(dir / "in.glb").size(), scene.primitives[0].mesh.vertex_count());
 
   test::RunResult r = test::run_cli({"simplify", (dir / "in.glb").string(), "-o", (dir / "subset.glb").string(),
                                      "--ratio", "0.25", "--keep-vertices"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Mesh subset = read_scene(dir / "subset.glb").primitives[0].mesh;
   EXPECT_LE(subset.triangle_count(), scene.primitives[0].mesh.triangle_count() / 4);
-  const std::vector<float3> offsets = first_morph_target(dir / "subset.glb");
+  const std::vector<float3> offsets = test::glb_morph_positions(dir / "subset.glb");
   ASSERT_EQ(offsets.size(), subset.vertex_count());
   for (size_t v = 0; v < subset.vertex_count(); ++v) ASSERT_EQ(offsets[v], offset(subset.positions[v])) << v;
 
   r = test::run_cli({"simplify", (dir / "in.glb").string(), "-o", (dir / "moved.glb").string(), "--ratio", "0.25"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(first_morph_target(dir / "moved.glb").empty());
+  EXPECT_TRUE(test::glb_morph_positions(dir / "moved.glb").empty());
   test::expect_valid_gltf({dir / "subset.glb", dir / "moved.glb"});
 }
 

@@ -50,8 +50,12 @@ TEST(Optimize, EveryStepKeepsTheTriangles) {
           const uint32_t s = r.source_vertices[v];
           ASSERT_LT(s, input.vertex_count());
           ASSERT_EQ(r.mesh.positions[v], input.positions[s]) << v;
-          if (!input.normals.empty()) ASSERT_EQ(r.mesh.normals[v], input.normals[s]) << v;
-          if (!input.uvs[0].empty()) ASSERT_EQ(r.mesh.uvs[0][v], input.uvs[0][s]) << v;
+          if (!input.normals.empty()) {
+            ASSERT_EQ(r.mesh.normals[v], input.normals[s]) << v;
+          }
+          if (!input.uvs[0].empty()) {
+            ASSERT_EQ(r.mesh.uvs[0][v], input.uvs[0][s]) << v;
+          }
         }
         if (strips) {
           // The strip buffer draws the output mesh's triangles, over its vertices.

@@ -101,6 +101,25 @@ TEST(Weld, DegenerateTrianglesCountedAndRemovedOnRequest) {
   EXPECT_EQ(removed.mesh.materials, std::vector<uint32_t>{5});
 }
 
+// Vertex classes (streams the Mesh does not hold, such as morph targets) keep copies apart even
+// when welding by position alone, exactly or within a tolerance; one class for all changes nothing.
+TEST(Weld, VertexClassesStayApart) {
+  const Mesh cube = shapes::cube();  // 24 vertices: 4 per face, each corner on 3 faces
+  std::vector<uint32_t> by_face(cube.vertex_count()), one(cube.vertex_count(), 7);
+  for (uint32_t v = 0; v < cube.vertex_count(); ++v) by_face[v] = v / 4;
+  for (const float tolerance : {0.0f, 1e-3f}) {
+    EXPECT_EQ(weld(cube, {.position_tolerance = tolerance, .ignore_attributes = true, .vertex_classes = one}).output_vertices, 8u);
+    const WeldResult apart = weld(cube, {.position_tolerance = tolerance, .ignore_attributes = true, .vertex_classes = by_face});
+    EXPECT_EQ(apart.output_vertices, 24u) << tolerance;
+  }
+  try {
+    weld(cube, {.vertex_classes = std::span<const uint32_t>(one).first(23)});
+    FAIL() << "expected a usage error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.category(), ErrorCategory::usage);
+  }
+}
+
 TEST(Weld, RejectsNegativeTolerance) {
   try {
     weld(shapes::cube(), {.position_tolerance = -1});

@@ -87,6 +87,10 @@ void GeometryFile::renumbered(size_t i, const std::vector<uint32_t>& source) {
   }
 }
 
+std::vector<uint32_t> GeometryFile::vertex_classes(size_t i) const {
+  return as_scene_ ? source_vertex_classes(scene_, i) : std::vector<uint32_t>{};
+}
+
 std::vector<std::vector<size_t>> GeometryFile::joint_groups() const {
   if (!as_scene_) return {{0}};
   // Primitives with other streams stay apart: joining them would drop or invent values (see flatten).

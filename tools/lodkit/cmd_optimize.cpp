@@ -119,7 +119,11 @@ Command register_optimize(CLI::App& root) {
               validate(*m, o->input);
               in_triangles += m->triangle_count(), in_vertices += m->vertex_count();
               if (overdraw) add_overdraw(overdraw_before, *m);
-              OptimizeResult r = optimize(*m, options);
+              // Vertices whose morph targets (or other glTF streams) differ stay apart.
+              const std::vector<uint32_t> classes = options.weld ? file.vertex_classes(i) : std::vector<uint32_t>{};
+              OptimizeOptions each = options;
+              each.weld_options.vertex_classes = classes;
+              OptimizeResult r = optimize(*m, each);
               welded_vertices += options.weld ? r.weld.output_vertices : m->vertex_count();
               degenerate += r.weld.degenerate_triangles;
               flipped += r.orient.flipped_triangles, parts += r.orient.components, closed += r.orient.closed_components;

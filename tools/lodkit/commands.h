@@ -48,6 +48,8 @@ class GeometryFile {
   // meshes[] in groups to simplify as one: the primitives of one glTF mesh with the same vertex
   // streams, so that the borders between their materials stay closed. In order of first member.
   std::vector<std::vector<size_t>> joint_groups() const;
+  // meshes[i]'s vertex classes for a weld (lod::source_vertex_classes; empty: none).
+  std::vector<uint32_t> vertex_classes(size_t i) const;
 
   std::vector<Mesh*> meshes;
 
