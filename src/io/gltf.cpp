@@ -1626,10 +1626,14 @@ class SkinAnimationWriter {
   tg::Model& model_;
 };
 
-// The MSFT_lod ids and the extras of a node (none: the node is left as it is). Other members of a
-// source node's MSFT_lod object are kept.
+// The MSFT_lod ids and the extras of a node. Ids are written as given (the reader fills them, so a
+// node read and written keeps its own): none removes a source node's MSFT_lod, whose levels may no
+// longer exist; other members of its MSFT_lod object are kept. Empty extras leave the node's as
+// they were.
 void set_lod_and_extras(tg::Model& model, const Node& in, tg::Node& node) {
-  if (!in.lod_ids.empty()) {
+  if (in.lod_ids.empty()) {
+    node.extensions.erase("MSFT_lod");
+  } else {
     tg::Value::Array ids;
     for (const int32_t id : in.lod_ids) ids.emplace_back(int(id));
     const auto old = node.extensions.find("MSFT_lod");
@@ -2047,6 +2051,9 @@ void write_gltf(const Scene& scene, const std::filesystem::path& path, const Wri
   if (scene.source) {
     model = scene.source->model;
     add_to_source(model, scene);
+    // MSFT_lod is declared only while a node still uses it.
+    if (std::none_of(model.nodes.begin(), model.nodes.end(), [](const tg::Node& n) { return n.extensions.count("MSFT_lod") > 0; }))
+      std::erase(model.extensionsUsed, std::string("MSFT_lod")), std::erase(model.extensionsRequired, std::string("MSFT_lod"));
     for (const Primitive& prim : scene.primitives) slots.push_back({int(prim.gltf_mesh), int(prim.gltf_primitive)});
   } else {
     model = model_from_scene(scene, slots);

@@ -92,6 +92,32 @@ TEST(CliLod, SimplifyingAChainDropsItsStaleFacts) {
   test::expect_valid_gltf({dir / "half.glb"});
 }
 
+// A chain made from a chain: the new one replaces the old, whose nodes (kept, without their meshes)
+// lose their MSFT_lod and what lodkit said about them; only the new first node has MSFT_lod. The
+// new chain is built from the old first level alone (the others are not in the scene).
+TEST(CliLod, ChainingAChainReplacesTheOldChain) {
+  test::TempDir dir;
+  write_mesh(shapes::torus(1.0f, 0.3f, 32, 16), dir / "torus.ply");
+  ASSERT_EQ(test::run_cli({"lod", (dir / "torus.ply").string(), "-o", (dir / "old.glb").string(), "--ratios", "1,0.4,0.1",
+                           "--morph"}).exit_code, 0);
+  const test::RunResult r =
+      test::run_cli({"lod", (dir / "old.glb").string(), "-o", (dir / "new.glb").string(), "--ratios", "1,0.25"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json doc = glb_json(dir / "new.glb");
+  ASSERT_EQ(doc["nodes"].size(), 5u);  // the old chain's three, the new chain's two
+  for (size_t i = 0; i < 3; ++i) {
+    const nlohmann::json& node = doc["nodes"][i];
+    EXPECT_FALSE(node.contains("mesh")) << i;
+    EXPECT_FALSE(node.contains("extensions")) << i;
+    const nlohmann::json extras = node.value("extras", nlohmann::json::object());
+    for (const char* fact : {"lodkit", "LODKIT_geomorph", "MSFT_screencoverage"}) EXPECT_FALSE(extras.contains(fact)) << i << fact;
+  }
+  EXPECT_EQ(doc["nodes"][3]["extensions"]["MSFT_lod"]["ids"], nlohmann::json::array({4}));
+  EXPECT_EQ(doc["nodes"][3]["extras"]["lodkit"]["triangles"].get<uint64_t>(), 32u * 16u * 2u);
+  EXPECT_EQ(std::count(doc["extensionsUsed"].begin(), doc["extensionsUsed"].end(), "MSFT_lod"), 1);
+  test::expect_valid_gltf({dir / "new.glb"});
+}
+
 // Materials: each level is one glTF mesh with a primitive per material. From OBJ the materials keep
 // their names; from a static glTF the chain is written into the source document, so its materials
 // (a textured one here), textures, images and other content (a camera) stay as they were.

@@ -1060,6 +1060,15 @@ TEST(GltfWrite, LodChainReadsBackItsLodIdsAndExtras) {
   EXPECT_EQ(hand.nodes[0].lod_ids, (std::vector<int32_t>{1}));
   write_scene(hand, dir / "hand-again.glb");
   EXPECT_EQ(load_written(dir / "hand-again.glb").doc["nodes"], f.doc["nodes"]);
+
+  // No ids: the source node's MSFT_lod goes, and with no node using it, so does its declaration.
+  Scene dropped = scene;
+  dropped.nodes[0].lod_ids.clear();
+  write_scene(dropped, dir / "dropped.glb");
+  const Written d = load_written(dir / "dropped.glb");
+  EXPECT_FALSE(d.doc["nodes"][0].contains("extensions"));
+  EXPECT_EQ(Json::parse(read_scene(dir / "dropped.glb").nodes[0].extras_json), Json::parse(extras[0]));
+  EXPECT_FALSE(d.doc.contains("extensionsUsed") && std::count(d.doc["extensionsUsed"].begin(), d.doc["extensionsUsed"].end(), "MSFT_lod"));
 }
 
 TEST(GltfWrite, EmptyMeshWritesAValidEmptyScene) {

@@ -64,15 +64,17 @@ void GeometryFile::forget_lod_facts(const std::vector<bool>& changed) {
     if (m >= stale.size()) stale.resize(size_t(m) + 1, false);
     if (changed[i]) stale[m] = true;
   }
-  for (Node& node : scene_.nodes) {
-    if (node.mesh < 0 || size_t(node.mesh) >= stale.size() || !stale[size_t(node.mesh)] || node.extras_json.empty())
-      continue;
-    nlohmann::json extras = nlohmann::json::parse(node.extras_json);
-    if (!extras.is_object()) continue;
-    extras.erase("lodkit");
-    extras.erase("LODKIT_geomorph");
-    node.extras_json = extras.dump();  // "{}", not "": an empty text would keep the source's extras
-  }
+  for (Node& node : scene_.nodes)
+    if (node.mesh >= 0 && size_t(node.mesh) < stale.size() && stale[size_t(node.mesh)])
+      erase_extras(node, {"lodkit", "LODKIT_geomorph"});
+}
+
+void erase_extras(Node& node, std::initializer_list<const char*> members) {
+  if (node.extras_json.empty()) return;
+  nlohmann::json extras = nlohmann::json::parse(node.extras_json);
+  if (!extras.is_object()) return;
+  for (const char* member : members) extras.erase(member);
+  node.extras_json = extras.dump();  // "{}", not "": an empty text would keep the source's extras
 }
 
 void GeometryFile::renumbered(size_t i, const std::vector<uint32_t>& source) {

@@ -63,6 +63,13 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
     scene.primitives.clear();
     mesh_base = source->gltf_mesh_count;
     node_base = int32_t(source->nodes.size());
+    // Its nodes no longer draw their triangles (an earlier chain's levels among them): what lodkit
+    // said about them, and an earlier chain's MSFT_lod, would describe what is gone.
+    for (Node& node : scene.nodes)
+      if (node.mesh >= 0) {
+        node.lod_ids.clear();
+        erase_extras(node, {"lodkit", "LODKIT_geomorph", "MSFT_screencoverage"});
+      }
   } else {
     scene.material_names = chain.levels.front().mesh.material_names;
   }

@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <initializer_list>
 #include <string>
 
 #include "lodkit/io.h"
@@ -58,6 +59,10 @@ class GeometryFile {
   Scene scene_;
   Mesh mesh_;
 };
+
+// Removes these members from a node's extras: lodkit's facts about what it draws (extras "lodkit",
+// "LODKIT_geomorph", "MSFT_screencoverage") once they no longer hold.
+void erase_extras(Node& node, std::initializer_list<const char*> members);
 
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);
