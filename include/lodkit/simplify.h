@@ -231,6 +231,8 @@ struct SimplifyResult {
 };
 
 // Simplifies `mesh` (which must pass lod::validate). Throws lod::Error (usage) on invalid options.
+// Input triangles with two corners on one position (zero area, such as the pole rows of a UV
+// sphere) leave with the first collapse, among its removed faces; with no collapse they stay.
 SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options = {});
 
 // Applies the first `count` collapses of `record` to `mesh` (the input of the simplify call that made

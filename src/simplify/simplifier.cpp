@@ -1022,6 +1022,11 @@ class Engine {
     c.relinks_begin = uint32_t(record.relinks.size());
     c.wedges_begin = uint32_t(record.wedges.size());
     c.moved_begin = uint32_t(record.moved_wedges.size());
+    if (!s_.degenerate.empty()) {  // the first collapse: the degenerate input triangles go with it
+      if (keep_record) record.removed_faces.insert(record.removed_faces.end(), s_.degenerate.begin(), s_.degenerate.end());
+      s_.live_triangles -= s_.degenerate.size();
+      s_.degenerate.clear();
+    }
     if (virtual_pair) {
       wedges_of(d.removed, scratch.extra);
       for (const uint32_t w : scratch.extra) {
@@ -1362,6 +1367,10 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
   for (size_t i = 0; i < state.corners.size(); ++i) state.corner_pos[i] = state.position_of[state.corners[i]];
   state.alive.assign(mesh.triangle_count(), 1);
   state.live_triangles = mesh.triangle_count();
+  for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+    const uint32_t* p = &state.corner_pos[3 * size_t(t)];
+    if (p[0] == p[1] || p[1] == p[2] || p[2] == p[0]) state.degenerate.push_back(t), state.alive[t] = 0;
+  }
   state.layout = attribute_layout(mesh);
   state.attributes = gather_attributes(mesh, state.layout);
 
@@ -1400,6 +1409,8 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
     QuadricMetric metric(constrained, memoryless, channels);
     run(state, metric, channels, target, cost_limit, result);
   }
+  // No collapse took the degenerate triangles: the output is the input, they included.
+  for (const uint32_t t : state.degenerate) state.alive[t] = 1;
   const auto fit_start = clock::now();
   result.seconds_collapse = seconds(engine_start, fit_start);
   result.fit_flips = options.fit_flips, result.fit_edge_weight = options.fit_edge_weight;

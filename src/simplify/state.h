@@ -83,6 +83,11 @@ struct State {
   std::vector<uint32_t> corner_pos;   // 3 positions per triangle: position_of[corners], kept in step
   std::vector<uint8_t> alive;         // per triangle
   uint64_t live_triangles = 0;
+  // Input triangles with two corners on one position (zero area; a UV sphere's poles often have a
+  // row of them). Their positions would be complex, never collapsing, so they are dead from the
+  // start and leave with the first collapse: it lists them among its removed faces (replay and
+  // undo stay exact) and live_triangles counts them until then. Empty once they have left.
+  std::vector<uint32_t> degenerate;
 
   AttributeLayout layout;
   std::vector<float> attributes;  // layout.stride per wedge, working values

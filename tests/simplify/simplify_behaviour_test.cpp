@@ -325,6 +325,62 @@ TEST(SimplifyBehaviour, MemorylessKeepsVolumeBetterThanQem) {
 // Seams: every output vertex that continues a seam wedge still has a partner at its position with
 // other UVs (a seam may shorten along itself but never closes up), on a torus (seams both ways,
 // four wedges where they cross) and a cylinder (uv seam plus hard cap edges).
+// A UV sphere as many tools export it: a grid of (columns + 1) x (rows + 1) vertices, each pole
+// copied once per column (own UV), and every quad as two triangles, so the pole rows hold one
+// degenerate triangle per column (two corners on the pole). Those have no area and go with the
+// first collapse; before, they made the poles and their rings uncollapsible, and at 10% the
+// budget flattened the rest of the sphere into a few large faces around two spiky fans.
+Mesh uv_sphere(uint32_t columns, uint32_t rows) {
+  Mesh m;
+  for (uint32_t j = 0; j <= rows; ++j)
+    for (uint32_t i = 0; i <= columns; ++i) {
+      const float theta = float(M_PI) * float(j) / float(rows), phi = 2.0f * float(M_PI) * float(i % columns) / float(columns);  // the seam column: the same positions
+      // Exact poles: every copy has the very same position.
+      const float r = j == 0 || j == rows ? 0.0f : std::sin(theta);
+      const float y = j == 0 ? 1.0f : j == rows ? -1.0f : std::cos(theta);
+      m.positions.push_back({r * std::cos(phi), y, -r * std::sin(phi)});
+      m.uvs[0].push_back({float(i) / float(columns), float(j) / float(rows)});
+    }
+  const auto at = [&](uint32_t i, uint32_t j) { return j * (columns + 1) + i; };
+  for (uint32_t j = 0; j < rows; ++j)
+    for (uint32_t i = 0; i < columns; ++i) {
+      const uint32_t a = at(i, j), b = at(i + 1, j), c = at(i + 1, j + 1), d = at(i, j + 1);
+      m.indices.insert(m.indices.end(), {a, d, c, a, c, b});
+    }
+  return m;
+}
+
+TEST(SimplifyBehaviour, DegeneratePoleTrianglesDoNotPinTheSphere) {
+  const Mesh sphere = uv_sphere(40, 20);
+  const MeshStats stats = compute_stats(sphere);
+  ASSERT_EQ(stats.degenerate_triangles, 80u);
+  ASSERT_TRUE(stats.components.size() == 1 && stats.components[0].closed && stats.components[0].orientable);
+  double volume = 0;  // six times the signed volume: positive when wound outward
+  for (size_t t = 0; t < sphere.triangle_count(); ++t) {
+    const float3 &p = sphere.positions[sphere.indices[3 * t]], &q = sphere.positions[sphere.indices[3 * t + 1]],
+                 &w = sphere.positions[sphere.indices[3 * t + 2]];
+    volume += double(p.x) * (double(q.y) * w.z - double(q.z) * w.y) - double(p.y) * (double(q.x) * w.z - double(q.z) * w.x) +
+              double(p.z) * (double(q.x) * w.y - double(q.y) * w.x);
+  }
+  ASSERT_GT(volume, 0.0);
+  const SimplifyResult r = simplify(sphere, {.target_ratio = 0.1f, .threads = 1});
+  EXPECT_LE(r.output_triangles, 160u);
+  // A closed polyhedron of ~80 vertices spread over the unit sphere: faces about 0.43 across, whose
+  // circumradius (0.25) leaves a gap of 1 - sqrt(1 - 0.25^2) = 0.03 to the sphere at their centres.
+  // Allow about twice that; before, the flattened sphere was 0.58 away.
+  EXPECT_LT(compare(sphere, r.mesh, {.samples = 100'000}).hausdorff, 0.07);
+  // Replay and undo stay exact (the degenerate triangles leave with the first collapse).
+  EXPECT_EQ(test::mesh_difference(replay(sphere, r.record, r.record.collapses.size()), r.mesh), "");
+  EXPECT_EQ(test::mesh_difference(replay_and_undo(sphere, r.record), sphere), "");
+  ASSERT_FALSE(r.record.collapses.empty());
+  const Collapse& first = r.record.collapses[0];
+  EXPECT_GE(first.removed_face_count, 80u);
+  // With nothing to collapse the output keeps every input triangle, the degenerate ones included.
+  const SimplifyResult none = simplify(sphere, {.target_ratio = 1.0f});
+  EXPECT_EQ(none.collapses, 0u);
+  EXPECT_EQ(none.triangle_origin.size(), sphere.triangle_count());
+}
+
 TEST(SimplifyBehaviour, SeamVerticesKeepTheirPartners) {
   for (const Mesh& mesh : {shapes::torus(1.0f, 0.35f, 32, 16), shapes::cylinder(24, 2.0f)}) {
     // Input: how many distinct (uv, normal) wedges each position has.
