@@ -15,6 +15,7 @@
 #include "lodkit/lod.h"
 #include "lodkit/skin.h"
 #include "skin/fixtures.h"
+#include "optimize/optimize_test_support.h"
 #include "test_support.h"
 
 namespace lod {
@@ -90,6 +91,23 @@ TEST(CliLod, SimplifyingAChainDropsItsStaleFacts) {
   EXPECT_FALSE(half["nodes"][1].contains("extras"));  // nothing left: no empty object either
 
   test::expect_valid_gltf({dir / "half.glb"});
+}
+
+// A triangle soup is welded before the chain is built (else no level could lose a triangle): each
+// level halves the triangles, and level 0 draws the soup's triangles over shared vertices.
+TEST(CliLod, TriangleSoupIsWeldedFirst) {
+  test::TempDir dir;
+  Mesh torus = shapes::torus(1.0f, 0.3f, 32, 16);
+  torus.normals.clear();
+  write_mesh(test::triangle_soup(torus), dir / "soup.ply");
+  const test::RunResult r = test::run_cli({"lod", (dir / "soup.ply").string(), "-o", (dir / "chain.glb").string(), "--ratios", "1,0.5,0.25"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Scene chain = read_scene(dir / "chain.glb");
+  ASSERT_EQ(chain.primitives.size(), 3u);
+  EXPECT_EQ(chain.primitives[0].mesh.triangle_count(), torus.triangle_count());
+  EXPECT_EQ(chain.primitives[0].mesh.vertex_count(), torus.vertex_count());
+  EXPECT_LE(chain.primitives[1].mesh.triangle_count(), torus.triangle_count() / 2);
+  EXPECT_LE(chain.primitives[2].mesh.triangle_count(), torus.triangle_count() / 4);
 }
 
 // A chain made from a chain: the new one replaces the old, whose nodes (kept, without their meshes)

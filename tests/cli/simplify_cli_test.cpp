@@ -12,7 +12,9 @@
 
 #include "core/shapes.h"
 #include "lodkit/io.h"
+#include "lodkit/measure.h"
 #include "lodkit/simplify.h"
+#include "optimize/optimize_test_support.h"
 #include "test_support.h"
 
 namespace lod {
@@ -70,6 +72,40 @@ TEST(CliSimplify, WritesTheLibraryResultAndReportsIt) {
   const SimplifyResult lib = simplify(read_mesh(dir / "torus.ply"), {.target_ratio = 0.1f, .metric = Metric::constrained_qem});
   EXPECT_EQ(lib.mesh.indices, out.indices);
   EXPECT_EQ(lib.mesh.positions, out.positions);
+}
+
+// A triangle soup (every triangle its own three vertices, as a non-indexed glTF has them) is welded
+// first, so it simplifies like the indexed mesh; a morph target that agrees on the copies of each
+// vertex comes through --keep-vertices exact. Before, the soup came back unchanged: every vertex
+// was a seam of copies.
+TEST(CliSimplify, TriangleSoupsAreWeldedFirst) {
+  test::TempDir dir;
+  Mesh torus = shapes::torus(1.0f, 0.3f, 40, 20);
+  torus.normals.clear();  // positions only: the copies of a vertex are identical
+  const Mesh soup = test::triangle_soup(torus);
+  write_mesh(soup, dir / "soup.ply");
+  test::RunResult r = test::run_cli({"simplify", (dir / "soup.ply").string(), "-o", (dir / "out.ply").string(), "--ratio", "0.1", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["input_vertices"].get<size_t>(), soup.vertex_count());
+  const Mesh out = read_mesh(dir / "out.ply");
+  EXPECT_LE(out.triangle_count(), torus.triangle_count() / 10);
+  const SimplifyResult indexed = simplify(torus, {.target_ratio = 0.1f});
+  EXPECT_LE(compare(torus, out).hausdorff, 1.5 * compare(torus, indexed.mesh).hausdorff);
+
+  Scene scene = scene_from_mesh(soup);
+  const auto offset = [](const float3& p) { return float3{0.0f, 0.0f, 0.25f * p.x + 0.5f * p.y}; };
+  MorphTarget target;
+  for (const float3& p : soup.positions) target.positions.push_back(offset(p));
+  scene.primitives[0].targets.push_back(target);
+  write_scene(scene, dir / "soup.glb");
+  r = test::run_cli({"simplify", (dir / "soup.glb").string(), "-o", (dir / "out.glb").string(), "--ratio", "0.25", "--keep-vertices"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Mesh subset = read_scene(dir / "out.glb").primitives[0].mesh;
+  EXPECT_LE(subset.triangle_count(), torus.triangle_count() / 4);
+  const std::vector<float3> offsets = test::glb_morph_positions(dir / "out.glb");
+  ASSERT_EQ(offsets.size(), subset.vertex_count());
+  for (size_t v = 0; v < subset.vertex_count(); ++v) ASSERT_EQ(offsets[v], offset(subset.positions[v])) << v;
+  test::expect_valid_gltf({dir / "out.glb"});
 }
 
 // A glTF mesh whose two materials are two primitives, each with its own copy of the border's

@@ -10,6 +10,7 @@
 #include "commands.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
+#include "lodkit/optimize.h"
 #include "progress.h"
 
 namespace lod::cli {
@@ -67,6 +68,16 @@ void GeometryFile::forget_lod_facts(const std::vector<bool>& changed) {
   for (Node& node : scene_.nodes)
     if (node.mesh >= 0 && size_t(node.mesh) < stale.size() && stale[size_t(node.mesh)])
       erase_extras(node, {"lodkit", "LODKIT_geomorph"});
+}
+
+std::vector<uint32_t> weld_duplicates(Mesh& mesh, std::span<const uint32_t> classes) {
+  WeldResult r = weld(mesh, {.vertex_classes = classes});
+  if (r.output_vertices == r.input_vertices) return {};
+  std::vector<uint32_t> first(r.output_vertices, UINT32_MAX);
+  for (uint32_t v = 0; v < r.remap.size(); ++v)
+    if (first[r.remap[v]] == UINT32_MAX) first[r.remap[v]] = v;
+  mesh = std::move(r.mesh);
+  return first;
 }
 
 void erase_extras(Node& node, std::initializer_list<const char*> members) {

@@ -355,6 +355,7 @@ Command register_lod(CLI::App& root) {
                                       [&](double f) { bar.update(f); });
             } else {
               validate(mesh, o->input);
+              weld_duplicates(mesh, {});  // the chain replaces the input's geometry: nothing to carry
               ProgressBar bar("building LODs");
               options.progress = [&](double f) { bar.update(f); };
               reports.push_back({"", build_lod_chain(mesh, options), {}, {}});

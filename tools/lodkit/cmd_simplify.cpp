@@ -195,9 +195,14 @@ Command register_simplify(CLI::App& root) {
             std::vector<Mesh*>& meshes = file.meshes;
             const double load_seconds = seconds_since(start);
 
-            uint64_t total = 0;
-            for (Mesh* m : meshes) validate(*m, o->input), total += m->triangle_count();
-            uint64_t in_triangles = 0, out_triangles = 0, in_vertices = 0, out_vertices = 0;
+            uint64_t total = 0, in_vertices = 0;
+            for (size_t i = 0; i < meshes.size(); ++i) {
+              validate(*meshes[i], o->input);
+              total += meshes[i]->triangle_count(), in_vertices += meshes[i]->vertex_count();
+              const std::vector<uint32_t> first = weld_duplicates(*meshes[i], file.vertex_classes(i));
+              if (!first.empty()) file.renumbered(i, first);
+            }
+            uint64_t in_triangles = 0, out_triangles = 0, out_vertices = 0;
             float error = 0, relative_error = 0;
             uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, fitted = 0, flipped = 0, deferred = 0, rejected[4] = {};
             uint32_t fit_iterations = 0;  // the most any group's fit ran
@@ -230,8 +235,7 @@ Command register_simplify(CLI::App& root) {
                 each.progress = [&, size](double f) { bar.update((double(done) + f * double(size)) / double(total)); };
                 SimplifyResult r = simplify(m, each);
                 done += size;
-                in_triangles += r.input_triangles, out_triangles += r.output_triangles;
-                in_vertices += r.input_vertices, out_vertices += r.output_vertices;
+                in_triangles += r.input_triangles, out_triangles += r.output_triangles, out_vertices += r.output_vertices;
                 error = std::max(error, r.error);
                 passes += r.passes, collapses += r.collapses, virtual_pairs += r.virtual_pairs, pruned += r.pruned_triangles;
                 fitted += r.fitted_positions, flipped += r.flipped_edges, fit_seconds += r.seconds_fit;

@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <span>
 #include <initializer_list>
 #include <string>
 
@@ -63,6 +64,13 @@ class GeometryFile {
 // Removes these members from a node's extras: lodkit's facts about what it draws (extras "lodkit",
 // "LODKIT_geomorph", "MSFT_screencoverage") once they no longer hold.
 void erase_extras(Node& node, std::initializer_list<const char*> members);
+
+// Merges a mesh's bitwise-identical vertices (lod::weld, exact), as gltfpack does before it
+// simplifies: the simplifier takes copies of one vertex for a seam, so a triangle soup (a
+// non-indexed glTF, an OBJ or PLY without shared vertices) would not simplify at all. Vertices in
+// different `classes` (GeometryFile::vertex_classes) stay apart. Returns each vertex's first input
+// vertex, or nothing when no two vertices were the same (the mesh is then untouched).
+std::vector<uint32_t> weld_duplicates(Mesh& mesh, std::span<const uint32_t> classes);
 
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);
