@@ -2,10 +2,11 @@
 // a missing target is a usage error.
 #include <gtest/gtest.h>
 
-#include <nlohmann/json.hpp>
 #include <algorithm>
-#include <cstring>
+#include <array>
+#include <cmath>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -106,6 +107,59 @@ TEST(CliSimplify, TriangleSoupsAreWeldedFirst) {
   ASSERT_EQ(offsets.size(), subset.vertex_count());
   for (size_t v = 0; v < subset.vertex_count(); ++v) ASSERT_EQ(offsets[v], offset(subset.positions[v])) << v;
   test::expect_valid_gltf({dir / "out.glb"});
+}
+
+// Flat shading (each triangle's corners carry its face normal, every vertex its own): the
+// normals are set aside, the positions simplified, and each output triangle gets its face normal
+// again; lodkit lod's levels too. Before, no vertex could move and nothing was simplified.
+TEST(CliSimplify, FlatShadedMeshesStayFlatShaded) {
+  test::TempDir dir;
+  Mesh torus = shapes::torus(1.0f, 0.3f, 40, 20);
+  torus.normals.clear();
+  Mesh flat = test::triangle_soup(torus);
+  const auto face_normal = [](const Mesh& m, size_t t) {
+    const float3 &a = m.positions[m.indices[3 * t]], &b = m.positions[m.indices[3 * t + 1]], &c = m.positions[m.indices[3 * t + 2]];
+    const double ux = double(b.x) - a.x, uy = double(b.y) - a.y, uz = double(b.z) - a.z;
+    const double vx = double(c.x) - a.x, vy = double(c.y) - a.y, vz = double(c.z) - a.z;
+    const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx, l = std::sqrt(nx * nx + ny * ny + nz * nz);
+    return std::array<double, 3>{nx / l, ny / l, nz / l};
+  };
+  for (size_t t = 0; t < flat.triangle_count(); ++t) {
+    const auto n = face_normal(flat, t);
+    for (int k = 0; k < 3; ++k) flat.normals.push_back({float(n[0]), float(n[1]), float(n[2])});
+  }
+  write_mesh(flat, dir / "flat.glb");
+  // Every triangle's corners hold its own face normal.
+  const auto expect_faceted = [&](const Mesh& m) {
+    ASSERT_EQ(m.normals.size(), m.vertex_count());
+    for (size_t t = 0; t < m.triangle_count(); ++t) {
+      const auto n = face_normal(m, t);
+      for (int k = 0; k < 3; ++k) {
+        const float3& c = m.normals[m.indices[3 * t + k]];
+        ASSERT_NEAR(c.x, n[0], 1e-5) << t;
+        ASSERT_NEAR(c.y, n[1], 1e-5) << t;
+        ASSERT_NEAR(c.z, n[2], 1e-5) << t;
+      }
+    }
+  };
+  test::RunResult r = test::run_cli({"simplify", (dir / "flat.glb").string(), "-o", (dir / "out.glb").string(), "--ratio", "0.1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Mesh out = read_scene(dir / "out.glb").primitives[0].mesh;
+  EXPECT_LE(out.triangle_count(), torus.triangle_count() / 10);
+  expect_faceted(out);
+  const SimplifyResult smooth = simplify(torus, {.target_ratio = 0.1f});
+  EXPECT_LE(compare(torus, out).hausdorff, 1.5 * compare(torus, smooth.mesh).hausdorff);
+
+  r = test::run_cli({"lod", (dir / "flat.glb").string(), "-o", (dir / "chain.glb").string(), "--ratios", "1,0.5,0.25"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Scene chain = read_scene(dir / "chain.glb");
+  ASSERT_EQ(chain.primitives.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_LE(chain.primitives[i].mesh.triangle_count(), torus.triangle_count() >> i);
+    expect_faceted(chain.primitives[i].mesh);
+  }
+  test::expect_valid_gltf({dir / "out.glb", dir / "chain.glb"});
 }
 
 // A glTF mesh whose two materials are two primitives, each with its own copy of the border's

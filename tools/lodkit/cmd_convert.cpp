@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -78,6 +79,44 @@ std::vector<uint32_t> weld_duplicates(Mesh& mesh, std::span<const uint32_t> clas
     if (first[r.remap[v]] == UINT32_MAX) first[r.remap[v]] = v;
   mesh = std::move(r.mesh);
   return first;
+}
+
+bool flat_shaded(const Mesh& mesh) {
+  if (mesh.normals.empty() || !mesh.tangents.empty()) return false;  // (tangents would need the same care)
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const float3& n = mesh.normals[mesh.indices[3 * t]];
+    if (!(mesh.normals[mesh.indices[3 * t + 1]] == n) || !(mesh.normals[mesh.indices[3 * t + 2]] == n)) return false;
+  }
+  // Some position with two normals: else the normals cost the simplifier nothing.
+  return weld(mesh, {.ignore_attributes = true}).output_vertices < weld(mesh).output_vertices;
+}
+
+Mesh smooth_copy(const Mesh& mesh) {
+  Mesh smooth = mesh;
+  smooth.normals.clear();
+  weld_duplicates(smooth, {});
+  return smooth;
+}
+
+void refacet(Mesh& mesh) {
+  Mesh split;
+  split.material_names = mesh.material_names, split.group_names = mesh.group_names;
+  split.materials = mesh.materials, split.groups = mesh.groups;
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const float3 &a = mesh.positions[mesh.indices[3 * t]], &b = mesh.positions[mesh.indices[3 * t + 1]],
+                 &c = mesh.positions[mesh.indices[3 * t + 2]];
+    const double ux = double(b.x) - a.x, uy = double(b.y) - a.y, uz = double(b.z) - a.z;
+    const double vx = double(c.x) - a.x, vy = double(c.y) - a.y, vz = double(c.z) - a.z;
+    const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+    const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
+    const float3 n = length > 0 ? float3{float(nx / length), float(ny / length), float(nz / length)} : float3{0, 0, 1};
+    for (int k = 0; k < 3; ++k) {
+      split.indices.push_back(uint32_t(split.positions.size()));
+      append_vertex(split, mesh, mesh.indices[3 * t + k]);
+      split.normals.push_back(n);
+    }
+  }
+  mesh = weld(split).mesh;  // corners of one face normal (and the same other streams) shared again
 }
 
 void erase_extras(Node& node, std::initializer_list<const char*> members) {

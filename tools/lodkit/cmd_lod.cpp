@@ -356,9 +356,15 @@ Command register_lod(CLI::App& root) {
             } else {
               validate(mesh, o->input);
               weld_duplicates(mesh, {});  // the chain replaces the input's geometry: nothing to carry
+              // Flat-shaded: the chain is built without the normals, then each level faceted again
+              // (not with geomorphs or one vertex buffer, whose tables follow the vertices).
+              const bool faceted = !o->morph && !o->shared && flat_shaded(mesh);
+              if (faceted) mesh = smooth_copy(mesh);
               ProgressBar bar("building LODs");
               options.progress = [&](double f) { bar.update(f); };
               reports.push_back({"", build_lod_chain(mesh, options), {}, {}});
+              if (faceted)
+                for (LodLevel& level : reports[0].chain.levels) refacet(level.mesh), level.vertex_origin.clear();
             }
             const double build_seconds = seconds_since(start);
             for (ChainReport& r : reports) set_switching(r, *o);

@@ -218,7 +218,11 @@ Command register_simplify(CLI::App& root) {
               changed.assign(meshes.size(), false);
               for (const std::vector<size_t>& group : file.joint_groups()) {
                 const Joined joined = join(meshes, group);
-                const Mesh& m = joined.mesh();
+                // Flat-shaded: simplified without its normals, then faceted again. Not with input
+                // vertices only (new face normals make new vertices).
+                const bool faceted = !o->keep_vertices && flat_shaded(joined.mesh());
+                const Mesh smooth = faceted ? smooth_copy(joined.mesh()) : Mesh{};
+                const Mesh& m = faceted ? smooth : joined.mesh();
                 SimplifyOptions each = options;
                 const uint64_t size = m.triangle_count();
                 // A triangle budget is shared in proportion to each group's size. With a ratio
@@ -234,8 +238,9 @@ Command register_simplify(CLI::App& root) {
                 }
                 each.progress = [&, size](double f) { bar.update((double(done) + f * double(size)) / double(total)); };
                 SimplifyResult r = simplify(m, each);
+                if (faceted) refacet(r.mesh);
                 done += size;
-                in_triangles += r.input_triangles, out_triangles += r.output_triangles, out_vertices += r.output_vertices;
+                in_triangles += r.input_triangles, out_triangles += r.output_triangles, out_vertices += r.mesh.vertex_count();
                 error = std::max(error, r.error);
                 passes += r.passes, collapses += r.collapses, virtual_pairs += r.virtual_pairs, pruned += r.pruned_triangles;
                 fitted += r.fitted_positions, flipped += r.flipped_edges, fit_seconds += r.seconds_fit;
@@ -248,15 +253,18 @@ Command register_simplify(CLI::App& root) {
                 rejected[0] += r.rejected_topology, rejected[1] += r.rejected_seam;
                 rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape, deferred += r.deferred_distance;
                 relative_error = std::max(relative_error, r.relative_error);
-                std::vector<Member> members = unjoin(joined, r, o->keep_vertices);
+                // Input vertices, unmoved: with --keep-vertices, or when nothing collapsed.
+                const bool unmoved = o->keep_vertices || (r.collapses == 0 && !faceted);
+                std::vector<Member> members = unjoin(joined, r, unmoved);
                 for (size_t k = 0; k < group.size(); ++k) {
                   const size_t i = group[k];
                   Member& out = members[k];
                   changed[i] = out.mesh.positions != meshes[i]->positions || out.mesh.indices != meshes[i]->indices;
                   *meshes[i] = std::move(out.mesh);
-                  // Input vertices only: each survivor is its origin, unmoved, so the glTF streams lodkit does
-                  // not model (morph targets, other attributes) stay exact for it.
-                  if (o->keep_vertices) file.renumbered(i, out.origin);
+                  // Unmoved: each survivor is its origin, so the glTF streams lodkit does not model (morph
+                  // targets, other attributes) stay exact for it. Otherwise the vertices are new: whatever
+                  // the weld mapped no longer applies, and the writer drops those streams.
+                  file.renumbered(i, unmoved ? out.origin : std::vector<uint32_t>{});
                 }
               }
             }

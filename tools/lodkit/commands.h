@@ -45,7 +45,8 @@ class GeometryFile {
   // morph target the writer drops with the old vertex count) no longer hold, and are removed.
   void forget_lod_facts(const std::vector<bool>& changed);
   // meshes[i]'s vertices were renumbered: its vertex v was vertex source[v]. The glTF streams lodkit
-  // does not model (morph targets, other attributes) follow them (Primitive::source_vertices).
+  // does not model (morph targets, other attributes) follow them (Primitive::source_vertices). An
+  // empty `source`: the vertices are new, and those streams are dropped.
   void renumbered(size_t i, const std::vector<uint32_t>& source);
   // meshes[] in groups to simplify as one: the primitives of one glTF mesh with the same vertex
   // streams, so that the borders between their materials stay closed. In order of first member.
@@ -71,6 +72,14 @@ void erase_extras(Node& node, std::initializer_list<const char*> members);
 // different `classes` (GeometryFile::vertex_classes) stay apart. Returns each vertex's first input
 // vertex, or nothing when no two vertices were the same (the mesh is then untouched).
 std::vector<uint32_t> weld_duplicates(Mesh& mesh, std::span<const uint32_t> classes);
+
+// Flat shading: every triangle's corners share one normal, and some position has several (so its
+// vertices are a seam of copies that no collapse can move). Such normals only say which way each
+// face points: the simplifier then works on the mesh without them, copies merged (smooth_copy),
+// and refacet gives each triangle of the result its own face normal again.
+bool flat_shaded(const Mesh& mesh);
+Mesh smooth_copy(const Mesh& mesh);
+void refacet(Mesh& mesh);
 
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);
