@@ -88,6 +88,8 @@ TEST(CliSimplify, TriangleSoupsAreWeldedFirst) {
   test::RunResult r = test::run_cli({"simplify", (dir / "soup.ply").string(), "-o", (dir / "out.ply").string(), "--ratio", "0.1", "--json"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(nlohmann::json::parse(r.out)["input_vertices"].get<size_t>(), soup.vertex_count());
+  EXPECT_EQ(nlohmann::json::parse(r.out)["welded_vertices"].get<size_t>(), torus.vertex_count());
+  EXPECT_FALSE(nlohmann::json::parse(r.out)["flat_shaded"].get<bool>());
   const Mesh out = read_mesh(dir / "out.ply");
   EXPECT_LE(out.triangle_count(), torus.triangle_count() / 10);
   const SimplifyResult indexed = simplify(torus, {.target_ratio = 0.1f});
@@ -142,8 +144,9 @@ TEST(CliSimplify, FlatShadedMeshesStayFlatShaded) {
       }
     }
   };
-  test::RunResult r = test::run_cli({"simplify", (dir / "flat.glb").string(), "-o", (dir / "out.glb").string(), "--ratio", "0.1"});
+  test::RunResult r = test::run_cli({"simplify", (dir / "flat.glb").string(), "-o", (dir / "out.glb").string(), "--ratio", "0.1", "--json"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["flat_shaded"].get<bool>());
   const Mesh out = read_scene(dir / "out.glb").primitives[0].mesh;
   EXPECT_LE(out.triangle_count(), torus.triangle_count() / 10);
   expect_faceted(out);

@@ -194,15 +194,19 @@ Command register_simplify(CLI::App& root) {
             GeometryFile file(o->input, o->output);
             std::vector<Mesh*>& meshes = file.meshes;
             const double load_seconds = seconds_since(start);
-            start = std::chrono::steady_clock::now();  // the welds below are part of the simplification
+            start = std::chrono::steady_clock::now();
 
-            uint64_t total = 0, in_vertices = 0;
+            uint64_t total = 0, in_vertices = 0, welded_vertices = 0;
             for (size_t i = 0; i < meshes.size(); ++i) {
               validate(*meshes[i], o->input);
               total += meshes[i]->triangle_count(), in_vertices += meshes[i]->vertex_count();
               const std::vector<uint32_t> first = weld_duplicates(*meshes[i], file.vertex_classes(i));
               if (!first.empty()) file.renumbered(i, first);
+              welded_vertices += meshes[i]->vertex_count();
             }
+            const double weld_seconds = seconds_since(start);
+            start = std::chrono::steady_clock::now();
+            bool any_faceted = false;  // some group was flat-shaded: simplified without normals, faceted again
             uint64_t in_triangles = 0, out_triangles = 0, out_vertices = 0;
             float error = 0, relative_error = 0;
             uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, fitted = 0, flipped = 0, deferred = 0, rejected[4] = {};
@@ -221,6 +225,7 @@ Command register_simplify(CLI::App& root) {
                 // Flat-shaded: simplified without its normals, then faceted again. Not with input
                 // vertices only (new face normals make new vertices).
                 const bool faceted = !o->keep_vertices && flat_shaded(joined.mesh());
+                any_faceted = any_faceted || faceted;
                 const Mesh smooth = faceted ? smooth_copy(joined.mesh()) : Mesh{};
                 const Mesh& m = faceted ? smooth : joined.mesh();
                 SimplifyOptions each = options;
@@ -284,7 +289,8 @@ Command register_simplify(CLI::App& root) {
                                   {"rejected", {{"topology", rejected[0]}, {"seam", rejected[1]},
                                                 {"flip", rejected[2]}, {"shape", rejected[3]}}},
                                   {"deferred_distance", deferred}, {"search_ways", search_ways}, {"kept", kept},
-                                  {"load_seconds", load_seconds}, {"simplify_seconds", simplify_seconds},
+                                  {"welded_vertices", welded_vertices}, {"flat_shaded", any_faceted},
+                                  {"load_seconds", load_seconds}, {"weld_seconds", weld_seconds}, {"simplify_seconds", simplify_seconds},
                                   {"fit_seconds", fit_seconds},
                                   {"write_seconds", write_seconds}};
               for (const auto& [name, value] : steps.named()) j["collapse_step_seconds"][name] = value;
@@ -293,6 +299,10 @@ Command register_simplify(CLI::App& root) {
               fmt::print("{:<10}{:>12}{:>12}{:>14}{:>10}  {}\n", "step", "triangles", "vertices", "error", "time", "");
               fmt::print("{:<10}{:>12}{:>12}{:>14}{:>9.3f}s  {}\n", "read", in_triangles, in_vertices, "", load_seconds,
                          o->input);
+              // Bitwise-identical copies merged first (a triangle soup, a non-indexed glTF).
+              if (welded_vertices != in_vertices)
+                fmt::print("{:<10}{:>12}{:>12}{:>14}{:>9.3f}s  {}\n", "weld", in_triangles, welded_vertices, "", weld_seconds,
+                           "identical vertices merged");
               // With a search, the way kept (one group) or how many ways were tried.
               std::string way = o->metric;
               if (search_ways > 1 && kept.size() == 1)
@@ -305,6 +315,7 @@ Command register_simplify(CLI::App& root) {
                                   100.0 * kept[0]["relative_hausdorff"].get<double>());
               else if (search_ways > 1)
                 way = fmt::format("{}, best of up to {} ways per mesh", o->metric, search_ways);
+              if (any_faceted) way += ", flat-shaded: faceted again";
               fmt::print("{:<10}{:>12}{:>12}{:>13.4f}%{:>9.3f}s  {} ({} = {:.6g}, final fit {:.3f}s)\n", "simplify", out_triangles,
                          out_vertices, 100.0 * relative_error, simplify_seconds, way, "error", error, fit_seconds);
               fmt::print("{:<10}{:>12}{:>12}{:>14}{:>9.3f}s  {}\n", "write", out_triangles, out_vertices, "",
