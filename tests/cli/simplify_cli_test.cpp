@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <tuple>
@@ -161,6 +162,65 @@ TEST(CliSimplify, FlatShadedMeshesStayFlatShaded) {
     SCOPED_TRACE(i);
     EXPECT_LE(chain.primitives[i].mesh.triangle_count(), torus.triangle_count() >> i);
     expect_faceted(chain.primitives[i].mesh);
+  }
+  test::expect_valid_gltf({dir / "out.glb", dir / "chain.glb"});
+}
+
+// Double-sided by duplication: a wavy sheet whose back faces reuse its positions, winding reversed
+// and normals negated. Its edges have four triangles, which no collapse may touch; the fronts are
+// simplified and the backs made again, in lodkit lod's levels too. Before, nothing simplified.
+TEST(CliSimplify, DoubleSidedMeshesStayDoubleSided) {
+  test::TempDir dir;
+  Mesh sheet = shapes::grid(40, 40);
+  for (float3& p : sheet.positions) p.z = 0.1f * std::sin(6 * p.x) * std::cos(5 * p.y);
+  sheet.normals.assign(sheet.vertex_count(), {0, 0, 1});  // (one way to make the twins differ)
+  Mesh two = sheet;
+  const uint32_t n = uint32_t(sheet.vertex_count());
+  for (uint32_t v = 0; v < n; ++v) {
+    two.positions.push_back(sheet.positions[v]), two.normals.push_back({0, 0, -1});
+    for (size_t k = 0; k < max_uv_sets; ++k)
+      if (!sheet.uvs[k].empty()) two.uvs[k].push_back(sheet.uvs[k][v]);
+  }
+  for (size_t t = 0; t < sheet.triangle_count(); ++t)
+    two.indices.insert(two.indices.end(), {n + sheet.indices[3 * t], n + sheet.indices[3 * t + 2], n + sheet.indices[3 * t + 1]});
+  write_mesh(two, dir / "two.glb");
+  // Every triangle has a twin: the same three positions, reversed, with the opposite normals.
+  const auto expect_double_sided = [](const Mesh& m) {
+    using Corner = std::tuple<float, float, float, float, float, float>;  // position, normal
+    std::map<std::array<Corner, 3>, int> count;
+    const auto corner = [&](uint32_t v, float s) {
+      const float3 &p = m.positions[v], &q = m.normals[v];
+      return Corner{p.x, p.y, p.z, s * q.x, s * q.y, s * q.z};
+    };
+    const auto key = [](std::array<Corner, 3> c) {
+      std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+      return c;
+    };
+    for (size_t t = 0; t < m.triangle_count(); ++t) {
+      const uint32_t a = m.indices[3 * t], b = m.indices[3 * t + 1], c = m.indices[3 * t + 2];
+      ++count[key({corner(a, 1), corner(b, 1), corner(c, 1)})];
+      --count[key({corner(a, -1), corner(c, -1), corner(b, -1)})];
+    }
+    for (const auto& [k, c] : count) ASSERT_EQ(c, 0);
+  };
+  test::RunResult r = test::run_cli({"simplify", (dir / "two.glb").string(), "-o", (dir / "out.glb").string(), "--ratio", "0.1", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["double_sided"].get<bool>());
+  const Mesh out = read_scene(dir / "out.glb").primitives[0].mesh;
+  EXPECT_LE(out.triangle_count(), two.triangle_count() / 10);
+  EXPECT_GT(out.triangle_count(), 0u);
+  expect_double_sided(out);
+  const SimplifyResult one = simplify(sheet, {.target_ratio = 0.1f});
+  EXPECT_LE(compare(sheet, out).hausdorff, 1.5 * compare(sheet, one.mesh).hausdorff);
+
+  r = test::run_cli({"lod", (dir / "two.glb").string(), "-o", (dir / "chain.glb").string(), "--ratios", "1,0.5,0.25"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Scene chain = read_scene(dir / "chain.glb");
+  ASSERT_EQ(chain.primitives.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_LE(chain.primitives[i].mesh.triangle_count(), two.triangle_count() >> i);
+    expect_double_sided(chain.primitives[i].mesh);
   }
   test::expect_valid_gltf({dir / "out.glb", dir / "chain.glb"});
 }

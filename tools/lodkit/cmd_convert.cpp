@@ -2,6 +2,8 @@
 // everything but the geometry as it was.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -117,6 +119,72 @@ void refacet(Mesh& mesh) {
     }
   }
   mesh = weld(split).mesh;  // corners of one face normal (and the same other streams) shared again
+}
+
+namespace {
+// Per triangle: the index of its reversed twin among the triangles (each twin paired once, the
+// earlier of a pair first), or -1. Position ids decide: the twin's corners are separate vertices.
+std::vector<int64_t> twins(const Mesh& mesh) {
+  const PositionIds ids = position_ids(mesh);
+  std::map<std::array<uint32_t, 3>, std::vector<uint32_t>> open;  // a rotation of the corners -> unpaired triangles
+  const auto rotated = [](std::array<uint32_t, 3> c) {  // the rotation starting at the smallest id
+    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+    return c;
+  };
+  std::vector<int64_t> twin(mesh.triangle_count(), -1);
+  for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+    const uint32_t a = ids.id[mesh.indices[3 * t]], b = ids.id[mesh.indices[3 * t + 1]], c = ids.id[mesh.indices[3 * t + 2]];
+    const auto reversed = open.find(rotated({a, c, b}));
+    if (reversed != open.end() && !reversed->second.empty()) {
+      twin[t] = reversed->second.back(), twin[reversed->second.back()] = t;
+      reversed->second.pop_back();
+    } else {
+      open[rotated({a, b, c})].push_back(t);
+    }
+  }
+  return twin;
+}
+}  // namespace
+
+bool double_sided(const Mesh& mesh) {
+  if (mesh.triangle_count() == 0) return false;
+  const std::vector<int64_t> twin = twins(mesh);
+  return std::none_of(twin.begin(), twin.end(), [](int64_t t) { return t < 0; });
+}
+
+Mesh front_faces(const Mesh& mesh) {
+  const std::vector<int64_t> twin = twins(mesh);
+  Mesh front = mesh;
+  front.indices.clear(), front.materials.clear(), front.groups.clear();
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    if (twin[t] >= 0 && size_t(twin[t]) < t) continue;
+    front.indices.insert(front.indices.end(), mesh.indices.begin() + ptrdiff_t(3 * t), mesh.indices.begin() + ptrdiff_t(3 * t + 3));
+    if (!mesh.materials.empty()) front.materials.push_back(mesh.materials[t]);
+    if (!mesh.groups.empty()) front.groups.push_back(mesh.groups[t]);
+  }
+  return front;
+}
+
+void add_back_faces(Mesh& mesh) {
+  const size_t triangles = mesh.triangle_count(), vertices = mesh.vertex_count();
+  for (uint32_t v = 0; v < vertices; ++v) {
+    append_vertex(mesh, mesh, v);
+    if (!mesh.normals.empty()) {
+      float3& n = mesh.normals.back();
+      n = {-n.x, -n.y, -n.z};
+    }
+    if (!mesh.tangents.empty()) {
+      float4& t = mesh.tangents.back();
+      t.w = -t.w;  // u runs the same way on the back, whose normal is turned: the bitangent's sign flips
+    }
+  }
+  for (size_t t = 0; t < triangles; ++t) {
+    const uint32_t a = mesh.indices[3 * t], b = mesh.indices[3 * t + 1], c = mesh.indices[3 * t + 2];
+    mesh.indices.insert(mesh.indices.end(), {uint32_t(vertices) + a, uint32_t(vertices) + c, uint32_t(vertices) + b});
+    if (!mesh.materials.empty()) mesh.materials.push_back(mesh.materials[t]);
+    if (!mesh.groups.empty()) mesh.groups.push_back(mesh.groups[t]);
+  }
+  if (mesh.normals.empty()) weld_duplicates(mesh, {});  // without normals the twins' vertices are the fronts'
 }
 
 void erase_extras(Node& node, std::initializer_list<const char*> members) {

@@ -358,13 +358,18 @@ Command register_lod(CLI::App& root) {
               weld_duplicates(mesh, {});  // the chain replaces the input's geometry: nothing to carry
               // Flat-shaded: the chain is built without the normals, then each level faceted again
               // (not with geomorphs or one vertex buffer, whose tables follow the vertices).
+              // Double-sided likewise: the chain is built on the fronts, and each level gets its backs.
+              const bool two_sided = !o->morph && !o->shared && double_sided(mesh);
+              if (two_sided) mesh = front_faces(mesh);
               const bool faceted = !o->morph && !o->shared && flat_shaded(mesh);
               if (faceted) mesh = smooth_copy(mesh);
               ProgressBar bar("building LODs");
               options.progress = [&](double f) { bar.update(f); };
               reports.push_back({"", build_lod_chain(mesh, options), {}, {}});
-              if (faceted)
-                for (LodLevel& level : reports[0].chain.levels) refacet(level.mesh), level.vertex_origin.clear();
+              for (LodLevel& level : reports[0].chain.levels) {
+                if (faceted) refacet(level.mesh), level.vertex_origin.clear();
+                if (two_sided) add_back_faces(level.mesh), level.vertex_origin.clear();
+              }
             }
             const double build_seconds = seconds_since(start);
             for (ChainReport& r : reports) set_switching(r, *o);

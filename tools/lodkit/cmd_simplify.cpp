@@ -207,6 +207,7 @@ Command register_simplify(CLI::App& root) {
             const double weld_seconds = seconds_since(start);
             start = std::chrono::steady_clock::now();
             bool any_faceted = false;  // some group was flat-shaded: simplified without normals, faceted again
+            bool any_two_sided = false;  // some group was double-sided: its fronts simplified, backs made again
             uint64_t in_triangles = 0, out_triangles = 0, out_vertices = 0;
             float error = 0, relative_error = 0;
             uint64_t passes = 0, collapses = 0, virtual_pairs = 0, pruned = 0, fitted = 0, flipped = 0, deferred = 0, rejected[4] = {};
@@ -222,12 +223,16 @@ Command register_simplify(CLI::App& root) {
               changed.assign(meshes.size(), false);
               for (const std::vector<size_t>& group : file.joint_groups()) {
                 const Joined joined = join(meshes, group);
-                // Flat-shaded: simplified without its normals, then faceted again. Not with input
-                // vertices only (new face normals make new vertices).
-                const bool faceted = !o->keep_vertices && flat_shaded(joined.mesh());
-                any_faceted = any_faceted || faceted;
-                const Mesh smooth = faceted ? smooth_copy(joined.mesh()) : Mesh{};
-                const Mesh& m = faceted ? smooth : joined.mesh();
+                // Double-sided: the fronts simplified, the backs made again. Flat-shaded: simplified
+                // without its normals, then faceted again. Neither with input vertices only (the
+                // new backs and face normals make new vertices).
+                const bool two_sided = !o->keep_vertices && double_sided(joined.mesh());
+                const Mesh front = two_sided ? front_faces(joined.mesh()) : Mesh{};
+                const Mesh& sided = two_sided ? front : joined.mesh();
+                const bool faceted = !o->keep_vertices && flat_shaded(sided);
+                any_faceted = any_faceted || faceted, any_two_sided = any_two_sided || two_sided;
+                const Mesh smooth = faceted ? smooth_copy(sided) : Mesh{};
+                const Mesh& m = faceted ? smooth : sided;
                 SimplifyOptions each = options;
                 const uint64_t size = m.triangle_count();
                 // A triangle budget is shared in proportion to each group's size. With a ratio
@@ -244,6 +249,7 @@ Command register_simplify(CLI::App& root) {
                 each.progress = [&, size](double f) { bar.update((double(done) + f * double(size)) / double(total)); };
                 SimplifyResult r = simplify(m, each);
                 if (faceted) refacet(r.mesh);
+                if (two_sided) add_back_faces(r.mesh);
                 done += size;
                 in_triangles += r.input_triangles, out_triangles += r.output_triangles, out_vertices += r.mesh.vertex_count();
                 error = std::max(error, r.error);
@@ -259,7 +265,7 @@ Command register_simplify(CLI::App& root) {
                 rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape, deferred += r.deferred_distance;
                 relative_error = std::max(relative_error, r.relative_error);
                 // Input vertices, unmoved: with --keep-vertices, or when nothing collapsed.
-                const bool unmoved = o->keep_vertices || (r.collapses == 0 && !faceted);
+                const bool unmoved = o->keep_vertices || (r.collapses == 0 && !faceted && !two_sided);
                 std::vector<Member> members = unjoin(joined, r, unmoved);
                 for (size_t k = 0; k < group.size(); ++k) {
                   const size_t i = group[k];
@@ -289,7 +295,7 @@ Command register_simplify(CLI::App& root) {
                                   {"rejected", {{"topology", rejected[0]}, {"seam", rejected[1]},
                                                 {"flip", rejected[2]}, {"shape", rejected[3]}}},
                                   {"deferred_distance", deferred}, {"search_ways", search_ways}, {"kept", kept},
-                                  {"welded_vertices", welded_vertices}, {"flat_shaded", any_faceted},
+                                  {"welded_vertices", welded_vertices}, {"flat_shaded", any_faceted}, {"double_sided", any_two_sided},
                                   {"load_seconds", load_seconds}, {"weld_seconds", weld_seconds}, {"simplify_seconds", simplify_seconds},
                                   {"fit_seconds", fit_seconds},
                                   {"write_seconds", write_seconds}};
@@ -316,6 +322,7 @@ Command register_simplify(CLI::App& root) {
               else if (search_ways > 1)
                 way = fmt::format("{}, best of up to {} ways per mesh", o->metric, search_ways);
               if (any_faceted) way += ", flat-shaded: faceted again";
+              if (any_two_sided) way += ", double-sided: fronts simplified, backs made again";
               fmt::print("{:<10}{:>12}{:>12}{:>13.4f}%{:>9.3f}s  {} ({} = {:.6g}, final fit {:.3f}s)\n", "simplify", out_triangles,
                          out_vertices, 100.0 * relative_error, simplify_seconds, way, "error", error, fit_seconds);
               fmt::print("{:<10}{:>12}{:>12}{:>14}{:>9.3f}s  {}\n", "write", out_triangles, out_vertices, "",

@@ -81,6 +81,14 @@ bool flat_shaded(const Mesh& mesh);
 Mesh smooth_copy(const Mesh& mesh);
 void refacet(Mesh& mesh);
 
+// Double-sided by duplication (foliage, cloth, paper): every triangle has a twin on the same
+// positions with the opposite winding. Front and back share every edge, four triangles each, which
+// no collapse may touch, so the simplifier gets the fronts alone (front_faces: the first of each
+// pair) and add_back_faces gives each triangle of the result its twin again, normals negated.
+bool double_sided(const Mesh& mesh);
+Mesh front_faces(const Mesh& mesh);
+void add_back_faces(Mesh& mesh);
+
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);
 
