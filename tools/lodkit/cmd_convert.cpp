@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cstring>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -122,6 +123,19 @@ void refacet(Mesh& mesh) {
 }
 
 namespace {
+// A position's bits mixed into 64 (+0 and -0 alike, as position ids have them).
+uint64_t position_hash(const float3& p) {
+  uint64_t h = 0;
+  for (const float f : {p.x, p.y, p.z}) {
+    uint32_t bits = 0;
+    const float g = f == 0.0f ? 0.0f : f;
+    std::memcpy(&bits, &g, 4);
+    h = (h ^ bits) * 0x9E3779B97F4A7C15ull;
+    h ^= h >> 29;
+  }
+  return h;
+}
+
 // Per triangle: the index of its reversed twin among the triangles (each twin paired once, the
 // earlier of a pair first), or -1. Position ids decide: the twin's corners are separate vertices.
 std::vector<int64_t> twins(const Mesh& mesh) {
@@ -147,7 +161,24 @@ std::vector<int64_t> twins(const Mesh& mesh) {
 }  // namespace
 
 bool double_sided(const Mesh& mesh) {
-  if (mesh.triangle_count() == 0) return false;
+  if (mesh.triangle_count() == 0 || mesh.triangle_count() % 2) return false;
+  // A quick filter before the exact pairing (a map over every triangle, a second on a 832k-triangle
+  // mesh): each triangle adds the hash of its corners' positions in sorted order, with the sign of
+  // the sort's permutation. A twin has the same sorted corners and the other sign, so a double-sided
+  // mesh sums to zero; anything else almost surely does not.
+  uint64_t sum = 0;
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    uint64_t h[3];
+    for (int k = 0; k < 3; ++k) h[k] = position_hash(mesh.positions[mesh.indices[3 * t + k]]);
+    bool odd = false;
+    const auto order = [&](int i, int j) {
+      if (h[i] > h[j]) std::swap(h[i], h[j]), odd = !odd;
+    };
+    order(0, 1), order(1, 2), order(0, 1);
+    const uint64_t key = (h[0] * 0x9E3779B97F4A7C15ull) ^ (h[1] * 0xC2B2AE3D27D4EB4Full + (h[1] >> 29)) ^ (h[2] * 0x165667B19E3779F9ull + (h[2] >> 31));
+    sum += odd ? key : 0 - key;
+  }
+  if (sum != 0) return false;
   const std::vector<int64_t> twin = twins(mesh);
   return std::none_of(twin.begin(), twin.end(), [](int64_t t) { return t < 0; });
 }
