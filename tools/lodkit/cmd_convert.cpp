@@ -8,6 +8,7 @@
 #include <cstring>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -91,7 +92,7 @@ bool flat_shaded(const Mesh& mesh) {
     if (!(mesh.normals[mesh.indices[3 * t + 1]] == n) || !(mesh.normals[mesh.indices[3 * t + 2]] == n)) return false;
   }
   // Some position with two normals: else the normals cost the simplifier nothing.
-  return weld(mesh, {.ignore_attributes = true}).output_vertices < weld(mesh).output_vertices;
+  return position_ids(mesh).count < weld(mesh).output_vertices;
 }
 
 Mesh smooth_copy(const Mesh& mesh) {
@@ -160,8 +161,8 @@ std::vector<int64_t> twins(const Mesh& mesh) {
 }
 }  // namespace
 
-bool double_sided(const Mesh& mesh) {
-  if (mesh.triangle_count() == 0 || mesh.triangle_count() % 2) return false;
+std::optional<Mesh> double_sided_fronts(const Mesh& mesh) {
+  if (mesh.triangle_count() == 0 || mesh.triangle_count() % 2) return std::nullopt;
   // A quick filter before the exact pairing (a map over every triangle, a second on a 832k-triangle
   // mesh): each triangle adds the hash of its corners' positions in sorted order, with the sign of
   // the sort's permutation. A twin has the same sorted corners and the other sign, so a double-sided
@@ -178,17 +179,13 @@ bool double_sided(const Mesh& mesh) {
     const uint64_t key = (h[0] * 0x9E3779B97F4A7C15ull) ^ (h[1] * 0xC2B2AE3D27D4EB4Full + (h[1] >> 29)) ^ (h[2] * 0x165667B19E3779F9ull + (h[2] >> 31));
     sum += odd ? key : 0 - key;
   }
-  if (sum != 0) return false;
+  if (sum != 0) return std::nullopt;
   const std::vector<int64_t> twin = twins(mesh);
-  return std::none_of(twin.begin(), twin.end(), [](int64_t t) { return t < 0; });
-}
-
-Mesh front_faces(const Mesh& mesh) {
-  const std::vector<int64_t> twin = twins(mesh);
+  if (std::any_of(twin.begin(), twin.end(), [](int64_t t) { return t < 0; })) return std::nullopt;
   Mesh front = mesh;
   front.indices.clear(), front.materials.clear(), front.groups.clear();
   for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    if (twin[t] >= 0 && size_t(twin[t]) < t) continue;
+    if (size_t(twin[t]) < t) continue;  // the back of an earlier front
     front.indices.insert(front.indices.end(), mesh.indices.begin() + ptrdiff_t(3 * t), mesh.indices.begin() + ptrdiff_t(3 * t + 3));
     if (!mesh.materials.empty()) front.materials.push_back(mesh.materials[t]);
     if (!mesh.groups.empty()) front.groups.push_back(mesh.groups[t]);

@@ -359,8 +359,9 @@ Command register_lod(CLI::App& root) {
               // Flat-shaded: the chain is built without the normals, then each level faceted again
               // (not with geomorphs or one vertex buffer, whose tables follow the vertices).
               // Double-sided likewise: the chain is built on the fronts, and each level gets its backs.
-              const bool two_sided = !o->morph && !o->shared && double_sided(mesh);
-              if (two_sided) mesh = front_faces(mesh);
+              std::optional<Mesh> front = o->morph || o->shared ? std::nullopt : double_sided_fronts(mesh);
+              const bool two_sided = front.has_value();
+              if (two_sided) mesh = std::move(*front);
               const bool faceted = !o->morph && !o->shared && flat_shaded(mesh);
               if (faceted) mesh = smooth_copy(mesh);
               ProgressBar bar("building LODs");

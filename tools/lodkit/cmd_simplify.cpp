@@ -226,9 +226,9 @@ Command register_simplify(CLI::App& root) {
                 // Double-sided: the fronts simplified, the backs made again. Flat-shaded: simplified
                 // without its normals, then faceted again. Neither with input vertices only (the
                 // new backs and face normals make new vertices).
-                const bool two_sided = !o->keep_vertices && double_sided(joined.mesh());
-                const Mesh front = two_sided ? front_faces(joined.mesh()) : Mesh{};
-                const Mesh& sided = two_sided ? front : joined.mesh();
+                const std::optional<Mesh> front = o->keep_vertices ? std::nullopt : double_sided_fronts(joined.mesh());
+                const bool two_sided = front.has_value();
+                const Mesh& sided = two_sided ? *front : joined.mesh();
                 const bool faceted = !o->keep_vertices && flat_shaded(sided);
                 any_faceted = any_faceted || faceted, any_two_sided = any_two_sided || two_sided;
                 const Mesh smooth = faceted ? smooth_copy(sided) : Mesh{};

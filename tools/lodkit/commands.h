@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <optional>
 #include <span>
 #include <initializer_list>
 #include <string>
@@ -83,10 +84,10 @@ void refacet(Mesh& mesh);
 
 // Double-sided by duplication (foliage, cloth, paper): every triangle has a twin on the same
 // positions with the opposite winding. Front and back share every edge, four triangles each, which
-// no collapse may touch, so the simplifier gets the fronts alone (front_faces: the first of each
-// pair) and add_back_faces gives each triangle of the result its twin again, normals negated.
-bool double_sided(const Mesh& mesh);
-Mesh front_faces(const Mesh& mesh);
+// no collapse may touch, so the simplifier gets the fronts alone (double_sided_fronts: the first of
+// each pair, or nothing when the mesh is not double-sided) and add_back_faces gives each triangle of
+// the result its twin again, normals negated.
+std::optional<Mesh> double_sided_fronts(const Mesh& mesh);
 void add_back_faces(Mesh& mesh);
 
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
