@@ -10,9 +10,11 @@ packages=(
   clang-14 libclang-rt-14-dev           # the fuzz preset (libFuzzer)
   libfmt-dev nlohmann-json3-dev libcli11-dev libtinygltf-dev libstb-dev
   libeigen3-dev libtbb-dev zlib1g-dev
+  libmeshoptimizer-dev libdraco-dev      # compressed glTF input (EXT_meshopt_compression, KHR_draco_mesh_compression)
+  gltfpack draco                         # the tests' independent producers of such files
   libgtest-dev libgmock-dev libbenchmark-dev
   libassimp-dev                          # bench/io: the peer loader
-  libmeshoptimizer-dev libcgal-dev libopenmesh-dev   # bench/peers: the simplifiers we measure against
+  libcgal-dev libopenmesh-dev            # bench/peers: the simplifiers we measure against
   gnuplot-nox                            # bench plots (rate-distortion)
   nodejs                                 # gltf-validator (Khronos) in the tests; npm ships with it
   time                                   # /usr/bin/time -v for peak memory in benchmarks

@@ -31,6 +31,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "io/gltf_compression.h"
 #include "io/text_reader.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
@@ -258,6 +259,7 @@ class JsonChecker {
 
 struct GlbParts {
   size_t json_offset = 0, json_size = 0;
+  size_t bin_offset = 0, bin_size = 0;  // the BIN chunk's data (size 0: none)
   size_t length = 0;  // declared total length (bytes after it are ignored)
 };
 
@@ -293,6 +295,8 @@ GlbParts check_glb(std::span<const uint8_t> bytes, const std::string& name) {
   if (bin_size > chunks.remaining())
     throw_bad_input_at_byte(name, bin_header, "BIN chunk length " + str(bin_size) + " runs past the end of the GLB (" +
                                                   str(chunks.remaining()) + " bytes left)");
+  parts.bin_offset = bin_header + 8;
+  parts.bin_size = bin_size;
   return parts;
 }
 
@@ -395,7 +399,6 @@ class Document {
 
   // Every byte range and every index the reader or writer follows; nothing is decoded before this.
   void validate() const {
-    validate_extensions();
     validate_buffer_views();
     for (size_t a = 0; a < model_.accessors.size(); ++a) validate_accessor(a);
     validate_references();
@@ -537,12 +540,6 @@ class Document {
   const uint8_t* view_bytes(int view_index) const {
     const tg::BufferView& view = model_.bufferViews[size_t(view_index)];
     return model_.buffers[size_t(view.buffer)].data.data() + view.byteOffset;
-  }
-
-  void validate_extensions() const {
-    for (const std::string& ext : model_.extensionsRequired)
-      if (ext == "KHR_draco_mesh_compression" || ext == "EXT_meshopt_compression" || ext == "KHR_meshopt_compression")
-        fail("requires extension " + ext + " (compressed geometry), which lodkit cannot decode");
   }
 
   void validate_buffer_views() const {
@@ -1900,8 +1897,9 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
   }
   std::span<const uint8_t> json_text = bytes;
   size_t json_offset = 0, glb_length = 0;
+  GlbParts parts;
   if (glb) {
-    const GlbParts parts = check_glb(bytes, name);
+    parts = check_glb(bytes, name);
     json_offset = parts.json_offset;
     json_text = bytes.subspan(parts.json_offset, parts.json_size);
     glb_length = parts.length;
@@ -1921,6 +1919,22 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
     throw_bad_input(name, std::string("invalid JSON: ") + e.what());
   }
   JsonChecker(doc, name).run();
+  // Compressed geometry needs a few stand-ins (see gltf_compression.h); tinygltf then reads the
+  // rewritten document (a GLB rebuilt around the same BIN chunk).
+  const io::CompressedJson compressed = io::prepare_compressed_json(doc, glb);
+  std::vector<uint8_t> rewritten;
+  if (compressed.changed) {
+    const std::string text = doc.dump();
+    if (glb) {
+      const std::vector<uint8_t> bin(bytes.begin() + ptrdiff_t(parts.bin_offset),
+                                     bytes.begin() + ptrdiff_t(parts.bin_offset + parts.bin_size));
+      rewritten = make_glb(text, bin, name);
+      glb_length = rewritten.size();
+    } else {
+      rewritten.assign(text.begin(), text.end());
+    }
+    bytes = rewritten;
+  }
   doc = Json();  // tinygltf parses the text again; keep peak memory down
   if (options.progress) options.progress(0.25);
 
@@ -1955,6 +1969,7 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
   if (options.progress) options.progress(0.5);
   source->base_dir = base_dir;
 
+  io::decode_compressed_geometry(source->model, compressed.fallback_lengths, name);
   const Document document(source->model, name);
   document.validate();
   Scene scene = SceneBuilder(document).build();

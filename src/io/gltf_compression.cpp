@@ -1,0 +1,420 @@
+// glTF compression extensions, decoded at load (see gltf_compression.h). Every field, byte range and
+// count is checked before a decoder runs or anything is allocated: a decoded size is bounded by the
+// compressed bytes actually present (meshopt) or must equal the accessors' counts (Draco).
+#include "io/gltf_compression.h"
+
+#include <draco/compression/decode.h>
+#include <meshoptimizer.h>
+
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <new>
+
+#include "lodkit/error.h"
+
+namespace lod::io {
+namespace {
+
+namespace tg = tinygltf;
+using Json = nlohmann::json;
+
+constexpr std::array<const char*, 2> meshopt_names = {"EXT_meshopt_compression", "KHR_meshopt_compression"};
+constexpr const char* draco_name = "KHR_draco_mesh_compression";
+// 3 zero bytes: the smallest data: URI tinygltf accepts for a buffer.
+constexpr const char* stand_in_uri = "data:application/octet-stream;base64,AAAA";
+constexpr uint64_t stand_in_length = 3;
+// A meshopt stream spends at least 2 header bits per 16 decoded bytes (attributes), a byte per
+// triangle (triangles) or per index (indices): no valid stream decodes to more than 64 times its size.
+constexpr uint64_t max_meshopt_ratio = 64;
+
+std::string str(uint64_t v) { return std::to_string(v); }
+
+const Json* meshopt_json(const Json& object) {
+  if (!object.is_object()) return nullptr;
+  auto extensions = object.find("extensions");
+  if (extensions == object.end() || !extensions->is_object()) return nullptr;
+  for (const char* ext : meshopt_names)
+    if (auto it = extensions->find(ext); it != extensions->end()) return &*it;
+  return nullptr;
+}
+
+// The meshopt extension object of a bufferView and its name, or nullptr.
+const tg::Value* meshopt_value(const tg::ExtensionMap& extensions, const char** which) {
+  for (const char* ext : meshopt_names)
+    if (auto it = extensions.find(ext); it != extensions.end()) {
+      *which = ext;
+      return &it->second;
+    }
+  return nullptr;
+}
+
+class Decoder {
+ public:
+  Decoder(tg::Model& model, const std::vector<uint64_t>& fallback_lengths, const std::string& name)
+      : model_(model), fallback_(fallback_lengths), name_(name) {}
+
+  void run() {
+    for (size_t v = 0; v < model_.bufferViews.size(); ++v) decode_meshopt_view(v);
+    add_buffer();
+    for (size_t m = 0; m < model_.meshes.size(); ++m)
+      for (size_t p = 0; p < model_.meshes[m].primitives.size(); ++p) decode_draco_primitive(m, p);
+    add_buffer();
+    for (const char* ext : meshopt_names) forget_extension(ext);
+    forget_extension(draco_name);
+    for (tg::Buffer& buffer : model_.buffers)
+      for (const char* ext : meshopt_names) buffer.extensions.erase(ext);
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const { throw_bad_input(name_, what); }
+
+  bool is_stand_in(int buffer) const { return buffer >= 0 && size_t(buffer) < fallback_.size() && fallback_[size_t(buffer)] > 0; }
+
+  uint64_t field(const tg::Value& object, const char* key, const std::string& where, bool required, uint64_t otherwise = 0) const {
+    if (!object.Has(key)) {
+      if (required) fail(where + " has no '" + key + "'");
+      return otherwise;
+    }
+    const tg::Value& value = object.Get(key);
+    const double d = value.IsNumber() ? value.GetNumberAsDouble() : -1.0;
+    if (!(d >= 0.0 && d <= 9007199254740992.0 && d == std::floor(d)))
+      fail(where + "." + key + " is not a non-negative integer");
+    return uint64_t(d);
+  }
+
+  std::string text_field(const tg::Value& object, const char* key, const std::string& where, const char* otherwise) const {
+    if (!object.Has(key)) {
+      if (!otherwise) fail(where + " has no '" + key + "'");
+      return otherwise;
+    }
+    const tg::Value& value = object.Get(key);
+    if (!value.IsString()) fail(where + "." + key + " is not a string");
+    return value.Get<std::string>();
+  }
+
+  // The bytes [offset, offset + length) of a loaded buffer.
+  const uint8_t* buffer_range(uint64_t buffer, uint64_t offset, uint64_t length, const std::string& what) const {
+    if (buffer >= model_.buffers.size()) fail(what + " refers to buffers[" + str(buffer) + "], which does not exist");
+    if (is_stand_in(int(buffer)))
+      fail(what + " refers to buffers[" + str(buffer) + "], which only stands for decoded data and holds no bytes");
+    const std::vector<unsigned char>& data = model_.buffers[buffer].data;
+    if (offset > data.size() || length > data.size() - offset)
+      fail(what + " (bytes " + str(offset) + ".." + str(offset + length) + ") runs past the end of buffers[" + str(buffer) + "] (" +
+           str(data.size()) + " bytes)");
+    return data.data() + offset;
+  }
+
+  // Room for `bytes` decoded bytes at a 4-byte aligned offset of the buffer being filled.
+  size_t reserve(uint64_t bytes) {
+    decoded_.resize((decoded_.size() + 3) & ~size_t(3), 0);
+    const size_t offset = decoded_.size();
+    decoded_.resize(offset + size_t(bytes), 0);
+    return offset;
+  }
+
+  // The buffer being filled joins the document (nothing when empty).
+  void add_buffer() {
+    if (decoded_.empty()) return;
+    tg::Buffer buffer;
+    buffer.data = std::move(decoded_);
+    decoded_.clear();
+    model_.buffers.push_back(std::move(buffer));
+  }
+  // The index the buffer being filled will have once added.
+  int filling_buffer() const { return int(model_.buffers.size()); }
+
+  void forget_extension(const std::string& ext) {
+    std::erase(model_.extensionsUsed, ext);
+    std::erase(model_.extensionsRequired, ext);
+  }
+
+  void decode_meshopt_view(size_t v) {
+    tg::BufferView& view = model_.bufferViews[v];
+    const std::string view_where = "bufferViews[" + str(v) + "]";
+    const char* ext_name = nullptr;
+    const tg::Value* ext = meshopt_value(view.extensions, &ext_name);
+    if (!ext) {
+      if (is_stand_in(view.buffer))
+        fail(view_where + " is not compressed but uses buffers[" + str(uint64_t(view.buffer)) + "], a " + meshopt_names[0] +
+             " fallback buffer");
+      return;
+    }
+    const std::string where = view_where + ".extensions." + ext_name;
+    if (!ext->IsObject()) fail(where + " is not an object");
+    const uint64_t buffer = field(*ext, "buffer", where, true);
+    const uint64_t offset = field(*ext, "byteOffset", where, false);
+    const uint64_t length = field(*ext, "byteLength", where, true);
+    const uint64_t stride = field(*ext, "byteStride", where, true);
+    const uint64_t count = field(*ext, "count", where, true);
+    const std::string mode = text_field(*ext, "mode", where, nullptr);
+    const std::string filter = text_field(*ext, "filter", where, "NONE");
+
+    if (mode == "ATTRIBUTES") {
+      if (stride == 0 || stride % 4 != 0 || stride > 256) fail(where + ": byteStride " + str(stride) + " is not a multiple of 4 in 4..256");
+    } else if (mode == "TRIANGLES" || mode == "INDICES") {
+      if (stride != 2 && stride != 4) fail(where + ": byteStride " + str(stride) + " is not 2 or 4 (mode " + mode + ")");
+      if (mode == "TRIANGLES" && count % 3 != 0) fail(where + ": count " + str(count) + " is not a multiple of 3 (mode TRIANGLES)");
+      if (filter != "NONE") fail(where + ": filter " + filter + " needs mode ATTRIBUTES, not " + mode);
+    } else {
+      fail(where + ": mode '" + mode + "' is not ATTRIBUTES, TRIANGLES or INDICES");
+    }
+    if (filter == "OCTAHEDRAL") {
+      if (stride != 4 && stride != 8) fail(where + ": filter OCTAHEDRAL needs byteStride 4 or 8, not " + str(stride));
+    } else if (filter == "QUATERNION") {
+      if (stride != 8) fail(where + ": filter QUATERNION needs byteStride 8, not " + str(stride));
+    } else if (filter != "NONE" && filter != "EXPONENTIAL") {
+      fail(where + ": filter '" + filter + "' is not NONE, OCTAHEDRAL, QUATERNION or EXPONENTIAL");
+    }
+    if (count == 0) fail(where + ": count is 0");
+    const uint64_t bytes = count * stride;  // count < 2^53 and stride <= 256: no overflow
+    if (view.byteLength != bytes)
+      fail(view_where + ".byteLength " + str(view.byteLength) + " is not byteStride " + str(stride) + " times count " + str(count));
+    if (view.byteStride != 0 && view.byteStride != stride)
+      fail(view_where + ".byteStride " + str(view.byteStride) + " differs from its " + ext_name + " byteStride " + str(stride));
+    const uint8_t* source = buffer_range(buffer, offset, length, where);
+    if (bytes > max_meshopt_ratio * length)
+      fail(where + ": " + str(count) + " elements of " + str(stride) + " bytes cannot come from " + str(length) +
+           " bytes of compressed data");
+
+    const size_t at = reserve(bytes);
+    unsigned char* out = decoded_.data() + at;
+    int rc = 0;
+    if (mode == "ATTRIBUTES") rc = meshopt_decodeVertexBuffer(out, size_t(count), size_t(stride), source, size_t(length));
+    else if (mode == "TRIANGLES") rc = meshopt_decodeIndexBuffer(out, size_t(count), size_t(stride), source, size_t(length));
+    else rc = meshopt_decodeIndexSequence(out, size_t(count), size_t(stride), source, size_t(length));
+    if (rc != 0)
+      fail(where + ": bytes " + str(offset) + ".." + str(offset + length) + " of buffers[" + str(buffer) + "] do not decode as " +
+           mode + " data (meshoptimizer error " + std::to_string(rc) + ": corrupt, or a newer bitstream version)");
+    if (filter == "OCTAHEDRAL") meshopt_decodeFilterOct(out, size_t(count), size_t(stride));
+    else if (filter == "QUATERNION") meshopt_decodeFilterQuat(out, size_t(count), size_t(stride));
+    else if (filter == "EXPONENTIAL") meshopt_decodeFilterExp(out, size_t(count), size_t(stride));
+
+    view.buffer = filling_buffer();
+    view.byteOffset = at;
+    view.extensions.erase(ext_name);
+  }
+
+  template <class T>
+  void convert_attribute(const draco::PointAttribute& attribute, size_t points, int components, unsigned char* out,
+                         const std::string& what) const {
+    T value[4];
+    for (size_t i = 0; i < points; ++i) {
+      const draco::AttributeValueIndex index = attribute.mapped_index(draco::PointIndex(uint32_t(i)));
+      if (index.value() >= attribute.size()) fail(what + ": point " + str(i) + " maps to a value the Draco stream does not have");
+      if (!attribute.ConvertValue<T>(index, int8_t(components), value))
+        fail(what + ": value " + str(index.value()) + " does not convert to the accessor's component type");
+      std::memcpy(out + i * sizeof(T) * size_t(components), value, sizeof(T) * size_t(components));
+    }
+  }
+
+  // A new bufferView of `bytes` decoded bytes for accessor `a`; returns where to write them.
+  unsigned char* give_view(int a, uint64_t bytes) {
+    const size_t at = reserve(bytes);
+    tg::BufferView view;
+    view.buffer = filling_buffer();
+    view.byteOffset = at;
+    view.byteLength = size_t(bytes);
+    model_.bufferViews.push_back(std::move(view));
+    tg::Accessor& acc = model_.accessors[size_t(a)];
+    acc.bufferView = int(model_.bufferViews.size() - 1);
+    acc.byteOffset = 0;
+    return decoded_.data() + at;
+  }
+
+  // Checks accessor `a` for a Draco stream (by bufferView) and returns false when that same stream
+  // has already filled it (primitives sharing accessors and stream).
+  bool claim_accessor(int a, int stream, const std::string& what) {
+    if (a < 0 || size_t(a) >= model_.accessors.size()) fail(what + " refers to accessors[" + std::to_string(a) + "], which does not exist");
+    filled_by_.resize(model_.accessors.size(), -1);
+    int& owner = filled_by_[size_t(a)];
+    if (owner == stream) return false;
+    if (owner >= 0) fail(what + ": accessors[" + std::to_string(a) + "] is also filled from another Draco stream");
+    owner = stream;
+    const tg::Accessor& acc = model_.accessors[size_t(a)];
+    if (acc.sparse.isSparse) fail(what + ": accessors[" + std::to_string(a) + "] is sparse, which a Draco-compressed accessor cannot be");
+    return true;
+  }
+
+  static size_t component_size(int type) {
+    switch (type) {
+      case TINYGLTF_COMPONENT_TYPE_BYTE:
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+      case TINYGLTF_COMPONENT_TYPE_SHORT:
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+      case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+      default: return 0;
+    }
+  }
+  static int type_components(int type) {
+    switch (type) {
+      case TINYGLTF_TYPE_SCALAR: return 1;
+      case TINYGLTF_TYPE_VEC2: return 2;
+      case TINYGLTF_TYPE_VEC3: return 3;
+      case TINYGLTF_TYPE_VEC4: return 4;
+      default: return 0;  // matrices are never vertex attributes Draco carries
+    }
+  }
+
+  void decode_draco_primitive(size_t m, size_t p) {
+    tg::Primitive& prim = model_.meshes[m].primitives[p];
+    auto found = prim.extensions.find(draco_name);
+    if (found == prim.extensions.end()) return;
+    const std::string prim_where = "meshes[" + str(m) + "].primitives[" + str(p) + "]";
+    const std::string where = prim_where + ".extensions." + draco_name;
+    const tg::Value& ext = found->second;
+    if (!ext.IsObject()) fail(where + " is not an object");
+    const uint64_t view_index = field(ext, "bufferView", where, true);
+    if (view_index >= model_.bufferViews.size())
+      fail(where + ".bufferView refers to bufferViews[" + str(view_index) + "], which does not exist");
+    if (prim.mode != TINYGLTF_MODE_TRIANGLES)
+      fail(prim_where + " has mode " + std::to_string(prim.mode) + "; lodkit decodes Draco triangle lists (mode 4) only");
+    if (!ext.Has("attributes") || !ext.Get("attributes").IsObject()) fail(where + " has no 'attributes' object");
+    // A view that the meshopt step decoded lives in a buffer already added. (A copy: give_view below
+    // adds bufferViews.)
+    const tg::BufferView view = model_.bufferViews[view_index];
+    const uint8_t* bytes = buffer_range(uint64_t(std::max(view.buffer, 0)), view.byteOffset, view.byteLength,
+                                        where + "'s bufferViews[" + str(view_index) + "]");
+
+    draco::DecoderBuffer input;
+    input.Init(reinterpret_cast<const char*>(bytes), view.byteLength);
+    std::unique_ptr<draco::Mesh> mesh;
+    try {
+      draco::Decoder decoder;
+      auto decoded = decoder.DecodeMeshFromBuffer(&input);
+      if (!decoded.ok())
+        fail(where + ": bufferViews[" + str(view_index) + "] does not decode as a Draco mesh (" + decoded.status().error_msg_string() + ")");
+      mesh = std::move(decoded).value();
+    } catch (const std::bad_alloc&) {
+      fail(where + ": bufferViews[" + str(view_index) + "] declares a Draco mesh too large to decode");
+    }
+    const size_t points = mesh->num_points(), faces = mesh->num_faces();
+    const int stream = int(view_index);
+
+    const tg::Value& attributes = ext.Get("attributes");
+    for (const std::string& semantic : attributes.Keys()) {
+      const std::string what = where + ".attributes." + semantic;
+      const uint64_t id = field(attributes, semantic.c_str(), where + ".attributes", true);
+      auto accessor = prim.attributes.find(semantic);
+      if (accessor == prim.attributes.end()) fail(what + ": the primitive has no " + semantic + " attribute");
+      const draco::PointAttribute* attribute = id <= std::numeric_limits<uint32_t>::max() ? mesh->GetAttributeByUniqueId(uint32_t(id)) : nullptr;
+      if (!attribute) fail(what + ": the Draco stream has no attribute with unique id " + str(id));
+      if (!claim_accessor(accessor->second, stream, what)) continue;
+      const tg::Accessor& acc = model_.accessors[size_t(accessor->second)];
+      const std::string acc_where = what + " (accessors[" + std::to_string(accessor->second) + "])";
+      const int components = type_components(acc.type);
+      const size_t size = component_size(acc.componentType);
+      if (components == 0 || size == 0) fail(acc_where + " has a type or componentType that Draco attributes cannot have");
+      if (components != attribute->num_components())
+        fail(acc_where + " has " + std::to_string(components) + " components, the Draco attribute " + std::to_string(attribute->num_components()));
+      if (acc.count != points)
+        fail(acc_where + " has count " + str(acc.count) + " but the Draco mesh has " + str(points) + " points");
+      unsigned char* out = give_view(accessor->second, uint64_t(points) * size * size_t(components));
+      switch (acc.componentType) {
+        case TINYGLTF_COMPONENT_TYPE_FLOAT: convert_attribute<float>(*attribute, points, components, out, acc_where); break;
+        case TINYGLTF_COMPONENT_TYPE_BYTE: convert_attribute<int8_t>(*attribute, points, components, out, acc_where); break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: convert_attribute<uint8_t>(*attribute, points, components, out, acc_where); break;
+        case TINYGLTF_COMPONENT_TYPE_SHORT: convert_attribute<int16_t>(*attribute, points, components, out, acc_where); break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: convert_attribute<uint16_t>(*attribute, points, components, out, acc_where); break;
+        default: convert_attribute<uint32_t>(*attribute, points, components, out, acc_where); break;
+      }
+    }
+
+    const std::string what = prim_where + ".indices";
+    if (prim.indices < 0) fail(what + " is missing; a Draco-compressed primitive is indexed");
+    if (claim_accessor(prim.indices, stream, what)) {
+      const tg::Accessor& acc = model_.accessors[size_t(prim.indices)];
+      const std::string acc_where = what + " (accessors[" + std::to_string(prim.indices) + "])";
+      const size_t size = component_size(acc.componentType);
+      if (acc.type != TINYGLTF_TYPE_SCALAR || size == 0 || acc.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT ||
+          acc.componentType == TINYGLTF_COMPONENT_TYPE_BYTE || acc.componentType == TINYGLTF_COMPONENT_TYPE_SHORT)
+        fail(acc_where + " is not a SCALAR of unsigned integers");
+      if (acc.count != uint64_t(faces) * 3)
+        fail(acc_where + " has count " + str(acc.count) + " but the Draco mesh has " + str(faces) + " triangles");
+      if (size < 4 && points > (uint64_t(1) << (8 * size)))
+        fail(acc_where + ": " + str(points) + " points do not fit its " + str(8 * size) + "-bit indices");
+      unsigned char* out = give_view(prim.indices, uint64_t(faces) * 3 * size);
+      for (size_t f = 0; f < faces; ++f) {
+        const draco::Mesh::Face& face = mesh->face(draco::FaceIndex(uint32_t(f)));
+        for (size_t c = 0; c < 3; ++c) {
+          const uint32_t index = face[c].value();
+          if (index >= points) fail(acc_where + ": Draco triangle " + str(f) + " refers to point " + str(index) + " of " + str(points));
+          std::memcpy(out + (f * 3 + c) * size, &index, size);  // little-endian: the low bytes
+        }
+      }
+    }
+    prim.extensions.erase(found);
+  }
+
+  tg::Model& model_;
+  const std::vector<uint64_t>& fallback_;
+  const std::string& name_;
+  std::vector<unsigned char> decoded_;  // the buffer being filled
+  std::vector<int> filled_by_;          // per accessor: the Draco stream (bufferView) that filled it
+};
+
+}  // namespace
+
+CompressedJson prepare_compressed_json(Json& doc, bool glb) {
+  CompressedJson out;
+  auto buffers = doc.find("buffers");
+  auto views = doc.find("bufferViews");
+  if (buffers != doc.end() && buffers->is_array() && views != doc.end() && views->is_array()) {
+    const size_t n = buffers->size();
+    std::vector<size_t> compressed_users(n, 0), plain_users(n, 0);
+    for (const Json& view : *views) {
+      if (!view.is_object()) continue;
+      auto buffer = view.find("buffer");
+      if (buffer == view.end() || !buffer->is_number_unsigned() || buffer->get<uint64_t>() >= n) continue;
+      ++(meshopt_json(view) ? compressed_users : plain_users)[buffer->get<size_t>()];
+    }
+    out.fallback_lengths.assign(n, 0);
+    for (size_t b = 0; b < n; ++b) {
+      Json& buffer = (*buffers)[b];
+      if (!buffer.is_object() || compressed_users[b] == 0 || plain_users[b] != 0) continue;
+      const Json* ext = meshopt_json(buffer);
+      const bool fallback = ext && ext->is_object() && ext->value("fallback", false) == true;
+      // A GLB's buffer 0 without a URI is its BIN chunk, which holds real bytes.
+      if (!fallback && (buffer.contains("uri") || (glb && b == 0))) continue;
+      auto length = buffer.find("byteLength");
+      if (length == buffer.end() || !length->is_number_unsigned() || length->get<uint64_t>() == 0) continue;  // tinygltf reports it
+      out.fallback_lengths[b] = length->get<uint64_t>();
+      buffer["uri"] = stand_in_uri;
+      buffer["byteLength"] = stand_in_length;
+      out.changed = true;
+    }
+  }
+  // tinygltf 2.7 refuses an indices accessor without a bufferView, which a Draco primitive's has:
+  // it borrows the Draco stream's view until the decoder gives it its own.
+  auto meshes = doc.find("meshes");
+  auto accessors = doc.find("accessors");
+  if (meshes == doc.end() || !meshes->is_array() || accessors == doc.end() || !accessors->is_array()) return out;
+  for (const Json& mesh : *meshes) {
+    auto primitives = mesh.is_object() ? mesh.find("primitives") : mesh.end();
+    if (primitives == mesh.end() || !primitives->is_array()) continue;
+    for (const Json& primitive : *primitives) {
+      if (!primitive.is_object()) continue;
+      auto extensions = primitive.find("extensions");
+      auto indices = primitive.find("indices");
+      if (extensions == primitive.end() || !extensions->is_object() || indices == primitive.end() ||
+          !indices->is_number_unsigned() || indices->get<uint64_t>() >= accessors->size())
+        continue;
+      auto draco = extensions->find(draco_name);
+      if (draco == extensions->end() || !draco->is_object()) continue;
+      auto view = draco->find("bufferView");
+      Json& accessor = (*accessors)[indices->get<size_t>()];
+      if (view == draco->end() || !view->is_number_unsigned() || !accessor.is_object() || accessor.contains("bufferView")) continue;
+      accessor["bufferView"] = *view;
+      out.changed = true;
+    }
+  }
+  return out;
+}
+
+void decode_compressed_geometry(tg::Model& model, const std::vector<uint64_t>& fallback_lengths, const std::string& name) {
+  Decoder(model, fallback_lengths, name).run();
+}
+
+}  // namespace lod::io

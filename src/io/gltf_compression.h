@@ -1,0 +1,38 @@
+// Internal to the glTF reader: the two compression extensions real files use for geometry,
+// decoded at load so that everything after the reader sees plain accessors.
+//  - EXT_meshopt_compression (gltfpack -c, and its KHR_meshopt_compression successor): whole
+//    bufferViews, decoded with meshoptimizer's decoders and filters;
+//  - KHR_draco_mesh_compression (Draco, e.g. draco_transcoder, gltf-transform draco): a primitive's
+//    attributes and indices, decoded with Draco.
+// The decoded bytes go into one new buffer; the extensions are then removed from the document, so a
+// file written from it is uncompressed glTF that any viewer reads.
+#pragma once
+
+#include <tiny_gltf.h>
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace lod::io {
+
+// Before tinygltf, on the parsed JSON:
+//  - a buffer that only stands for meshopt-decoded data (a "fallback" buffer, or one without a URI
+//    that only compressed bufferViews use) has no bytes to load, yet tinygltf 2.7 would read it from
+//    the GLB's BIN chunk or a missing file and fail: each gets a small data: URI stand-in;
+//  - a Draco primitive's indices accessor has no bufferView, which tinygltf 2.7 refuses: it borrows
+//    the Draco stream's until decoding.
+struct CompressedJson {
+  std::vector<uint64_t> fallback_lengths;  // per buffer: a stand-in's declared byteLength, else 0
+  bool changed = false;                    // whether tinygltf must read the rewritten JSON
+};
+CompressedJson prepare_compressed_json(nlohmann::json& doc, bool glb);
+
+// After tinygltf, before any accessor is read: decodes every compressed bufferView and Draco
+// primitive into plain data (`fallback_lengths` from above), checking every field,
+// range and count first, and removes the extensions. Throws lod::Error (bad input) naming `name`.
+void decode_compressed_geometry(tinygltf::Model& model, const std::vector<uint64_t>& fallback_lengths,
+                                const std::string& name);
+
+}  // namespace lod::io
