@@ -33,11 +33,18 @@ TempDir::~TempDir() {
 }
 
 RunResult run_cli(const std::vector<std::string>& args, uint64_t address_space_limit) {
-  std::vector<std::string> argv_s;
+  std::vector<std::string> argv = {LODKIT_CLI};
+  argv.insert(argv.end(), args.begin(), args.end());
+  return run_program(std::move(argv), address_space_limit);
+}
+
+bool program_available(const std::string& name) {
+  return std::system(("command -v '" + name + "' >/dev/null 2>&1").c_str()) == 0;
+}
+
+RunResult run_program(std::vector<std::string> argv_s, uint64_t address_space_limit) {
   // prlimit (util-linux) caps the child's address space: an allocation for a declared count fails.
-  if (address_space_limit) argv_s = {"/usr/bin/prlimit", "--as=" + std::to_string(address_space_limit)};
-  argv_s.push_back(LODKIT_CLI);
-  argv_s.insert(argv_s.end(), args.begin(), args.end());
+  if (address_space_limit) argv_s.insert(argv_s.begin(), {"/usr/bin/prlimit", "--as=" + std::to_string(address_space_limit)});
   TempDir tmp;
   std::string out_path = (tmp.path / "out").string(), err_path = (tmp.path / "err").string();
   std::vector<char*> argv;
@@ -50,7 +57,7 @@ RunResult run_cli(const std::vector<std::string>& args, uint64_t address_space_l
   posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
   pid_t pid = 0;
   RunResult r;
-  if (posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ) != 0) {
+  if (posix_spawnp(&pid, argv[0], &fa, nullptr, argv.data(), environ) != 0) {
     posix_spawn_file_actions_destroy(&fa);
     r.err = std::string("spawn failed: ") + std::strerror(errno);
     return r;
@@ -188,24 +195,55 @@ void expect_valid_gltf(const std::vector<std::filesystem::path>& files) {
     EXPECT_NE(v.output.find(file.filename().string() + ": 0 errors"), std::string::npos) << v.output;
 }
 
-nlohmann::json glb_json(const std::filesystem::path& path) {
+uint32_t little_u32(const uint8_t* p) { return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24; }
+
+Glb read_glb(const std::filesystem::path& path) {
   const FileBytes bytes = read_file_bytes(path);
-  uint32_t length = 0;
-  std::memcpy(&length, bytes.data() + 12, 4);
-  return nlohmann::json::parse(std::string(reinterpret_cast<const char*>(bytes.data()) + 20, length));
+  if (bytes.size() < 20) throw std::runtime_error(path.string() + ": not a GLB");
+  const uint32_t json_length = little_u32(bytes.data() + 12);
+  Glb glb;
+  glb.doc = nlohmann::json::parse(std::string(reinterpret_cast<const char*>(bytes.data()) + 20, json_length));
+  const size_t bin_at = 20 + size_t(json_length);
+  if (bytes.size() >= bin_at + 8) {
+    const uint32_t bin_length = little_u32(bytes.data() + bin_at);
+    glb.bin.assign(bytes.data() + bin_at + 8, bytes.data() + bin_at + 8 + bin_length);
+  }
+  return glb;
 }
 
+std::vector<uint8_t> glb_bytes(const Glb& glb) {
+  std::string text = glb.doc.dump();
+  while (text.size() % 4) text += ' ';
+  std::vector<uint8_t> bin = glb.bin;
+  while (bin.size() % 4) bin.push_back(0);
+  std::vector<uint8_t> out;
+  const auto put = [&](uint32_t v) {
+    for (int i = 0; i < 4; ++i) out.push_back(uint8_t(v >> (8 * i)));
+  };
+  put(0x46546C67);  // "glTF"
+  put(2);
+  put(uint32_t(12 + 8 + text.size() + (bin.empty() ? 0 : 8 + bin.size())));
+  put(uint32_t(text.size()));
+  put(0x4E4F534A);  // "JSON"
+  out.insert(out.end(), text.begin(), text.end());
+  if (!bin.empty()) {
+    put(uint32_t(bin.size()));
+    put(0x004E4942);  // "BIN\0"
+    out.insert(out.end(), bin.begin(), bin.end());
+  }
+  return out;
+}
+
+nlohmann::json glb_json(const std::filesystem::path& path) { return read_glb(path).doc; }
+
 std::vector<float3> glb_morph_positions(const std::filesystem::path& path, size_t mesh, size_t primitive, size_t target) {
-  const FileBytes bytes = read_file_bytes(path);
-  uint32_t length = 0;
-  std::memcpy(&length, bytes.data() + 12, 4);
-  const nlohmann::json doc = glb_json(path);
+  const Glb glb = read_glb(path);
+  const nlohmann::json& doc = glb.doc;
   const auto& prim = doc["meshes"][mesh]["primitives"][primitive];
   if (!prim.contains("targets") || prim["targets"].size() <= target) return {};
   const auto& accessor = doc["accessors"][prim["targets"][target]["POSITION"].get<size_t>()];
   const auto& view = doc["bufferViews"][accessor["bufferView"].get<size_t>()];
-  const uint8_t* data =
-      bytes.data() + 20 + length + 8 + view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0));
+  const uint8_t* data = glb.bin.data() + view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0));
   std::vector<float3> out(accessor["count"].get<size_t>());
   std::memcpy(out.data(), data, out.size() * sizeof(float3));
   return out;

@@ -32,6 +32,10 @@ struct RunResult {
 // Runs the built `lodkit` CLI with arguments (no shell), capturing stdout and stderr; with a non-zero
 // `address_space_limit` (bytes), under that cap.
 RunResult run_cli(const std::vector<std::string>& args, uint64_t address_space_limit = 0);
+// Runs argv[0] (looked up in PATH) the same way.
+RunResult run_program(std::vector<std::string> argv, uint64_t address_space_limit = 0);
+// Whether a program is on the PATH (tests that need a Debian tool skip without it).
+bool program_available(const std::string& name);
 
 // data/corpus, or an empty path when the corpus is absent (call GTEST_SKIP then).
 std::filesystem::path corpus_dir();
@@ -62,7 +66,15 @@ inline std::span<const uint8_t> bytes_of(const std::string& s) {
 using Reader = std::function<void(std::span<const uint8_t>, const std::string&)>;
 std::string expect_bad_input(const Reader& read, const std::string& input, const std::string& name);
 
-// The JSON chunk of a .glb (little-endian header, then the first chunk).
+// A .glb's two chunks, parsed without lodkit: the JSON and the BIN data (empty when absent).
+struct Glb {
+  nlohmann::json doc;
+  std::vector<uint8_t> bin;
+};
+Glb read_glb(const std::filesystem::path& path);
+// A .glb of those chunks (padded as GLB requires; the JSON as given).
+std::vector<uint8_t> glb_bytes(const Glb& glb);
+// The JSON chunk of a .glb.
 nlohmann::json glb_json(const std::filesystem::path& path);
 // Morph target `target`'s POSITION offsets of a .glb's mesh `mesh`, primitive `primitive`, read
 // straight from the file's JSON and BIN chunk (lodkit's reader does not model targets). Empty when

@@ -1921,7 +1921,7 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
   JsonChecker(doc, name).run();
   // Compressed geometry needs a few stand-ins (see gltf_compression.h); tinygltf then reads the
   // rewritten document (a GLB rebuilt around the same BIN chunk).
-  const io::CompressedJson compressed = io::prepare_compressed_json(doc, glb);
+  const io::CompressedJson compressed = io::prepare_compressed_json(doc, glb, name);
   std::vector<uint8_t> rewritten;
   if (compressed.changed) {
     const std::string text = doc.dump();

@@ -1,0 +1,337 @@
+// Compressed glTF input: EXT_meshopt_compression and KHR_draco_mesh_compression files made by
+// independent encoders (Debian's gltfpack and draco_transcoder, installed by scripts/setup.sh), read
+// against their uncompressed twin or their source within the quantization step; and broken copies
+// of them, refused with a message.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/shapes.h"
+#include "lodkit/error.h"
+#include "lodkit/io.h"
+#include "test_support.h"
+
+namespace lod {
+namespace {
+
+using Json = nlohmann::json;
+using test::TempDir;
+
+constexpr const char* kMeshopt = "EXT_meshopt_compression";
+constexpr const char* kDraco = "KHR_draco_mesh_compression";
+
+// A torus with normals and UVs (UV seam rows duplicated), written as a plain .glb.
+std::filesystem::path write_torus(const TempDir& dir) {
+  const std::filesystem::path path = dir / "torus.glb";
+  write_scene(scene_from_mesh(shapes::torus(1.0f, 0.25f, 24, 12)), path);
+  return path;
+}
+
+void run_tool(const std::vector<std::string>& argv) {
+  const test::RunResult r = test::run_program(argv);
+  ASSERT_EQ(r.exit_code, 0) << argv[0] << ": " << r.err << r.out;
+}
+
+const Mesh& only_mesh(const Scene& scene) {
+  EXPECT_EQ(scene.primitives.size(), 1u);
+  return scene.primitives.at(0).mesh;
+}
+
+bool contains(const Json& list, const std::string& name) {
+  return list.is_array() && std::find(list.begin(), list.end(), name) != list.end();
+}
+
+// Every bufferView's (mode, filter) under the meshopt extension.
+std::vector<std::pair<std::string, std::string>> meshopt_views(const Json& doc) {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const Json& view : doc["bufferViews"])
+    if (view.contains("extensions") && view["extensions"].contains(kMeshopt)) {
+      const Json& e = view["extensions"][kMeshopt];
+      out.emplace_back(e["mode"].get<std::string>(), e.value("filter", std::string("NONE")));
+    }
+  return out;
+}
+
+float dot3(const float3& a, const float3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+float length3(const float3& a) { return std::sqrt(dot3(a, a)); }
+float cosine(const float3& a, const float3& b) { return dot3(a, b) / (length3(a) * length3(b)); }
+
+// A mesh's triangles through a vertex map, each as its rotation that starts at the smallest id
+// (so the winding counts), sorted.
+std::vector<std::array<uint32_t, 3>> triangles(const std::vector<uint32_t>& indices, const std::vector<uint32_t>* map) {
+  std::vector<std::array<uint32_t, 3>> out;
+  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+    std::array<uint32_t, 3> c;
+    for (size_t k = 0; k < 3; ++k) c[k] = map ? (*map)[indices[t + k]] : indices[t + k];
+    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+    out.push_back(c);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// `b` is `a` with its vertices and triangles reordered: each vertex of b has exactly the position of
+// one vertex of a (a's positions being distinct), its normal exactly (normal_cos 1) or within
+// `normal_cos`, and the triangles through that match are a's.
+void expect_same_up_to_order(const Mesh& a, const Mesh& b, float normal_cos) {
+  ASSERT_EQ(a.vertex_count(), b.vertex_count());
+  ASSERT_EQ(a.normals.size(), b.normals.size());
+  std::map<std::array<float, 3>, uint32_t> by_position;
+  for (size_t v = 0; v < a.vertex_count(); ++v) by_position[{a.positions[v].x, a.positions[v].y, a.positions[v].z}] = uint32_t(v);
+  ASSERT_EQ(by_position.size(), a.vertex_count());
+  std::vector<uint32_t> match(b.vertex_count());
+  size_t unequal_normals = 0;
+  float worst = 1.0f;
+  for (size_t v = 0; v < b.vertex_count(); ++v) {
+    auto it = by_position.find({b.positions[v].x, b.positions[v].y, b.positions[v].z});
+    ASSERT_NE(it, by_position.end()) << "vertex " << v << " has no twin";
+    match[v] = it->second;
+    if (a.normals.empty()) continue;
+    const float3 n = b.normals[v], m = a.normals[it->second];
+    unequal_normals += n.x != m.x || n.y != m.y || n.z != m.z;
+    worst = std::min(worst, cosine(n, m));
+  }
+  if (normal_cos >= 1.0f) EXPECT_EQ(unequal_normals, 0u);
+  else EXPECT_GE(worst, normal_cos);
+  EXPECT_EQ(triangles(b.indices, &match), triangles(a.indices, nullptr));
+}
+
+TEST(GltfCompression, MeshoptFilesReadLikeTheirUncompressedTwin) {
+  if (!test::program_available("gltfpack")) GTEST_SKIP() << "gltfpack not installed (scripts/setup.sh installs it)";
+  TempDir dir;
+  const std::string torus = write_torus(dir).string();
+  // gltfpack quantizes the same way with and without -c; -c then compresses the same bytes.
+  run_tool({"gltfpack", "-i", torus, "-o", (dir / "plain.glb").string()});
+  run_tool({"gltfpack", "-i", torus, "-o", (dir / "c.glb").string(), "-c"});
+  run_tool({"gltfpack", "-i", torus, "-o", (dir / "cc.glb").string(), "-cc"});
+  run_tool({"gltfpack", "-i", torus, "-o", (dir / "cf.glb").string(), "-cf"});
+
+  // The files really are compressed: triangles and attributes, and -cc's octahedral normals.
+  const Json c = test::glb_json(dir / "c.glb");
+  ASSERT_TRUE(contains(c["extensionsRequired"], kMeshopt));
+  const auto c_views = meshopt_views(c);
+  EXPECT_NE(std::count(c_views.begin(), c_views.end(), std::pair<std::string, std::string>{"TRIANGLES", "NONE"}), 0);
+  EXPECT_NE(std::count(c_views.begin(), c_views.end(), std::pair<std::string, std::string>{"ATTRIBUTES", "NONE"}), 0);
+  const auto cc_views = meshopt_views(test::glb_json(dir / "cc.glb"));
+  ASSERT_NE(std::count(cc_views.begin(), cc_views.end(), std::pair<std::string, std::string>{"ATTRIBUTES", "OCTAHEDRAL"}), 0);
+
+  // gltfpack orders vertices and triangles for compression with -c, so the twins are compared up to
+  // order: the same quantized vertices (matched by position; the torus has no two alike once UVs
+  // are gone) and the same triangles, winding included.
+  const Scene plain = read_scene(dir / "plain.glb");
+  const Mesh& reference = only_mesh(plain);
+  ASSERT_EQ(reference.triangle_count(), 576u);
+  ASSERT_FALSE(reference.normals.empty());
+  for (const char* name : {"c.glb", "cf.glb", "cc.glb"}) {
+    SCOPED_TRACE(name);
+    const Scene scene = read_scene(dir / name);
+    const Mesh& mesh = only_mesh(scene);
+    // -cc stores the normals octahedrally (8 bits) instead of as int8 xyz: within a few degrees.
+    const float normal_cos = std::string(name) == "cc.glb" ? std::cos(3.0f * 3.14159265f / 180.0f) : 1.0f;
+    expect_same_up_to_order(reference, mesh, normal_cos);
+  }
+  // A decoder never needs -cf's fallback file.
+  std::filesystem::remove(dir / "cf.fallback.bin");
+  expect_same_up_to_order(reference, only_mesh(read_scene(dir / "cf.glb")), 1.0f);
+
+  // Written back, the file is plain glTF: no compression left, valid, and the same mesh.
+  const test::RunResult r = test::run_cli({"convert", (dir / "c.glb").string(), (dir / "out.glb").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Json out = test::glb_json(dir / "out.glb");
+  EXPECT_FALSE(contains(out["extensionsUsed"], kMeshopt)) << out.dump();
+  EXPECT_FALSE(contains(out["extensionsRequired"], kMeshopt));
+  EXPECT_TRUE(meshopt_views(out).empty());
+  EXPECT_EQ(out["buffers"].size(), 1u);
+  EXPECT_EQ(test::mesh_difference(only_mesh(read_scene(dir / "c.glb")), only_mesh(read_scene(dir / "out.glb"))), "");
+  test::expect_valid_gltf({dir / "out.glb"});
+}
+
+TEST(GltfCompression, DracoFileMatchesItsSourceWithinTheQuantizationStep) {
+  if (!test::program_available("draco_transcoder")) GTEST_SKIP() << "draco_transcoder not installed (scripts/setup.sh installs it)";
+  TempDir dir;
+  const std::filesystem::path torus = write_torus(dir);
+  run_tool({"draco_transcoder", "-i", torus.string(), "-o", (dir / "d.glb").string(), "-qp", "14", "-qn", "10", "-qt", "12"});
+  const Json doc = test::glb_json(dir / "d.glb");
+  ASSERT_TRUE(contains(doc["extensionsRequired"], kDraco));
+
+  const Mesh source = only_mesh(read_scene(torus));
+  const Scene decoded_scene = read_scene(dir / "d.glb");
+  const Mesh& decoded = only_mesh(decoded_scene);
+  ASSERT_EQ(decoded.triangle_count(), source.triangle_count());
+  ASSERT_EQ(decoded.normals.size(), decoded.vertex_count());
+  ASSERT_EQ(decoded.uvs[0].size(), decoded.vertex_count());
+
+  // Draco quantizes each attribute on a grid of 2^bits - 1 steps over its largest extent, so a
+  // value moves at most half a step per component. The torus spans 2.5 in x and y; its UVs span 1.
+  const float position_bound = std::sqrt(3.0f) * 0.5f * 2.5f / float((1 << 14) - 1) + 1e-6f;
+  const float uv_bound = std::sqrt(2.0f) * 0.5f * 1.0f / float((1 << 12) - 1) + 1e-6f;
+  // Each decoded vertex is exactly one source vertex: the seam copies share positions, not UVs.
+  std::vector<uint32_t> match(decoded.vertex_count());
+  for (size_t v = 0; v < decoded.vertex_count(); ++v) {
+    int found = 0;
+    for (size_t s = 0; s < source.vertex_count(); ++s) {
+      const float3 a = decoded.positions[v], b = source.positions[s];
+      const float3 d = {a.x - b.x, a.y - b.y, a.z - b.z};
+      const float du = decoded.uvs[0][v].x - source.uvs[0][s].x, dv = decoded.uvs[0][v].y - source.uvs[0][s].y;
+      if (length3(d) <= position_bound && std::sqrt(du * du + dv * dv) <= uv_bound) {
+        match[v] = uint32_t(s);
+        ++found;
+      }
+    }
+    ASSERT_EQ(found, 1) << "decoded vertex " << v;
+    // 10-bit octahedral normals are within a fraction of a degree; cos(1 degree) leaves room.
+    const float3 n = decoded.normals[v], m = source.normals[match[v]];
+    EXPECT_GT(cosine(n, m), std::cos(3.14159265f / 180.0f)) << "vertex " << v;
+  }
+  EXPECT_EQ(triangles(decoded.indices, &match), triangles(source.indices, nullptr));  // winding included
+
+  // Written back: plain, valid glTF with the decoded mesh.
+  const test::RunResult r = test::run_cli({"convert", (dir / "d.glb").string(), (dir / "out.glb").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Json out = test::glb_json(dir / "out.glb");
+  EXPECT_FALSE(contains(out["extensionsUsed"], kDraco)) << out.dump();
+  EXPECT_FALSE(out["meshes"][0]["primitives"][0].contains("extensions"));
+  EXPECT_EQ(test::mesh_difference(decoded, only_mesh(read_scene(dir / "out.glb"))), "");
+  test::expect_valid_gltf({dir / "out.glb"});
+}
+
+void expect_refused(const test::Glb& glb, const std::string& name, const std::string& needle) {
+  SCOPED_TRACE(name);
+  const std::vector<uint8_t> bytes = test::glb_bytes(glb);
+  const std::string what = test::expect_bad_input([](auto b, const auto& n) { read_gltf(b, n); },
+                                                  std::string(bytes.begin(), bytes.end()), name);
+  EXPECT_NE(what.find(needle), std::string::npos) << "expected '" << needle << "' in: " << what;
+}
+
+TEST(GltfCompression, BrokenMeshoptFilesAreRefused) {
+  if (!test::program_available("gltfpack")) GTEST_SKIP() << "gltfpack not installed (scripts/setup.sh installs it)";
+  TempDir dir;
+  run_tool({"gltfpack", "-i", write_torus(dir).string(), "-o", (dir / "c.glb").string(), "-c"});
+  const test::Glb good = test::read_glb(dir / "c.glb");
+  ASSERT_NO_THROW(read_gltf(test::glb_bytes(good), "good.glb"));
+  // The views in gltfpack's order: one per stream; find the index stream.
+  size_t tri = 0;
+  while (tri < good.doc["bufferViews"].size() && good.doc["bufferViews"][tri]["extensions"][kMeshopt]["mode"] != "TRIANGLES") ++tri;
+  ASSERT_LT(tri, good.doc["bufferViews"].size());
+  auto ext = [](test::Glb& g, size_t view) -> Json& { return g.doc["bufferViews"][view]["extensions"][kMeshopt]; };
+
+  test::Glb g = good;
+  ext(g, 0)["byteLength"] = good.bin.size() * 2;
+  expect_refused(g, "past.glb", "runs past the end of buffers[0]");
+
+  // A declared count far beyond what the compressed bytes can hold: refused before allocating.
+  g = good;
+  ext(g, tri)["count"] = 2'100'000'000ull;
+  g.doc["bufferViews"][tri]["byteLength"] = 2'100'000'000ull * ext(g, tri)["byteStride"].get<uint64_t>();
+  expect_refused(g, "count.glb", "cannot come from");
+
+  // Numbers tinygltf would wrap to int (2^32 + 5 reading as 5) are refused on the JSON.
+  g = good;
+  ext(g, tri)["byteOffset"] = (uint64_t(1) << 32) + 5;
+  expect_refused(g, "wrap.glb", "not an integer in 0..2147483647");
+
+  g = good;
+  ext(g, tri)["mode"] = "FANS";
+  expect_refused(g, "mode.glb", "is not ATTRIBUTES, TRIANGLES or INDICES");
+
+  g = good;
+  ext(g, tri)["filter"] = "OCTAHEDRAL";
+  expect_refused(g, "filter.glb", "needs mode ATTRIBUTES");
+
+  g = good;
+  g.doc["bufferViews"][tri]["byteLength"] = g.doc["bufferViews"][tri]["byteLength"].get<uint64_t>() + 2;
+  expect_refused(g, "length.glb", "is not byteStride");
+
+  g = good;
+  ext(g, tri)["buffer"] = 1;  // the fallback buffer, which holds nothing
+  expect_refused(g, "fallback.glb", "holds no bytes");
+
+  g = good;
+  g.bin[ext(g, tri).value("byteOffset", size_t(0))] = 0x00;  // the stream's header byte
+  expect_refused(g, "header.glb", "do not decode as TRIANGLES");
+
+  // Flipped bytes anywhere in the compressed data: read, or refused with a message (never a crash).
+  std::mt19937 rng(12345);
+  for (int trial = 0; trial < 300; ++trial) {
+    g = good;
+    for (int k = 0; k < 4; ++k) g.bin[rng() % g.bin.size()] ^= uint8_t(1u << (rng() % 8));
+    try {
+      read_gltf(test::glb_bytes(g), "flipped.glb");
+    } catch (const Error& e) {
+      EXPECT_EQ(e.category(), ErrorCategory::bad_input) << e.what();
+    }
+  }
+}
+
+TEST(GltfCompression, BrokenDracoFilesAreRefused) {
+  if (!test::program_available("draco_transcoder")) GTEST_SKIP() << "draco_transcoder not installed (scripts/setup.sh installs it)";
+  TempDir dir;
+  run_tool({"draco_transcoder", "-i", write_torus(dir).string(), "-o", (dir / "d.glb").string()});
+  const test::Glb good = test::read_glb(dir / "d.glb");
+  ASSERT_NO_THROW(read_gltf(test::glb_bytes(good), "good.glb"));
+  auto ext = [](test::Glb& g) -> Json& { return g.doc["meshes"][0]["primitives"][0]["extensions"][kDraco]; };
+  const size_t view = ext(const_cast<test::Glb&>(good))["bufferView"].get<size_t>();
+
+  test::Glb g = good;
+  g.doc["bufferViews"][view]["byteLength"] = 16;
+  expect_refused(g, "truncated.glb", "does not decode as a Draco mesh");
+
+  g = good;
+  const size_t position = g.doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<size_t>();
+  g.doc["accessors"][position]["count"] = g.doc["accessors"][position]["count"].get<uint64_t>() + 1;
+  expect_refused(g, "count.glb", "but the Draco mesh has");
+
+  g = good;
+  ext(g)["attributes"]["POSITION"] = 99;
+  expect_refused(g, "id.glb", "no attribute with unique id 99");
+
+  g = good;
+  ext(g)["attributes"]["TEXCOORD_5"] = 0;
+  expect_refused(g, "semantic.glb", "has no TEXCOORD_5 attribute");
+
+  g = good;
+  g.doc["meshes"][0]["primitives"][0]["mode"] = 5;
+  expect_refused(g, "strip.glb", "Draco triangle lists");
+
+  // Fewer trials than for meshopt: Draco 1.5.5 spends seconds on some corrupted streams (a UV
+  // prediction's declared orientation count, up to 2^31, drives a bit-decoding loop).
+  std::mt19937 rng(54321);
+  const size_t offset = good.doc["bufferViews"][view].value("byteOffset", size_t(0));
+  const size_t length = good.doc["bufferViews"][view]["byteLength"].get<size_t>();
+  for (int trial = 0; trial < 60; ++trial) {
+    g = good;
+    for (int k = 0; k < 4; ++k) g.bin[offset + rng() % length] ^= uint8_t(1u << (rng() % 8));
+    try {
+      read_gltf(test::glb_bytes(g), "flipped.glb");
+    } catch (const Error& e) {
+      EXPECT_EQ(e.category(), ErrorCategory::bad_input) << e.what();
+    }
+  }
+}
+
+// A file that declares a compression extension it never uses reads as it is, and is written
+// without the declaration.
+TEST(GltfCompression, UnusedDeclarationsAreDropped) {
+  TempDir dir;
+  write_scene(scene_from_mesh(shapes::cube()), dir / "cube.glb");
+  test::Glb g = test::read_glb(dir / "cube.glb");
+  g.doc["extensionsUsed"] = {kDraco, kMeshopt};
+  g.doc["extensionsRequired"] = {kDraco, kMeshopt};
+  test::write_bytes(dir / "declared.glb", test::glb_bytes(g));
+  const Scene scene = read_scene(dir / "declared.glb");
+  EXPECT_EQ(test::mesh_difference(only_mesh(scene), only_mesh(read_scene(dir / "cube.glb"))), "");
+  write_scene(scene, dir / "out.glb");
+  const Json out = test::glb_json(dir / "out.glb");
+  EXPECT_FALSE(out.contains("extensionsUsed")) << out.dump();
+  EXPECT_FALSE(out.contains("extensionsRequired"));
+}
+
+}  // namespace
+}  // namespace lod
