@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/shapes.h"
+#include "skin/fixtures.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
 #include "test_support.h"
@@ -200,6 +201,63 @@ TEST(GltfCompression, DracoFileMatchesItsSourceWithinTheQuantizationStep) {
   EXPECT_FALSE(out["meshes"][0]["primitives"][0].contains("extensions"));
   EXPECT_EQ(test::mesh_difference(decoded, only_mesh(read_scene(dir / "out.glb"))), "");
   test::expect_valid_gltf({dir / "out.glb"});
+}
+
+// A skinned, animated character through gltfpack -cc uses all four meshopt filters: octahedral
+// normals, quaternion rotations and exponential translations besides plain attributes. Its clips read
+// like those of gltfpack's uncompressed output, within the two quantizations.
+TEST(GltfCompression, AnimatedCharacterThroughEveryMeshoptFilter) {
+  if (!test::program_available("gltfpack")) GTEST_SKIP() << "gltfpack not installed (scripts/setup.sh installs it)";
+  TempDir dir;
+  write_scene(fixtures::humanoid_scene(), dir / "humanoid.glb");
+  run_tool({"gltfpack", "-i", (dir / "humanoid.glb").string(), "-o", (dir / "plain.glb").string()});
+  run_tool({"gltfpack", "-i", (dir / "humanoid.glb").string(), "-o", (dir / "cc.glb").string(), "-cc"});
+  const auto views = meshopt_views(test::glb_json(dir / "cc.glb"));
+  for (const char* filter : {"OCTAHEDRAL", "QUATERNION", "EXPONENTIAL"})
+    EXPECT_NE(std::count(views.begin(), views.end(), std::pair<std::string, std::string>{"ATTRIBUTES", filter}), 0) << filter;
+
+  const Scene plain = read_scene(dir / "plain.glb"), packed = read_scene(dir / "cc.glb");
+  expect_same_up_to_order(only_mesh(plain), only_mesh(packed), std::cos(3.0f * 3.14159265f / 180.0f));
+  ASSERT_EQ(plain.animations.size(), 2u);
+  ASSERT_EQ(packed.animations.size(), plain.animations.size());
+  size_t rotations = 0, translations = 0;
+  for (size_t a = 0; a < plain.animations.size(); ++a) {
+    const auto& pc = plain.animations[a].channels;
+    const auto& cc = packed.animations[a].channels;
+    ASSERT_EQ(pc.size(), cc.size());
+    for (size_t c = 0; c < pc.size(); ++c) {
+      SCOPED_TRACE("animation " + std::to_string(a) + " channel " + std::to_string(c));
+      ASSERT_EQ(pc[c].node, cc[c].node);
+      ASSERT_EQ(pc[c].path, cc[c].path);
+      EXPECT_EQ(pc[c].times, cc[c].times);  // key times are stored without a filter: exact
+      ASSERT_EQ(pc[c].values.size(), cc[c].values.size());
+      float largest = 0.0f, worst = 0.0f;
+      for (float v : pc[c].values) largest = std::max(largest, std::abs(v));
+      if (pc[c].path == AnimationPath::rotation) {
+        // q and -q are the same rotation, and the quaternion filter rebuilds the largest component
+        // as positive: each key is compared with the nearer sign.
+        for (size_t k = 0; k + 3 < pc[c].values.size(); k += 4) {
+          float same = 0.0f, flipped = 0.0f;
+          for (size_t i = k; i < k + 4; ++i) {
+            same = std::max(same, std::abs(pc[c].values[i] - cc[c].values[i]));
+            flipped = std::max(flipped, std::abs(pc[c].values[i] + cc[c].values[i]));
+          }
+          worst = std::max(worst, std::min(same, flipped));
+        }
+        // 12-bit rotations (gltfpack's default) both ways: each component within 2^-11 of the
+        // original in each file, so within 2^-10 of each other; twice that for the renormalization.
+        EXPECT_LE(worst, 2.0f / 1024.0f);
+        ++rotations;
+      } else if (pc[c].path == AnimationPath::translation) {
+        for (size_t k = 0; k < pc[c].values.size(); ++k) worst = std::max(worst, std::abs(pc[c].values[k] - cc[c].values[k]));
+        // 16-bit mantissas (gltfpack's default) against the largest value of the track.
+        EXPECT_LE(worst, 2.0f * largest / 65536.0f + 1e-7f);
+        ++translations;
+      }
+    }
+  }
+  EXPECT_GT(rotations, 0u);
+  EXPECT_GT(translations, 0u);
 }
 
 void expect_refused(const test::Glb& glb, const std::string& name, const std::string& needle) {
