@@ -82,6 +82,15 @@ struct Node {
   // node's own MSFT_lod and extras as they were where they are empty.
   std::vector<int32_t> lod_ids;
   std::string extras_json;
+  // EXT_mesh_gpu_instancing (gltfpack -mi, forests and crowds): the node's mesh is drawn once per
+  // instance, at the node's world transform times the instance's T * R * S. Empty: drawn once.
+  // The reader fills it and flatten() places every instance; the writer keeps the source's.
+  struct GpuInstance {
+    float3 translation;
+    float4 rotation = {0, 0, 0, 1};
+    float3 scale = {1, 1, 1};
+  };
+  std::vector<GpuInstance> gpu_instances;
 };
 
 struct Skin {

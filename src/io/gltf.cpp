@@ -60,6 +60,8 @@ constexpr uint64_t max_zero_accessor_count = uint64_t(1) << 24;
 
 std::string str(uint64_t value) { return std::to_string(value); }
 
+constexpr const char* gpu_instancing = "EXT_mesh_gpu_instancing";
+
 // tinygltf::Value -> nlohmann::json (a node's extras, read into Node::extras_json). tinygltf has
 // already dropped nulls and empty objects and arrays; binary values do not occur in JSON.
 Json value_to_json(const tg::Value& v) {
@@ -203,6 +205,7 @@ class JsonChecker {
           fail("meshes[" + str(m) + "].primitives[" + str(p) + "] has no attributes object");
       }
     }
+    check_extension_integers();
     // tinygltf passes &buffer.data[view.byteOffset] with view.byteLength to the image loader unchecked.
     const Json* images = array("images");
     for (size_t i = 0; images && i < images->size(); ++i) {
@@ -249,6 +252,49 @@ class JsonChecker {
     const Json& e = (*list)[i];
     if (!e.is_object()) fail(std::string(list_name) + "[" + str(i) + "] is not an object");
     return e;
+  }
+
+  // tinygltf 2.7 keeps an extension's integers as int, wrapping larger ones (2^32 + 5 reads as 5):
+  // the ones lodkit follows are checked here (meshopt and Draco compression, GPU instancing).
+  void check_extension_integers() const {
+    const auto check = [&](const Json& object, const std::string& key, const std::string& where) {
+      auto it = object.find(key);
+      if (it == object.end()) return;
+      if (!it->is_number_unsigned() || it->get<uint64_t>() > uint64_t(std::numeric_limits<int>::max()))
+        fail(where + "." + key + " is " + it->dump() + ", not an integer in 0.." + std::to_string(std::numeric_limits<int>::max()));
+    };
+    // The object of extension `name` on a JSON element, or nullptr.
+    const auto extension = [&](const Json& element, const char* name) -> const Json* {
+      auto extensions = element.is_object() ? element.find("extensions") : element.end();
+      if (extensions == element.end() || !extensions->is_object()) return nullptr;
+      auto ext = extensions->find(name);
+      return ext != extensions->end() && ext->is_object() ? &*ext : nullptr;
+    };
+    const auto each_key = [&](const Json& ext, const char* member, const std::string& where) {
+      auto object = ext.find(member);
+      if (object == ext.end() || !object->is_object()) return;
+      for (auto it = object->begin(); it != object->end(); ++it) check(*object, it.key(), where + "." + member);
+    };
+    if (const Json* views = array("bufferViews"))
+      for (size_t v = 0; v < views->size(); ++v)
+        for (const char* name : {"EXT_meshopt_compression", "KHR_meshopt_compression"})
+          if (const Json* ext = extension((*views)[v], name))
+            for (const char* key : {"buffer", "byteOffset", "byteLength", "byteStride", "count"})
+              check(*ext, key, "bufferViews[" + str(v) + "].extensions." + name);
+    if (const Json* nodes = array("nodes"))
+      for (size_t n = 0; n < nodes->size(); ++n)
+        if (const Json* ext = extension((*nodes)[n], "EXT_mesh_gpu_instancing"))
+          each_key(*ext, "attributes", "nodes[" + str(n) + "].extensions.EXT_mesh_gpu_instancing");
+    const Json* meshes = array("meshes");
+    for (size_t m = 0; meshes && m < meshes->size(); ++m) {
+      const Json& primitives = (*meshes)[m]["primitives"];  // run() has checked the structure
+      for (size_t p = 0; p < primitives.size(); ++p)
+        if (const Json* ext = extension(primitives[p], "KHR_draco_mesh_compression")) {
+          const std::string where = "meshes[" + str(m) + "].primitives[" + str(p) + "].extensions.KHR_draco_mesh_compression";
+          check(*ext, "bufferView", where);
+          each_key(*ext, "attributes", where);
+        }
+    }
   }
 
   const Json& doc_;
@@ -869,6 +915,7 @@ class SceneBuilder {
       const tg::Value& lod_ids = msft_lod_ids(in);
       for (size_t k = 0; k < lod_ids.ArrayLen(); ++k) out.lod_ids.push_back(lod_ids.Get(int(k)).Get<int>());
       if (in.extras.Type() != tg::NULL_TYPE) out.extras_json = value_to_json(in.extras).dump();
+      read_gpu_instances(in, out, where);
       for (int child : in.children) {
         if (size_t(child) == i) doc_.fail(where + " is its own child");
         if (scene.nodes[size_t(child)].parent != -1)
@@ -916,6 +963,51 @@ class SceneBuilder {
       // No scene: every parentless node is a root.
       for (size_t i = 0; i < count; ++i)
         if (scene.nodes[i].parent == -1) scene.roots.push_back(int32_t(i));
+    }
+  }
+
+  // EXT_mesh_gpu_instancing: TRANSLATION, ROTATION and SCALE accessors of one count (floats, or
+  // normalized integers as KHR_mesh_quantization allows), any of them absent.
+  void read_gpu_instances(const tg::Node& in, Node& out, const std::string& where) const {
+    auto found = in.extensions.find(gpu_instancing);
+    if (found == in.extensions.end()) return;
+    const std::string ext_where = where + ".extensions." + gpu_instancing;
+    if (!found->second.IsObject() || !found->second.Has("attributes") || !found->second.Get("attributes").IsObject())
+      doc_.fail(ext_where + " has no 'attributes' object");
+    const tg::Value& attributes = found->second.Get("attributes");
+    size_t count = 0;
+    bool any = false;
+    auto read = [&](const char* semantic, int type) -> std::vector<float> {
+      if (!attributes.Has(semantic)) return {};
+      const std::string what = ext_where + ".attributes." + semantic;
+      const tg::Value& value = attributes.Get(semantic);
+      const int index = value.IsInt() ? value.Get<int>() : -1;
+      if (index < 0 || size_t(index) >= model_.accessors.size()) doc_.fail(what + " is not an index of accessors");
+      const tg::Accessor& acc = expect(index, {type}, what);
+      if (any && acc.count != count) doc_.fail(what + " has " + str(acc.count) + " elements, the other attributes " + str(count));
+      count = acc.count;
+      any = true;
+      // Integers are normalized only where the accessor says so (quantized translations are not).
+      const size_t n = type == TINYGLTF_TYPE_VEC4 ? 4 : 3;
+      std::vector<float> values(acc.count * n);
+      auto copy = [&](const auto& typed) {
+        if (!typed.empty()) std::memcpy(values.data(), typed.data(), values.size() * sizeof(float));
+      };
+      if (n == 4) copy(doc_.decode_floats<float4>(index));
+      else copy(doc_.decode_floats<float3>(index));
+      for (size_t i = 0; i < values.size(); ++i)
+        if (!std::isfinite(values[i])) doc_.fail(what + " of instance " + str(i / n) + " is not finite");
+      return values;
+    };
+    const std::vector<float> t = read("TRANSLATION", TINYGLTF_TYPE_VEC3), r = read("ROTATION", TINYGLTF_TYPE_VEC4),
+                             s = read("SCALE", TINYGLTF_TYPE_VEC3);
+    if (!any) doc_.fail(ext_where + " has no TRANSLATION, ROTATION or SCALE");
+    out.gpu_instances.resize(count);
+    for (size_t i = 0; i < count; ++i) {
+      Node::GpuInstance& g = out.gpu_instances[i];
+      if (!t.empty()) g.translation = {t[3 * i], t[3 * i + 1], t[3 * i + 2]};
+      if (!r.empty()) g.rotation = {r[4 * i], r[4 * i + 1], r[4 * i + 2], r[4 * i + 3]};
+      if (!s.empty()) g.scale = {s[3 * i], s[3 * i + 1], s[3 * i + 2]};
     }
   }
 
@@ -1198,6 +1290,23 @@ void check_writable(const Mesh& mesh, size_t primitive) {
 // Replaces the geometry of the triangle primitives listed in `slots` by scene.primitives[i].mesh,
 // drops what nothing references any more, and packs the surviving bufferViews and the new geometry
 // into one buffer (returned; buffer 0 of the model, whose `buffers` list is left empty).
+// Calls f(int& index) on each accessor index of a node's EXT_mesh_gpu_instancing and stores what f
+// leaves (the reader has checked them).
+template <class F>
+void for_each_instancing_accessor(tg::Node& node, F&& f) {
+  auto found = node.extensions.find(gpu_instancing);
+  if (found == node.extensions.end() || !found->second.IsObject() || !found->second.Has("attributes")) return;
+  tg::Value::Object ext = found->second.Get<tg::Value::Object>();
+  tg::Value::Object attributes = ext["attributes"].Get<tg::Value::Object>();
+  for (auto& entry : attributes) {
+    int index = entry.second.IsInt() ? entry.second.Get<int>() : -1;
+    f(index);
+    entry.second = tg::Value(index);
+  }
+  ext["attributes"] = tg::Value(std::move(attributes));
+  found->second = tg::Value(std::move(ext));
+}
+
 std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, const std::vector<Slot>& slots) {
   const size_t mesh_count = model.meshes.size();
   // Which scene primitive replaces each glTF primitive (-1: none).
@@ -1324,7 +1433,10 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
       node.weights.clear();
       weights_gone[n] = true;
     }
-    if (mesh_removed[m]) node.skin = -1;
+    if (mesh_removed[m]) {
+      node.skin = -1;
+      node.extensions.erase(gpu_instancing);  // instances of nothing
+    }
     node.mesh = mesh_remap[m];
   }
   for (tg::Animation& anim : model.animations)
@@ -1352,6 +1464,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         for (const auto& attribute : target) mark_accessor(attribute.second);
     }
   for (const tg::Skin& skin : model.skins) mark_accessor(skin.inverseBindMatrices);
+  for (tg::Node& node : model.nodes) for_each_instancing_accessor(node, mark_accessor);
   for (const tg::Animation& anim : model.animations)
     for (const tg::AnimationSampler& sampler : anim.samplers) {
       mark_accessor(sampler.input);
@@ -1412,6 +1525,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         for (auto& attribute : target) remap(attribute.second, accessor_remap);
     }
   for (tg::Skin& skin : model.skins) remap(skin.inverseBindMatrices, accessor_remap);
+  for (tg::Node& node : model.nodes) for_each_instancing_accessor(node, [&](int& index) { remap(index, accessor_remap); });
   for (tg::Animation& anim : model.animations)
     for (tg::AnimationSampler& sampler : anim.samplers) {
       remap(sampler.input, accessor_remap);
@@ -1921,7 +2035,7 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
   JsonChecker(doc, name).run();
   // Compressed geometry needs a few stand-ins (see gltf_compression.h); tinygltf then reads the
   // rewritten document (a GLB rebuilt around the same BIN chunk).
-  const io::CompressedJson compressed = io::prepare_compressed_json(doc, glb, name);
+  const io::CompressedJson compressed = io::prepare_compressed_json(doc, glb);
   std::vector<uint8_t> rewritten;
   if (compressed.changed) {
     const std::string text = doc.dump();
@@ -2066,14 +2180,15 @@ void write_gltf(const Scene& scene, const std::filesystem::path& path, const Wri
   if (scene.source) {
     model = scene.source->model;
     add_to_source(model, scene);
-    // MSFT_lod is declared only while a node still uses it.
-    if (std::none_of(model.nodes.begin(), model.nodes.end(), [](const tg::Node& n) { return n.extensions.count("MSFT_lod") > 0; }))
-      std::erase(model.extensionsUsed, std::string("MSFT_lod")), std::erase(model.extensionsRequired, std::string("MSFT_lod"));
     for (const Primitive& prim : scene.primitives) slots.push_back({int(prim.gltf_mesh), int(prim.gltf_primitive)});
   } else {
     model = model_from_scene(scene, slots);
   }
   std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots);
+  // MSFT_lod and instancing are declared only while a node still uses them.
+  for (const std::string ext : {"MSFT_lod", gpu_instancing})
+    if (std::none_of(model.nodes.begin(), model.nodes.end(), [&](const tg::Node& n) { return n.extensions.count(ext) > 0; }))
+      std::erase(model.extensionsUsed, ext), std::erase(model.extensionsRequired, ext);
   if (scene.source) relocate_images(model, glb ? &bin : nullptr, scene.source->base_dir, path.parent_path());
   if (glb) {
     const std::string json_text = serialize_json(model, bin.size(), "", false);

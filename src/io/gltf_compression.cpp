@@ -354,48 +354,9 @@ class Decoder {
   std::vector<int> filled_by_;          // per accessor: the Draco stream (bufferView) that filled it
 };
 
-// tinygltf 2.7 keeps an extension's integers as int, wrapping larger ones (2^32 + 5 reads as 5): the
-// numbers the decoders use are checked on the JSON first.
-void check_extension_numbers(const Json& doc, const std::string& name) {
-  const auto check = [&](const Json& object, std::initializer_list<const char*> keys, const std::string& where) {
-    for (const char* key : keys) {
-      auto it = object.find(key);
-      if (it == object.end()) continue;
-      if (!it->is_number_unsigned() || it->get<uint64_t>() > uint64_t(std::numeric_limits<int>::max()))
-        throw_bad_input(name, where + "." + key + " is " + it->dump() + ", not an integer in 0.." +
-                                  std::to_string(std::numeric_limits<int>::max()));
-    }
-  };
-  if (auto views = doc.find("bufferViews"); views != doc.end() && views->is_array())
-    for (size_t v = 0; v < views->size(); ++v) {
-      const char* which = nullptr;
-      if (const Json* ext = meshopt_json((*views)[v], &which); ext && ext->is_object())
-        check(*ext, {"buffer", "byteOffset", "byteLength", "byteStride", "count"}, "bufferViews[" + str(v) + "].extensions." + which);
-    }
-  auto meshes = doc.find("meshes");
-  if (meshes == doc.end() || !meshes->is_array()) return;
-  for (size_t m = 0; m < meshes->size(); ++m) {
-    const Json& mesh = (*meshes)[m];
-    auto primitives = mesh.is_object() ? mesh.find("primitives") : mesh.end();
-    if (primitives == mesh.end() || !primitives->is_array()) continue;
-    for (size_t p = 0; p < primitives->size(); ++p) {
-      const Json& primitive = (*primitives)[p];
-      auto extensions = primitive.is_object() ? primitive.find("extensions") : primitive.end();
-      if (extensions == primitive.end() || !extensions->is_object()) continue;
-      auto draco = extensions->find(draco_name);
-      if (draco == extensions->end() || !draco->is_object()) continue;
-      const std::string where = "meshes[" + str(m) + "].primitives[" + str(p) + "].extensions." + draco_name;
-      check(*draco, {"bufferView"}, where);
-      if (auto attributes = draco->find("attributes"); attributes != draco->end() && attributes->is_object())
-        for (auto it = attributes->begin(); it != attributes->end(); ++it) check(*attributes, {it.key().c_str()}, where + ".attributes");
-    }
-  }
-}
-
 }  // namespace
 
-CompressedJson prepare_compressed_json(Json& doc, bool glb, const std::string& name) {
-  check_extension_numbers(doc, name);
+CompressedJson prepare_compressed_json(Json& doc, bool glb) {
   CompressedJson out;
   auto buffers = doc.find("buffers");
   auto views = doc.find("bufferViews");

@@ -27,8 +27,7 @@ struct CompressedJson {
   std::vector<uint64_t> fallback_lengths;  // per buffer: a stand-in's declared byteLength, else 0
   bool changed = false;                    // whether tinygltf must read the rewritten JSON
 };
-// The extensions' numbers are checked here too (tinygltf would wrap large ones): bad input names `name`.
-CompressedJson prepare_compressed_json(nlohmann::json& doc, bool glb, const std::string& name);
+CompressedJson prepare_compressed_json(nlohmann::json& doc, bool glb);
 
 // After tinygltf, before any accessor is read: decodes every compressed bufferView and Draco
 // primitive into plain data (`fallback_lengths` from above), checking every field,

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <vector>
@@ -30,27 +31,29 @@ Matrix multiply(const Matrix& a, const Matrix& b) {
 }
 
 // T * R * S, or the node's matrix.
-Matrix local_matrix(const Node& node) {
+Matrix trs_matrix(const float3& t, const float4& r, const float3& s) {
   Matrix m{};
-  if (node.has_matrix) {
-    for (int i = 0; i < 16; ++i) m[i] = node.matrix[i];
-    return m;
-  }
-  const double x = node.rotation.x, y = node.rotation.y, z = node.rotation.z, w = node.rotation.w;
-  const double sx = node.scale.x, sy = node.scale.y, sz = node.scale.z;
-  m[0] = (1 - 2 * (y * y + z * z)) * sx;
-  m[1] = (2 * (x * y + z * w)) * sx;
-  m[2] = (2 * (x * z - y * w)) * sx;
-  m[4] = (2 * (x * y - z * w)) * sy;
-  m[5] = (1 - 2 * (x * x + z * z)) * sy;
-  m[6] = (2 * (y * z + x * w)) * sy;
-  m[8] = (2 * (x * z + y * w)) * sz;
-  m[9] = (2 * (y * z - x * w)) * sz;
-  m[10] = (1 - 2 * (x * x + y * y)) * sz;
-  m[12] = node.translation.x;
-  m[13] = node.translation.y;
-  m[14] = node.translation.z;
+  const double x = r.x, y = r.y, z = r.z, w = r.w;
+  m[0] = (1 - 2 * (y * y + z * z)) * s.x;
+  m[1] = (2 * (x * y + z * w)) * s.x;
+  m[2] = (2 * (x * z - y * w)) * s.x;
+  m[4] = (2 * (x * y - z * w)) * s.y;
+  m[5] = (1 - 2 * (x * x + z * z)) * s.y;
+  m[6] = (2 * (y * z + x * w)) * s.y;
+  m[8] = (2 * (x * z + y * w)) * s.z;
+  m[9] = (2 * (y * z - x * w)) * s.z;
+  m[10] = (1 - 2 * (x * x + y * y)) * s.z;
+  m[12] = t.x;
+  m[13] = t.y;
+  m[14] = t.z;
   m[15] = 1;
+  return m;
+}
+
+Matrix local_matrix(const Node& node) {
+  if (!node.has_matrix) return trs_matrix(node.translation, node.rotation, node.scale);
+  Matrix m{};
+  for (int i = 0; i < 16; ++i) m[i] = node.matrix[i];
   return m;
 }
 
@@ -87,8 +90,16 @@ std::vector<Instance> collect_instances(const Scene& scene) {
       // glTF ignores the transform of a node with a skinned mesh: joints place it. Flattening
       // gives the bind pose, in the mesh's own space.
       const Matrix& placement = node.skin >= 0 ? identity_matrix : world;
-      if (found != primitives_of_mesh.end())
-        for (size_t p : found->second) instances.push_back({p, placement});
+      if (found != primitives_of_mesh.end()) {
+        if (node.gpu_instances.empty()) {
+          for (size_t p : found->second) instances.push_back({p, placement});
+        } else {
+          for (const Node::GpuInstance& gpu : node.gpu_instances) {
+            const Matrix each = multiply(placement, trs_matrix(gpu.translation, gpu.rotation, gpu.scale));
+            for (size_t p : found->second) instances.push_back({p, each});
+          }
+        }
+      }
     }
     for (auto it = node.children.rbegin(); it != node.children.rend(); ++it) stack.push_back({*it, world});
   }
@@ -137,6 +148,11 @@ Mesh flatten(const Scene& scene) {
     vertices += prim.mesh.vertex_count();
     corners += prim.mesh.indices.size();
   }
+  // Instancing multiplies a mesh: the merged one must still fit 32-bit indices.
+  if (vertices > std::numeric_limits<uint32_t>::max() || corners > std::numeric_limits<uint32_t>::max())
+    throw_bad_input(scene.name.empty() ? std::string("scene") : scene.name,
+                    "its instances add up to " + std::to_string(vertices) + " vertices and " + std::to_string(corners / 3) +
+                        " triangles, more than one mesh with 32-bit indices holds");
   core::reserve_huge(out.positions, vertices);
   core::reserve_huge(out.indices, corners);
 

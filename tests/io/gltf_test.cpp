@@ -9,6 +9,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "core/shapes.h"
@@ -576,6 +577,108 @@ TEST(GltfRead, InterleavedStreamsWithByteStride) {
   const Mesh m = read_gltf(f.glb(), "interleaved.glb").primitives[0].mesh;
   EXPECT_EQ(flat(m.positions), (std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0}));
   EXPECT_EQ(flat(m.normals), (std::vector<float>{0, 0, 1, 0, 0, 1, 0, 0, 1}));
+}
+
+void expect_bad_input(std::span<const uint8_t> bytes, const std::string& name, const std::string& needle);
+
+// One triangle drawn twice by EXT_mesh_gpu_instancing (under a node translated by (0, 0, 5)):
+// instance 0 in place, instance 1 scaled by 2, turned 90 degrees about +z, moved by (10, 0, 0).
+HandBuilt instanced_triangle() {
+  HandBuilt f;
+  const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+  const int idx = f.accessor(std::vector<uint16_t>{0, 1, 2}, kUShort, "SCALAR", 1, kElementArrayBuffer);
+  const float h = std::sqrt(0.5f);
+  const int t = f.accessor(std::vector<float>{0, 0, 0, 10, 0, 0}, kFloat, "VEC3", 3);
+  const int r = f.accessor(std::vector<float>{0, 0, 0, 1, 0, 0, h, h}, kFloat, "VEC4", 4);
+  const int s = f.accessor(std::vector<float>{1, 1, 1, 2, 2, 2}, kFloat, "VEC3", 3);
+  f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", pos}}}, {"indices", idx}}}}}});
+  f.doc["nodes"] = Json::array({{{"mesh", 0},
+                                 {"translation", {0, 0, 5}},
+                                 {"extensions", {{"EXT_mesh_gpu_instancing",
+                                                  {{"attributes", {{"TRANSLATION", t}, {"ROTATION", r}, {"SCALE", s}}}}}}}}});
+  f.doc["scenes"] = Json::array({{{"nodes", {0}}}});
+  f.doc["extensionsUsed"] = {"EXT_mesh_gpu_instancing"};
+  return f;
+}
+
+TEST(GltfInstancing, EveryInstanceIsReadPlacedAndKept) {
+  TempDir dir;
+  test::write_bytes(dir / "in.glb", instanced_triangle().glb());
+  test::expect_valid_gltf({dir / "in.glb"});
+  Scene scene = read_scene(dir / "in.glb");
+  ASSERT_EQ(scene.nodes.size(), 1u);
+  ASSERT_EQ(scene.nodes[0].gpu_instances.size(), 2u);
+  EXPECT_EQ(scene.nodes[0].gpu_instances[1].translation.x, 10.0f);
+  EXPECT_EQ(scene.nodes[0].gpu_instances[1].scale.y, 2.0f);
+
+  // Instance 1 maps (x, y, z) to (10 - 2y, 2x, 2z), then the node adds 5 to z.
+  const Mesh flat = flatten(scene);
+  ASSERT_EQ(flat.triangle_count(), 2u);
+  const std::vector<float3> expected = {{0, 0, 5}, {1, 0, 5}, {0, 1, 5}, {10, 0, 5}, {10, 2, 5}, {8, 0, 5}};
+  ASSERT_EQ(flat.positions.size(), expected.size());
+  for (size_t v = 0; v < expected.size(); ++v) {
+    EXPECT_NEAR(flat.positions[v].x, expected[v].x, 1e-5f) << v;
+    EXPECT_NEAR(flat.positions[v].y, expected[v].y, 1e-5f) << v;
+    EXPECT_NEAR(flat.positions[v].z, expected[v].z, 1e-5f) << v;
+  }
+
+  // Written with new geometry, the instances stay: the node's accessors are kept and renumbered.
+  scene.primitives[0].mesh.positions[2] = {0, 2, 0};
+  write_scene(scene, dir / "out.glb");
+  test::expect_valid_gltf({dir / "out.glb"});
+  const Scene back = read_scene(dir / "out.glb");
+  ASSERT_EQ(back.nodes[0].gpu_instances.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const Node::GpuInstance &a = scene.nodes[0].gpu_instances[i], &b = back.nodes[0].gpu_instances[i];
+    EXPECT_EQ(std::tie(a.translation.x, a.translation.y, a.translation.z), std::tie(b.translation.x, b.translation.y, b.translation.z));
+    EXPECT_EQ(std::tie(a.rotation.x, a.rotation.y, a.rotation.z, a.rotation.w), std::tie(b.rotation.x, b.rotation.y, b.rotation.z, b.rotation.w));
+    EXPECT_EQ(std::tie(a.scale.x, a.scale.y, a.scale.z), std::tie(b.scale.x, b.scale.y, b.scale.z));
+  }
+  EXPECT_EQ(back.primitives[0].mesh.positions[2].y, 2.0f);
+}
+
+TEST(GltfInstancing, LodChainBakesTheInstancesAndTheOldNodeDropsThem) {
+  TempDir dir;
+  test::write_bytes(dir / "in.glb", instanced_triangle().glb());
+  const test::RunResult r = test::run_cli({"lod", (dir / "in.glb").string(), "-o", (dir / "chain.glb").string(), "--levels", "1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Json doc = test::glb_json(dir / "chain.glb");
+  EXPECT_FALSE(doc["nodes"][0].contains("extensions")) << doc["nodes"][0].dump();
+  for (const Json& ext : doc.value("extensionsUsed", Json::array())) EXPECT_NE(ext, "EXT_mesh_gpu_instancing");
+  // Level 0 is both instances, in world space.
+  const Scene chain = read_scene(dir / "chain.glb");
+  EXPECT_EQ(flatten(chain).triangle_count(), 2u);
+  test::expect_valid_gltf({dir / "chain.glb"});
+}
+
+TEST(GltfInstancing, MalformedInstancingIsRefused) {
+  HandBuilt f = instanced_triangle();
+  f.doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["SCALE"] =
+      f.accessor(std::vector<float>{1, 1, 1}, kFloat, "VEC3", 3);
+  expect_bad_input(f.glb(), "count.glb", "has 1 elements, the other attributes 2");
+
+  f = instanced_triangle();
+  f.doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["TRANSLATION"] = 99;
+  expect_bad_input(f.glb(), "index.glb", "TRANSLATION is not an index of accessors");
+
+  // tinygltf would wrap 2^32 + 1 to accessor 1.
+  f = instanced_triangle();
+  f.doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["TRANSLATION"] = (uint64_t(1) << 32) + 1;
+  expect_bad_input(f.glb(), "wrap.glb", "TRANSLATION is 4294967297, not an integer in 0..2147483647");
+
+  f = instanced_triangle();
+  f.doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["ROTATION"] =
+      f.accessor(std::vector<float>{0, 0, 0, 1, 0, 0, 0}, kFloat, "VEC3", 3);
+  expect_bad_input(f.glb(), "type.glb", "ROTATION is VEC3, expected VEC4");
+
+  f = instanced_triangle();
+  f.doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["TRANSLATION"] =
+      f.accessor(std::vector<float>{0, 0, 0, std::numeric_limits<float>::infinity(), 0, 0}, kFloat, "VEC3", 3);
+  expect_bad_input(f.glb(), "inf.glb", "TRANSLATION of instance 1 is not finite");
+
+  f = instanced_triangle();
+  f.doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"] = Json::object();
+  expect_bad_input(f.glb(), "empty.glb", "EXT_mesh_gpu_instancing");
 }
 
 TEST(GltfRead, SparseAccessorsAreApplied) {
