@@ -31,20 +31,17 @@ constexpr uint64_t max_meshopt_ratio = 64;
 
 std::string str(uint64_t v) { return std::to_string(v); }
 
-// The meshopt extension object of a JSON bufferView or buffer (and its name), or nullptr.
-const Json* meshopt_json(const Json& object, const char** which = nullptr) {
+// The meshopt extension object of a JSON bufferView or buffer, or nullptr.
+const Json* meshopt_json(const Json& object) {
   if (!object.is_object()) return nullptr;
   auto extensions = object.find("extensions");
   if (extensions == object.end() || !extensions->is_object()) return nullptr;
   for (const char* ext : meshopt_names)
-    if (auto it = extensions->find(ext); it != extensions->end()) {
-      if (which) *which = ext;
-      return &*it;
-    }
+    if (auto it = extensions->find(ext); it != extensions->end()) return &*it;
   return nullptr;
 }
 
-// The meshopt extension object of a bufferView and its name, or nullptr.
+// The meshopt extension object of a loaded bufferView (and its name), or nullptr.
 const tg::Value* meshopt_value(const tg::ExtensionMap& extensions, const char** which) {
   for (const char* ext : meshopt_names)
     if (auto it = extensions.find(ext); it != extensions.end()) {
