@@ -9,6 +9,7 @@
 // The shared oracle lives in fuzz_common.h.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -80,8 +81,11 @@ size_t total_vertices(const Scene& scene) {
 }
 
 void check_flatten(const Scene& scene) {
-  // Instancing multiplies the vertices: flatten only scenes whose worst case stays small.
-  if (total_vertices(scene) * (scene.nodes.size() + 1) > 10 * max_round_trip_vertices) return;
+  // Instancing (nodes and GPU instances) multiplies the vertices: flatten only scenes whose worst
+  // case stays small.
+  size_t placements = 1;
+  for (const Node& node : scene.nodes) placements += std::max<size_t>(1, node.gpu_instances.size());
+  if (total_vertices(scene) * placements > 10 * max_round_trip_vertices) return;
   // flatten may refuse a scene whose node transforms overflow float, but only as bad input.
   const std::optional<Mesh> flat = run_step("gltf flatten", true, [&] { return flatten(scene); });
   if (flat) check_mesh(*flat, "gltf flatten");

@@ -975,6 +975,12 @@ class SceneBuilder {
     if (!found->second.IsObject() || !found->second.Has("attributes") || !found->second.Get("attributes").IsObject())
       doc_.fail(ext_where + " has no 'attributes' object");
     const tg::Value& attributes = found->second.Get("attributes");
+    // Every attribute (custom "_NAME" ones included, which the writer keeps) names an accessor.
+    for (const std::string& semantic : attributes.Keys()) {
+      const tg::Value& value = attributes.Get(semantic);
+      if (!value.IsInt() || value.Get<int>() < 0 || size_t(value.Get<int>()) >= model_.accessors.size())
+        doc_.fail(ext_where + ".attributes." + semantic + " is not an index of accessors");
+    }
     size_t count = 0;
     bool any = false;
     auto read = [&](const char* semantic, int type) -> std::vector<float> {
@@ -1287,19 +1293,17 @@ void check_writable(const Mesh& mesh, size_t primitive) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) throw_usage(where + "non-finite position");
 }
 
-// Replaces the geometry of the triangle primitives listed in `slots` by scene.primitives[i].mesh,
-// drops what nothing references any more, and packs the surviving bufferViews and the new geometry
-// into one buffer (returned; buffer 0 of the model, whose `buffers` list is left empty).
-// Calls f(int& index) on each accessor index of a node's EXT_mesh_gpu_instancing and stores what f
-// leaves (the reader has checked them).
+// Calls f(int& index) on each accessor index (below accessor_count) of a node's
+// EXT_mesh_gpu_instancing and stores what f leaves.
 template <class F>
-void for_each_instancing_accessor(tg::Node& node, F&& f) {
+void for_each_instancing_accessor(tg::Node& node, size_t accessor_count, F&& f) {
   auto found = node.extensions.find(gpu_instancing);
   if (found == node.extensions.end() || !found->second.IsObject() || !found->second.Has("attributes")) return;
   tg::Value::Object ext = found->second.Get<tg::Value::Object>();
   tg::Value::Object attributes = ext["attributes"].Get<tg::Value::Object>();
   for (auto& entry : attributes) {
     int index = entry.second.IsInt() ? entry.second.Get<int>() : -1;
+    if (index < 0 || size_t(index) >= accessor_count) continue;  // the reader refuses those
     f(index);
     entry.second = tg::Value(index);
   }
@@ -1307,6 +1311,9 @@ void for_each_instancing_accessor(tg::Node& node, F&& f) {
   found->second = tg::Value(std::move(ext));
 }
 
+// Replaces the geometry of the triangle primitives listed in `slots` by scene.primitives[i].mesh,
+// drops what nothing references any more, and packs the surviving bufferViews and the new geometry
+// into one buffer (returned; buffer 0 of the model, whose `buffers` list is left empty).
 std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, const std::vector<Slot>& slots) {
   const size_t mesh_count = model.meshes.size();
   // Which scene primitive replaces each glTF primitive (-1: none).
@@ -1464,7 +1471,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         for (const auto& attribute : target) mark_accessor(attribute.second);
     }
   for (const tg::Skin& skin : model.skins) mark_accessor(skin.inverseBindMatrices);
-  for (tg::Node& node : model.nodes) for_each_instancing_accessor(node, mark_accessor);
+  for (tg::Node& node : model.nodes) for_each_instancing_accessor(node, accessor_remap.size(), mark_accessor);
   for (const tg::Animation& anim : model.animations)
     for (const tg::AnimationSampler& sampler : anim.samplers) {
       mark_accessor(sampler.input);
@@ -1525,7 +1532,8 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         for (auto& attribute : target) remap(attribute.second, accessor_remap);
     }
   for (tg::Skin& skin : model.skins) remap(skin.inverseBindMatrices, accessor_remap);
-  for (tg::Node& node : model.nodes) for_each_instancing_accessor(node, [&](int& index) { remap(index, accessor_remap); });
+  for (tg::Node& node : model.nodes)
+    for_each_instancing_accessor(node, accessor_remap.size(), [&](int& index) { remap(index, accessor_remap); });
   for (tg::Animation& anim : model.animations)
     for (tg::AnimationSampler& sampler : anim.samplers) {
       remap(sampler.input, accessor_remap);

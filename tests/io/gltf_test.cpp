@@ -661,6 +661,12 @@ TEST(GltfInstancing, MalformedInstancingIsRefused) {
   f.doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["TRANSLATION"] = 99;
   expect_bad_input(f.glb(), "index.glb", "TRANSLATION is not an index of accessors");
 
+  // Custom attributes are kept, so they must name accessors too (fuzzing found the writer
+  // following one out of range).
+  f = instanced_triangle();
+  f.doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["_ID"] = 99;
+  expect_bad_input(f.glb(), "custom.glb", "_ID is not an index of accessors");
+
   // tinygltf would wrap 2^32 + 1 to accessor 1.
   f = instanced_triangle();
   f.doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["TRANSLATION"] = (uint64_t(1) << 32) + 1;
