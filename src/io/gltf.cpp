@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "io/gltf_compression.h"
+#include "io/gltf_types.h"
 #include "io/text_reader.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
@@ -59,6 +60,8 @@ constexpr size_t max_json_depth = 64;
 constexpr uint64_t max_zero_accessor_count = uint64_t(1) << 24;
 
 std::string str(uint64_t value) { return std::to_string(value); }
+using io::component_bytes;
+using io::type_components;
 
 constexpr const char* gpu_instancing = "EXT_mesh_gpu_instancing";
 
@@ -92,32 +95,6 @@ const tg::Value& msft_lod_ids(const tg::Node& node) {
 }
 
 // ---- accessor layout -----------------------------------------------------------------------------
-
-size_t component_bytes(int component_type) {
-  switch (component_type) {
-    case TINYGLTF_COMPONENT_TYPE_BYTE:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
-    case TINYGLTF_COMPONENT_TYPE_SHORT:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
-    case TINYGLTF_COMPONENT_TYPE_INT:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
-    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
-    default: return 0;  // DOUBLE is not glTF 2.0
-  }
-}
-
-size_t type_components(int type) {
-  switch (type) {
-    case TINYGLTF_TYPE_SCALAR: return 1;
-    case TINYGLTF_TYPE_VEC2: return 2;
-    case TINYGLTF_TYPE_VEC3: return 3;
-    case TINYGLTF_TYPE_VEC4: return 4;
-    case TINYGLTF_TYPE_MAT2: return 4;
-    case TINYGLTF_TYPE_MAT3: return 9;
-    case TINYGLTF_TYPE_MAT4: return 16;
-    default: return 0;
-  }
-}
 
 const char* type_name(int type) {
   switch (type) {

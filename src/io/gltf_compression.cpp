@@ -12,6 +12,7 @@
 #include <limits>
 #include <new>
 
+#include "io/gltf_types.h"
 #include "lodkit/error.h"
 
 namespace lod::io {
@@ -233,27 +234,6 @@ class Decoder {
     return true;
   }
 
-  static size_t component_size(int type) {
-    switch (type) {
-      case TINYGLTF_COMPONENT_TYPE_BYTE:
-      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
-      case TINYGLTF_COMPONENT_TYPE_SHORT:
-      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
-      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
-      case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
-      default: return 0;
-    }
-  }
-  static int type_components(int type) {
-    switch (type) {
-      case TINYGLTF_TYPE_SCALAR: return 1;
-      case TINYGLTF_TYPE_VEC2: return 2;
-      case TINYGLTF_TYPE_VEC3: return 3;
-      case TINYGLTF_TYPE_VEC4: return 4;
-      default: return 0;  // matrices are never vertex attributes Draco carries
-    }
-  }
-
   void decode_draco_primitive(size_t m, size_t p) {
     tg::Primitive& prim = model_.meshes[m].primitives[p];
     auto found = prim.extensions.find(draco_name);
@@ -300,8 +280,8 @@ class Decoder {
       if (!claim_accessor(accessor->second, stream, what)) continue;
       const tg::Accessor& acc = model_.accessors[size_t(accessor->second)];
       const std::string acc_where = what + " (accessors[" + std::to_string(accessor->second) + "])";
-      const int components = type_components(acc.type);
-      const size_t size = component_size(acc.componentType);
+      const int components = int(type_components(acc.type));
+      const size_t size = component_bytes(acc.componentType);
       if (components == 0 || size == 0) fail(acc_where + " has a type or componentType that Draco attributes cannot have");
       if (components != attribute->num_components())
         fail(acc_where + " has " + std::to_string(components) + " components, the Draco attribute " + std::to_string(attribute->num_components()));
@@ -323,7 +303,7 @@ class Decoder {
     if (claim_accessor(prim.indices, stream, what)) {
       const tg::Accessor& acc = model_.accessors[size_t(prim.indices)];
       const std::string acc_where = what + " (accessors[" + std::to_string(prim.indices) + "])";
-      const size_t size = component_size(acc.componentType);
+      const size_t size = component_bytes(acc.componentType);
       if (acc.type != TINYGLTF_TYPE_SCALAR || size == 0 || acc.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT ||
           acc.componentType == TINYGLTF_COMPONENT_TYPE_BYTE || acc.componentType == TINYGLTF_COMPONENT_TYPE_SHORT)
         fail(acc_where + " is not a SCALAR of unsigned integers");
