@@ -131,6 +131,9 @@ struct Scene {
   // glTF meshes in the source document, points and lines included: a primitive with a gltf_mesh
   // from here on makes a new mesh.
   uint32_t gltf_mesh_count = 0;
+  // The source document's extensionsUsed as declared, the compression extensions the reader decoded
+  // (and the writer drops) included: what `lodkit info` reports.
+  std::vector<std::string> extensions_used;
   std::shared_ptr<const GltfSource> source;  // non-null when read from glTF
   std::string name;                           // the file it was read from, for messages
 };

@@ -2068,10 +2068,12 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
   if (options.progress) options.progress(0.5);
   source->base_dir = base_dir;
 
+  std::vector<std::string> extensions_used = source->model.extensionsUsed;  // before decoding drops some
   io::decode_compressed_geometry(source->model, compressed.fallback_lengths, name);
   const Document document(source->model, name);
   document.validate();
   Scene scene = SceneBuilder(document).build();
+  scene.extensions_used = std::move(extensions_used);
   scene.source = std::move(source);
   scene.name = name;
   if (options.progress) options.progress(1.0);

@@ -48,6 +48,9 @@ const Mesh& only_mesh(const Scene& scene) {
 bool contains(const Json& list, const std::string& name) {
   return list.is_array() && std::find(list.begin(), list.end(), name) != list.end();
 }
+bool contains(const std::vector<std::string>& list, const std::string& name) {
+  return std::find(list.begin(), list.end(), name) != list.end();
+}
 
 // Every bufferView's (mode, filter) under the meshopt extension.
 std::vector<std::pair<std::string, std::string>> meshopt_views(const Json& doc) {
@@ -138,6 +141,16 @@ TEST(GltfCompression, MeshoptFilesReadLikeTheirUncompressedTwin) {
     const float normal_cos = std::string(name) == "cc.glb" ? std::cos(3.0f * 3.14159265f / 180.0f) : 1.0f;
     expect_same_up_to_order(reference, mesh, normal_cos);
   }
+  // info names the decoded extension, from the scene and on the command line; the plain twin has none.
+  EXPECT_TRUE(contains(read_scene(dir / "c.glb").extensions_used, kMeshopt));
+  EXPECT_TRUE(plain.extensions_used.empty() || !contains(plain.extensions_used, kMeshopt));
+  const test::RunResult info = test::run_cli({"info", "--json", (dir / "c.glb").string()});
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  const Json report = Json::parse(info.out);
+  EXPECT_TRUE(contains(report["gltf"]["extensions_used"], kMeshopt)) << info.out;
+  EXPECT_EQ(report["stats"]["triangles"], 576);
+  EXPECT_NE(test::run_cli({"info", (dir / "c.glb").string()}).out.find(kMeshopt), std::string::npos);
+
   // A decoder never needs -cf's fallback file.
   std::filesystem::remove(dir / "cf.fallback.bin");
   expect_same_up_to_order(reference, only_mesh(read_scene(dir / "cf.glb")), 1.0f);

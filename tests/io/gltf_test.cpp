@@ -637,6 +637,19 @@ TEST(GltfInstancing, EveryInstanceIsReadPlacedAndKept) {
   EXPECT_EQ(back.primitives[0].mesh.positions[2].y, 2.0f);
 }
 
+TEST(GltfInstancing, InfoCountsTheInstances) {
+  TempDir dir;
+  test::write_bytes(dir / "in.glb", instanced_triangle().glb());
+  const test::RunResult r = test::run_cli({"info", "--json", (dir / "in.glb").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Json report = Json::parse(r.out);
+  EXPECT_EQ(report["gltf"]["gpu_instances"], 2) << r.out;
+  EXPECT_EQ(report["gltf"]["instanced_nodes"], 1);
+  EXPECT_EQ(report["gltf"]["extensions_used"], Json::array({"EXT_mesh_gpu_instancing"}));
+  EXPECT_EQ(report["stats"]["triangles"], 2);  // both instances, flattened
+  EXPECT_NE(test::run_cli({"info", (dir / "in.glb").string()}).out.find("2 on 1 node\n"), std::string::npos);
+}
+
 TEST(GltfInstancing, LodChainBakesTheInstancesAndTheOldNodeDropsThem) {
   TempDir dir;
   test::write_bytes(dir / "in.glb", instanced_triangle().glb());

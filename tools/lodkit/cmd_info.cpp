@@ -1,5 +1,6 @@
 // lodkit info FILE [--json]: what a mesh file holds, and its topology.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <chrono>
 #include <memory>
@@ -62,6 +63,16 @@ std::string streams_text(const Mesh& m) {
   return s;
 }
 
+// EXT_mesh_gpu_instancing: how many instances, over how many nodes.
+std::pair<size_t, size_t> gpu_instance_counts(const Scene& scene) {
+  size_t instances = 0, nodes = 0;
+  for (const Node& node : scene.nodes) {
+    instances += node.gpu_instances.size();
+    nodes += !node.gpu_instances.empty();
+  }
+  return {instances, nodes};
+}
+
 void print_table(const InfoOptions& o, FileFormat format, const Scene& scene, const Mesh& mesh, const MeshStats& s,
                  double load_seconds) {
   auto row = [](const char* key, const std::string& value) { fmt::print("{:<24}{}\n", key, value); };
@@ -75,6 +86,9 @@ void print_table(const InfoOptions& o, FileFormat format, const Scene& scene, co
     row("glTF textures / images", fmt::format("{} / {}", scene.texture_count, scene.image_count));
     row("glTF skins", std::to_string(scene.skins.size()));
     row("glTF animations", std::to_string(scene.animations.size()));
+    row("glTF extensions", scene.extensions_used.empty() ? "none" : fmt::format("{}", fmt::join(scene.extensions_used, " ")));
+    if (const auto [instances, nodes] = gpu_instance_counts(scene); instances != 0)
+      row("glTF GPU instances", fmt::format("{} on {} node{}", instances, nodes, nodes == 1 ? "" : "s"));
   }
   row("vertices", std::to_string(s.vertices));
   row("triangles", std::to_string(s.triangles));
@@ -141,7 +155,10 @@ Command register_info(CLI::App& root) {
                 j["gltf"] = {{"primitives", scene.primitives.size()}, {"nodes", scene.nodes.size()},
                              {"materials", scene.material_names.size()}, {"textures", scene.texture_count},
                              {"images", scene.image_count}, {"skins", scene.skins.size()},
-                             {"animations", scene.animations.size()}};
+                             {"animations", scene.animations.size()},
+                             {"extensions_used", scene.extensions_used},
+                             {"gpu_instances", gpu_instance_counts(scene).first},
+                             {"instanced_nodes", gpu_instance_counts(scene).second}};
               fmt::print("{}\n", j.dump(2));
             } else {
               print_table(o, format, scene, mesh, s, load_seconds);
