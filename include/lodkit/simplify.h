@@ -242,4 +242,34 @@ Mesh replay(const Mesh& mesh, const SimplifyRecord& record, size_t count);
 // exactly (bit for bit, including triangle order and winding). For tests and progressive meshes.
 Mesh replay_and_undo(const Mesh& mesh, const SimplifyRecord& record);
 
+// ---- inputs in a form no collapse can touch -------------------------------------------------------
+// Three kinds of input leave an edge collapse nothing to do as they come; `lodkit simplify` and
+// `lodkit lod` prepare them this way, and so can a caller of simplify or build_lod_chain:
+// - A triangle soup (a non-indexed glTF, an OBJ or PLY without shared vertices): the simplifier takes
+//   copies of one position for a seam, which moves only as a whole. Weld it first, exactly:
+//   lod::weld(mesh) (optimize.h), as gltfpack does.
+// - Double-sided by duplication (foliage, cloth, paper): every triangle has a twin on the same
+//   positions with the opposite winding, so every edge has four triangles, which no collapse may
+//   touch. The fronts (the first of each pair) are simplified, and each result triangle gets its
+//   twin again, normals negated and tangents' w flipped.
+// - Flat shading: every triangle's corners share its one normal and some position has several (a
+//   seam of copies everywhere). Those normals only say which way each face points: the mesh is
+//   simplified without them, copies merged, and each result triangle gets its face normal again.
+// Neither form applies to a result that must use input vertices (keep_vertices, a chain sharing one
+// vertex buffer, geomorphs): the backs and face normals are new vertices.
+struct SurfaceForm {
+  bool double_sided = false;  // `mesh` holds the fronts
+  bool flat_shaded = false;   // `mesh` holds no normals, its copies merged
+  Mesh mesh;                  // what to simplify when either is set; else empty (simplify the input)
+
+  bool changed() const { return double_sided || flat_shaded; }
+  const Mesh& to_simplify(const Mesh& input) const { return changed() ? mesh : input; }
+};
+// Detects both forms (double-sided first; the fronts may then be flat-shaded). Linear time but for
+// a sort-free hash check that rules out most meshes that are not double-sided.
+SurfaceForm surface_form(const Mesh& mesh);
+// Gives a simplified result its form back: face normals, then the backs. Does nothing when
+// !form.changed().
+void restore_form(const SurfaceForm& form, Mesh& result);
+
 }  // namespace lod

@@ -18,6 +18,7 @@
 #include "lodkit/measure.h"
 #include "lodkit/simplify.h"
 #include "optimize/optimize_test_support.h"
+#include "simplify/form_fixtures.h"
 #include "test_support.h"
 
 namespace lod {
@@ -147,72 +148,20 @@ void expect_kept_through_simplify_and_lod(const Mesh& input, const char* flag, c
 // normals are set aside, the positions simplified, and each output triangle gets its face normal
 // again; lodkit lod's levels too. Before, no vertex could move and nothing was simplified.
 TEST(CliSimplify, FlatShadedMeshesStayFlatShaded) {
-  Mesh torus = shapes::torus(1.0f, 0.3f, 40, 20);
-  torus.normals.clear();
-  Mesh flat = test::triangle_soup(torus);
-  const auto face_normal = [](const Mesh& m, size_t t) {
-    const float3 &a = m.positions[m.indices[3 * t]], &b = m.positions[m.indices[3 * t + 1]], &c = m.positions[m.indices[3 * t + 2]];
-    const double ux = double(b.x) - a.x, uy = double(b.y) - a.y, uz = double(b.z) - a.z;
-    const double vx = double(c.x) - a.x, vy = double(c.y) - a.y, vz = double(c.z) - a.z;
-    const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx, l = std::sqrt(nx * nx + ny * ny + nz * nz);
-    return std::array<double, 3>{nx / l, ny / l, nz / l};
-  };
-  for (size_t t = 0; t < flat.triangle_count(); ++t) {
-    const auto n = face_normal(flat, t);
-    for (int k = 0; k < 3; ++k) flat.normals.push_back({float(n[0]), float(n[1]), float(n[2])});
-  }
-  // Every triangle's corners hold its own face normal.
-  const auto expect_faceted = [&](const Mesh& m) {
-    ASSERT_EQ(m.normals.size(), m.vertex_count());
-    for (size_t t = 0; t < m.triangle_count(); ++t) {
-      const auto n = face_normal(m, t);
-      for (int k = 0; k < 3; ++k) {
-        const float3& c = m.normals[m.indices[3 * t + k]];
-        ASSERT_NEAR(c.x, n[0], 1e-5) << t;
-        ASSERT_NEAR(c.y, n[1], 1e-5) << t;
-        ASSERT_NEAR(c.z, n[2], 1e-5) << t;
-      }
-    }
-  };
-  expect_kept_through_simplify_and_lod(flat, "flat_shaded", torus, expect_faceted);
+  const Mesh torus = shapes::torus(1.0f, 0.3f, 40, 20);
+  Mesh plain = torus;
+  plain.normals.clear();
+  expect_kept_through_simplify_and_lod(test::flat_shaded(torus), "flat_shaded", plain,
+                                       [](const Mesh& m) { EXPECT_EQ(test::faceted_problem(m), ""); });
 }
 
 // Double-sided by duplication: a wavy sheet whose back faces reuse its positions, winding reversed
 // and normals negated. Its edges have four triangles, which no collapse may touch; the fronts are
 // simplified and the backs made again, in lodkit lod's levels too. Before, nothing simplified.
 TEST(CliSimplify, DoubleSidedMeshesStayDoubleSided) {
-  Mesh sheet = shapes::grid(40, 40);
-  for (float3& p : sheet.positions) p.z = 0.1f * std::sin(6 * p.x) * std::cos(5 * p.y);
-  sheet.normals.assign(sheet.vertex_count(), {0, 0, 1});  // (one way to make the twins differ)
-  Mesh two = sheet;
-  const uint32_t n = uint32_t(sheet.vertex_count());
-  for (uint32_t v = 0; v < n; ++v) {
-    two.positions.push_back(sheet.positions[v]), two.normals.push_back({0, 0, -1});
-    for (size_t k = 0; k < max_uv_sets; ++k)
-      if (!sheet.uvs[k].empty()) two.uvs[k].push_back(sheet.uvs[k][v]);
-  }
-  for (size_t t = 0; t < sheet.triangle_count(); ++t)
-    two.indices.insert(two.indices.end(), {n + sheet.indices[3 * t], n + sheet.indices[3 * t + 2], n + sheet.indices[3 * t + 1]});
-  // Every triangle has a twin: the same three positions, reversed, with the opposite normals.
-  const auto expect_double_sided = [](const Mesh& m) {
-    using Corner = std::tuple<float, float, float, float, float, float>;  // position, normal
-    std::map<std::array<Corner, 3>, int> count;
-    const auto corner = [&](uint32_t v, float s) {
-      const float3 &p = m.positions[v], &q = m.normals[v];
-      return Corner{p.x, p.y, p.z, s * q.x, s * q.y, s * q.z};
-    };
-    const auto key = [](std::array<Corner, 3> c) {
-      std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
-      return c;
-    };
-    for (size_t t = 0; t < m.triangle_count(); ++t) {
-      const uint32_t a = m.indices[3 * t], b = m.indices[3 * t + 1], c = m.indices[3 * t + 2];
-      ++count[key({corner(a, 1), corner(b, 1), corner(c, 1)})];
-      --count[key({corner(a, -1), corner(c, -1), corner(b, -1)})];
-    }
-    for (const auto& [k, c] : count) ASSERT_EQ(c, 0);
-  };
-  expect_kept_through_simplify_and_lod(two, "double_sided", sheet, expect_double_sided);
+  const test::TwoSided s = test::double_sided_sheet();
+  expect_kept_through_simplify_and_lod(s.two, "double_sided", s.sheet,
+                                       [](const Mesh& m) { EXPECT_EQ(test::double_sided_problem(m), ""); });
 }
 
 // A glTF mesh whose two materials are two primitives, each with its own copy of the border's

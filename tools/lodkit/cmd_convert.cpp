@@ -3,12 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <array>
 #include <chrono>
-#include <cstring>
-#include <cmath>
 #include <map>
-#include <optional>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -83,136 +79,6 @@ std::vector<uint32_t> weld_duplicates(Mesh& mesh, std::span<const uint32_t> clas
     if (first[r.remap[v]] == UINT32_MAX) first[r.remap[v]] = v;
   mesh = std::move(r.mesh);
   return first;
-}
-
-bool flat_shaded(const Mesh& mesh) {
-  if (mesh.normals.empty() || !mesh.tangents.empty()) return false;  // (tangents would need the same care)
-  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const float3& n = mesh.normals[mesh.indices[3 * t]];
-    if (!(mesh.normals[mesh.indices[3 * t + 1]] == n) || !(mesh.normals[mesh.indices[3 * t + 2]] == n)) return false;
-  }
-  // Some position with two normals: else the normals cost the simplifier nothing.
-  return position_ids(mesh).count < weld(mesh).output_vertices;
-}
-
-Mesh smooth_copy(const Mesh& mesh) {
-  Mesh smooth = mesh;
-  smooth.normals.clear();
-  weld_duplicates(smooth, {});
-  return smooth;
-}
-
-void refacet(Mesh& mesh) {
-  Mesh split;
-  split.material_names = mesh.material_names, split.group_names = mesh.group_names;
-  split.materials = mesh.materials, split.groups = mesh.groups;
-  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const float3 &a = mesh.positions[mesh.indices[3 * t]], &b = mesh.positions[mesh.indices[3 * t + 1]],
-                 &c = mesh.positions[mesh.indices[3 * t + 2]];
-    const double ux = double(b.x) - a.x, uy = double(b.y) - a.y, uz = double(b.z) - a.z;
-    const double vx = double(c.x) - a.x, vy = double(c.y) - a.y, vz = double(c.z) - a.z;
-    const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-    const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
-    const float3 n = length > 0 ? float3{float(nx / length), float(ny / length), float(nz / length)} : float3{0, 0, 1};
-    for (int k = 0; k < 3; ++k) {
-      split.indices.push_back(uint32_t(split.positions.size()));
-      append_vertex(split, mesh, mesh.indices[3 * t + k]);
-      split.normals.push_back(n);
-    }
-  }
-  mesh = weld(split).mesh;  // corners of one face normal (and the same other streams) shared again
-}
-
-namespace {
-// A position's bits mixed into 64 (+0 and -0 alike, as position ids have them).
-uint64_t position_hash(const float3& p) {
-  uint64_t h = 0;
-  for (const float f : {p.x, p.y, p.z}) {
-    uint32_t bits = 0;
-    const float g = f == 0.0f ? 0.0f : f;
-    std::memcpy(&bits, &g, 4);
-    h = (h ^ bits) * 0x9E3779B97F4A7C15ull;
-    h ^= h >> 29;
-  }
-  return h;
-}
-
-// Per triangle: the index of its reversed twin among the triangles (each twin paired once, the
-// earlier of a pair first), or -1. Position ids decide: the twin's corners are separate vertices.
-std::vector<int64_t> twins(const Mesh& mesh) {
-  const PositionIds ids = position_ids(mesh);
-  std::map<std::array<uint32_t, 3>, std::vector<uint32_t>> open;  // a rotation of the corners -> unpaired triangles
-  const auto rotated = [](std::array<uint32_t, 3> c) {  // the rotation starting at the smallest id
-    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
-    return c;
-  };
-  std::vector<int64_t> twin(mesh.triangle_count(), -1);
-  for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
-    const uint32_t a = ids.id[mesh.indices[3 * t]], b = ids.id[mesh.indices[3 * t + 1]], c = ids.id[mesh.indices[3 * t + 2]];
-    const auto reversed = open.find(rotated({a, c, b}));
-    if (reversed != open.end() && !reversed->second.empty()) {
-      twin[t] = reversed->second.back(), twin[reversed->second.back()] = t;
-      reversed->second.pop_back();
-    } else {
-      open[rotated({a, b, c})].push_back(t);
-    }
-  }
-  return twin;
-}
-}  // namespace
-
-std::optional<Mesh> double_sided_fronts(const Mesh& mesh) {
-  if (mesh.triangle_count() == 0 || mesh.triangle_count() % 2) return std::nullopt;
-  // A quick filter before the exact pairing (a map over every triangle, a second on a 832k-triangle
-  // mesh): each triangle adds the hash of its corners' positions in sorted order, with the sign of
-  // the sort's permutation. A twin has the same sorted corners and the other sign, so a double-sided
-  // mesh sums to zero; anything else almost surely does not.
-  uint64_t sum = 0;
-  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    uint64_t h[3];
-    for (int k = 0; k < 3; ++k) h[k] = position_hash(mesh.positions[mesh.indices[3 * t + k]]);
-    bool odd = false;
-    const auto order = [&](int i, int j) {
-      if (h[i] > h[j]) std::swap(h[i], h[j]), odd = !odd;
-    };
-    order(0, 1), order(1, 2), order(0, 1);
-    const uint64_t key = (h[0] * 0x9E3779B97F4A7C15ull) ^ (h[1] * 0xC2B2AE3D27D4EB4Full + (h[1] >> 29)) ^ (h[2] * 0x165667B19E3779F9ull + (h[2] >> 31));
-    sum += odd ? key : 0 - key;
-  }
-  if (sum != 0) return std::nullopt;
-  const std::vector<int64_t> twin = twins(mesh);
-  if (std::any_of(twin.begin(), twin.end(), [](int64_t t) { return t < 0; })) return std::nullopt;
-  Mesh front = mesh;
-  front.indices.clear(), front.materials.clear(), front.groups.clear();
-  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    if (size_t(twin[t]) < t) continue;  // the back of an earlier front
-    front.indices.insert(front.indices.end(), mesh.indices.begin() + ptrdiff_t(3 * t), mesh.indices.begin() + ptrdiff_t(3 * t + 3));
-    if (!mesh.materials.empty()) front.materials.push_back(mesh.materials[t]);
-    if (!mesh.groups.empty()) front.groups.push_back(mesh.groups[t]);
-  }
-  return front;
-}
-
-void add_back_faces(Mesh& mesh) {
-  const size_t triangles = mesh.triangle_count(), vertices = mesh.vertex_count();
-  for (uint32_t v = 0; v < vertices; ++v) {
-    append_vertex(mesh, mesh, v);
-    if (!mesh.normals.empty()) {
-      float3& n = mesh.normals.back();
-      n = {-n.x, -n.y, -n.z};
-    }
-    if (!mesh.tangents.empty()) {
-      float4& t = mesh.tangents.back();
-      t.w = -t.w;  // u runs the same way on the back, whose normal is turned: the bitangent's sign flips
-    }
-  }
-  for (size_t t = 0; t < triangles; ++t) {
-    const uint32_t a = mesh.indices[3 * t], b = mesh.indices[3 * t + 1], c = mesh.indices[3 * t + 2];
-    mesh.indices.insert(mesh.indices.end(), {uint32_t(vertices) + a, uint32_t(vertices) + c, uint32_t(vertices) + b});
-    if (!mesh.materials.empty()) mesh.materials.push_back(mesh.materials[t]);
-    if (!mesh.groups.empty()) mesh.groups.push_back(mesh.groups[t]);
-  }
-  if (mesh.normals.empty()) weld_duplicates(mesh, {});  // without normals the twins' vertices are the fronts'
 }
 
 void erase_extras(Node& node, std::initializer_list<const char*> members) {

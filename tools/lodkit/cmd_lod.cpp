@@ -359,18 +359,13 @@ Command register_lod(CLI::App& root) {
               // Flat-shaded: the chain is built without the normals, then each level faceted again
               // (not with geomorphs or one vertex buffer, whose tables follow the vertices).
               // Double-sided likewise: the chain is built on the fronts, and each level gets its backs.
-              std::optional<Mesh> front = o->morph || o->shared ? std::nullopt : double_sided_fronts(mesh);
-              const bool two_sided = front.has_value();
-              if (two_sided) mesh = std::move(*front);
-              const bool faceted = !o->morph && !o->shared && flat_shaded(mesh);
-              if (faceted) mesh = smooth_copy(mesh);
+              const SurfaceForm form = o->morph || o->shared ? SurfaceForm{} : surface_form(mesh);
+              if (form.changed()) mesh = form.mesh;
               ProgressBar bar("building LODs");
               options.progress = [&](double f) { bar.update(f); };
               reports.push_back({"", build_lod_chain(mesh, options), {}, {}});
-              for (LodLevel& level : reports[0].chain.levels) {
-                if (faceted) refacet(level.mesh), level.vertex_origin.clear();
-                if (two_sided) add_back_faces(level.mesh), level.vertex_origin.clear();
-              }
+              if (form.changed())
+                for (LodLevel& level : reports[0].chain.levels) restore_form(form, level.mesh), level.vertex_origin.clear();
             }
             const double build_seconds = seconds_since(start);
             for (ChainReport& r : reports) set_switching(r, *o);

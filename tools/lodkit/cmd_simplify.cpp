@@ -226,13 +226,9 @@ Command register_simplify(CLI::App& root) {
                 // Double-sided: the fronts simplified, the backs made again. Flat-shaded: simplified
                 // without its normals, then faceted again. Neither with input vertices only (the
                 // new backs and face normals make new vertices).
-                const std::optional<Mesh> front = o->keep_vertices ? std::nullopt : double_sided_fronts(joined.mesh());
-                const bool two_sided = front.has_value();
-                const Mesh& sided = two_sided ? *front : joined.mesh();
-                const bool faceted = !o->keep_vertices && flat_shaded(sided);
-                any_faceted = any_faceted || faceted, any_two_sided = any_two_sided || two_sided;
-                const Mesh smooth = faceted ? smooth_copy(sided) : Mesh{};
-                const Mesh& m = faceted ? smooth : sided;
+                const SurfaceForm form = o->keep_vertices ? SurfaceForm{} : surface_form(joined.mesh());
+                any_faceted = any_faceted || form.flat_shaded, any_two_sided = any_two_sided || form.double_sided;
+                const Mesh& m = form.to_simplify(joined.mesh());
                 SimplifyOptions each = options;
                 const uint64_t size = m.triangle_count();
                 // A triangle budget is shared in proportion to each group's size. With a ratio
@@ -248,8 +244,7 @@ Command register_simplify(CLI::App& root) {
                 }
                 each.progress = [&, size](double f) { bar.update((double(done) + f * double(size)) / double(total)); };
                 SimplifyResult r = simplify(m, each);
-                if (faceted) refacet(r.mesh);
-                if (two_sided) add_back_faces(r.mesh);
+                restore_form(form, r.mesh);
                 done += size;
                 in_triangles += r.input_triangles, out_triangles += r.output_triangles, out_vertices += r.mesh.vertex_count();
                 error = std::max(error, r.error);
@@ -265,7 +260,7 @@ Command register_simplify(CLI::App& root) {
                 rejected[2] += r.rejected_flip, rejected[3] += r.rejected_shape, deferred += r.deferred_distance;
                 relative_error = std::max(relative_error, r.relative_error);
                 // Input vertices, unmoved: with --keep-vertices, or when nothing collapsed.
-                const bool unmoved = o->keep_vertices || (r.collapses == 0 && !faceted && !two_sided);
+                const bool unmoved = o->keep_vertices || (r.collapses == 0 && !form.changed());
                 std::vector<Member> members = unjoin(joined, r, unmoved);
                 for (size_t k = 0; k < group.size(); ++k) {
                   const size_t i = group[k];

@@ -74,22 +74,6 @@ void erase_extras(Node& node, std::initializer_list<const char*> members);
 // vertex, or nothing when no two vertices were the same (the mesh is then untouched).
 std::vector<uint32_t> weld_duplicates(Mesh& mesh, std::span<const uint32_t> classes);
 
-// Flat shading: every triangle's corners share one normal, and some position has several (so its
-// vertices are a seam of copies that no collapse can move). Such normals only say which way each
-// face points: the simplifier then works on the mesh without them, copies merged (smooth_copy),
-// and refacet gives each triangle of the result its own face normal again.
-bool flat_shaded(const Mesh& mesh);
-Mesh smooth_copy(const Mesh& mesh);
-void refacet(Mesh& mesh);
-
-// Double-sided by duplication (foliage, cloth, paper): every triangle has a twin on the same
-// positions with the opposite winding. Front and back share every edge, four triangles each, which
-// no collapse may touch, so the simplifier gets the fronts alone (double_sided_fronts: the first of
-// each pair, or nothing when the mesh is not double-sided) and add_back_faces gives each triangle of
-// the result its twin again, normals negated.
-std::optional<Mesh> double_sided_fronts(const Mesh& mesh);
-void add_back_faces(Mesh& mesh);
-
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);
 
