@@ -30,6 +30,11 @@ struct ReadOptions {
 
 struct WriteOptions {
   bool binary = true;  // PLY and STL: binary little-endian (true) or ASCII (false)
+  // glTF: geometry, skins and animation compressed with EXT_meshopt_compression (gltfpack -c's
+  // codec) without quantization: readers get back the same values (a triangle may start at another
+  // corner). The extension is then required: three.js, Babylon.js and lodkit read it (gltfpack 0.18
+  // does not).
+  bool meshopt_compression = false;
   // Text formats print floats with the shortest representation that reads back bit-exact.
 };
 

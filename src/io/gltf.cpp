@@ -1916,7 +1916,7 @@ std::string uri_escape(const std::string& s) {
 }
 
 // tinygltf serializes everything but the buffer (the model has none); the one buffer is added here.
-std::string serialize_json(const tg::Model& model, size_t bin_size, const std::string& bin_uri, bool pretty) {
+Json serialize_json(const tg::Model& model, size_t bin_size, const std::string& bin_uri) {
   const bool needs_buffer = bin_size > 0 || !model.bufferViews.empty();
   tg::TinyGLTF writer;
   writer.SetImageWriter(&write_image_uri, nullptr);
@@ -1943,11 +1943,13 @@ std::string serialize_json(const tg::Model& model, size_t bin_size, const std::s
       if (!bin_uri.empty()) buffer["uri"] = bin_uri;
       doc["buffers"] = Json::array({std::move(buffer)});
     }
-    return doc.dump(pretty ? 2 : -1) + (pretty ? "\n" : "");
+    return doc;
   } catch (const Json::exception& e) {
     throw_internal(std::string("glTF: serializing the scene failed: ") + e.what());
   }
 }
+
+std::string dump_json(const Json& doc, bool pretty) { return doc.dump(pretty ? 2 : -1) + (pretty ? "\n" : ""); }
 
 void put_u32(std::vector<uint8_t>& out, uint32_t v) {
   for (int i = 0; i < 4; ++i) out.push_back(uint8_t(v >> (8 * i)));
@@ -2160,7 +2162,7 @@ std::vector<uint32_t> source_vertex_classes(const Scene& scene, size_t primitive
   return classes;
 }
 
-void write_gltf(const Scene& scene, const std::filesystem::path& path, const WriteOptions&) {
+void write_gltf(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options) {
   const bool glb = format_from_path(path) == FileFormat::glb;
   std::vector<Slot> slots;
   tg::Model model;
@@ -2177,15 +2179,15 @@ void write_gltf(const Scene& scene, const std::filesystem::path& path, const Wri
     if (std::none_of(model.nodes.begin(), model.nodes.end(), [&](const tg::Node& n) { return n.extensions.count(ext) > 0; }))
       std::erase(model.extensionsUsed, ext), std::erase(model.extensionsRequired, ext);
   if (scene.source) relocate_images(model, glb ? &bin : nullptr, scene.source->base_dir, path.parent_path());
+  const std::string bin_name = path.stem().string() + ".bin";
+  Json doc = serialize_json(model, bin.size(), glb ? "" : uri_escape(bin_name));
+  if (options.meshopt_compression) io::compress_meshopt(doc, bin);
   if (glb) {
-    const std::string json_text = serialize_json(model, bin.size(), "", false);
-    write_file_atomic(path, make_glb(json_text, bin, path.string()));
+    write_file_atomic(path, make_glb(dump_json(doc, false), bin, path.string()));
     return;
   }
-  const std::string bin_name = path.stem().string() + ".bin";
-  const std::string json_text = serialize_json(model, bin.size(), uri_escape(bin_name), true);
   if (!bin.empty()) write_file_atomic(path.parent_path() / bin_name, bin);
-  write_file_atomic(path, json_text);
+  write_file_atomic(path, dump_json(doc, true));
 }
 
 }  // namespace lod

@@ -6,10 +6,12 @@
 #include <draco/compression/decode.h>
 #include <meshoptimizer.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <new>
 
 #include "io/gltf_types.h"
@@ -391,6 +393,141 @@ CompressedJson prepare_compressed_json(Json& doc, bool glb) {
 
 void decode_compressed_geometry(tg::Model& model, const std::vector<uint64_t>& fallback_lengths, const std::string& name) {
   Decoder(model, fallback_lengths, name).run();
+}
+
+}  // namespace lod::io
+
+namespace lod::io {
+namespace {
+
+size_t element_size(const Json& accessor) {
+  static const std::map<std::string, size_t> components = {{"SCALAR", 1}, {"VEC2", 2}, {"VEC3", 3}, {"VEC4", 4},
+                                                            {"MAT2", 4},   {"MAT3", 9}, {"MAT4", 16}};
+  const auto it = components.find(accessor.value("type", std::string()));
+  return it == components.end() ? 0 : it->second * component_bytes(accessor.value("componentType", 0));
+}
+
+// How a bufferView may be encoded, from the accessors that use it.
+struct ViewUse {
+  bool indices = false, attributes = false, excluded = false;
+  uint64_t stride = 0;  // element (or byteStride) size shared by its accessors
+};
+
+std::vector<ViewUse> view_uses(const Json& doc) {
+  const Json& views = doc["bufferViews"];
+  std::vector<ViewUse> use(views.size());
+  const Json accessors = doc.value("accessors", Json::array());
+  // Per accessor: indices of triangle lists (1), of other topologies (2: strips stay plain), or not (0).
+  std::vector<int> indices(accessors.size(), 0);
+  for (const Json& mesh : doc.value("meshes", Json::array()))
+    for (const Json& primitive : mesh.value("primitives", Json::array()))
+      if (primitive.contains("indices"))
+        indices.at(primitive["indices"].get<size_t>()) |= primitive.value("mode", 4) == 4 ? 1 : 2;
+  for (size_t k = 0; k < accessors.size(); ++k) {
+    const Json& accessor = accessors[k];
+    if (accessor.contains("sparse"))  // its sparse parts stay plain (small, and of two kinds)
+      for (const char* part : {"indices", "values"}) use.at(accessor["sparse"][part]["bufferView"].get<size_t>()).excluded = true;
+    if (!accessor.contains("bufferView")) continue;
+    ViewUse& u = use.at(accessor["bufferView"].get<size_t>());
+    const Json& view = views[accessor["bufferView"].get<size_t>()];
+    const uint64_t element = element_size(accessor), count = accessor.value("count", uint64_t(0));
+    if (indices[k] != 0) {
+      // TRIANGLES mode: the whole view is the list, 16- or 32-bit.
+      u.indices = true;
+      u.excluded |= indices[k] != 1 || !(element == 2 || element == 4) || accessor.value("byteOffset", 0) != 0 || view.contains("byteStride") ||
+                    count % 3 != 0 || count * element != view.value("byteLength", uint64_t(0)) || (u.stride && u.stride != element);
+      u.stride = element;
+    } else {
+      u.attributes = true;
+      const uint64_t stride = view.value("byteStride", element);
+      u.excluded |= stride == 0 || stride % 4 != 0 || stride > 256 || (u.stride && u.stride != stride);
+      u.stride = stride;
+    }
+  }
+  return use;
+}
+
+// The view's bytes encoded, or nothing when that is not smaller.
+std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const ViewUse& u) {
+  const size_t count = size_t(length / u.stride);
+  std::vector<uint8_t> out;
+  if (u.indices) {
+    std::vector<uint32_t> indices(count);
+    uint32_t largest = 0;
+    for (size_t i = 0; i < count; ++i) {
+      if (u.stride == 2) {
+        uint16_t v;
+        std::memcpy(&v, data + 2 * i, 2);
+        indices[i] = v;
+      } else {
+        std::memcpy(&indices[i], data + 4 * i, 4);
+      }
+      largest = std::max(largest, indices[i]);
+    }
+    meshopt_encodeIndexVersion(1);  // the version EXT_meshopt_compression's TRIANGLES mode requires (0.18 writes 0)
+    out.resize(meshopt_encodeIndexBufferBound(count, size_t(largest) + 1));
+    out.resize(meshopt_encodeIndexBuffer(out.data(), out.size(), indices.data(), count));
+  } else {
+    meshopt_encodeVertexVersion(0);  // the only one EXT_meshopt_compression admits (later releases default to 1)
+    out.resize(meshopt_encodeVertexBufferBound(count, size_t(u.stride)));
+    out.resize(meshopt_encodeVertexBuffer(out.data(), out.size(), data, count, size_t(u.stride)));
+  }
+  if (out.empty() || out.size() >= length) return {};
+  return out;
+}
+
+}  // namespace
+
+void compress_meshopt(Json& doc, std::vector<uint8_t>& bin) {
+  if (bin.empty() || !doc.contains("bufferViews") || doc["buffers"].size() != 1) return;
+  Json& views = doc["bufferViews"];
+  const std::vector<ViewUse> use = view_uses(doc);
+  std::vector<std::vector<uint8_t>> encoded(views.size());
+  bool any = false;
+  for (size_t v = 0; v < views.size(); ++v) {
+    const ViewUse& u = use[v];
+    const uint64_t length = views[v]["byteLength"].get<uint64_t>();
+    if (u.excluded || u.stride == 0 || (u.indices && u.attributes) || length % u.stride != 0) continue;
+    encoded[v] = encode_view(bin.data() + views[v].value("byteOffset", uint64_t(0)), length, u);
+    any = any || !encoded[v].empty();
+  }
+  if (!any) return;
+  // Buffer 0 (the GLB's BIN chunk, or the .bin) holds the compressed views and the plain ones, in
+  // view order; buffer 1 is the fallback, where the compressed views keep a place.
+  const auto align = [](uint64_t n) { return (n + 3) & ~uint64_t(3); };
+  std::vector<uint8_t> packed;
+  uint64_t fallback = 0;
+  for (size_t v = 0; v < views.size(); ++v) {
+    Json& view = views[v];
+    const uint64_t length = view["byteLength"].get<uint64_t>();
+    packed.resize(align(packed.size()), 0);
+    if (encoded[v].empty()) {
+      const uint8_t* data = bin.data() + view.value("byteOffset", uint64_t(0));
+      view["byteOffset"] = packed.size();
+      packed.insert(packed.end(), data, data + length);
+      continue;
+    }
+    const uint64_t stride = use[v].stride;
+    view["extensions"][meshopt_names[0]] = {{"buffer", 0},
+                                            {"byteOffset", packed.size()},
+                                            {"byteLength", encoded[v].size()},
+                                            {"byteStride", stride},
+                                            {"count", length / stride},
+                                            {"mode", use[v].indices ? "TRIANGLES" : "ATTRIBUTES"}};
+    packed.insert(packed.end(), encoded[v].begin(), encoded[v].end());
+    fallback = align(fallback);
+    view["buffer"] = 1;
+    view["byteOffset"] = fallback;
+    fallback += length;
+  }
+  bin = std::move(packed);
+  doc["buffers"][0]["byteLength"] = bin.size();
+  doc["buffers"].push_back({{"byteLength", fallback}, {"extensions", {{meshopt_names[0], {{"fallback", true}}}}}});
+  for (const char* list : {"extensionsUsed", "extensionsRequired"}) {
+    Json& names = doc[list];
+    if (!names.is_array()) names = Json::array();
+    if (std::find(names.begin(), names.end(), meshopt_names[0]) == names.end()) names.push_back(meshopt_names[0]);
+  }
 }
 
 }  // namespace lod::io

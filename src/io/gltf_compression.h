@@ -35,4 +35,16 @@ CompressedJson prepare_compressed_json(nlohmann::json& doc, bool glb);
 void decode_compressed_geometry(tinygltf::Model& model, const std::vector<uint64_t>& fallback_lengths,
                                 const std::string& name);
 
+// Writing (WriteOptions::meshopt_compression), on the serialized document before it is dumped: its
+// one buffer's bufferViews (`bin`) are encoded with meshoptimizer as EXT_meshopt_compression
+// describes, without quantization or filters: a triangle list's index view in TRIANGLES mode (the
+// codec may start a triangle at another corner, winding and triangle order kept), a view of
+// accessors whose elements (or byteStride) take a multiple of 4 bytes up to 256 in ATTRIBUTES mode
+// (vertex streams, morph targets, skins, animation: bit-exact); each only where the encoding is
+// smaller. Compressed views keep their place in a fallback buffer without bytes (the extension is
+// then required); `bin` holds the compressed views and the others (images, sparse data). The codec
+// versions are set to the ones the extension admits (vertex 0, index 1) before each encoding:
+// meshoptimizer keeps them in globals. Nothing changes when no view gets smaller.
+void compress_meshopt(nlohmann::json& doc, std::vector<uint8_t>& bin);
+
 }  // namespace lod::io

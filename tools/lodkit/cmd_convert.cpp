@@ -21,6 +21,7 @@ namespace {
 struct ConvertOptions {
   std::string input, output, output_flag;
   bool ascii = false;
+  bool compress = false;
   bool force = false;
   bool json = false;
 };
@@ -53,9 +54,15 @@ GeometryFile::GeometryFile(const std::string& input, const std::string& output)
     meshes.push_back(&mesh_);
 }
 
-void GeometryFile::write(const std::string& output) const {
-  if (as_scene_) write_scene(scene_, output);
-  else write_mesh(mesh_, output);
+void GeometryFile::write(const std::string& output, const WriteOptions& options) const {
+  if (as_scene_) write_scene(scene_, output, options);
+  else write_mesh(mesh_, output, options);
+}
+
+void add_compress_flag(CLI::App* app, bool& compress) {
+  app->add_flag("-c,--compress", compress,
+                "glTF output: compress geometry and animation with EXT_meshopt_compression (no quantization; "
+                "the extension becomes required)");
 }
 
 void GeometryFile::forget_lod_facts(const std::vector<bool>& changed) {
@@ -136,6 +143,7 @@ Command register_convert(CLI::App& root) {
   app->add_option("output", options->output, "Output mesh file; the format follows the extension");
   app->add_option("-o,--output", options->output_flag, "Output mesh file (same as the second argument)");
   app->add_flag("--ascii", options->ascii, "Write PLY and STL as text instead of binary");
+  add_compress_flag(app, options->compress);
   app->add_flag("--force", options->force, "Allow writing over the input file");
   app->add_flag("--json", options->json, "Print a machine-readable report on stdout");
   return {app, [options] {
@@ -173,8 +181,9 @@ Command register_convert(CLI::App& root) {
             if (as_scene) for (const Primitive& p : scene.primitives) count(p.mesh);
             else count(mesh);
             start = std::chrono::steady_clock::now();
-            if (as_scene) write_scene(scene, o.output, {.binary = !o.ascii});
-            else write_mesh(mesh, o.output, {.binary = !o.ascii});
+            const WriteOptions write_options{.binary = !o.ascii, .meshopt_compression = o.compress};
+            if (as_scene) write_scene(scene, o.output, write_options);
+            else write_mesh(mesh, o.output, write_options);
             double write_seconds = seconds_since(start);
             if (o.json) {
               nlohmann::json j = {{"input", o.input}, {"output", o.output}, {"vertices", vertices},

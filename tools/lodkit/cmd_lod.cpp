@@ -25,7 +25,7 @@ struct LodCommand {
   std::string input, output, ratios, errors, metric = "cqem", attributes, lpm;
   uint32_t levels = 0;
   float error_px = 1.0f, screen_height = 1080.0f, fov_degrees = 60.0f;
-  bool from_input = false, morph = false, shared = false, json = false, force = false;
+  bool from_input = false, morph = false, shared = false, json = false, force = false, compress = false;
   unsigned threads = 0;
   std::string skin_mode = "multipose";
   uint32_t poses = 16;
@@ -308,6 +308,7 @@ Command register_lod(CLI::App& root) {
   app->add_option("--lpm", o->lpm, "Also write a progressive mesh (.lpm) down to the coarsest level");
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
+  add_compress_flag(app, o->compress);
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
   return {app, [o] {
             const FileFormat format = format_from_path(o->output);
@@ -372,10 +373,10 @@ Command register_lod(CLI::App& root) {
 
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
-              write_scene(skinned_scene(std::move(scene), skinned, reports), o->output);
+              write_scene(skinned_scene(std::move(scene), skinned, reports), o->output, {.meshopt_compression = o->compress});
             } else {
               write_scene(chain_scene(reports[0].chain, reports[0].distances, reports[0].coverage, scene.source ? &scene : nullptr),
-                          o->output);
+                          o->output, {.meshopt_compression = o->compress});
               if (!o->lpm.empty()) {
                 // The progressive mesh spans the input down to the coarsest level's size.
                 SimplifyOptions so = options.simplify;

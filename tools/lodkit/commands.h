@@ -40,7 +40,7 @@ class GeometryFile {
   GeometryFile(const std::string& input, const std::string& output);
   GeometryFile(const GeometryFile&) = delete;
   GeometryFile& operator=(const GeometryFile&) = delete;
-  void write(const std::string& output) const;
+  void write(const std::string& output, const WriteOptions& options = {}) const;
   // After meshes[i] changed for each i where changed[i]: the facts `lodkit lod` wrote on the glTF
   // nodes that draw them (extras "lodkit": triangles, errors, switch distance; "LODKIT_geomorph": a
   // morph target the writer drops with the old vertex count) no longer hold, and are removed.
@@ -73,6 +73,9 @@ void erase_extras(Node& node, std::initializer_list<const char*> members);
 // different `classes` (GeometryFile::vertex_classes) stay apart. Returns each vertex's first input
 // vertex, or nothing when no two vertices were the same (the mesh is then untouched).
 std::vector<uint32_t> weld_duplicates(Mesh& mesh, std::span<const uint32_t> classes);
+
+// -c/--compress on a command that writes glTF: WriteOptions::meshopt_compression.
+void add_compress_flag(CLI::App* app, bool& compress);
 
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);
