@@ -9,6 +9,7 @@
 #   scripts/bench.sh lod [RUNS=15]
 #   scripts/bench.sh optimize [--quick] [--no-big] [RUNS=5]
 #   scripts/bench.sh render [RUNS=5]
+#   scripts/bench.sh compress [RUNS=5]
 #
 # io: loads a binary PLY and an OBJ of >= 3M triangles (bunny00.off subdivided 1->4) with lodkit and
 # with Assimp, each loader in its own process under /usr/bin/time -v; prints a markdown table of
@@ -47,6 +48,11 @@
 # draw, write) RUNS times, each under /usr/bin/time -v; prints the medians and peak memory (target:
 # under 5 s) and writes bench/results/render.json.
 #
+# compress: glTF output with -c (EXT_meshopt_compression, no quantization) against gltfpack 0.18 on
+# the same optimized files (-noq, -c -noq and its quantized -c): sizes raw and gzipped, and lodkit's
+# load time and peak memory, plain against compressed (bench/compress/run.py); writes
+# bench/results/compress.json.
+#
 # The build is the release preset (build/release); LODKIT_BENCH_BUILD=DIR uses another configured
 # build directory instead.
 set -euo pipefail
@@ -54,7 +60,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 usage() {
-  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5]" >&2
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5] | compress [RUNS=5]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -261,6 +267,24 @@ area_optimize() {
   echo "whole run: $((SECONDS - started)) s"
 }
 
+# ---- compress ------------------------------------------------------------------------------------
+area_compress() {
+  [ $# -le 1 ] || usage
+  local runs=${1:-5} started=$SECONDS
+  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  command -v gltfpack >/dev/null || { echo "bench: gltfpack is not installed (scripts/setup.sh installs it)" >&2; exit 1; }
+  configure
+  build_targets lodkit_cli lodkit_fixtures
+  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
+  echo
+  machine_line
+  echo
+  mkdir -p bench/results
+  python3 bench/compress/run.py "$build/lodkit" "$build/lodkit_fixtures" bench/results/compress.json --runs "$runs"
+  echo
+  echo "whole run: $((SECONDS - started)) s"
+}
+
 # ---- skin ----------------------------------------------------------------------------------------
 area_skin() {
   [ $# -le 1 ] || usage
@@ -348,5 +372,6 @@ case $area in
   simplify) area_simplify "$@" ;;
   measure) area_measure "$@" ;;
   render) area_render "$@" ;;
+  compress) area_compress "$@" ;;
   *) usage ;;
 esac

@@ -1,0 +1,116 @@
+#!/usr/bin/env python3
+"""glTF compression (`-c`, EXT_meshopt_compression without quantization) against gltfpack.
+
+usage: run.py LODKIT FIXTURES OUT.json [--runs N]
+
+For each input (corpus meshes of at least 20,000 triangles, the humanoid test character with its
+skin and clips, and bunny00's LOD chain as `lodkit lod` writes it):
+  - lodkit: `lodkit optimize IN` (vertex cache and fetch order) written plain and with -c;
+  - gltfpack (Debian, 0.18) on the same plain file: -noq (its reordering, no quantization), -c -noq
+    (the same compression lodkit writes), and -c (its defaults: quantized, lossy).
+Sizes raw and after gzip -9 (what a web server sends), the ratio lodkit -c / gltfpack -c -noq, and
+lodkit's load time (median of N `lodkit info --json` load_seconds) and peak RSS, plain against -c.
+Every lodkit -c file must read back with the plain file's triangle and vertex counts.
+"""
+import gzip
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+
+CORPUS = ["bunny00.off", "armadillo.off", "ChineseDragon-10kv.off", "fandisk_large.off", "elephant.off",
+          "mushroom.off", "man.off", "refined_elephant.off", "femur.off", "cylinder.off"]
+
+
+def run(args, **kw):
+    r = subprocess.run(args, capture_output=True, text=True, **kw)
+    if r.returncode != 0:
+        raise RuntimeError(f"{' '.join(args)}: {r.stderr.strip()[:300]}")
+    return r.stdout
+
+
+def gz(path):
+    with open(path, "rb") as f:
+        return len(gzip.compress(f.read(), 9, mtime=0))
+
+
+def info(lodkit, path):
+    return json.loads(run([lodkit, "info", "--json", path]))
+
+
+def load(lodkit, path, runs):
+    times = [info(lodkit, path)["load_seconds"] for _ in range(runs)]
+    log = subprocess.run(["/usr/bin/time", "-v", lodkit, "info", "--json", path], capture_output=True, text=True)
+    rss = next(int(l.split(":")[1]) for l in log.stderr.splitlines() if "Maximum resident set size" in l)
+    return statistics.median(times), rss / 1024
+
+
+def main():
+    lodkit, fixtures, out = sys.argv[1:4]
+    runs = int(sys.argv[sys.argv.index("--runs") + 1]) if "--runs" in sys.argv else 5
+    tmp = tempfile.mkdtemp(prefix="lodkit-bench-compress-")
+    inputs = []
+    for name in CORPUS:
+        path = os.path.join("data/corpus", name)
+        if not os.path.exists(path):
+            continue
+        glb = os.path.join(tmp, name.rsplit(".", 1)[0] + ".glb")
+        run([lodkit, "convert", path, glb])
+        if info(lodkit, glb)["stats"]["triangles"] >= 20000:
+            inputs.append((name, glb))
+    run([fixtures, tmp])
+    inputs.append(("humanoid (skinned, 2 clips)", os.path.join(tmp, "humanoid.glb")))
+    chain = os.path.join(tmp, "bunny-lod.glb")
+    run([lodkit, "lod", "data/corpus/bunny00.off", "-o", chain])
+    inputs.append(("bunny00 LOD chain (4 levels)", chain))
+
+    rows = []
+    for name, src in inputs:
+        stem = os.path.join(tmp, "x")
+        files = {
+            "lodkit": stem + "-opt.glb",
+            "lodkit -c": stem + "-opt-c.glb",
+            "gltfpack -noq": stem + "-gp.glb",
+            "gltfpack -c -noq": stem + "-gp-c-noq.glb",
+            "gltfpack -c": stem + "-gp-c.glb",
+        }
+        run([lodkit, "optimize", src, "-o", files["lodkit"]])
+        run([lodkit, "optimize", src, "-o", files["lodkit -c"], "-c"])
+        run(["gltfpack", "-i", files["lodkit"], "-o", files["gltfpack -noq"], "-noq"])
+        run(["gltfpack", "-i", files["lodkit"], "-o", files["gltfpack -c -noq"], "-c", "-noq"])
+        run(["gltfpack", "-i", files["lodkit"], "-o", files["gltfpack -c"], "-c"])
+        plain, packed = info(lodkit, files["lodkit"])["stats"], info(lodkit, files["lodkit -c"])["stats"]
+        if (plain["triangles"], plain["vertices"]) != (packed["triangles"], packed["vertices"]):
+            raise RuntimeError(f"{name}: -c read back {packed['triangles']} triangles, {packed['vertices']} vertices")
+        row = {"input": name, "triangles": plain["triangles"], "bytes": {}, "gzip": {}}
+        for tool, path in files.items():
+            row["bytes"][tool] = os.path.getsize(path)
+            row["gzip"][tool] = gz(path)
+        row["load_plain_s"], row["rss_plain_mib"] = load(lodkit, files["lodkit"], runs)
+        row["load_c_s"], row["rss_c_mib"] = load(lodkit, files["lodkit -c"], runs)
+        rows.append(row)
+        print(f"  {name}: done", file=sys.stderr)
+
+    tools = ["lodkit", "lodkit -c", "gltfpack -noq", "gltfpack -c -noq", "gltfpack -c"]
+    print("| input | triangles | " + " | ".join(f"{t} KiB (gzip)" for t in tools) +
+          " | lodkit -c ÷ gltfpack -c -noq (gzip) | load plain / -c | peak RSS plain / -c |")
+    print("|---|---|" + "---|" * len(tools) + "---|---|---|")
+    ratios = []
+    for r in rows:
+        ratio = r["bytes"]["lodkit -c"] / r["bytes"]["gltfpack -c -noq"]
+        gratio = r["gzip"]["lodkit -c"] / r["gzip"]["gltfpack -c -noq"]
+        ratios.append(ratio)
+        cells = " | ".join(f"{r['bytes'][t] / 1024:.0f} ({r['gzip'][t] / 1024:.0f})" for t in tools)
+        print(f"| {r['input']} | {r['triangles']:,} | {cells} | {ratio:.3f} ({gratio:.3f}) | "
+              f"{r['load_plain_s'] * 1000:.1f} / {r['load_c_s'] * 1000:.1f} ms | {r['rss_plain_mib']:.0f} / {r['rss_c_mib']:.0f} MiB |")
+    print()
+    print(f"lodkit -c ÷ gltfpack -c -noq, raw size: median {statistics.median(ratios):.3f}, "
+          f"min {min(ratios):.3f}, max {max(ratios):.3f} over {len(ratios)} inputs (runs per load time: {runs})")
+    with open(out, "w") as f:
+        json.dump({"runs": runs, "rows": rows}, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
