@@ -3,8 +3,8 @@
 
 usage: run.py LODKIT FIXTURES OUT.json [--runs N]
 
-For each input (corpus meshes of at least 20,000 triangles, the humanoid test character with its
-skin and clips, and bunny00's LOD chain as `lodkit lod` writes it):
+For each input (corpus meshes of at least 20,000 triangles, the two skinned test characters with
+their clips, and bunny00's LOD chain as `lodkit lod` writes it):
   - lodkit: `lodkit optimize IN` (vertex cache and fetch order) written plain and with -c;
   - gltfpack (Debian, 0.18) on the same plain file: -noq (its reordering, no quantization), -c -noq
     (the same compression lodkit writes), and -c (its defaults: quantized, lossy).
@@ -60,8 +60,12 @@ def main():
         run([lodkit, "convert", path, glb])
         if info(lodkit, glb)["stats"]["triangles"] >= 20000:
             inputs.append((name, glb))
-    run([fixtures, tmp])
-    inputs.append(("humanoid (skinned, 2 clips)", os.path.join(tmp, "humanoid.glb")))
+    characters = os.path.join(tmp, "fixtures")  # (its man.glb is not the corpus man's)
+    os.makedirs(characters)
+    run([fixtures, characters, "data/corpus/man.off"])
+    inputs.append(("humanoid (skinned, 2 clips)", os.path.join(characters, "humanoid.glb")))
+    if os.path.exists(os.path.join(characters, "man.glb")):
+        inputs.append(("man (skinned, 2 clips)", os.path.join(characters, "man.glb")))
     chain = os.path.join(tmp, "bunny-lod.glb")
     run([lodkit, "lod", "data/corpus/bunny00.off", "-o", chain])
     inputs.append(("bunny00 LOD chain (4 levels)", chain))
