@@ -1197,14 +1197,23 @@ class BinWriter {
             add_accessor(mesh.uvs[k], TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, array);
     if (!mesh.colors.empty())
       prim.attributes["COLOR_0"] = add_accessor(mesh.colors, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
-    if (!mesh.joints.empty())
-      prim.attributes["JOINTS_0"] =
-          add_accessor(mesh.joints, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4, array);
+    // Joint indices in bytes when every one fits (skeletons of up to 256 joints): the same values
+    // in half the space.
+    const auto fits_byte = [](const std::vector<ushort4>& joints) {
+      return std::all_of(joints.begin(), joints.end(), [](const ushort4& j) { return std::max({j[0], j[1], j[2], j[3]}) < 256; });
+    };
+    const bool byte_joints = fits_byte(mesh.joints) && fits_byte(mesh.joints1);
+    const auto add_joints = [&](const std::vector<ushort4>& joints) {
+      if (!byte_joints) return add_accessor(joints, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4, array);
+      std::vector<std::array<uint8_t, 4>> narrow(joints.size());
+      for (size_t v = 0; v < joints.size(); ++v)
+        for (int k = 0; k < 4; ++k) narrow[v][size_t(k)] = uint8_t(joints[v][size_t(k)]);
+      return add_accessor(narrow, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_TYPE_VEC4, array);
+    };
+    if (!mesh.joints.empty()) prim.attributes["JOINTS_0"] = add_joints(mesh.joints);
     if (!mesh.weights.empty())
       prim.attributes["WEIGHTS_0"] = add_accessor(mesh.weights, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
-    if (!mesh.joints1.empty())
-      prim.attributes["JOINTS_1"] =
-          add_accessor(mesh.joints1, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4, array);
+    if (!mesh.joints1.empty()) prim.attributes["JOINTS_1"] = add_joints(mesh.joints1);
     if (!mesh.weights1.empty())
       prim.attributes["WEIGHTS_1"] = add_accessor(mesh.weights1, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
     if (prim.targets.empty())

@@ -167,6 +167,34 @@ TEST(GltfSkinWriter, DocumentShape) {
   EXPECT_EQ(doc["nodes"][2]["skin"], 0);
 }
 
+// Joint indices take one byte each while every index fits (the values unchanged), two once one
+// does not: a skin of 302 joints whose vertex 0 uses joint 299.
+TEST(GltfSkinWriter, JointIndicesTakeBytesWhileTheyFit) {
+  test::TempDir dir;
+  Scene scene = skinned_scene();
+  write_scene(scene, dir / "small.glb");
+  const nlohmann::json small = test::glb_json(dir / "small.glb");
+  EXPECT_EQ(small["accessors"][small["meshes"][0]["primitives"][0]["attributes"]["JOINTS_0"].get<size_t>()]["componentType"], 5121);
+  EXPECT_EQ(test::mesh_difference(read_scene(dir / "small.glb").primitives[0].mesh, scene.primitives[0].mesh), "");
+
+  const std::array<float, 16> some_matrix = scene.skins[0].inverse_bind_matrices[0];
+  for (int32_t k = 0; k < 300; ++k) {
+    Node joint;
+    joint.name = "extra" + std::to_string(k);
+    joint.parent = 0;  // under the skeleton's root, as glTF wants every joint
+    scene.nodes[0].children.push_back(int32_t(scene.nodes.size()));
+    scene.skins[0].joints.push_back(int32_t(scene.nodes.size()));
+    scene.skins[0].inverse_bind_matrices.push_back(some_matrix);
+    scene.nodes.push_back(joint);
+  }
+  scene.primitives[0].mesh.joints[0] = {299, 0, 0, 0};
+  write_scene(scene, dir / "large.glb");
+  const nlohmann::json large = test::glb_json(dir / "large.glb");
+  EXPECT_EQ(large["accessors"][large["meshes"][0]["primitives"][0]["attributes"]["JOINTS_0"].get<size_t>()]["componentType"], 5123);
+  EXPECT_EQ(test::mesh_difference(read_scene(dir / "large.glb").primitives[0].mesh, scene.primitives[0].mesh), "");
+  test::expect_valid_gltf({dir / "small.glb", dir / "large.glb"});
+}
+
 TEST(GltfSkinWriter, PassesTheValidator) {
   if (!test::validator_available())
     GTEST_SKIP() << "gltf-validator not installed: run `npm ci --prefix tests/gltf-validator` (needs node on PATH)";
