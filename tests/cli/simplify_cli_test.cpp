@@ -116,8 +116,8 @@ TEST(CliSimplify, TriangleSoupsAreWeldedFirst) {
 
 // A kind of mesh that lodkit simplify and lodkit lod keep: `input` (as a .glb) at 10% reports `flag`
 // in --json and lands within 1.5x the Hausdorff distance of `plain` (the same surface without the
-// trait) simplified by the library; that result and each level of a 1, 1/2, 1/4 chain pass `keeps`
-// and have at most their share of the triangles.
+// trait) simplified by the library; that result and each level of a 1, 1/2, 1/4 chain (which
+// reports `flag` too) pass `keeps` and have at most their share of the triangles.
 void expect_kept_through_simplify_and_lod(const Mesh& input, const char* flag, const Mesh& plain,
                                           const std::function<void(const Mesh&)>& keeps) {
   test::TempDir dir;
@@ -132,8 +132,9 @@ void expect_kept_through_simplify_and_lod(const Mesh& input, const char* flag, c
   const SimplifyResult reference = simplify(plain, {.target_ratio = 0.1f});
   EXPECT_LE(compare(plain, out).hausdorff, 1.5 * compare(plain, reference.mesh).hausdorff);
 
-  r = test::run_cli({"lod", (dir / "in.glb").string(), "-o", (dir / "chain.glb").string(), "--ratios", "1,0.5,0.25"});
+  r = test::run_cli({"lod", (dir / "in.glb").string(), "-o", (dir / "chain.glb").string(), "--ratios", "1,0.5,0.25", "--json"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(r.out)[flag].get<bool>());
   const Scene chain = read_scene(dir / "chain.glb");
   ASSERT_EQ(chain.primitives.size(), 3u);
   for (size_t i = 0; i < 3; ++i) {

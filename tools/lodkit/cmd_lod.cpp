@@ -346,6 +346,7 @@ Command register_lod(CLI::App& root) {
             const double load_seconds = seconds_since(start);
 
             std::vector<ChainReport> reports;
+            SurfaceForm form;  // static input: built on the fronts, or without face normals (reported)
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
               if (o->morph) throw_usage("--morph: skinned input morphs at run time (lod::SkinnedGeomorph), not as glTF morph targets");
@@ -360,7 +361,7 @@ Command register_lod(CLI::App& root) {
               // Flat-shaded: the chain is built without the normals, then each level faceted again
               // (not with geomorphs or one vertex buffer, whose tables follow the vertices).
               // Double-sided likewise: the chain is built on the fronts, and each level gets its backs.
-              const SurfaceForm form = o->morph || o->shared ? SurfaceForm{} : surface_form(mesh);
+              if (!o->morph && !o->shared) form = surface_form(mesh);
               if (form.changed()) mesh = form.mesh;
               ProgressBar bar("building LODs");
               options.progress = [&](double f) { bar.update(f); };
@@ -392,7 +393,8 @@ Command register_lod(CLI::App& root) {
               for (const ChainReport& r : reports) chains.push_back({{"node", r.node}, {"diagonal", r.chain.diagonal}, {"levels", levels_json(r)}});
               nlohmann::json j = {{"input", o->input}, {"output", o->output}, {"diagonal", reports[0].chain.diagonal},
                                   {"levels", levels_json(reports[0])}, {"load_seconds", load_seconds},
-                                  {"build_seconds", build_seconds}, {"write_seconds", write_seconds}};
+                                  {"build_seconds", build_seconds}, {"write_seconds", write_seconds},
+                                  {"flat_shaded", form.flat_shaded}, {"double_sided", form.double_sided}};
               if (!skinned.empty())
                 j["skinned"] = {{"mode", o->skin_mode}, {"poses", o->poses}, {"chains", chains}};
               fmt::print("{}\n", j.dump(2));
@@ -410,6 +412,8 @@ Command register_lod(CLI::App& root) {
               fmt::print("error: Hausdorff distance to the input (measured{}); bound: certified upper bound; switch at: the "
                          "distance where the bound is {} px ({} px screen, {} deg fov)\n",
                          skinned.empty() ? "" : ", bind pose", o->error_px, o->screen_height, o->fov_degrees);
+              if (form.flat_shaded) fmt::print("flat-shaded: each level built without the normals, faceted again\n");
+              if (form.double_sided) fmt::print("double-sided: each level built on the fronts, backs made again\n");
               fmt::print("loaded in {:.3f}s, built in {:.3f}s, wrote {} in {:.3f}s\n", load_seconds, build_seconds,
                          o->output, write_seconds);
             }
