@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "lodkit/mesh.h"
+#include "lodkit/optimize.h"
 #include "lodkit/simplify.h"
 
 namespace lod {
@@ -61,6 +62,9 @@ struct LodOptions {
   // Reorder each level's triangles for the vertex cache and its vertices by first use
   // (lod::optimize_vertex_cache, lod::vertex_fetch_remap); geomorph tables follow.
   bool optimize = true;
+  // The cache `optimize` orders for. An LRU order also suits meshoptimizer's codecs best
+  // (EXT_meshopt_compression): `lodkit lod -c` asks for it.
+  VertexCacheOptions cache;
   SimplifyOptions simplify;  // metric, attribute weights, locks, threads; the target fields are set per level
   // The simplifier each level is made with; empty: lod::simplify. Skinned chains pass
   // lod::simplify_skinned with their poses (levels are then measured in the bind pose).

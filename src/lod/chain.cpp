@@ -125,7 +125,7 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
     std::vector<std::vector<uint32_t>> new_index(count);
     for (size_t i = 0; i < count; ++i) {
       Mesh& m = chain.levels[i].mesh;
-      m = reorder_triangles(m, vertex_cache_order(m.indices, m.vertex_count()));
+      m = reorder_triangles(m, vertex_cache_order(m.indices, m.vertex_count(), o.cache));
       new_index[i] = vertex_fetch_remap(m.indices, m.vertex_count());
       m = remap_vertices(m, new_index[i], m.vertex_count());
       std::vector<uint32_t> moved(origin[i].size());
