@@ -62,6 +62,7 @@ constexpr uint64_t max_zero_accessor_count = uint64_t(1) << 24;
 std::string str(uint64_t value) { return std::to_string(value); }
 using io::component_bytes;
 using io::type_components;
+using io::type_name;
 
 constexpr const char* gpu_instancing = "EXT_mesh_gpu_instancing";
 
@@ -95,19 +96,6 @@ const tg::Value& msft_lod_ids(const tg::Node& node) {
 }
 
 // ---- accessor layout -----------------------------------------------------------------------------
-
-const char* type_name(int type) {
-  switch (type) {
-    case TINYGLTF_TYPE_SCALAR: return "SCALAR";
-    case TINYGLTF_TYPE_VEC2: return "VEC2";
-    case TINYGLTF_TYPE_VEC3: return "VEC3";
-    case TINYGLTF_TYPE_VEC4: return "VEC4";
-    case TINYGLTF_TYPE_MAT2: return "MAT2";
-    case TINYGLTF_TYPE_MAT3: return "MAT3";
-    case TINYGLTF_TYPE_MAT4: return "MAT4";
-    default: return "?";
-  }
-}
 
 // One component's value as stored (integers not normalized: accessor bounds are in stored units).
 double component_value(const uint8_t* p, int component_type) {

@@ -11,7 +11,6 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <map>
 #include <new>
 
 #include "io/gltf_types.h"
@@ -395,16 +394,10 @@ void decode_compressed_geometry(tg::Model& model, const std::vector<uint64_t>& f
   Decoder(model, fallback_lengths, name).run();
 }
 
-}  // namespace lod::io
-
-namespace lod::io {
 namespace {
 
 size_t element_size(const Json& accessor) {
-  static const std::map<std::string, size_t> components = {{"SCALAR", 1}, {"VEC2", 2}, {"VEC3", 3}, {"VEC4", 4},
-                                                            {"MAT2", 4},   {"MAT3", 9}, {"MAT4", 16}};
-  const auto it = components.find(accessor.value("type", std::string()));
-  return it == components.end() ? 0 : it->second * component_bytes(accessor.value("componentType", 0));
+  return type_components(accessor.value("type", std::string())) * component_bytes(accessor.value("componentType", 0));
 }
 
 // How a bufferView may be encoded, from the accessors that use it.
@@ -416,7 +409,8 @@ struct ViewUse {
 std::vector<ViewUse> view_uses(const Json& doc) {
   const Json& views = doc["bufferViews"];
   std::vector<ViewUse> use(views.size());
-  const Json accessors = doc.value("accessors", Json::array());
+  static const Json none = Json::array();
+  const Json& accessors = doc.contains("accessors") ? doc["accessors"] : none;
   // Per accessor: indices of triangle lists (1), of other topologies (2: strips stay plain), or not (0).
   std::vector<int> indices(accessors.size(), 0);
   for (const Json& mesh : doc.value("meshes", Json::array()))

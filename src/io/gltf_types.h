@@ -1,9 +1,11 @@
-// Internal to the glTF reader and its compression decoders: sizes of glTF component and element types.
+// Internal to the glTF reader, writer and compression codecs: glTF component and element types, their
+// sizes and names.
 #pragma once
 
 #include <tiny_gltf.h>
 
 #include <cstddef>
+#include <string_view>
 
 namespace lod::io {
 
@@ -31,6 +33,27 @@ inline size_t type_components(int type) {
     case TINYGLTF_TYPE_MAT4: return 16;
     default: return 0;
   }
+}
+
+inline const char* type_name(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return "SCALAR";
+    case TINYGLTF_TYPE_VEC2: return "VEC2";
+    case TINYGLTF_TYPE_VEC3: return "VEC3";
+    case TINYGLTF_TYPE_VEC4: return "VEC4";
+    case TINYGLTF_TYPE_MAT2: return "MAT2";
+    case TINYGLTF_TYPE_MAT3: return "MAT3";
+    case TINYGLTF_TYPE_MAT4: return "MAT4";
+    default: return "?";
+  }
+}
+
+// Components of an element type given by its JSON name ("VEC3": 3); 0 for an unknown name.
+inline size_t type_components(std::string_view name) {
+  for (int type : {TINYGLTF_TYPE_SCALAR, TINYGLTF_TYPE_VEC2, TINYGLTF_TYPE_VEC3, TINYGLTF_TYPE_VEC4, TINYGLTF_TYPE_MAT2,
+                   TINYGLTF_TYPE_MAT3, TINYGLTF_TYPE_MAT4})
+    if (name == type_name(type)) return type_components(type);
+  return 0;
 }
 
 }  // namespace lod::io

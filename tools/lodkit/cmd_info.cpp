@@ -151,14 +151,15 @@ Command register_info(CLI::App& root) {
             if (o.json) {
               nlohmann::json j = {{"file", o.input}, {"format", format_name(format)}, {"load_seconds", load_seconds},
                                   {"streams", streams_text(mesh)}, {"stats", stats_json(s)}};
+              const auto [instances, instanced_nodes] = gpu_instance_counts(scene);
               if (scene.source)
                 j["gltf"] = {{"primitives", scene.primitives.size()}, {"nodes", scene.nodes.size()},
                              {"materials", scene.material_names.size()}, {"textures", scene.texture_count},
                              {"images", scene.image_count}, {"skins", scene.skins.size()},
                              {"animations", scene.animations.size()},
                              {"extensions_used", scene.extensions_used},
-                             {"gpu_instances", gpu_instance_counts(scene).first},
-                             {"instanced_nodes", gpu_instance_counts(scene).second}};
+                             {"gpu_instances", instances},
+                             {"instanced_nodes", instanced_nodes}};
               fmt::print("{}\n", j.dump(2));
             } else {
               print_table(o, format, scene, mesh, s, load_seconds);

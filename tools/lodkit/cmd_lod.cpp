@@ -365,7 +365,7 @@ Command register_lod(CLI::App& root) {
               // (not with geomorphs or one vertex buffer, whose tables follow the vertices).
               // Double-sided likewise: the chain is built on the fronts, and each level gets its backs.
               if (!o->morph && !o->shared) form = surface_form(mesh);
-              if (form.changed()) mesh = form.mesh;
+              if (form.changed()) mesh = std::move(form.mesh);  // (restore_form reads only the flags)
               ProgressBar bar("building LODs");
               options.progress = [&](double f) { bar.update(f); };
               reports.push_back({"", build_lod_chain(mesh, options), {}, {}});
