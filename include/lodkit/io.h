@@ -65,6 +65,10 @@ struct Primitive {
   // vertices are the source's own, in order, while their count is unchanged, and otherwise those
   // streams are dropped.
   std::vector<uint32_t> source_vertices;
+  // Vertices that moved (a simplification, lod::vertex_blends): source_vertices then holds three
+  // source vertices per vertex, blended with these weights. Float and normalized streams are
+  // interpolated, other integer ones (ids) take the heaviest vertex's value. Empty: one each.
+  std::vector<std::array<float, 3>> source_weights;
   uint32_t gltf_mesh = 0;       // index of the glTF mesh this primitive belongs to
   uint32_t gltf_primitive = 0;  // index within that mesh
   int32_t material = -1;        // glTF material index, -1 for none

@@ -11,6 +11,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -179,6 +180,11 @@ struct SimplifyResult {
   Mesh mesh;  // compacted: only live triangles and the vertices they use, in order of first use
   std::vector<uint32_t> vertex_origin;  // per output vertex: the input vertex it continues
   std::vector<uint32_t> triangle_origin;  // per output triangle: its input triangle
+  // Per input vertex: the output vertex it continues as or was merged into (a wedge of the position
+  // its own collapsed into, the one its triangles' corners were moved to); ~0u when it left with its
+  // triangles. The input triangles around an output vertex's successors are where it came from
+  // (lod::vertex_blends).
+  std::vector<uint32_t> vertex_successor;
 
   float error = 0;           // largest collapse error, object space (a distance)
   float relative_error = 0;  // error / bounding-box diagonal of the input
@@ -241,6 +247,21 @@ Mesh replay(const Mesh& mesh, const SimplifyRecord& record, size_t count);
 // Applies all collapses, then undoes them as vertex splits in reverse order: gives back `mesh`
 // exactly (bit for bit, including triangle order and winding). For tests and progressive meshes.
 Mesh replay_and_undo(const Mesh& mesh, const SimplifyRecord& record);
+
+// ---- data the simplifier does not carry -----------------------------------------------------------
+// A result vertex as a point of an input triangle: its three vertices and barycentric weights (summing
+// to 1). Per-vertex data the simplifier does not model (glTF morph targets, extra attributes) can be
+// interpolated there.
+struct VertexBlend {
+  std::array<uint32_t, 3> vertex{};  // input vertices
+  std::array<float, 3> weight{};
+};
+// Per output vertex: the point nearest its position among the input triangles that have a corner
+// whose SimplifyResult::vertex_successor is that vertex, that is, the patch of the input it replaces
+// (not the nearest point of the whole input: across a thin part, such as lips or an eyelid, that
+// would lie on the other side). Ties go to the lower triangle id. Results of chained calls compose
+// by following each call's vertex_successor in turn.
+std::vector<VertexBlend> vertex_blends(const Mesh& input, std::span<const uint32_t> vertex_successor, const Mesh& output);
 
 // ---- inputs in a form no collapse can touch -------------------------------------------------------
 // Three kinds of input leave an edge collapse nothing to do as they come; `lodkit simplify` and

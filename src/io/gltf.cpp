@@ -114,6 +114,29 @@ double component_value(const uint8_t* p, int component_type) {
   }
 }
 
+// Stores a value in one component, rounded and clamped to an integer type's range.
+void store_component(double value, uint8_t* p, int component_type) {
+  const auto store = [&](auto v) {
+    using T = decltype(v);
+    if constexpr (std::is_floating_point_v<T>) {
+      v = T(value);
+    } else {
+      const double lo = double(std::numeric_limits<T>::min()), hi = double(std::numeric_limits<T>::max());
+      v = T(std::clamp(std::round(value), lo, hi));
+    }
+    std::memcpy(p, &v, sizeof v);
+  };
+  switch (component_type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: return store(int8_t{});
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return store(uint8_t{});
+    case TINYGLTF_COMPONENT_TYPE_SHORT: return store(int16_t{});
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return store(uint16_t{});
+    case TINYGLTF_COMPONENT_TYPE_INT: return store(int32_t{});
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return store(uint32_t{});
+    default: return store(float{});
+  }
+}
+
 // Matrix columns start on 4-byte boundaries, which pads 1- and 2-byte MAT2/MAT3 elements.
 size_t element_bytes(int component_type, int type) {
   const size_t c = component_bytes(component_type);
@@ -1358,11 +1381,16 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
       if (geometry.indices.empty()) continue;
       auto position = prim.attributes.find("POSITION");
       const std::vector<uint32_t>& map = scene.primitives[size_t(owner)].source_vertices;
+      const std::vector<std::array<float, 3>>& weights = scene.primitives[size_t(owner)].source_weights;
       const size_t source_count = position != prim.attributes.end() ? model.accessors[size_t(position->second)].count : 0;
       if (!map.empty()) {
         const std::string where = "cannot write glTF: scene primitive " + str(size_t(owner)) + "'s source_vertices";
-        if (map.size() != geometry.vertex_count())
-          throw_usage(where + " has " + str(map.size()) + " entries for " + str(geometry.vertex_count()) + " vertices");
+        const size_t per_vertex = weights.empty() ? 1 : 3;
+        if (map.size() != per_vertex * geometry.vertex_count())
+          throw_usage(where + " has " + str(map.size()) + " entries for " + str(geometry.vertex_count()) + " vertices" +
+                      (weights.empty() ? "" : ", 3 each (source_weights)"));
+        if (!weights.empty() && weights.size() != geometry.vertex_count())
+          throw_usage(where + ": source_weights has " + str(weights.size()) + " entries for " + str(geometry.vertex_count()) + " vertices");
         for (const uint32_t v : map)
           if (v >= source_count)
             throw_usage(where + " names vertex " + str(v) + " of a source primitive with " + str(source_count));
@@ -1370,9 +1398,29 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
           const tg::Accessor& like = model.accessors[size_t(index)];
           const std::vector<uint8_t> all = source.packed_elements(index);
           const size_t element = element_bytes(like.componentType, like.type);
-          std::vector<uint8_t> bytes(map.size() * element);
-          for (size_t v = 0; v < map.size(); ++v)
-            std::memcpy(bytes.data() + v * element, all.data() + size_t(map[v]) * element, element);
+          const size_t count = geometry.vertex_count();
+          std::vector<uint8_t> bytes(count * element);
+          // Blends: floats and normalized integers are interpolated; other integers (ids) are not
+          // quantities, so the heaviest source vertex gives its value.
+          const bool interpolate = like.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT || like.normalized;
+          const size_t components = type_components(like.type), size = component_bytes(like.componentType);
+          for (size_t v = 0; v < count; ++v) {
+            uint8_t* out = bytes.data() + v * element;
+            if (weights.empty()) {
+              std::memcpy(out, all.data() + size_t(map[v]) * element, element);
+            } else if (!interpolate || components * size != element) {  // (matrices: padded columns)
+              const std::array<float, 3>& w = weights[v];
+              const size_t k = w[1] > w[0] ? (w[2] > w[1] ? 2 : 1) : (w[2] > w[0] ? 2 : 0);
+              std::memcpy(out, all.data() + size_t(map[3 * v + k]) * element, element);
+            } else {
+              for (size_t c = 0; c < components; ++c) {
+                double value = 0;
+                for (size_t k = 0; k < 3; ++k)
+                  value += double(weights[v][k]) * component_value(all.data() + size_t(map[3 * v + k]) * element + c * size, like.componentType);
+                store_component(value, out + c * size, like.componentType);
+              }
+            }
+          }
           gathered[size_t(owner)].push_back({target, semantic, like, std::move(bytes)});
           index = -1;  // written anew: the source accessor is not kept for it
         };
@@ -2143,6 +2191,7 @@ std::vector<uint32_t> source_vertex_classes(const Scene& scene, size_t primitive
   const size_t source_count = model.accessors[size_t(position->second)].count;
   const std::vector<uint32_t>& map = prim.source_vertices;
   const size_t n = prim.mesh.vertex_count();
+  if (!prim.source_weights.empty()) throw_usage("source_vertex_classes: primitive " + str(primitive) + "'s vertices are blends (source_weights)");
   if (map.empty() && n != source_count) return {};  // the writer drops those streams
   if (!map.empty() && map.size() != n) throw_usage("source_vertex_classes: primitive " + str(primitive) + "'s source_vertices do not match its vertices");
   std::unordered_map<std::string, uint32_t> ids;  // the streams' bytes -> class, in order of first appearance

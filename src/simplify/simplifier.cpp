@@ -1053,6 +1053,7 @@ class Engine {
       for (const WedgePair& pair : pairs)
         if (pair.from == corner && pair.material == m) {
           if (keep_record) record.relinks.push_back({t, k, corner, pair.to});
+          s_.wedge_successor[corner] = pair.to;
           corner = pair.to;
           break;
         }
@@ -1352,6 +1353,7 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
   for (size_t v = mesh.vertex_count(); v-- > 0;) state.position[state.position_of[v]] = mesh.positions[v];
   core::assign_huge(state.moves, ids.count, 0);
   core::assign_huge(state.successor, ids.count, none);
+  core::assign_huge(state.wedge_successor, mesh.vertex_count(), none);
   state.flags.assign(ids.count, 0);
   for (size_t v = 0; v < options.locked.size(); ++v)
     if (options.locked[v]) state.flags[state.position_of[v]] |= flag_locked;
@@ -1433,6 +1435,12 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
   const Snapshot snapshot{state.position_of, state.position, state.moves, state.corners,
                           state.alive, &state.layout, state.attributes};
   result.mesh = compact(mesh, snapshot, &result.vertex_origin, &result.triangle_origin);
+  // Each input vertex's output vertex: the wedge its relinks end at, if that is in the output.
+  std::vector<uint32_t>& next = state.wedge_successor;
+  core::assign_huge(result.vertex_successor, mesh.vertex_count(), none);
+  std::vector<uint32_t> output_of = core::make_huge<uint32_t>(mesh.vertex_count(), none);
+  for (uint32_t v = 0; v < result.vertex_origin.size(); ++v) output_of[result.vertex_origin[v]] = v;
+  for (uint32_t w = 0; w < mesh.vertex_count(); ++w) result.vertex_successor[w] = output_of[core::chain_end(next, w)];
   if (multipose)
     for (size_t v = 0; v < result.mesh.vertex_count(); ++v) {
       const Influences& w = final_influences[result.vertex_origin[v]];

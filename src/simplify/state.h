@@ -77,6 +77,9 @@ struct State {
   std::vector<float3> position;       // per position, object space
   std::vector<uint32_t> moves;        // per position: collapses that moved it (0: input positions)
   std::vector<uint32_t> successor;    // per position: the position it collapsed into (~0u while live)
+  // Per wedge: the wedge of the kept position its corners were relinked to (~0u while none was):
+  // where the data lodkit does not model (glTF morph targets) goes (SimplifyResult::vertex_successor).
+  std::vector<uint32_t> wedge_successor;
   std::vector<uint8_t> flags;         // per position
   std::vector<float> importance;      // per position (largest of its wedges'); empty: all 1
   std::vector<uint32_t> corners;      // 3 wedges per triangle

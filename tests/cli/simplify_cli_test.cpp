@@ -24,13 +24,15 @@
 namespace lod {
 namespace {
 
-// A glTF morph target (here each vertex's offset is a function of its position): --keep-vertices
-// keeps input vertices unmoved, so it keeps their offsets; moved vertices have none, and the target
-// is dropped.
-TEST(CliSimplify, KeepVerticesKeepsMorphTargets) {
+// A glTF morph target (here each vertex's offset is a linear, invertible function of its position).
+// --keep-vertices keeps input vertices unmoved, so it keeps their offsets exactly. Moved vertices get
+// offsets interpolated on the input's triangles: the point they stand for (the function inverted)
+// lies on the input torus, next to the vertex.
+TEST(CliSimplify, KeepsMorphTargetsExactOrInterpolated) {
   test::TempDir dir;
   Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 40, 20));
-  const auto offset = [](const float3& p) { return float3{0.0f, 0.0f, 0.25f * p.x + 0.5f * p.y}; };
+  const auto offset = [](const float3& p) { return float3{0.5f * p.z, 0.25f * p.x, -0.4f * p.y}; };
+  const auto inverse = [](const float3& o) { return float3{4.0f * o.y, -2.5f * o.z, 2.0f * o.x}; };
   MorphTarget target;
   for (const float3& p : scene.primitives[0].mesh.positions) target.positions.push_back(offset(p));
   scene.primitives[0].targets.push_back(target);
@@ -42,14 +44,32 @@ TEST(CliSimplify, KeepVerticesKeepsMorphTargets) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Mesh subset = read_scene(dir / "subset.glb").primitives[0].mesh;
   EXPECT_LE(subset.triangle_count(), scene.primitives[0].mesh.triangle_count() / 4);
-  const std::vector<float3> offsets = test::glb_morph_positions(dir / "subset.glb");
+  std::vector<float3> offsets = test::glb_morph_positions(dir / "subset.glb");
   ASSERT_EQ(offsets.size(), subset.vertex_count());
   for (size_t v = 0; v < subset.vertex_count(); ++v) ASSERT_EQ(offsets[v], offset(subset.positions[v])) << v;
 
-  r = test::run_cli({"simplify", (dir / "in.glb").string(), "-o", (dir / "moved.glb").string(), "--ratio", "0.25"});
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(test::glb_morph_positions(dir / "moved.glb").empty());
-  test::expect_valid_gltf({dir / "subset.glb", dir / "moved.glb"});
+  for (const char* ratio : {"0.25", "0.05"}) {
+    r = test::run_cli({"simplify", (dir / "in.glb").string(), "-o", (dir / "moved.glb").string(), "--ratio", ratio});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Mesh moved = read_scene(dir / "moved.glb").primitives[0].mesh;
+    offsets = test::glb_morph_positions(dir / "moved.glb");
+    ASSERT_EQ(offsets.size(), moved.vertex_count());
+    size_t off_input = 0;  // vertices the simplification left off the input surface
+    for (size_t v = 0; v < moved.vertex_count(); ++v) {
+      const float3 p = moved.positions[v], q = inverse(offsets[v]);
+      // On the polygonal torus: within the sag of its chords around the ring and the tube
+      // (1.3 (1 - cos(pi / 40)) + 0.3 (1 - cos(pi / 20)) < 0.0078) of the round one.
+      const double ring = std::hypot(double(q.x), double(q.y)) - 1.0;
+      EXPECT_LT(std::fabs(std::hypot(ring, double(q.z)) - 0.3), 0.0078) << ratio << " vertex " << v;
+      // And about as near the vertex as the torus is (the vertex's distance to the round torus, plus the sag).
+      const double d = std::hypot(double(p.x) - q.x, double(p.y) - q.y, double(p.z) - q.z);
+      const double off = std::fabs(std::hypot(std::hypot(double(p.x), double(p.y)) - 1.0, double(p.z)) - 0.3);
+      EXPECT_LT(d, off + 0.0078) << ratio << " vertex " << v;
+      off_input += d > 1e-4;
+    }
+    EXPECT_GT(off_input, moved.vertex_count() / 10) << ratio;  // the vertices moved: offsets were interpolated
+    test::expect_valid_gltf({dir / "subset.glb", dir / "moved.glb"});
+  }
 }
 
 TEST(CliSimplify, WritesTheLibraryResultAndReportsIt) {
@@ -111,7 +131,15 @@ TEST(CliSimplify, TriangleSoupsAreWeldedFirst) {
   const std::vector<float3> offsets = test::glb_morph_positions(dir / "out.glb");
   ASSERT_EQ(offsets.size(), subset.vertex_count());
   for (size_t v = 0; v < subset.vertex_count(); ++v) ASSERT_EQ(offsets[v], offset(subset.positions[v])) << v;
-  test::expect_valid_gltf({dir / "out.glb"});
+  // Moved vertices: blends of the welded vertices, taken back to the soup's copies.
+  r = test::run_cli({"simplify", (dir / "soup.glb").string(), "-o", (dir / "moved.glb").string(), "--ratio", "0.25"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Mesh moved = read_scene(dir / "moved.glb").primitives[0].mesh;
+  const std::vector<float3> interpolated = test::glb_morph_positions(dir / "moved.glb");
+  ASSERT_EQ(interpolated.size(), moved.vertex_count());
+  for (size_t v = 0; v < moved.vertex_count(); ++v)  // |gradient| < 0.56, vertices within 0.05 of their point
+    ASSERT_NEAR(interpolated[v].z, offset(moved.positions[v]).z, 0.03) << v;
+  test::expect_valid_gltf({dir / "out.glb", dir / "moved.glb"});
 }
 
 // A kind of mesh that lodkit simplify and lodkit lod keep: `input` (as a .glb) at 10% reports `flag`

@@ -73,9 +73,16 @@ void GeometryFile::forget_lod_facts(const std::vector<bool>& changed) {
     if (m >= stale.size()) stale.resize(size_t(m) + 1, false);
     if (changed[i]) stale[m] = true;
   }
+  std::vector<bool> geomorph(stale.size(), false);  // per glTF mesh: its morph target is lod's geomorph
   for (Node& node : scene_.nodes)
-    if (node.mesh >= 0 && size_t(node.mesh) < stale.size() && stale[size_t(node.mesh)])
+    if (node.mesh >= 0 && size_t(node.mesh) < stale.size() && stale[size_t(node.mesh)]) {
+      geomorph[size_t(node.mesh)] = node.extras_json.find("LODKIT_geomorph") != std::string::npos;
       erase_extras(node, {"lodkit", "LODKIT_geomorph"});
+    }
+  // A geomorph moved the old vertices onto the next level's: interpolated at new ones it would
+  // morph towards nothing, so it goes (with the old vertices' other streams, which lod writes none of).
+  for (size_t i = 0; i < scene_.primitives.size(); ++i)
+    if (changed[i] && geomorph[scene_.primitives[i].gltf_mesh]) renumbered(i, std::vector<uint32_t>{});
 }
 
 std::vector<uint32_t> weld_duplicates(Mesh& mesh, std::span<const uint32_t> classes) {
@@ -99,13 +106,37 @@ void erase_extras(Node& node, std::initializer_list<const char*> members) {
 void GeometryFile::renumbered(size_t i, const std::vector<uint32_t>& source) {
   if (!as_scene_) return;
   std::vector<uint32_t>& map = scene_.primitives[i].source_vertices;
-  if (map.empty()) {
+  std::vector<std::array<float, 3>>& weights = scene_.primitives[i].source_weights;
+  if (map.empty() || source.empty()) {
     map = source;
+    weights.clear();
+  } else if (!weights.empty()) {  // blends, renumbered
+    std::vector<uint32_t> composed(3 * source.size());
+    std::vector<std::array<float, 3>> reweighed(source.size());
+    for (size_t v = 0; v < source.size(); ++v) {
+      for (size_t k = 0; k < 3; ++k) composed[3 * v + k] = map[3 * size_t(source[v]) + k];
+      reweighed[v] = weights[source[v]];
+    }
+    map = std::move(composed), weights = std::move(reweighed);
   } else {
     std::vector<uint32_t> composed(source.size());
     for (size_t v = 0; v < source.size(); ++v) composed[v] = map[source[v]];
     map = std::move(composed);
   }
+}
+
+void GeometryFile::renumbered(size_t i, const std::vector<VertexBlend>& blends) {
+  if (!as_scene_) return;
+  Primitive& p = scene_.primitives[i];
+  if (!p.source_weights.empty()) throw_internal("GeometryFile::renumbered: blends of blends");
+  std::vector<uint32_t> map;
+  map.reserve(3 * blends.size());
+  p.source_weights.clear();
+  for (const VertexBlend& b : blends) {
+    for (const uint32_t v : b.vertex) map.push_back(p.source_vertices.empty() ? v : p.source_vertices[v]);
+    p.source_weights.push_back(b.weight);
+  }
+  p.source_vertices = std::move(map);
 }
 
 std::vector<uint32_t> GeometryFile::vertex_classes(size_t i) const {

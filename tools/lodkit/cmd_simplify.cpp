@@ -1,8 +1,8 @@
 // lodkit simplify IN -o OUT: one simplification to a target ratio, triangle count or error.
 // A glTF written from a glTF keeps everything else (nodes, skins, animations, materials). The
 // primitives of one glTF mesh are simplified together, their material borders kept closed like
-// seams; a skinned one keeps its survivors' joints and weights (with --keep-vertices, their morph
-// targets too).
+// seams; a skinned one keeps its survivors' joints and weights. Morph targets and other streams
+// lodkit does not model are kept: exact with --keep-vertices, else interpolated (lod::vertex_blends).
 #include <fmt/format.h>
 
 #include <chrono>
@@ -64,30 +64,42 @@ Joined join(const std::vector<Mesh*>& meshes, const std::vector<size_t>& group) 
   return j;
 }
 
-// The simplified group back in its members, each with (when `origins`) its output vertices'
-// input vertices among its own. A member whose triangles all collapsed is left empty (the glTF
+// The simplified group back in its members, each with its output vertices' input vertices among
+// its own (origin) and its input vertices' output vertices (successor, SimplifyResult's
+// vertex_successor; ~0u for none). A member whose triangles all collapsed is left empty (the glTF
 // writer drops it).
 struct Member {
   Mesh mesh;
-  std::vector<uint32_t> origin;
+  std::vector<uint32_t> origin, successor;
 };
-std::vector<Member> unjoin(const Joined& j, SimplifyResult& r, bool origins) {
+std::vector<Member> unjoin(const Joined& j, SimplifyResult& r) {
   std::vector<Member> members(j.offsets.size());
   if (j.alone) {
-    members[0] = {std::move(r.mesh), std::move(r.vertex_origin)};
+    members[0] = {std::move(r.mesh), std::move(r.vertex_origin), std::move(r.vertex_successor)};
     return members;
   }
+  std::vector<uint32_t> index(r.mesh.vertex_count(), ~0u);  // joined output vertex -> its member's
+  const auto end_of = [&](size_t k) { return k + 1 < j.offsets.size() ? j.offsets[k + 1] : uint32_t(j.joined.vertex_count()); };
   for (MaterialPart& part : split_by_material(r.mesh)) {
     const size_t k = size_t(part.material) - 1;
     if (part.material == 0 || k >= members.size()) throw_internal("simplify: a joined mesh's part has material id " + std::to_string(part.material));
     members[k].mesh = std::move(part.mesh);
-    if (!origins) continue;
-    const uint32_t begin = j.offsets[k], end = k + 1 < j.offsets.size() ? j.offsets[k + 1] : uint32_t(j.joined.vertex_count());
-    for (const uint32_t v : part.vertices) {
+    const uint32_t begin = j.offsets[k], end = end_of(k);
+    for (uint32_t i = 0; i < part.vertices.size(); ++i) {
       // Wedges continue within their material, so a member's vertex comes from its own input.
-      const uint32_t from = r.vertex_origin[v];
+      const uint32_t v = part.vertices[i], from = r.vertex_origin[v];
       if (from < begin || from >= end) throw_internal("simplify: a joined mesh's vertex continues another member's");
       members[k].origin.push_back(from - begin);
+      index[v] = i;
+    }
+  }
+  for (size_t k = 0; k < members.size(); ++k) {
+    const uint32_t begin = j.offsets[k], end = end_of(k);
+    for (uint32_t v = begin; v < end; ++v) {
+      const uint32_t to = r.vertex_successor[v];
+      // Its own member's vertex (a wedge relinked across a material border would not be).
+      const bool own = to != ~0u && r.vertex_origin[to] >= begin && r.vertex_origin[to] < end;
+      members[k].successor.push_back(own ? index[to] : ~0u);
     }
   }
   return members;
@@ -262,16 +274,19 @@ Command register_simplify(CLI::App& root) {
                 relative_error = std::max(relative_error, r.relative_error);
                 // Input vertices, unmoved: with --keep-vertices, or when nothing collapsed.
                 const bool unmoved = o->keep_vertices || (r.collapses == 0 && !form.changed());
-                std::vector<Member> members = unjoin(joined, r, unmoved);
+                std::vector<Member> members = unjoin(joined, r);
                 for (size_t k = 0; k < group.size(); ++k) {
                   const size_t i = group[k];
                   Member& out = members[k];
                   changed[i] = out.mesh.positions != meshes[i]->positions || out.mesh.indices != meshes[i]->indices;
+                  // The glTF streams lodkit does not model (morph targets, other attributes). Unmoved:
+                  // each survivor is its origin, so they stay exact for it. Moved: interpolated at each
+                  // vertex's point on the patch of the input it replaces. A changed form's result has
+                  // new vertices of another mesh: they are dropped.
+                  if (unmoved) file.renumbered(i, out.origin);
+                  else if (!form.changed()) file.renumbered(i, vertex_blends(*meshes[i], out.successor, out.mesh));
+                  else file.renumbered(i, std::vector<uint32_t>{});
                   *meshes[i] = std::move(out.mesh);
-                  // Unmoved: each survivor is its origin, so the glTF streams lodkit does not model (morph
-                  // targets, other attributes) stay exact for it. Otherwise the vertices are new: whatever
-                  // the weld mapped no longer applies, and the writer drops those streams.
-                  file.renumbered(i, unmoved ? out.origin : std::vector<uint32_t>{});
                 }
               }
             }

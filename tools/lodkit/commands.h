@@ -43,12 +43,15 @@ class GeometryFile {
   void write(const std::string& output, const WriteOptions& options = {}) const;
   // After meshes[i] changed for each i where changed[i]: the facts `lodkit lod` wrote on the glTF
   // nodes that draw them (extras "lodkit": triangles, errors, switch distance; "LODKIT_geomorph": a
-  // morph target the writer drops with the old vertex count) no longer hold, and are removed.
+  // morph target) no longer hold, and are removed, the geomorph's target too.
   void forget_lod_facts(const std::vector<bool>& changed);
   // meshes[i]'s vertices were renumbered: its vertex v was vertex source[v]. The glTF streams lodkit
   // does not model (morph targets, other attributes) follow them (Primitive::source_vertices). An
   // empty `source`: the vertices are new, and those streams are dropped.
   void renumbered(size_t i, const std::vector<uint32_t>& source);
+  // meshes[i]'s vertices moved (a simplification): its vertex v lies at blends[v] on the vertices it
+  // had, and those streams are interpolated there (Primitive::source_weights).
+  void renumbered(size_t i, const std::vector<VertexBlend>& blends);
   // meshes[] in groups to simplify as one: the primitives of one glTF mesh with the same vertex
   // streams, so that the borders between their materials stay closed. In order of first member.
   std::vector<std::vector<size_t>> joint_groups() const;
