@@ -3,7 +3,8 @@
 // an OFF file (OFF can carry colours, so seams and colour weights get exercised too). The OFF reader
 // may refuse the rest; a mesh it accepts must simplify without any exception, to a mesh that
 // validates, with a record that replays to that mesh and undoes to the input
-// (tests/simplify/simplify_robustness_test.cpp checks the same on generated meshes).
+// (tests/simplify/simplify_robustness_test.cpp checks the same on generated meshes), and whose
+// vertex_successor and vertex_blends describe it.
 #include <cmath>
 
 #include "fuzz_common.h"
@@ -68,5 +69,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     fuzz::fail("replay", "replaying the record does not give the result");
   if (fuzz::run_step("undo", false, [&] { return replay_and_undo(*mesh, r.record); }) != *mesh)
     fuzz::fail("undo", "undoing the record does not give the input back");
+  // Each output vertex continues an input vertex that became it, and is a blend of input vertices.
+  if (r.vertex_successor.size() != mesh->vertex_count()) fuzz::fail("simplify", "vertex_successor has the wrong size");
+  for (size_t v = 0; v < r.mesh.vertex_count(); ++v)
+    if (r.vertex_successor[r.vertex_origin[v]] != v) fuzz::fail("simplify", "an output vertex's origin did not become it");
+  const auto blends = *fuzz::run_step("vertex_blends", false, [&] { return vertex_blends(*mesh, r.vertex_successor, r.mesh); });
+  for (const VertexBlend& b : blends) {
+    float sum = 0;
+    for (size_t k = 0; k < 3; ++k) {
+      if (b.vertex[k] >= mesh->vertex_count()) fuzz::fail("vertex_blends", "a blend names no input vertex");
+      if (!(b.weight[k] >= -1e-3f && b.weight[k] <= 1.001f)) fuzz::fail("vertex_blends", "a blend weight is outside [0, 1]");
+      sum += b.weight[k];
+    }
+    if (!(std::fabs(sum - 1.0f) < 1e-3f)) fuzz::fail("vertex_blends", "blend weights do not sum to 1");
+  }
   return 0;
 }

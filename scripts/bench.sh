@@ -60,7 +60,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 usage() {
-  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5] | compress [RUNS=5]" >&2
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5] | compress [RUNS=5] | morphs [RUNS=3]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -285,6 +285,22 @@ area_compress() {
   echo "whole run: $((SECONDS - started)) s"
 }
 
+# ---- morphs: a blend shape carried through simplify (lod::vertex_blends) --------------------------
+area_morphs() {
+  [ $# -le 1 ] || usage
+  local runs=${1:-3}
+  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  configure
+  build_targets lodkit_bench_morph_transfer
+  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
+  echo
+  machine_line
+  echo
+  local meshes=()
+  for m in bunny00 armadillo elk cow knot hand fandisk camel; do meshes+=("data/corpus/$m.off"); done
+  with_peak_memory "$build/bench/lodkit_bench_morph_transfer" "$runs" "${meshes[@]}"
+}
+
 # ---- skin ----------------------------------------------------------------------------------------
 area_skin() {
   [ $# -le 1 ] || usage
@@ -373,5 +389,6 @@ case $area in
   measure) area_measure "$@" ;;
   render) area_render "$@" ;;
   compress) area_compress "$@" ;;
+  morphs) area_morphs "$@" ;;
   *) usage ;;
 esac

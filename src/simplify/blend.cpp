@@ -69,19 +69,24 @@ std::vector<VertexBlend> vertex_blends(const Mesh& input, std::span<const uint32
     // corner became this very wedge).
     const measure::vec3f x = output.positions[v];
     double best = INFINITY, best_own = INFINITY;
-    VertexBlend any, own;
+    // Until a distance is finite (coordinates near the float range overflow): a corner of the patch.
+    const uint32_t* c0 = &input.indices[3 * size_t(region[first[p]])];
+    uint32_t k0 = 0;
+    while (k0 < 2 && (vertex_successor[c0[k0]] == none || out.id[vertex_successor[c0[k0]]] != p)) ++k0;
+    VertexBlend any{{c0[k0], c0[k0], c0[k0]}, {1.0f, 0.0f, 0.0f}}, own;
     for (uint32_t i = first[p]; i < first[p + 1]; ++i) {
       const uint32_t t = region[i];
       const uint32_t* c = &input.indices[3 * size_t(t)];
       const measure::TrianglePoint q =
           measure::closest_on_triangle(x, input.positions[c[0]], input.positions[c[1]], input.positions[c[2]]);
+      if (!std::isfinite(q.v) || !std::isfinite(q.w)) continue;
       const VertexBlend b{{c[0], c[1], c[2]}, {1.0f - q.v - q.w, q.v, q.w}};
       // Strictly nearer: ties go to the first triangle, so the result does not depend on anything else.
       if (q.distance_squared < best) best = q.distance_squared, any = b;
       const bool mine = vertex_successor[c[0]] == v || vertex_successor[c[1]] == v || vertex_successor[c[2]] == v;
       if (mine && q.distance_squared < best_own) best_own = q.distance_squared, own = b;
     }
-    blends[v] = std::sqrt(best_own) <= std::sqrt(best) + own_side ? own : any;
+    blends[v] = best_own < INFINITY && std::sqrt(best_own) <= std::sqrt(best) + own_side ? own : any;
     // Corners at a seam: the copy that became this wedge, where the input has one.
     for (uint32_t& c : blends[v].vertex) {
       const auto mine = side.find(uint64_t(in.id[c]) << 32 | uint32_t(v));

@@ -7,7 +7,10 @@
 #include <cmath>
 
 #include "core/shapes.h"
+#include "test_support.h"
 #include "lodkit/error.h"
+#include "lodkit/io.h"
+#include "lodkit/measure.h"
 #include "lodkit/simplify.h"
 
 namespace lod {
@@ -159,6 +162,40 @@ TEST(VertexBlends, AnUnmovedVertexIsItsOrigin) {
     const float3 point = blend_of(torus.positions, blends[v]);
     EXPECT_LT(distance(point, torus.positions[r.vertex_origin[v]]), 1e-6) << v;
   }
+}
+
+// A smooth morph field (2% of the diagonal, a few waves across the bunny) carried to the 10% result:
+// interpolated, the morphed result stays about as near the morphed input as the rest poses are to
+// each other, and far nearer than with each survivor's own offset (what a subset simplifier keeps).
+// scripts/bench.sh morphs measures more meshes.
+TEST(VertexBlends, CarryAMorphFieldNearlyAsWellAsTheRestPose) {
+  const std::filesystem::path dir = test::corpus_dir();
+  if (dir.empty()) GTEST_SKIP() << "corpus not fetched";
+  const Mesh bunny = read_mesh(dir / "bunny00.off");
+  float3 lo, hi;
+  bounding_box(bunny, lo, hi);
+  const float d = float(distance(lo, hi));
+  const auto field = [&](const float3& p) {
+    const float x = (p.x - lo.x) / d, y = (p.y - lo.y) / d, z = (p.z - lo.z) / d;
+    return float3{0.02f * d * std::sin(12 * y), 0.02f * d * std::cos(10 * z), 0.02f * d * std::sin(11 * x + 4 * y)};
+  };
+  const auto moved = [](Mesh m, const auto& offset) {
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+      const float3 o = offset(v);
+      m.positions[v] = {m.positions[v].x + o.x, m.positions[v].y + o.y, m.positions[v].z + o.z};
+    }
+    return m;
+  };
+  std::vector<float3> offsets;
+  for (const float3& p : bunny.positions) offsets.push_back(field(p));
+  const SimplifyResult r = simplify(bunny, {.target_ratio = 0.1f});
+  const std::vector<VertexBlend> blends = vertex_blends(bunny, r.vertex_successor, r.mesh);
+  const Mesh morphed = moved(bunny, [&](size_t v) { return offsets[v]; });
+  const double rest = compare(bunny, r.mesh).rms;
+  const double interpolated = compare(morphed, moved(r.mesh, [&](size_t v) { return blend_of(offsets, blends[v]); })).rms;
+  const double own = compare(morphed, moved(r.mesh, [&](size_t v) { return offsets[r.vertex_origin[v]]; })).rms;
+  EXPECT_LT(interpolated, 2 * rest);
+  EXPECT_LT(interpolated, 0.5 * own);
 }
 
 TEST(VertexBlends, RejectsSuccessorsOfAnotherMesh) {
