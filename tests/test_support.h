@@ -66,6 +66,10 @@ inline std::span<const uint8_t> bytes_of(const std::string& s) {
 using Reader = std::function<void(std::span<const uint8_t>, const std::string&)>;
 std::string expect_bad_input(const Reader& read, const std::string& input, const std::string& name);
 
+// The distance from p to triangle abc, computed on its own (not by lodkit's measure): to the plane
+// where p projects inside (barycentric coordinates from Cramer's rule), else to the nearest edge.
+double triangle_distance(const float3& p, const float3& a, const float3& b, const float3& c);
+
 // A .glb's two chunks, parsed without lodkit: the JSON and the BIN data (empty when absent).
 struct Glb {
   nlohmann::json doc;

@@ -100,6 +100,9 @@ struct Node {
     float3 scale = {1, 1, 1};
   };
   std::vector<GpuInstance> gpu_instances;
+  // A node lodkit adds (a LOD level of a morphing mesh): it takes the morph weights of this source
+  // node, and the animation channels that drive them are copied to it. -1: none.
+  int32_t morph_weights_of = -1;
 };
 
 struct Skin {
@@ -179,6 +182,11 @@ std::vector<MaterialPart> split_by_material(const Mesh& mesh);
 // while their count is the source's). Empty when the primitive has no such streams, or they will
 // not be written. A weld that keeps classes apart (WeldOptions::vertex_classes) keeps them exact.
 std::vector<uint32_t> source_vertex_classes(const Scene& scene, size_t primitive);
+
+// The source glTF primitive's morph targets (POSITION and NORMAL displacements; other semantics are
+// not decoded), per vertex of the scene primitive (through Primitive::source_vertices). Empty when it
+// has none or its vertices are not the source's.
+std::vector<MorphTarget> source_morph_targets(const Scene& scene, size_t primitive);
 
 // ---- per format, in memory (used by the file functions, tests and fuzzers) ----------------------
 // `name` is used in error messages. Writers append to `out`.

@@ -87,6 +87,10 @@ struct LodLevel {
   // Per vertex: the input vertex it continues (for streams the Mesh does not hold, such as a glTF
   // primitive's morph targets).
   std::vector<uint32_t> vertex_origin;
+  // Per input vertex: the level's vertex it became (SimplifyResult::vertex_successor along the
+  // chain; ~0u for none). lod::vertex_blends(input, vertex_successor, mesh) interpolates those
+  // streams at vertices that moved.
+  std::vector<uint32_t> vertex_successor;
 };
 
 // With shared_vertices: one vertex buffer for all levels, and per level its indices into it; level i

@@ -1844,6 +1844,22 @@ void add_to_source(tg::Model& model, const Scene& scene) {
         node.skin = in.skin;
       }
     }
+    if (in.morph_weights_of >= 0) {
+      const size_t of = size_t(in.morph_weights_of);
+      if (of >= source_nodes) throw_usage("cannot write glTF: nodes[" + str(i) + "] takes the morph weights of a node the source does not have");
+      const tg::Node& other = model.nodes[of];
+      node.weights = !other.weights.empty() || other.mesh < 0 ? other.weights : model.meshes[size_t(other.mesh)].weights;
+      // The clips that drive the other node's weights drive this one's too (the same samplers).
+      for (tg::Animation& anim : model.animations) {
+        const size_t channels = anim.channels.size();
+        for (size_t c = 0; c < channels; ++c)
+          if (anim.channels[c].target_path == "weights" && anim.channels[c].target_node == int(of)) {
+            tg::AnimationChannel copy = anim.channels[c];
+            copy.target_node = int(i);
+            anim.channels.push_back(std::move(copy));
+          }
+      }
+    }
     set_lod_and_extras(model, in, node);
     set_transform(in, node);
     model.nodes.push_back(std::move(node));
@@ -2206,6 +2222,39 @@ std::vector<uint32_t> source_vertex_classes(const Scene& scene, size_t primitive
     classes[v] = ids.try_emplace(key, uint32_t(ids.size())).first->second;
   }
   return classes;
+}
+
+std::vector<MorphTarget> source_morph_targets(const Scene& scene, size_t primitive) {
+  if (!scene.source || primitive >= scene.primitives.size()) return {};
+  const Primitive& prim = scene.primitives[primitive];
+  const tg::Model& model = scene.source->model;
+  if (prim.gltf_mesh >= model.meshes.size() || prim.gltf_primitive >= model.meshes[prim.gltf_mesh].primitives.size())
+    return {};
+  const tg::Primitive& source = model.meshes[prim.gltf_mesh].primitives[prim.gltf_primitive];
+  const auto position = source.attributes.find("POSITION");
+  if (source.targets.empty() || position == source.attributes.end()) return {};
+  const size_t source_count = model.accessors[size_t(position->second)].count, n = prim.mesh.vertex_count();
+  const std::vector<uint32_t>& map = prim.source_vertices;
+  if (!prim.source_weights.empty()) throw_usage("source_morph_targets: primitive " + str(primitive) + "'s vertices are blends (source_weights)");
+  if (map.empty() && n != source_count) return {};  // not the source's vertices
+  if (!map.empty() && map.size() != n) throw_usage("source_morph_targets: primitive " + str(primitive) + "'s source_vertices do not match its vertices");
+  for (const uint32_t v : map)
+    if (v >= source_count) throw_usage("source_morph_targets: primitive " + str(primitive) + " names source vertex " + str(v));
+  const Document doc(model, scene.name);
+  std::vector<MorphTarget> targets;
+  for (const auto& attributes : source.targets) {
+    MorphTarget& t = targets.emplace_back();
+    t.positions.assign(n, float3{});
+    for (const char* semantic : {"POSITION", "NORMAL"}) {
+      const auto it = attributes.find(semantic);
+      if (it == attributes.end()) continue;
+      const std::vector<float3> values = doc.decode_floats<float3>(it->second);
+      std::vector<float3>& out = semantic[0] == 'P' ? t.positions : t.normals;
+      out.resize(n);
+      for (size_t v = 0; v < n; ++v) out[v] = values[map.empty() ? v : map[v]];
+    }
+  }
+  return targets;
 }
 
 void write_gltf(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options) {

@@ -76,6 +76,7 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
 
   const uint64_t input_triangles = input.triangle_count();
   std::vector<std::vector<uint32_t>> origin;  // per level: input vertex of each vertex
+  std::vector<std::vector<uint32_t>> successor;  // per level: each input vertex's vertex (~0u: none)
   std::vector<bool> identity;                 // per level: the input itself (no error to measure)
   const size_t count = ratios.size();
   for (size_t i = 0; i < count; ++i) {
@@ -84,12 +85,13 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
     const bool previous = o.from_previous && i > 0;
     const Mesh& source = previous ? chain.levels.back().mesh : input;
     LodLevel level;
-    std::vector<uint32_t> level_origin;
+    std::vector<uint32_t> level_origin, level_successor;
     if ((!by_error && target >= source.triangle_count() && !previous) || (by_error && errors[i] == 0 && !previous)) {
       // Everything kept: the input itself, vertex order and all.
       level.mesh = input;
       level_origin.resize(input.vertex_count());
       std::iota(level_origin.begin(), level_origin.end(), 0u);
+      level_successor = level_origin;
     } else {
       SimplifyOptions so = o.simplify;
       so.target_ratio = 0;
@@ -109,6 +111,13 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
       level_origin.resize(r.vertex_origin.size());
       for (size_t v = 0; v < r.vertex_origin.size(); ++v)
         level_origin[v] = previous ? origin.back()[r.vertex_origin[v]] : r.vertex_origin[v];
+      if (previous) {  // through the previous level's vertices
+        level_successor = successor.back();
+        for (uint32_t& s : level_successor)
+          if (s != ~0u) s = r.vertex_successor[s];
+      } else {
+        level_successor = std::move(r.vertex_successor);
+      }
       level.mesh = std::move(r.mesh);
     }
     level.ratio = input_triangles ? float(double(level.mesh.triangle_count()) / double(input_triangles)) : 1.0f;
@@ -117,6 +126,7 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
                        level_origin.size() == input.vertex_count());
     chain.levels.push_back(std::move(level));
     origin.push_back(std::move(level_origin));
+    successor.push_back(std::move(level_successor));
     if (o.progress) o.progress(double(i + 1) / double(count) * (o.measure ? 0.5 : 1.0));
   }
 
@@ -131,6 +141,8 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
       std::vector<uint32_t> moved(origin[i].size());
       for (size_t v = 0; v < origin[i].size(); ++v) moved[new_index[i][v]] = origin[i][v];
       origin[i] = std::move(moved);
+      for (uint32_t& s : successor[i])
+        if (s != ~0u) s = new_index[i][s];
     }
     for (size_t i = 0; i < chain.morphs.size(); ++i) {
       std::vector<uint32_t> target(chain.morphs[i].target.size());
@@ -161,7 +173,8 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
     }
   for (LodLevel& level : chain.levels) level.relative_error = chain.diagonal > 0 ? level.error / chain.diagonal : 0;
   if (o.shared_vertices) chain.shared = share_vertices(input, chain.levels, origin);
-  for (size_t i = 0; i < count; ++i) chain.levels[i].vertex_origin = std::move(origin[i]);
+  for (size_t i = 0; i < count; ++i)
+    chain.levels[i].vertex_origin = std::move(origin[i]), chain.levels[i].vertex_successor = std::move(successor[i]);
   return chain;
 }
 

@@ -384,34 +384,80 @@ TEST(CliLod, SkinnedCharacterKeepsItsSkeletonAndClips) {
   test::expect_valid_gltf({dir / "lod.glb"});
 }
 
-// A skinned character's blend shape: level 0 replaces the source primitive with its vertices
-// reordered for the vertex cache, and the morph target follows them (each vertex keeps its own
-// offset, here a function of its position).
-TEST(CliLod, SkinnedLevelZeroKeepsItsMorphTargets) {
+// A skinned character's blend shape (each vertex's offset a linear, invertible function of its
+// position), driven by a clip. Level 0 replaces the source primitive with its vertices reordered for
+// the vertex cache, and the morph target follows them exactly. The coarser levels, and level 0 when
+// it is simplified too, get it interpolated on the input: inverted, each offset names a point of the
+// input's surface next to the vertex. Each level's node takes the clip that drives the weight.
+TEST(CliLod, SkinnedLevelsKeepTheirMorphTargets) {
   test::TempDir dir;
   Scene input = fixtures::humanoid_scene();
   const std::vector<SkinnedPrimitive> skinned = skinned_primitives(input);
   ASSERT_EQ(skinned.size(), 1u);
   Primitive& body = input.primitives[skinned[0].primitive];
-  const auto offset = [](const float3& p) { return float3{0.0f, 0.0f, 0.25f * p.x + 0.5f * p.y}; };
+  const auto offset = [](const float3& p) { return float3{0.5f * p.z, 0.25f * p.x, -0.4f * p.y}; };
+  const auto inverse = [](const float3& o) { return float3{4.0f * o.y, -2.5f * o.z, 2.0f * o.x}; };
   MorphTarget blend;
   for (const float3& p : body.mesh.positions) blend.positions.push_back(offset(p));
   body.targets.push_back(blend);
+  AnimationChannel smile{.node = int32_t(skinned[0].node), .path = AnimationPath::weights, .times = {0, 1, 2},
+                         .values = {0, 1, 0}, .components = 1};
+  input.animations[0].channels.push_back(smile);
   write_scene(input, dir / "humanoid.glb");
-  const test::RunResult r = test::run_cli({"lod", (dir / "humanoid.glb").string(), "-o", (dir / "lod.glb").string(),
-                                           "--ratios", "1,0.4", "--poses", "4"});
-  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Mesh& rest = body.mesh;
+  float3 lo, hi;
+  bounding_box(rest, lo, hi);
+  const double diagonal = std::hypot(double(hi.x) - lo.x, double(hi.y) - lo.y, double(hi.z) - lo.z);
+  // The distance from q to the input surface, brute force.
+  const auto to_input = [&](const float3& q) {
+    double best = INFINITY;
+    for (size_t t = 0; t < rest.triangle_count(); ++t)
+      best = std::min(best, test::triangle_distance(q, rest.positions[rest.indices[3 * t]], rest.positions[rest.indices[3 * t + 1]],
+                                                    rest.positions[rest.indices[3 * t + 2]]));
+    return best;
+  };
 
-  const Scene out = read_scene(dir / "lod.glb");
-  const Mesh& level0 = out.primitives[skinned[0].primitive].mesh;
-  ASSERT_EQ(level0.vertex_count(), body.mesh.vertex_count());
-  EXPECT_NE(level0.positions, read_scene(dir / "humanoid.glb").primitives[skinned[0].primitive].mesh.positions);
-  const size_t mesh = out.primitives[skinned[0].primitive].gltf_mesh;
-  ASSERT_EQ(glb_json(dir / "lod.glb")["meshes"][mesh]["primitives"][0]["targets"].size(), 1u);
-  const std::vector<float3> offsets = test::glb_morph_positions(dir / "lod.glb", mesh);
-  ASSERT_EQ(offsets.size(), level0.vertex_count());
-  for (size_t v = 0; v < level0.vertex_count(); ++v) ASSERT_EQ(offsets[v], offset(level0.positions[v])) << "vertex " << v;
-  test::expect_valid_gltf({dir / "lod.glb"});
+  for (const char* ratios : {"1,0.4", "0.5,0.2"}) {
+    const test::RunResult r = test::run_cli({"lod", (dir / "humanoid.glb").string(), "-o", (dir / "lod.glb").string(),
+                                             "--ratios", ratios, "--poses", "4"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Scene out = read_scene(dir / "lod.glb");
+    const nlohmann::json doc = glb_json(dir / "lod.glb");
+    const uint32_t node = skinned[0].node;
+    ASSERT_EQ(out.nodes[node].lod_ids.size(), 1u) << ratios;
+    const uint32_t lod_node = uint32_t(out.nodes[node].lod_ids[0]);
+    for (const uint32_t n : {node, lod_node}) {
+      const size_t mesh = size_t(out.nodes[n].mesh);
+      ASSERT_EQ(doc["meshes"][mesh]["primitives"][0]["targets"].size(), 1u) << ratios << " node " << n;
+      const Mesh* level = nullptr;
+      for (const Primitive& p : out.primitives)
+        if (p.gltf_mesh == mesh) level = &p.mesh;
+      ASSERT_NE(level, nullptr);
+      const std::vector<float3> offsets = test::glb_morph_positions(dir / "lod.glb", mesh);
+      ASSERT_EQ(offsets.size(), level->vertex_count());
+      const bool exact = n == node && std::string(ratios) == "1,0.4";
+      for (size_t v = 0; v < level->vertex_count(); ++v) {
+        const float3 p = level->positions[v], q = inverse(offsets[v]);
+        if (exact) {
+          ASSERT_EQ(offsets[v], offset(p)) << "vertex " << v;
+          continue;
+        }
+        ASSERT_LT(to_input(q), 1e-4 * diagonal) << ratios << " node " << n << " vertex " << v;
+        ASSERT_LT(std::hypot(double(p.x) - q.x, double(p.y) - q.y, double(p.z) - q.z), 0.02 * diagonal)
+            << ratios << " node " << n << " vertex " << v;
+      }
+      // The clip drives the level's weight through the same sampler as the skinned node's.
+      int sampler = -1, copies = 0;
+      for (const auto& channel : doc["animations"][0]["channels"])
+        if (channel["target"]["path"] == "weights") {
+          if (channel["target"]["node"] == node) sampler = channel["sampler"];
+          if (channel["target"]["node"] == n) ++copies;
+        }
+      EXPECT_GE(sampler, 0);
+      EXPECT_EQ(copies, 1) << ratios << " node " << n;
+    }
+    test::expect_valid_gltf({dir / "lod.glb"});
+  }
 }
 
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {

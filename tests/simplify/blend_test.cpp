@@ -21,32 +21,6 @@ double distance(const float3& a, const float3& b) {
   return std::sqrt(x * x + y * y + z * z);
 }
 
-// The distance from p to triangle abc, computed here on its own: to the plane where p projects
-// inside (barycentric coordinates from Cramer's rule), else to the nearest of the three edges.
-double triangle_distance(const float3& p, const float3& a, const float3& b, const float3& c) {
-  const auto sub = [](const float3& x, const float3& y) {
-    return std::array<double, 3>{double(x.x) - y.x, double(x.y) - y.y, double(x.z) - y.z};
-  };
-  const auto dot = [](const std::array<double, 3>& x, const std::array<double, 3>& y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
-  const auto segment = [&](const float3& s, const float3& e) {
-    const std::array<double, 3> se = sub(e, s), sp = sub(p, s);
-    const double len2 = dot(se, se), t = len2 > 0 ? std::clamp(dot(sp, se) / len2, 0.0, 1.0) : 0.0;
-    const std::array<double, 3> r{sp[0] - t * se[0], sp[1] - t * se[1], sp[2] - t * se[2]};
-    return std::sqrt(dot(r, r));
-  };
-  const std::array<double, 3> u = sub(b, a), w = sub(c, a), ap = sub(p, a);
-  const double uu = dot(u, u), uw = dot(u, w), ww = dot(w, w), pu = dot(ap, u), pw = dot(ap, w);
-  const double det = uu * ww - uw * uw;
-  if (det > 0) {
-    const double s = (pu * ww - pw * uw) / det, t = (pw * uu - pu * uw) / det;
-    if (s >= 0 && t >= 0 && s + t <= 1) {
-      const std::array<double, 3> r{ap[0] - s * u[0] - t * w[0], ap[1] - s * u[1] - t * w[1], ap[2] - s * u[2] - t * w[2]};
-      return std::sqrt(dot(r, r));
-    }
-  }
-  return std::min({segment(a, b), segment(b, c), segment(c, a)});
-}
-
 template <class T>
 T blend_of(const std::vector<T>& values, const VertexBlend& b);
 template <>
@@ -133,7 +107,7 @@ TEST(VertexBlends, SeamVerticesBlendTheirOwnSide) {
       if (!at) continue;
       const float3 &a = torus.positions[torus.indices[3 * t]], &b = torus.positions[torus.indices[3 * t + 1]],
                    &c = torus.positions[torus.indices[3 * t + 2]];
-      const double d = triangle_distance(p, a, b, c);
+      const double d = test::triangle_distance(p, a, b, c);
       all = std::min(all, d);
       if (self) mine = std::min(mine, d);
     }

@@ -225,6 +225,16 @@ std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<Ski
   return reports;
 }
 
+// A blend of per-vertex displacements.
+float3 blend(const std::vector<float3>& values, const VertexBlend& b) {
+  float3 out;
+  for (size_t k = 0; k < 3; ++k) {
+    const float3& v = values[b.vertex[k]];
+    out.x += b.weight[k] * v.x, out.y += b.weight[k] * v.y, out.z += b.weight[k] * v.z;
+  }
+  return out;
+}
+
 // The input scene with each skinned primitive's levels: level 0 replaces the primitive's geometry,
 // level i > 0 becomes primitive 0 of a new glTF mesh drawn by a new node with the same skin, listed
 // in the skinned node's MSFT_lod. Skeleton, skins, animations, materials and everything else of the
@@ -238,12 +248,24 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
     done[sp.primitive] = true;
     const ChainReport& r = reports[report++];
     const Primitive source = scene.primitives[sp.primitive];
+    // The source's morph targets go to every level, interpolated where the vertices moved
+    // (lod::vertex_blends), and each level's node takes the skinned node's morph weights and clips.
+    const std::vector<MorphTarget> targets = source_morph_targets(scene, sp.primitive);
+    const auto blends = [&](const LodLevel& level) { return vertex_blends(source.mesh, level.vertex_successor, level.mesh); };
     // Level 0 is the source's vertices reordered for the vertex cache, unless it was simplified: its
-    // morph targets and other streams follow a reordering, and are dropped with a simplification (as
-    // by lodkit simplify: a vertex that moved has no exact morph).
-    if (r.chain.levels[0].mesh.vertex_count() == source.mesh.vertex_count())
-      scene.primitives[sp.primitive].source_vertices = r.chain.levels[0].vertex_origin;
-    scene.primitives[sp.primitive].mesh = r.chain.levels[0].mesh;
+    // morph targets and other streams follow a reordering, and are interpolated where it moved them.
+    Primitive& first = scene.primitives[sp.primitive];
+    if (r.chain.levels[0].mesh.vertex_count() == source.mesh.vertex_count()) {
+      first.source_vertices = r.chain.levels[0].vertex_origin;
+    } else {
+      first.source_weights.clear();
+      first.source_vertices.clear();
+      for (const VertexBlend& b : blends(r.chain.levels[0])) {
+        for (const uint32_t v : b.vertex) first.source_vertices.push_back(source.source_vertices.empty() ? v : source.source_vertices[v]);
+        first.source_weights.push_back(b.weight);
+      }
+    }
+    first.mesh = r.chain.levels[0].mesh;
     const std::string owner = scene.nodes[sp.node].name;  // a copy: scene.nodes grows below
     // The source node's own extras are kept; its MSFT_lod (an earlier chain's) gives way to this one.
     const std::string& old_extras = scene.nodes[sp.node].extras_json;
@@ -267,6 +289,16 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
       Primitive prim;
       prim.mesh = level.mesh;
       prim.material = source.material;
+      if (!targets.empty()) {
+        const std::vector<VertexBlend> at = blends(level);
+        for (const MorphTarget& t : targets) {
+          MorphTarget& out = prim.targets.emplace_back();
+          for (const VertexBlend& b : at) {
+            out.positions.push_back(blend(t.positions, b));
+            if (!t.normals.empty()) out.normals.push_back(blend(t.normals, b));
+          }
+        }
+      }
       prim.gltf_mesh = next_mesh++;
       prim.gltf_primitive = 0;
       scene.primitives.push_back(std::move(prim));
@@ -274,6 +306,7 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
       node.name = fmt::format("{}_LOD{}", owner, i);
       node.mesh = int32_t(scene.primitives.back().gltf_mesh);
       node.skin = int32_t(sp.skin);
+      if (!targets.empty()) node.morph_weights_of = int32_t(sp.node);
       node.extras_json = nlohmann::json{{"lodkit", about}}.dump();
       scene.nodes.push_back(std::move(node));
       scene.nodes[sp.node].lod_ids.push_back(int32_t(scene.nodes.size() - 1));
