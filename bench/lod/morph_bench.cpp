@@ -14,12 +14,9 @@
 
 #include "lodkit/io.h"
 #include "lodkit/lod.h"
+#include "median.h"
 
 namespace {
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -51,7 +48,7 @@ int main(int argc, char** argv) {
     copy_s.push_back(std::chrono::duration<double>(c - b).count());
     checksum += out[size_t(r) % n].x + copy[size_t(r) % n].y;  // keep both results alive
   }
-  const double m = median(morph_s), c = median(copy_s);
+  const double m = bench::median(morph_s), c = bench::median(copy_s);
   if (json) {
     fmt::print("{}\n", nlohmann::json{{"vertices", n}, {"runs", runs}, {"morph_s", m}, {"memcpy_s", c}, {"ratio", m / c},
                                       {"morph_vertices_per_s", double(n) / m}, {"checksum", checksum}}

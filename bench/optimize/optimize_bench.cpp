@@ -42,15 +42,11 @@
 
 #include "lodkit/io.h"
 #include "lodkit/optimize.h"
+#include "median.h"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
 
 double peak_rss_mib() {
   rusage usage{};
@@ -179,7 +175,7 @@ int run(const std::string& tool, const std::string& op, const std::string& input
     return 3;
   }
   nlohmann::json j = {{"tool", tool}, {"op", op}, {"input", input}, {"triangles", mesh.triangle_count()}, {"vertices", V},
-                      {"runs", seconds.size()}, {"median_s", median(seconds)},
+                      {"runs", seconds.size()}, {"median_s", bench::median(seconds)},
                       {"min_s", *std::min_element(seconds.begin(), seconds.end())}, {"rss_before_runs_mib", rss_before}};
   for (const uint32_t k : {16u, 32u}) {
     const lod::VertexCacheStats s = lod::analyze_vertex_cache(list, V, {.cache_size = k, .policy = lod::CachePolicy::fifo});

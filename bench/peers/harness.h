@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "lodkit/io.h"
+#include "median.h"
 #include "lodkit/mesh.h"
 
 namespace bench {
@@ -134,12 +135,6 @@ auto timed_runs(const Args& args, std::vector<double>& seconds, Setup setup, Sim
     total += seconds.back();
   }
   return state;
-}
-
-inline double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 // Writes the result (unless OUT is "-") and prints the report line. `extra` adds tool-specific keys.

@@ -22,17 +22,12 @@
 #include "lodkit/error.h"
 #include "lodkit/io.h"
 #include "lodkit/render.h"
+#include "median.h"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2;
-}
 
 int make_input(const std::filesystem::path& source, const std::filesystem::path& out) {
   std::error_code ec;
@@ -86,10 +81,10 @@ int run(const std::filesystem::path& input, int runs, uint32_t width, uint32_t h
                             {"upload_seconds", upload},
                             {"draw_seconds", draw},
                             {"encode_seconds", encode},
-                            {"median_upload_seconds", median(upload)},
-                            {"median_draw_seconds", median(draw)},
-                            {"median_encode_seconds", median(encode)},
-                            {"median_render_seconds", median(total)},
+                            {"median_upload_seconds", bench::median(upload)},
+                            {"median_draw_seconds", bench::median(draw)},
+                            {"median_encode_seconds", bench::median(encode)},
+                            {"median_render_seconds", bench::median(total)},
                             {"png_bytes", png_bytes}};
   std::printf("%s\n", j.dump().c_str());
   return 0;

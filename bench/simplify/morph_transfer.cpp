@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "lodkit/io.h"
+#include "median.h"
 #include "lodkit/measure.h"
 #include "lodkit/simplify.h"
 
@@ -25,11 +26,6 @@ using namespace lod;
 namespace {
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
 
 // The morph field: waves of a few periods across the bounding box, amplitude 2% of its diagonal.
 struct Field {
@@ -96,7 +92,7 @@ int main(int argc, char** argv) {
       name = name.substr(name.find_last_of('/') + 1);
       std::printf("| %s | %g%% | %.4f%% | %.4f%% | %.4f%% | %.4f%% | %.4f%% | %.4f%% | %.3f | %.4f |\n", name.c_str(), 100.0 * ratio,
                   100 * rest.hausdorff / d, 100 * rest.rms / d, 100 * with_blends.hausdorff / d, 100 * with_blends.rms / d,
-                  100 * with_own.hausdorff / d, 100 * with_own.rms / d, median(simplify_times), median(blend_times));
+                  100 * with_own.hausdorff / d, 100 * with_own.rms / d, bench::median(simplify_times), bench::median(blend_times));
       ++cases;
       interpolated_rms_better += with_blends.rms < with_own.rms;
       interpolated_h_better += with_blends.hausdorff < with_own.hausdorff;

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "lodkit/lod.h"
+#include "median.h"
 #include "lodkit/measure.h"
 #include "lodkit/skin.h"
 #include "skin/fixtures.h"
@@ -26,11 +27,6 @@ using namespace lod;
 namespace {
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
 
 Mesh posed(const Mesh& m, const std::vector<mat4>& joints) {
   SkinnedVertices v;
@@ -119,7 +115,7 @@ int main(int argc, char** argv) {
           r = simplify_skinned(mesh, o);
           times.push_back(now() - t0);
         }
-        Row row{c.name, skin_mode_name(mode), ratio, r.mesh.triangle_count(), median(times)};
+        Row row{c.name, skin_mode_name(mode), ratio, r.mesh.triangle_count(), bench::median(times)};
         for (size_t f = 0; f < frames.joints.size(); ++f) {
           const Deviation d = compare(original_frames[f], posed(r.mesh, frames.joints[f]),
                                       {.samples = 100'000, .attributes = false});
@@ -167,7 +163,7 @@ int main(int argc, char** argv) {
       for (int i = 0; i < reps; ++i) morph.evaluate(joints, 0.37f, out);
       morph_times.push_back((now() - t0) / reps);
     }
-    morph_rows.push_back({c.name, median(skin_times), median(morph_times), fine.vertex_count()});
+    morph_rows.push_back({c.name, bench::median(skin_times), bench::median(morph_times), fine.vertex_count()});
   }
   std::printf("\n| character | vertices | skinning µs/frame | skin + geomorph µs/frame | ratio | target <= 1.5x |\n");
   std::printf("|---|---:|---:|---:|---:|---|\n");

@@ -97,26 +97,32 @@ const tg::Value& msft_lod_ids(const tg::Node& node) {
 
 // ---- accessor layout -----------------------------------------------------------------------------
 
+// Calls f with a value of the C++ type a glTF component type stores (float for FLOAT, and for any
+// other code: the readers have refused those by then).
+template <class F>
+decltype(auto) with_component_type(int component_type, F&& f) {
+  switch (component_type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: return f(int8_t{});
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return f(uint8_t{});
+    case TINYGLTF_COMPONENT_TYPE_SHORT: return f(int16_t{});
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return f(uint16_t{});
+    case TINYGLTF_COMPONENT_TYPE_INT: return f(int32_t{});
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return f(uint32_t{});
+    default: return f(float{});
+  }
+}
+
 // One component's value as stored (integers not normalized: accessor bounds are in stored units).
 double component_value(const uint8_t* p, int component_type) {
-  const auto load = [p](auto v) {
+  return with_component_type(component_type, [p](auto v) {
     std::memcpy(&v, p, sizeof v);
     return double(v);
-  };
-  switch (component_type) {
-    case TINYGLTF_COMPONENT_TYPE_BYTE: return load(int8_t{});
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return load(uint8_t{});
-    case TINYGLTF_COMPONENT_TYPE_SHORT: return load(int16_t{});
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return load(uint16_t{});
-    case TINYGLTF_COMPONENT_TYPE_INT: return load(int32_t{});
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return load(uint32_t{});
-    default: return load(float{});
-  }
+  });
 }
 
 // Stores a value in one component, rounded and clamped to an integer type's range.
 void store_component(double value, uint8_t* p, int component_type) {
-  const auto store = [&](auto v) {
+  with_component_type(component_type, [&](auto v) {
     using T = decltype(v);
     if constexpr (std::is_floating_point_v<T>) {
       v = T(value);
@@ -125,16 +131,7 @@ void store_component(double value, uint8_t* p, int component_type) {
       v = T(std::clamp(std::round(value), lo, hi));
     }
     std::memcpy(p, &v, sizeof v);
-  };
-  switch (component_type) {
-    case TINYGLTF_COMPONENT_TYPE_BYTE: return store(int8_t{});
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return store(uint8_t{});
-    case TINYGLTF_COMPONENT_TYPE_SHORT: return store(int16_t{});
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return store(uint16_t{});
-    case TINYGLTF_COMPONENT_TYPE_INT: return store(int32_t{});
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return store(uint32_t{});
-    default: return store(float{});
-  }
+  });
 }
 
 // Matrix columns start on 4-byte boundaries, which pads 1- and 2-byte MAT2/MAT3 elements.
@@ -514,15 +511,7 @@ class Document {
         store(target, static_cast<const T*>(raw));
       });
     };
-    switch (acc.componentType) {
-      case TINYGLTF_COMPONENT_TYPE_BYTE: run(int8_t{}); break;
-      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: run(uint8_t{}); break;
-      case TINYGLTF_COMPONENT_TYPE_SHORT: run(int16_t{}); break;
-      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: run(uint16_t{}); break;
-      case TINYGLTF_COMPONENT_TYPE_INT: run(int32_t{}); break;
-      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: run(uint32_t{}); break;
-      default: run(float{}); break;
-    }
+    with_component_type(acc.componentType, run);
   }
 
   // Out is float, float2, float3, float4 or std::array<float, 16>; its size must match the type.
