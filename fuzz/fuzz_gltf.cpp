@@ -6,7 +6,7 @@
 // primitives (minus those without a triangle, which the writer drops), positions bit for bit; so
 // must the same scene with every primitive's vertices renumbered (Primitive::source_vertices),
 // written with EXT_meshopt_compression (triangles up to the codec's rotations), and both must give
-// the same vertex classes (source_vertex_classes).
+// the same vertex classes (source_vertex_classes) and morph targets (source_morph_targets).
 // The shared oracle lives in fuzz_common.h.
 #include <unistd.h>
 
@@ -172,6 +172,29 @@ void check_vertex_classes(const Scene& scene, const Scene& reversed_scene) {
   }
 }
 
+// lod::source_morph_targets: it may refuse a target that is not VEC3 (the reader passes targets
+// through unread), else one entry per vertex, the same through the reversed copy's source_vertices.
+void check_morph_targets(const Scene& scene, const Scene& reversed_scene) {
+  const std::string stage = "gltf morph targets";
+  for (size_t p = 0; p < scene.primitives.size(); ++p) {
+    const std::string where = stage + ": primitive " + std::to_string(p);
+    const auto a = run_step(where, true, [&] { return source_morph_targets(scene, p); });
+    if (!a) continue;
+    const auto b = run_step(where + ", vertices reversed", false, [&] { return source_morph_targets(reversed_scene, p); });
+    const size_t n = scene.primitives[p].mesh.vertex_count();
+    if (a->size() != b->size()) fail(where, "a different target count once its vertices are reversed");
+    for (size_t k = 0; k < a->size(); ++k) {
+      const MorphTarget &x = (*a)[k], &y = (*b)[k];
+      if (x.positions.size() != n || (!x.normals.empty() && x.normals.size() != n) || x.normals.size() != y.normals.size())
+        fail(where, "target " + std::to_string(k) + " does not have one entry per vertex");
+      for (size_t v = 0; v < n; ++v)
+        if (std::memcmp(&x.positions[v], &y.positions[n - 1 - v], sizeof(float3)) ||
+            (!x.normals.empty() && std::memcmp(&x.normals[v], &y.normals[n - 1 - v], sizeof(float3))))
+          fail(where, "target " + std::to_string(k) + " differs at vertex " + std::to_string(v) + " once its vertices are reversed");
+    }
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -189,5 +212,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const Scene backwards = reversed(*scene);
   check_round_trip(backwards, "gltf round trip, vertices reversed, meshopt-compressed", true);
   check_vertex_classes(*scene, backwards);
+  check_morph_targets(*scene, backwards);
   return 0;
 }

@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -2177,70 +2178,86 @@ void relocate_images(tg::Model& model, std::vector<uint8_t>* bin, const std::fil
   }
 }
 
-std::vector<uint32_t> source_vertex_classes(const Scene& scene, size_t primitive) {
+namespace {
+
+// A scene primitive's source glTF primitive and each of its vertices' source vertex (checked). No
+// primitive when it has no source, or its vertices are not the source's (then the writer drops the
+// streams lodkit does not model). `what` names the caller in errors.
+struct SourceMap {
+  const tg::Primitive* primitive = nullptr;
+  std::vector<uint32_t> vertex;
+};
+SourceMap source_map(const Scene& scene, size_t primitive, const char* what) {
   if (!scene.source || primitive >= scene.primitives.size()) return {};
   const Primitive& prim = scene.primitives[primitive];
   const tg::Model& model = scene.source->model;
   if (prim.gltf_mesh >= model.meshes.size() || prim.gltf_primitive >= model.meshes[prim.gltf_mesh].primitives.size())
     return {};
   const tg::Primitive& source = model.meshes[prim.gltf_mesh].primitives[prim.gltf_primitive];
+  const auto position = source.attributes.find("POSITION");
+  if (position == source.attributes.end()) return {};
+  const size_t source_count = model.accessors[size_t(position->second)].count, n = prim.mesh.vertex_count();
+  const std::vector<uint32_t>& map = prim.source_vertices;
+  const std::string where = std::string(what) + ": primitive " + str(primitive);
+  if (!prim.source_weights.empty()) throw_usage(where + "'s vertices are blends (source_weights)");
+  if (map.empty() && n != source_count) return {};
+  if (!map.empty() && map.size() != n) throw_usage(where + "'s source_vertices do not match its vertices");
+  SourceMap out{&source, map};
+  if (map.empty()) {
+    out.vertex.resize(n);
+    std::iota(out.vertex.begin(), out.vertex.end(), 0u);
+  }
+  for (const uint32_t v : out.vertex)
+    if (v >= source_count) throw_usage(where + " names source vertex " + str(v));
+  return out;
+}
+
+}  // namespace
+
+std::vector<uint32_t> source_vertex_classes(const Scene& scene, size_t primitive) {
+  const SourceMap map = source_map(scene, primitive, "source_vertex_classes");
+  if (!map.primitive) return {};
+  const tg::Model& model = scene.source->model;
   const Document doc(model, scene.name);
   std::vector<std::vector<uint8_t>> streams;
   std::vector<size_t> element_sizes;
-  for_each_unmodelled_stream(source, [&](int, const std::string&, int index) {
+  for_each_unmodelled_stream(*map.primitive, [&](int, const std::string&, int index) {
     streams.push_back(doc.packed_elements(index));
     element_sizes.push_back(element_bytes(model.accessors[size_t(index)].componentType, model.accessors[size_t(index)].type));
   });
-  const auto position = source.attributes.find("POSITION");
-  if (streams.empty() || position == source.attributes.end()) return {};
-  const size_t source_count = model.accessors[size_t(position->second)].count;
-  const std::vector<uint32_t>& map = prim.source_vertices;
-  const size_t n = prim.mesh.vertex_count();
-  if (!prim.source_weights.empty()) throw_usage("source_vertex_classes: primitive " + str(primitive) + "'s vertices are blends (source_weights)");
-  if (map.empty() && n != source_count) return {};  // the writer drops those streams
-  if (!map.empty() && map.size() != n) throw_usage("source_vertex_classes: primitive " + str(primitive) + "'s source_vertices do not match its vertices");
+  if (streams.empty()) return {};
   std::unordered_map<std::string, uint32_t> ids;  // the streams' bytes -> class, in order of first appearance
-  std::vector<uint32_t> classes(n);
+  std::vector<uint32_t> classes(map.vertex.size());
   std::string key;
-  for (size_t v = 0; v < n; ++v) {
-    const size_t s = map.empty() ? v : map[v];
-    if (s >= source_count) throw_usage("source_vertex_classes: primitive " + str(primitive) + " names source vertex " + str(s));
+  for (size_t v = 0; v < map.vertex.size(); ++v) {
     key.clear();
     for (size_t k = 0; k < streams.size(); ++k)
-      key.append(reinterpret_cast<const char*>(streams[k].data() + s * element_sizes[k]), element_sizes[k]);
+      key.append(reinterpret_cast<const char*>(streams[k].data() + map.vertex[v] * element_sizes[k]), element_sizes[k]);
     classes[v] = ids.try_emplace(key, uint32_t(ids.size())).first->second;
   }
   return classes;
 }
 
 std::vector<MorphTarget> source_morph_targets(const Scene& scene, size_t primitive) {
-  if (!scene.source || primitive >= scene.primitives.size()) return {};
-  const Primitive& prim = scene.primitives[primitive];
-  const tg::Model& model = scene.source->model;
-  if (prim.gltf_mesh >= model.meshes.size() || prim.gltf_primitive >= model.meshes[prim.gltf_mesh].primitives.size())
-    return {};
-  const tg::Primitive& source = model.meshes[prim.gltf_mesh].primitives[prim.gltf_primitive];
-  const auto position = source.attributes.find("POSITION");
-  if (source.targets.empty() || position == source.attributes.end()) return {};
-  const size_t source_count = model.accessors[size_t(position->second)].count, n = prim.mesh.vertex_count();
-  const std::vector<uint32_t>& map = prim.source_vertices;
-  if (!prim.source_weights.empty()) throw_usage("source_morph_targets: primitive " + str(primitive) + "'s vertices are blends (source_weights)");
-  if (map.empty() && n != source_count) return {};  // not the source's vertices
-  if (!map.empty() && map.size() != n) throw_usage("source_morph_targets: primitive " + str(primitive) + "'s source_vertices do not match its vertices");
-  for (const uint32_t v : map)
-    if (v >= source_count) throw_usage("source_morph_targets: primitive " + str(primitive) + " names source vertex " + str(v));
-  const Document doc(model, scene.name);
+  const SourceMap map = source_map(scene, primitive, "source_morph_targets");
+  if (!map.primitive) return {};
+  const Document doc(scene.source->model, scene.name);
   std::vector<MorphTarget> targets;
-  for (const auto& attributes : source.targets) {
+  for (size_t k = 0; k < map.primitive->targets.size(); ++k) {
+    const auto& attributes = map.primitive->targets[k];
     MorphTarget& t = targets.emplace_back();
-    t.positions.assign(n, float3{});
+    t.positions.assign(map.vertex.size(), float3{});
     for (const char* semantic : {"POSITION", "NORMAL"}) {
       const auto it = attributes.find(semantic);
       if (it == attributes.end()) continue;
+      // (The reader passes morph targets through unread: their type is checked here.)
+      if (doc.accessor(it->second).type != TINYGLTF_TYPE_VEC3)
+        doc.fail("mesh " + str(scene.primitives[primitive].gltf_mesh) + " primitive " + str(scene.primitives[primitive].gltf_primitive) +
+                 " morph target " + str(k) + " " + semantic + " must be VEC3");
       const std::vector<float3> values = doc.decode_floats<float3>(it->second);
       std::vector<float3>& out = semantic[0] == 'P' ? t.positions : t.normals;
-      out.resize(n);
-      for (size_t v = 0; v < n; ++v) out[v] = values[map.empty() ? v : map[v]];
+      out.resize(map.vertex.size());
+      for (size_t v = 0; v < map.vertex.size(); ++v) out[v] = values[map.vertex[v]];
     }
   }
   return targets;
