@@ -64,18 +64,19 @@ Joined join(const std::vector<Mesh*>& meshes, const std::vector<size_t>& group) 
   return j;
 }
 
-// The simplified group back in its members, each with its output vertices' input vertices among
-// its own (origin) and its input vertices' output vertices (successor, SimplifyResult's
-// vertex_successor; ~0u for none). A member whose triangles all collapsed is left empty (the glTF
-// writer drops it).
+// The simplified group back in its members, each with (when `maps`: the result's vertices are the
+// simplifier's, not a restored form's) its output vertices' input vertices among its own (origin)
+// and its input vertices' output vertices (successor, SimplifyResult's vertex_successor; ~0u for
+// none). A member whose triangles all collapsed is left empty (the glTF writer drops it).
 struct Member {
   Mesh mesh;
   std::vector<uint32_t> origin, successor;
 };
-std::vector<Member> unjoin(const Joined& j, SimplifyResult& r) {
+std::vector<Member> unjoin(const Joined& j, SimplifyResult& r, bool maps) {
   std::vector<Member> members(j.offsets.size());
   if (j.alone) {
-    members[0] = {std::move(r.mesh), std::move(r.vertex_origin), std::move(r.vertex_successor)};
+    members[0].mesh = std::move(r.mesh);
+    if (maps) members[0].origin = std::move(r.vertex_origin), members[0].successor = std::move(r.vertex_successor);
     return members;
   }
   std::vector<uint32_t> index(r.mesh.vertex_count(), ~0u);  // joined output vertex -> its member's
@@ -84,6 +85,7 @@ std::vector<Member> unjoin(const Joined& j, SimplifyResult& r) {
     const size_t k = size_t(part.material) - 1;
     if (part.material == 0 || k >= members.size()) throw_internal("simplify: a joined mesh's part has material id " + std::to_string(part.material));
     members[k].mesh = std::move(part.mesh);
+    if (!maps) continue;
     const uint32_t begin = j.offsets[k], end = end_of(k);
     for (uint32_t i = 0; i < part.vertices.size(); ++i) {
       // Wedges continue within their material, so a member's vertex comes from its own input.
@@ -93,7 +95,7 @@ std::vector<Member> unjoin(const Joined& j, SimplifyResult& r) {
       index[v] = i;
     }
   }
-  for (size_t k = 0; k < members.size(); ++k) {
+  for (size_t k = 0; k < members.size() && maps; ++k) {
     const uint32_t begin = j.offsets[k], end = end_of(k);
     for (uint32_t v = begin; v < end; ++v) {
       const uint32_t to = r.vertex_successor[v];
@@ -274,7 +276,7 @@ Command register_simplify(CLI::App& root) {
                 relative_error = std::max(relative_error, r.relative_error);
                 // Input vertices, unmoved: with --keep-vertices, or when nothing collapsed.
                 const bool unmoved = o->keep_vertices || (r.collapses == 0 && !form.changed());
-                std::vector<Member> members = unjoin(joined, r);
+                std::vector<Member> members = unjoin(joined, r, !form.changed());
                 for (size_t k = 0; k < group.size(); ++k) {
                   const size_t i = group[k];
                   Member& out = members[k];
