@@ -403,7 +403,8 @@ Command register_lod(CLI::App& root) {
               options.progress = [&](double f) { bar.update(f); };
               reports.push_back({"", build_lod_chain(mesh, options), {}, {}});
               if (form.changed())
-                for (LodLevel& level : reports[0].chain.levels) restore_form(form, level.mesh), level.vertex_origin.clear();
+                for (LodLevel& level : reports[0].chain.levels)
+                  restore_form(form, level.mesh), level.vertex_origin.clear(), level.vertex_successor.clear();
             }
             const double build_seconds = seconds_since(start);
             for (ChainReport& r : reports) set_switching(r, *o);
