@@ -49,9 +49,12 @@ std::vector<VertexBlend> vertex_blends(const Mesh& input, std::span<const uint32
   }
   // The input vertices at each input position that became each output vertex, to give a blend the
   // corners on its own vertex's side of a seam: (input position, output vertex) -> input vertex.
+  // Only positions with several input vertices (seams) can have a choice.
+  std::vector<uint8_t> copies(in.count, 0);
+  for (uint32_t u = 0; u < input.vertex_count(); ++u) copies[in.id[u]] = uint8_t(std::min(copies[in.id[u]] + 1, 2));
   std::unordered_map<uint64_t, uint32_t> side;
   for (uint32_t u = 0; u < input.vertex_count(); ++u)
-    if (vertex_successor[u] != none) side.try_emplace(uint64_t(in.id[u]) << 32 | vertex_successor[u], u);
+    if (copies[in.id[u]] > 1 && vertex_successor[u] != none) side.try_emplace(uint64_t(in.id[u]) << 32 | vertex_successor[u], u);
 
   // A vertex within a thousandth of the bounding-box diagonal of its own side of a seam blends that
   // side: values that jump at the seam (UVs, the normals of a hard edge) stay its own, and smooth
@@ -89,6 +92,7 @@ std::vector<VertexBlend> vertex_blends(const Mesh& input, std::span<const uint32
     blends[v] = best_own < INFINITY && std::sqrt(best_own) <= std::sqrt(best) + own_side ? own : any;
     // Corners at a seam: the copy that became this wedge, where the input has one.
     for (uint32_t& c : blends[v].vertex) {
+      if (copies[in.id[c]] < 2) continue;
       const auto mine = side.find(uint64_t(in.id[c]) << 32 | uint32_t(v));
       if (mine != side.end()) c = mine->second;
     }
