@@ -828,7 +828,12 @@ class SceneBuilder {
     };
     for (const auto& [semantic, index] : prim.attributes) one_per_vertex(index, semantic);
     for (size_t k = 0; k < prim.targets.size(); ++k)
-      for (const auto& [semantic, index] : prim.targets[k]) one_per_vertex(index, "morph target " + str(k) + " " + semantic);
+      for (const auto& [semantic, index] : prim.targets[k]) {
+        one_per_vertex(index, "morph target " + str(k) + " " + semantic);
+        // Displacements of the three-component attributes are three-component too (glTF 3.7.2.2).
+        if ((semantic == "POSITION" || semantic == "NORMAL" || semantic == "TANGENT") && doc_.accessor(index).type != TINYGLTF_TYPE_VEC3)
+          doc_.fail(where + " morph target " + str(k) + " " + semantic + " must be VEC3");
+      }
 
     std::vector<uint32_t> corners;
     if (prim.indices >= 0) {
@@ -2250,10 +2255,7 @@ std::vector<MorphTarget> source_morph_targets(const Scene& scene, size_t primiti
     for (const char* semantic : {"POSITION", "NORMAL"}) {
       const auto it = attributes.find(semantic);
       if (it == attributes.end()) continue;
-      // (The reader passes morph targets through unread: their type is checked here.)
-      if (doc.accessor(it->second).type != TINYGLTF_TYPE_VEC3)
-        doc.fail("mesh " + str(scene.primitives[primitive].gltf_mesh) + " primitive " + str(scene.primitives[primitive].gltf_primitive) +
-                 " morph target " + str(k) + " " + semantic + " must be VEC3");
+      // (VEC3: the reader refuses other types.)
       const std::vector<float3> values = doc.decode_floats<float3>(it->second);
       std::vector<float3>& out = semantic[0] == 'P' ? t.positions : t.normals;
       out.resize(map.vertex.size());

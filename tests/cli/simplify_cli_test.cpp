@@ -69,6 +69,11 @@ TEST(CliSimplify, KeepsMorphTargetsExactOrInterpolated) {
     }
     EXPECT_GT(off_input, moved.vertex_count() / 10) << ratio;  // the vertices moved: offsets were interpolated
     test::expect_valid_gltf({dir / "subset.glb", dir / "moved.glb"});
+    // lodkit info counts the blend shape.
+    const test::RunResult info = test::run_cli({"info", "--json", (dir / "moved.glb").string()});
+    ASSERT_EQ(info.exit_code, 0) << info.err;
+    EXPECT_EQ(nlohmann::json::parse(info.out)["gltf"]["morph_targets"], 1) << info.out;
+    EXPECT_EQ(nlohmann::json::parse(info.out)["gltf"]["morphing_primitives"], 1);
   }
 }
 

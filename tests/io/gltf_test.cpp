@@ -1058,6 +1058,10 @@ TEST(GltfMalformed, Geometry) {
   f = valid_triangle();
   f.doc["meshes"][0]["primitives"][0]["targets"] = {{{"POSITION", f.positions({0, 0, 1, 0, 0, 1})}}};
   expect_bad_input(f.glb(), "targetcount.glb", "morph target 0 POSITION has 2 entries for 3 vertices");
+  // Displacements of positions, normals and tangents are VEC3, like the three-component attributes.
+  f = valid_triangle();
+  f.doc["meshes"][0]["primitives"][0]["targets"] = {{{"NORMAL", f.accessor(std::vector<float>(6, 0.0f), kFloat, "VEC2", 2)}}};
+  expect_bad_input(f.glb(), "targettype.glb", "morph target 0 NORMAL must be VEC3");
 }
 
 TEST(GltfMalformed, References) {

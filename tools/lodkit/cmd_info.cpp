@@ -63,6 +63,16 @@ std::string streams_text(const Mesh& m) {
   return s;
 }
 
+// Morph targets (blend shapes): how many, over how many primitives.
+std::pair<size_t, size_t> morph_target_counts(const Scene& scene) {
+  size_t targets = 0, primitives = 0;
+  for (size_t p = 0; p < scene.primitives.size(); ++p) {
+    const size_t n = source_morph_targets(scene, p).size();
+    targets += n, primitives += n != 0;
+  }
+  return {targets, primitives};
+}
+
 // EXT_mesh_gpu_instancing: how many instances, over how many nodes.
 std::pair<size_t, size_t> gpu_instance_counts(const Scene& scene) {
   size_t instances = 0, nodes = 0;
@@ -87,6 +97,8 @@ void print_table(const InfoOptions& o, FileFormat format, const Scene& scene, co
     row("glTF skins", std::to_string(scene.skins.size()));
     row("glTF animations", std::to_string(scene.animations.size()));
     row("glTF extensions", scene.extensions_used.empty() ? "none" : fmt::format("{}", fmt::join(scene.extensions_used, " ")));
+    if (const auto [targets, primitives] = morph_target_counts(scene); targets != 0)
+      row("glTF morph targets", fmt::format("{} on {} primitive{}", targets, primitives, primitives == 1 ? "" : "s"));
     if (const auto [instances, nodes] = gpu_instance_counts(scene); instances != 0)
       row("glTF GPU instances", fmt::format("{} on {} node{}", instances, nodes, nodes == 1 ? "" : "s"));
   }
@@ -152,12 +164,15 @@ Command register_info(CLI::App& root) {
               nlohmann::json j = {{"file", o.input}, {"format", format_name(format)}, {"load_seconds", load_seconds},
                                   {"streams", streams_text(mesh)}, {"stats", stats_json(s)}};
               const auto [instances, instanced_nodes] = gpu_instance_counts(scene);
+              const auto [morph_targets, morphing_primitives] = morph_target_counts(scene);
               if (scene.source)
                 j["gltf"] = {{"primitives", scene.primitives.size()}, {"nodes", scene.nodes.size()},
                              {"materials", scene.material_names.size()}, {"textures", scene.texture_count},
                              {"images", scene.image_count}, {"skins", scene.skins.size()},
                              {"animations", scene.animations.size()},
                              {"extensions_used", scene.extensions_used},
+                             {"morph_targets", morph_targets},
+                             {"morphing_primitives", morphing_primitives},
                              {"gpu_instances", instances},
                              {"instanced_nodes", instanced_nodes}};
               fmt::print("{}\n", j.dump(2));
