@@ -125,18 +125,19 @@ void GeometryFile::renumbered(size_t i, const std::vector<uint32_t>& source) {
   }
 }
 
-void GeometryFile::renumbered(size_t i, const std::vector<VertexBlend>& blends) {
-  if (!as_scene_) return;
-  Primitive& p = scene_.primitives[i];
-  if (!p.source_weights.empty()) throw_internal("GeometryFile::renumbered: blends of blends");
+void blend_sources(Primitive& p, const std::vector<VertexBlend>& blends) {
+  if (!p.source_weights.empty()) throw_internal("blend_sources: blends of blends");
   std::vector<uint32_t> map;
   map.reserve(3 * blends.size());
-  p.source_weights.clear();
   for (const VertexBlend& b : blends) {
     for (const uint32_t v : b.vertex) map.push_back(p.source_vertices.empty() ? v : p.source_vertices[v]);
     p.source_weights.push_back(b.weight);
   }
   p.source_vertices = std::move(map);
+}
+
+void GeometryFile::renumbered(size_t i, const std::vector<VertexBlend>& blends) {
+  if (as_scene_) blend_sources(scene_.primitives[i], blends);
 }
 
 std::vector<uint32_t> GeometryFile::vertex_classes(size_t i) const {

@@ -258,12 +258,7 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
     if (r.chain.levels[0].mesh.vertex_count() == source.mesh.vertex_count()) {
       first.source_vertices = r.chain.levels[0].vertex_origin;
     } else {
-      first.source_weights.clear();
-      first.source_vertices.clear();
-      for (const VertexBlend& b : blends(r.chain.levels[0])) {
-        for (const uint32_t v : b.vertex) first.source_vertices.push_back(source.source_vertices.empty() ? v : source.source_vertices[v]);
-        first.source_weights.push_back(b.weight);
-      }
+      blend_sources(first, blends(r.chain.levels[0]));
     }
     first.mesh = r.chain.levels[0].mesh;
     const std::string owner = scene.nodes[sp.node].name;  // a copy: scene.nodes grows below

@@ -70,6 +70,11 @@ class GeometryFile {
 // "LODKIT_geomorph", "MSFT_screencoverage") once they no longer hold.
 void erase_extras(Node& node, std::initializer_list<const char*> members);
 
+// A primitive whose vertices moved: vertex v lies at blends[v] on the vertices it had, so the glTF
+// streams lodkit does not model are interpolated there (Primitive::source_weights), through its
+// source_vertices when it has them.
+void blend_sources(Primitive& p, const std::vector<VertexBlend>& blends);
+
 // Merges a mesh's bitwise-identical vertices (lod::weld, exact), as gltfpack does before it
 // simplifies: the simplifier takes copies of one vertex for a seam, so a triangle soup (a
 // non-indexed glTF, an OBJ or PLY without shared vertices) would not simplify at all. Vertices in
