@@ -76,8 +76,8 @@ void GeometryFile::forget_lod_facts(const std::vector<bool>& changed) {
   std::vector<bool> geomorph(stale.size(), false);  // per glTF mesh: its morph target is lod's geomorph
   for (Node& node : scene_.nodes)
     if (node.mesh >= 0 && size_t(node.mesh) < stale.size() && stale[size_t(node.mesh)]) {
-      geomorph[size_t(node.mesh)] = node.extras_json.find("LODKIT_geomorph") != std::string::npos;
-      erase_extras(node, {"lodkit", "LODKIT_geomorph"});
+      erase_extras(node, {"lodkit"});
+      if (erase_extras(node, {"LODKIT_geomorph"})) geomorph[size_t(node.mesh)] = true;
     }
   // A geomorph moved the old vertices onto the next level's: interpolated at new ones it would
   // morph towards nothing, so it goes (with the old vertices' other streams, which lod writes none of).
@@ -95,12 +95,14 @@ std::vector<uint32_t> weld_duplicates(Mesh& mesh, std::span<const uint32_t> clas
   return first;
 }
 
-void erase_extras(Node& node, std::initializer_list<const char*> members) {
-  if (node.extras_json.empty()) return;
+bool erase_extras(Node& node, std::initializer_list<const char*> members) {
+  if (node.extras_json.empty()) return false;
   nlohmann::json extras = nlohmann::json::parse(node.extras_json);
-  if (!extras.is_object()) return;
-  for (const char* member : members) extras.erase(member);
+  if (!extras.is_object()) return false;
+  bool erased = false;
+  for (const char* member : members) erased = extras.erase(member) > 0 || erased;
   node.extras_json = extras.dump();  // "{}", not "": an empty text would keep the source's extras
+  return erased;
 }
 
 void GeometryFile::renumbered(size_t i, const std::vector<uint32_t>& source) {

@@ -68,7 +68,7 @@ class GeometryFile {
 
 // Removes these members from a node's extras: lodkit's facts about what it draws (extras "lodkit",
 // "LODKIT_geomorph", "MSFT_screencoverage") once they no longer hold.
-void erase_extras(Node& node, std::initializer_list<const char*> members);
+bool erase_extras(Node& node, std::initializer_list<const char*> members);  // whether any was there
 
 // A primitive whose vertices moved: vertex v lies at blends[v] on the vertices it had, so the glTF
 // streams lodkit does not model are interpolated there (Primitive::source_weights), through its
