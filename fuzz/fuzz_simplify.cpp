@@ -4,7 +4,8 @@
 // may refuse the rest; a mesh it accepts must simplify without any exception, to a mesh that
 // validates, with a record that replays to that mesh and undoes to the input
 // (tests/simplify/simplify_robustness_test.cpp checks the same on generated meshes), and whose
-// vertex_successor and vertex_blends describe it.
+// vertex_successor and vertex_blends describe it; and likewise through lod::surface_form and
+// lod::restore_form (double-sided inputs as read, or the mesh flat-shaded first).
 #include <cmath>
 
 #include "fuzz_common.h"
@@ -50,38 +51,12 @@ lod::SimplifyOptions decode_options(std::span<const uint8_t, option_bytes> b, co
   return o;
 }
 
-}  // namespace
-
-extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+// Blends of `output`'s vertices on `input` (vertex_blends) name input vertices, with weights in
+// [0, 1] that sum to 1.
+void check_blends(const lod::Mesh& input, const std::vector<uint32_t>& successor, const lod::Mesh& output) {
   using namespace lod;
-  if (size < option_bytes) return 0;
-  const std::span<const uint8_t> off(data + option_bytes, size - option_bytes);
-  const std::optional<Mesh> mesh = fuzz::run_step("off read", true, [&] { return read_off(off, "fuzz.off"); });
-  if (!mesh || mesh->triangle_count() > max_triangles) return 0;
-  fuzz::check_mesh(*mesh, "off read");
-  const SimplifyOptions options = decode_options(std::span<const uint8_t, option_bytes>(data, option_bytes), *mesh);
-  const SimplifyResult r = *fuzz::run_step("simplify", false, [&] { return simplify(*mesh, options); });
-  fuzz::run_step("validate the result", false, [&] { validate(r.mesh, "simplified"); return 0; });
-  if (r.output_triangles != r.mesh.triangle_count() || r.output_triangles > mesh->triangle_count())
-    fuzz::fail("simplify", "the reported triangle count does not match the result");
-  // Replay describes the mesh before pruning (SimplifyOptions::prune).
-  if (!options.prune && fuzz::run_step("replay", false, [&] { return replay(*mesh, r.record, r.record.collapses.size()); }) != r.mesh)
-    fuzz::fail("replay", "replaying the record does not give the result");
-  if (fuzz::run_step("undo", false, [&] { return replay_and_undo(*mesh, r.record); }) != *mesh)
-    fuzz::fail("undo", "undoing the record does not give the input back");
-  // Each output vertex continues an input vertex that became it, and is a blend of input vertices.
-  if (r.vertex_successor.size() != mesh->vertex_count()) fuzz::fail("simplify", "vertex_successor has the wrong size");
-  for (size_t v = 0; v < r.mesh.vertex_count(); ++v)
-    if (r.vertex_successor[r.vertex_origin[v]] != v) fuzz::fail("simplify", "an output vertex's origin did not become it");
-  const auto blends = *fuzz::run_step("vertex_blends", false, [&] { return vertex_blends(*mesh, r.vertex_successor, r.mesh); });
-  for (const VertexBlend& b : blends) {
-    float sum = 0;
-    for (size_t k = 0; k < 3; ++k) {
-      if (b.vertex[k] >= mesh->vertex_count()) fuzz::fail("vertex_blends", "a blend names no input vertex");
-      if (!(b.weight[k] >= -1e-3f && b.weight[k] <= 1.001f)) fuzz::fail("vertex_blends", "a blend weight is outside [0, 1]");
-      sum += b.weight[k];
-    }
-    if (!(std::fabs(sum - 1.0f) < 1e-3f)) fuzz::fail("vertex_blends", "blend weights do not sum to 1");
-  }
+  check_blends(*mesh, r.vertex_successor, r.mesh);
+  // Byte 15: a double-sided form as read, or the mesh flat-shaded first.
+  if (data[15] & 1) check_form(data[15] & 2 ? flat_shaded(*mesh) : *mesh, options);
   return 0;
 }

@@ -259,8 +259,11 @@ struct VertexBlend {
 // Per output vertex: the point nearest its position among the input triangles that have a corner
 // whose SimplifyResult::vertex_successor is that vertex, that is, the patch of the input it replaces
 // (not the nearest point of the whole input: across a thin part, such as lips or an eyelid, that
-// would lie on the other side). Ties go to the lower triangle id. Results of chained calls compose
-// by following each call's vertex_successor in turn.
+// would lie on the other side). Within a thousandth of the diagonal of that point, a triangle with a
+// corner that became this very vertex (its side of a seam) is preferred, else one facing the output
+// vertex's normal (the side of a double-sided surface it is on, after restore_form). Ties go to the
+// lower triangle id. Results of chained calls compose by following each call's vertex_successor in
+// turn.
 std::vector<VertexBlend> vertex_blends(const Mesh& input, std::span<const uint32_t> vertex_successor, const Mesh& output);
 
 // ---- inputs in a form no collapse can touch -------------------------------------------------------
@@ -282,6 +285,14 @@ struct SurfaceForm {
   bool double_sided = false;  // `mesh` holds the fronts
   bool flat_shaded = false;   // `mesh` holds no normals, its copies merged
   Mesh mesh;                  // what to simplify when either is set; else empty (simplify the input)
+  // Per input vertex when either is set, for restore_form to map a result's vertex_successor: its
+  // vertex in `mesh` (a back's: the vertex at the same corner of its front), whether only backs use
+  // it, and when flat-shaded the face normal of its front side and the material of its first
+  // triangle (if the input has materials).
+  std::vector<uint32_t> source;
+  std::vector<bool> back;
+  std::vector<float3> facet;
+  std::vector<uint32_t> material;
 
   bool changed() const { return double_sided || flat_shaded; }
   const Mesh& to_simplify(const Mesh& input) const { return changed() ? mesh : input; }
@@ -290,7 +301,12 @@ struct SurfaceForm {
 // a sort-free hash check that rules out most meshes that are not double-sided.
 SurfaceForm surface_form(const Mesh& mesh);
 // Gives a simplified result its form back: face normals, then the backs. Does nothing when
-// !form.changed().
-void restore_form(const SurfaceForm& form, Mesh& result);
+// !form.changed(). `vertex_successor`, unless empty, goes in as the SimplifyResult's (per vertex of
+// form.mesh) and comes out per input vertex: a front's successor, or the back copy of it for a back,
+// and of a successor's faceted copies the one whose face normal is nearest the vertex's own, on a
+// triangle of the vertex's material where there is one. So
+// vertex_blends can carry per-vertex data the simplifier does not model (glTF morph targets) through
+// a form too.
+void restore_form(const SurfaceForm& form, Mesh& result, std::vector<uint32_t>& vertex_successor);
 
 }  // namespace lod

@@ -63,20 +63,32 @@ std::vector<VertexBlend> vertex_blends(const Mesh& input, std::span<const uint32
   bounding_box(input, lo, hi);
   const double own_side = 1e-3 * std::hypot(double(hi.x) - lo.x, double(hi.y) - lo.y, double(hi.z) - lo.z);
 
+  // A triangle faces an output vertex when its normal is on the side of the vertex's normal: of a
+  // double-sided surface only the vertex's own side does. (Without normals: every triangle.)
+  const auto facing = [&](const uint32_t* c, size_t v) {
+    if (output.normals.empty()) return true;
+    const float3 &a = input.positions[c[0]], &b = input.positions[c[1]], &d = input.positions[c[2]], &m = output.normals[v];
+    const double ux = double(b.x) - a.x, uy = double(b.y) - a.y, uz = double(b.z) - a.z;
+    const double vx = double(d.x) - a.x, vy = double(d.y) - a.y, vz = double(d.z) - a.z;
+    return (uy * vz - uz * vy) * m.x + (uz * vx - ux * vz) * m.y + (ux * vy - uy * vx) * m.z > 0;
+  };
+
   std::vector<VertexBlend> blends(n);
   for (size_t v = 0; v < n; ++v) {
     const uint32_t p = out.id[v];
     if (first[p] == first[p + 1])
       throw_usage("vertex_blends: output vertex " + std::to_string(v) + " has no input vertex among its successors' sources");
-    // The nearest point of the patch, and of the triangles on the vertex's own side of a seam (a
-    // corner became this very wedge).
+    // The nearest point of the patch; and, within a thousandth of the diagonal of it, of the
+    // triangles on the vertex's own side of a seam (a corner became this very wedge), else of those
+    // facing it (a restored form's vertex may be no input vertex's successor: the twin of a
+    // double-sided triangle is as near).
     const measure::vec3f x = output.positions[v];
-    double best = INFINITY, best_own = INFINITY;
+    double best = INFINITY, best_own = INFINITY, best_facing = INFINITY;
     // Until a distance is finite (coordinates near the float range overflow): a corner of the patch.
     const uint32_t* c0 = &input.indices[3 * size_t(region[first[p]])];
     uint32_t k0 = 0;
     while (k0 < 2 && (vertex_successor[c0[k0]] == none || out.id[vertex_successor[c0[k0]]] != p)) ++k0;
-    VertexBlend any{{c0[k0], c0[k0], c0[k0]}, {1.0f, 0.0f, 0.0f}}, own;
+    VertexBlend any{{c0[k0], c0[k0], c0[k0]}, {1.0f, 0.0f, 0.0f}}, own, facing_one;
     for (uint32_t i = first[p]; i < first[p + 1]; ++i) {
       const uint32_t t = region[i];
       const uint32_t* c = &input.indices[3 * size_t(t)];
@@ -88,8 +100,10 @@ std::vector<VertexBlend> vertex_blends(const Mesh& input, std::span<const uint32
       if (q.distance_squared < best) best = q.distance_squared, any = b;
       const bool mine = vertex_successor[c[0]] == v || vertex_successor[c[1]] == v || vertex_successor[c[2]] == v;
       if (mine && q.distance_squared < best_own) best_own = q.distance_squared, own = b;
+      if (q.distance_squared < best_facing && facing(c, v)) best_facing = q.distance_squared, facing_one = b;
     }
-    blends[v] = best_own < INFINITY && std::sqrt(best_own) <= std::sqrt(best) + own_side ? own : any;
+    const auto near = [&](double d) { return d < INFINITY && std::sqrt(d) <= std::sqrt(best) + own_side; };
+    blends[v] = near(best_own) ? own : near(best_facing) ? facing_one : any;
     // Corners at a seam: the copy that became this wedge, where the input has one.
     for (uint32_t& c : blends[v].vertex) {
       if (copies[in.id[c]] < 2) continue;

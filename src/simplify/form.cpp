@@ -7,6 +7,7 @@
 #include <map>
 #include <optional>
 
+#include "lodkit/error.h"
 #include "lodkit/optimize.h"
 #include "lodkit/simplify.h"
 
@@ -51,8 +52,7 @@ bool may_be_double_sided(const Mesh& mesh) {
 
 // Per triangle: the index of its reversed twin among the triangles (each twin paired once, the
 // earlier of a pair first), or -1. Position ids decide: the twin's corners are separate vertices.
-std::vector<int64_t> twins(const Mesh& mesh) {
-  const PositionIds ids = position_ids(mesh);
+std::vector<int64_t> twins(const Mesh& mesh, const PositionIds& ids) {
   std::map<std::array<uint32_t, 3>, std::vector<uint32_t>> open;  // a rotation of the corners -> unpaired triangles
   const auto rotated = [](std::array<uint32_t, 3> c) {  // the rotation starting at the smallest id
     std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
@@ -74,10 +74,11 @@ std::vector<int64_t> twins(const Mesh& mesh) {
 
 // The first of each twin pair on the vertices they use (in input order), or nothing when some
 // triangle has no twin. The backs' vertices go: left in, their reversed normals would make every
-// position look flat-shaded.
-std::optional<Mesh> double_sided_fronts(const Mesh& mesh) {
+// position look flat-shaded. Fills `form.source` and `form.back` for the input's vertices.
+std::optional<Mesh> double_sided_fronts(const Mesh& mesh, SurfaceForm& form) {
   if (!may_be_double_sided(mesh)) return std::nullopt;
-  const std::vector<int64_t> twin = twins(mesh);
+  const PositionIds ids = position_ids(mesh);
+  const std::vector<int64_t> twin = twins(mesh, ids);
   if (std::any_of(twin.begin(), twin.end(), [](int64_t t) { return t < 0; })) return std::nullopt;
   std::vector<uint32_t> kept(mesh.vertex_count(), UINT32_MAX);
   for (size_t t = 0; t < mesh.triangle_count(); ++t)
@@ -87,8 +88,19 @@ std::optional<Mesh> double_sided_fronts(const Mesh& mesh) {
   front.material_names = mesh.material_names, front.group_names = mesh.group_names;
   for (uint32_t v = 0; v < mesh.vertex_count(); ++v)
     if (kept[v] == 0) kept[v] = uint32_t(front.vertex_count()), append_vertex(front, mesh, v);
+  form.source = kept, form.back.assign(mesh.vertex_count(), false);
   for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    if (size_t(twin[t]) < t) continue;  // the back of an earlier front
+    if (size_t(twin[t]) < t) {
+      // The back of an earlier front: its own vertices stand for the front's at the same positions.
+      const uint32_t* f = &mesh.indices[3 * size_t(twin[t])];
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t u = mesh.indices[3 * t + k];
+        if (kept[u] != UINT32_MAX) continue;  // a front's vertex too (no normals to tell the sides apart)
+        for (int j = 0; j < 3; ++j)
+          if (ids.id[f[j]] == ids.id[u]) form.source[u] = kept[f[j]], form.back[u] = true;
+      }
+      continue;
+    }
     for (int k = 0; k < 3; ++k) front.indices.push_back(kept[mesh.indices[3 * t + k]]);
     if (!mesh.materials.empty()) front.materials.push_back(mesh.materials[t]);
     if (!mesh.groups.empty()) front.groups.push_back(mesh.groups[t]);
@@ -98,6 +110,7 @@ std::optional<Mesh> double_sided_fronts(const Mesh& mesh) {
 
 bool flat_shaded(const Mesh& mesh) {
   if (mesh.normals.empty() || !mesh.tangents.empty()) return false;  // (tangents would need the same care)
+  if (mesh.triangle_count() == 0) return false;  // no face to facet
   for (size_t t = 0; t < mesh.triangle_count(); ++t) {
     const float3& n = mesh.normals[mesh.indices[3 * t]];
     if (!(mesh.normals[mesh.indices[3 * t + 1]] == n) || !(mesh.normals[mesh.indices[3 * t + 2]] == n)) return false;
@@ -107,7 +120,8 @@ bool flat_shaded(const Mesh& mesh) {
 }
 
 // Each triangle's corners get its face normal (double precision), corners alike shared again.
-void refacet(Mesh& mesh) {
+// Returns each corner's vertex.
+std::vector<uint32_t> refacet(Mesh& mesh) {
   Mesh split;
   split.material_names = mesh.material_names, split.group_names = mesh.group_names;
   split.materials = mesh.materials, split.groups = mesh.groups;
@@ -125,11 +139,14 @@ void refacet(Mesh& mesh) {
       split.normals.push_back(n);
     }
   }
-  mesh = weld(split).mesh;
+  WeldResult welded = weld(split);
+  mesh = std::move(welded.mesh);
+  return std::move(welded.remap);
 }
 
-// Each triangle gets its reversed twin on copies of its vertices, normals negated.
-void add_back_faces(Mesh& mesh) {
+// Each triangle gets its reversed twin on copies of its vertices, normals negated. Returns, per
+// vertex and then per back copy of it, its vertex (the front's own when they weld).
+std::vector<uint32_t> add_back_faces(Mesh& mesh) {
   const size_t triangles = mesh.triangle_count(), vertices = mesh.vertex_count();
   for (uint32_t v = 0; v < vertices; ++v) {
     append_vertex(mesh, mesh, v);
@@ -148,26 +165,90 @@ void add_back_faces(Mesh& mesh) {
     if (!mesh.materials.empty()) mesh.materials.push_back(mesh.materials[t]);
     if (!mesh.groups.empty()) mesh.groups.push_back(mesh.groups[t]);
   }
-  if (mesh.normals.empty()) mesh = weld(mesh).mesh;  // without normals the twins' vertices are the fronts'
+  std::vector<uint32_t> vertex(mesh.vertex_count());
+  for (uint32_t v = 0; v < vertex.size(); ++v) vertex[v] = v;
+  if (mesh.normals.empty()) {  // without normals the twins' vertices are the fronts'
+    WeldResult welded = weld(mesh);
+    mesh = std::move(welded.mesh), vertex = std::move(welded.remap);
+  }
+  return vertex;
 }
 
 }  // namespace
 
 SurfaceForm surface_form(const Mesh& mesh) {
   SurfaceForm form;
-  if (std::optional<Mesh> front = double_sided_fronts(mesh)) form.double_sided = true, form.mesh = std::move(*front);
+  if (std::optional<Mesh> front = double_sided_fronts(mesh, form)) form.double_sided = true, form.mesh = std::move(*front);
   const Mesh& sided = form.double_sided ? form.mesh : mesh;
   if (flat_shaded(sided)) {
     Mesh smooth = sided;
     smooth.normals.clear();
-    form.flat_shaded = true, form.mesh = weld(smooth).mesh;
+    WeldResult welded = weld(smooth);
+    if (!form.double_sided) {
+      form.source.resize(mesh.vertex_count());
+      for (uint32_t v = 0; v < mesh.vertex_count(); ++v) form.source[v] = v;
+      form.back.assign(mesh.vertex_count(), false);
+    }
+    form.facet.resize(mesh.vertex_count());
+    for (uint32_t v = 0; v < mesh.vertex_count(); ++v)
+      if (form.source[v] != UINT32_MAX)  // (a vertex no triangle uses has no front)
+        form.facet[v] = sided.normals[form.source[v]], form.source[v] = welded.remap[form.source[v]];
+    if (!mesh.materials.empty()) {
+      form.material.assign(mesh.vertex_count(), 0);
+      for (size_t c = mesh.indices.size(); c-- > 0;) form.material[mesh.indices[c]] = mesh.materials[c / 3];
+    }
+    form.flat_shaded = true, form.mesh = std::move(welded.mesh);  // (`sided` may be form.mesh: last)
   }
+  if (!form.changed()) form.source.clear(), form.back.clear();
   return form;
 }
 
-void restore_form(const SurfaceForm& form, Mesh& result) {
-  if (form.flat_shaded) refacet(result);
-  if (form.double_sided) add_back_faces(result);
+void restore_form(const SurfaceForm& form, Mesh& result, std::vector<uint32_t>& vertex_successor) {
+  if (!form.changed()) return;
+  const bool track = !vertex_successor.empty();
+  if (track && (vertex_successor.size() != form.mesh.vertex_count() || form.source.size() != form.back.size()))
+    throw_usage("restore_form: " + std::to_string(vertex_successor.size()) + " successors for a form of " +
+                std::to_string(form.mesh.vertex_count()) + " vertices");
+  // Each input vertex's successor in the simplified form (UINT32_MAX: none).
+  std::vector<uint32_t> successor(form.source.size(), UINT32_MAX);
+  for (size_t u = 0; u < successor.size() && track; ++u)
+    if (form.source[u] < vertex_successor.size()) successor[u] = vertex_successor[form.source[u]];
+  if (form.flat_shaded) {
+    // A successor's faceted copies are at its corners: the corner whose face normal is nearest.
+    // (refacet keeps the corners in order: corner c of the result is corner c of the smooth mesh.)
+    const size_t smooth = result.vertex_count();
+    std::vector<uint32_t> first(smooth + 1, 0), corners(track ? result.indices.size() : 0);
+    for (size_t c = 0; c < corners.size(); ++c) ++first[result.indices[c] + 1];
+    for (size_t v = 0; v < smooth; ++v) first[v + 1] += first[v];
+    std::vector<uint32_t> fill(first.begin(), first.end() - 1);
+    for (uint32_t c = 0; c < corners.size(); ++c) corners[fill[result.indices[c]]++] = c;
+    const std::vector<uint32_t> corner_vertex = refacet(result);
+    for (size_t u = 0; u < successor.size() && track; ++u) {
+      const uint32_t r = successor[u];
+      if (r >= smooth) continue;
+      const float3& n = form.facet[u];
+      // Its own material's copies, when it has some: a joined group's member keeps its vertices.
+      const auto own = [&](uint32_t c) {
+        return form.material.empty() || result.materials.empty() || result.materials[c / 3] == form.material[u];
+      };
+      const bool any_own = std::any_of(corners.data() + first[r], corners.data() + first[r + 1], own);
+      double best_dot = -INFINITY;
+      successor[u] = UINT32_MAX;  // (a vertex no triangle uses has no copy)
+      for (uint32_t i = first[r]; i < first[r + 1]; ++i) {
+        if (any_own && !own(corners[i])) continue;
+        const float3& m = result.normals[corner_vertex[corners[i]]];
+        const double dot = double(m.x) * n.x + double(m.y) * n.y + double(m.z) * n.z;
+        if (dot > best_dot) best_dot = dot, successor[u] = corner_vertex[corners[i]];  // ties: the first corner
+      }
+    }
+  }
+  if (form.double_sided) {
+    const size_t fronts = result.vertex_count();
+    const std::vector<uint32_t> vertex = add_back_faces(result);
+    for (size_t u = 0; u < successor.size() && track; ++u)
+      if (successor[u] < fronts) successor[u] = vertex[successor[u] + (form.back[u] ? fronts : 0)];
+  }
+  if (track) vertex_successor = std::move(successor);
 }
 
 }  // namespace lod

@@ -24,6 +24,28 @@
 namespace lod {
 namespace {
 
+// Per vertex of a simplified torus(1, 0.3, 40, 20), the input point its morph offset stands for
+// (`inverse` of it): checks that it lies on the input torus, about as near the vertex as the torus
+// is. Returns how many are off the vertex (the vertex moved off the input surface).
+template <class Inverse>
+size_t expect_points_on_torus(const Mesh& moved, const std::vector<float3>& offsets, Inverse inverse, const std::string& label) {
+  EXPECT_EQ(offsets.size(), moved.vertex_count()) << label;
+  size_t off_input = 0;
+  for (size_t v = 0; v < moved.vertex_count() && v < offsets.size(); ++v) {
+    const float3 p = moved.positions[v], q = inverse(offsets[v]);
+    // On the polygonal torus: within the sag of its chords around the ring and the tube
+    // (1.3 (1 - cos(pi / 40)) + 0.3 (1 - cos(pi / 20)) < 0.0078) of the round one.
+    const double ring = std::hypot(double(q.x), double(q.y)) - 1.0;
+    EXPECT_LT(std::fabs(std::hypot(ring, double(q.z)) - 0.3), 0.0078) << label << " vertex " << v;
+    // And about as near the vertex as the torus is (the vertex's distance to the round torus, plus the sag).
+    const double d = std::hypot(double(p.x) - q.x, double(p.y) - q.y, double(p.z) - q.z);
+    const double off = std::fabs(std::hypot(std::hypot(double(p.x), double(p.y)) - 1.0, double(p.z)) - 0.3);
+    EXPECT_LT(d, off + 0.0078) << label << " vertex " << v;
+    off_input += d > 1e-4;
+  }
+  return off_input;
+}
+
 // A glTF morph target (here each vertex's offset is a linear, invertible function of its position).
 // --keep-vertices keeps input vertices unmoved, so it keeps their offsets exactly. Moved vertices get
 // offsets interpolated on the input's triangles: the point they stand for (the function inverted)
@@ -54,26 +76,71 @@ TEST(CliSimplify, KeepsMorphTargetsExactOrInterpolated) {
     const Mesh moved = read_scene(dir / "moved.glb").primitives[0].mesh;
     offsets = test::glb_morph_positions(dir / "moved.glb");
     ASSERT_EQ(offsets.size(), moved.vertex_count());
-    size_t off_input = 0;  // vertices the simplification left off the input surface
-    for (size_t v = 0; v < moved.vertex_count(); ++v) {
-      const float3 p = moved.positions[v], q = inverse(offsets[v]);
-      // On the polygonal torus: within the sag of its chords around the ring and the tube
-      // (1.3 (1 - cos(pi / 40)) + 0.3 (1 - cos(pi / 20)) < 0.0078) of the round one.
-      const double ring = std::hypot(double(q.x), double(q.y)) - 1.0;
-      EXPECT_LT(std::fabs(std::hypot(ring, double(q.z)) - 0.3), 0.0078) << ratio << " vertex " << v;
-      // And about as near the vertex as the torus is (the vertex's distance to the round torus, plus the sag).
-      const double d = std::hypot(double(p.x) - q.x, double(p.y) - q.y, double(p.z) - q.z);
-      const double off = std::fabs(std::hypot(std::hypot(double(p.x), double(p.y)) - 1.0, double(p.z)) - 0.3);
-      EXPECT_LT(d, off + 0.0078) << ratio << " vertex " << v;
-      off_input += d > 1e-4;
-    }
-    EXPECT_GT(off_input, moved.vertex_count() / 10) << ratio;  // the vertices moved: offsets were interpolated
+    // The vertices moved: offsets were interpolated.
+    EXPECT_GT(expect_points_on_torus(moved, offsets, inverse, ratio), moved.vertex_count() / 10) << ratio;
     test::expect_valid_gltf({dir / "subset.glb", dir / "moved.glb"});
     // lodkit info counts the blend shape.
     const test::RunResult info = test::run_cli({"info", "--json", (dir / "moved.glb").string()});
     ASSERT_EQ(info.exit_code, 0) << info.err;
     EXPECT_EQ(nlohmann::json::parse(info.out)["gltf"]["morph_targets"], 1) << info.out;
     EXPECT_EQ(nlohmann::json::parse(info.out)["gltf"]["morphing_primitives"], 1);
+  }
+}
+
+// The same through the forms lodkit simplify changes and gives back (flat-shaded, double-sided,
+// both): the restored result's vertices get offsets interpolated on the input's patch too. A second,
+// NORMAL displacement (a tenth of each vertex's normal) tells the sides apart: each output vertex's
+// must point along its own normal, so a back's came from the backs and a facet's from faces turned
+// its way (where the normal says: not at a sliver's corners).
+TEST(CliSimplify, KeepsMorphTargetsThroughFlatShadingAndDoubleSides) {
+  test::TempDir dir;
+  const auto offset = [](const float3& p) { return float3{0.5f * p.z, 0.25f * p.x, -0.4f * p.y}; };
+  const auto inverse = [](const float3& o) { return float3{4.0f * o.y, -2.5f * o.z, 2.0f * o.x}; };
+  const Mesh torus = shapes::torus(1.0f, 0.3f, 40, 20);
+  const std::pair<const char*, Mesh> forms[] = {{"flat_shaded", test::flat_shaded(torus)},
+                                                {"double_sided", test::double_sided(torus)},
+                                                {"both", test::flat_shaded(test::double_sided(torus))}};
+  for (const auto& [name, mesh] : forms) {
+    Scene scene = scene_from_mesh(mesh);
+    MorphTarget target;
+    for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+      const float3& n = mesh.normals[v];
+      target.positions.push_back(offset(mesh.positions[v])), target.normals.push_back({0.1f * n.x, 0.1f * n.y, 0.1f * n.z});
+    }
+    scene.primitives[0].targets.push_back(target);
+    const std::filesystem::path in = dir / (std::string(name) + ".glb"), out = dir / (std::string(name) + "-out.glb");
+    write_scene(scene, in);
+    const test::RunResult r = test::run_cli({"simplify", in.string(), "-o", out.string(), "--ratio", "0.25", "--json"});
+    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    const nlohmann::json report = nlohmann::json::parse(r.out);
+    EXPECT_EQ(report["flat_shaded"].get<bool>(), std::string(name) != "double_sided") << name;
+    EXPECT_EQ(report["double_sided"].get<bool>(), std::string(name) != "flat_shaded") << name;
+    const Scene result = read_scene(out);
+    ASSERT_EQ(result.primitives.size(), 1u);
+    const Mesh& moved = result.primitives[0].mesh;
+    EXPECT_LE(moved.triangle_count(), mesh.triangle_count() / 4 + 2) << name;
+    const std::vector<MorphTarget> targets = source_morph_targets(result, 0);
+    ASSERT_EQ(targets.size(), 1u) << name;
+    EXPECT_GT(expect_points_on_torus(moved, targets[0].positions, inverse, name), moved.vertex_count() / 10) << name;
+    ASSERT_EQ(targets[0].normals.size(), moved.vertex_count()) << name;
+    size_t turned = 0;  // vertices whose normal is off the round torus's by more than 60 degrees
+    for (size_t v = 0; v < moved.vertex_count(); ++v) {
+      const float3 &d = targets[0].normals[v], &n = moved.normals[v], &p = moved.positions[v];
+      // The round torus's outward normal there: from the nearest point of the tube's centre circle.
+      const double ring = std::hypot(double(p.x), double(p.y));
+      const double tx = p.x - p.x / ring, ty = p.y - p.y / ring, tz = p.z, tl = std::hypot(tx, ty, tz);
+      // Only where the normal says which side the vertex is on: a sliver's face normal (a flat
+      // result's) may point anywhere.
+      if (std::fabs((tx * n.x + ty * n.y + tz * n.z) / tl) < 0.5) {
+        ++turned;
+        continue;
+      }
+      // Input displacements are within 20 degrees of the round torus's normal (faces of 9 and 18
+      // degrees): along the vertex's normal, by more than 0.1 cos(80 degrees), on its own side.
+      EXPECT_GT(double(d.x) * n.x + double(d.y) * n.y + double(d.z) * n.z, 0.017) << name << " vertex " << v;
+    }
+    EXPECT_LT(turned, moved.vertex_count() / 50) << name;
+    test::expect_valid_gltf({out});
   }
 }
 

@@ -55,20 +55,25 @@ inline std::string faceted_problem(const Mesh& m) {
 struct TwoSided {
   Mesh sheet, two;
 };
+// `one` double-sided by duplication: backs on copies of its vertices (after them), winding
+// reversed, normals negated.
+inline Mesh double_sided(const Mesh& one) {
+  Mesh two = one;
+  const uint32_t n = uint32_t(one.vertex_count());
+  for (uint32_t v = 0; v < n; ++v) {
+    append_vertex(two, one, v);
+    if (!two.normals.empty()) two.normals.back() = {-one.normals[v].x, -one.normals[v].y, -one.normals[v].z};
+  }
+  for (size_t t = 0; t < one.triangle_count(); ++t)
+    two.indices.insert(two.indices.end(), {n + one.indices[3 * t], n + one.indices[3 * t + 2], n + one.indices[3 * t + 1]});
+  return two;
+}
 inline TwoSided double_sided_sheet() {
   TwoSided s;
   s.sheet = shapes::grid(40, 40);
   for (float3& p : s.sheet.positions) p.z = 0.1f * std::sin(6 * p.x) * std::cos(5 * p.y);
   s.sheet.normals.assign(s.sheet.vertex_count(), {0, 0, 1});  // (one way to make the twins differ)
-  s.two = s.sheet;
-  const uint32_t n = uint32_t(s.sheet.vertex_count());
-  for (uint32_t v = 0; v < n; ++v) {
-    s.two.positions.push_back(s.sheet.positions[v]), s.two.normals.push_back({0, 0, -1});
-    for (size_t k = 0; k < max_uv_sets; ++k)
-      if (!s.sheet.uvs[k].empty()) s.two.uvs[k].push_back(s.sheet.uvs[k][v]);
-  }
-  for (size_t t = 0; t < s.sheet.triangle_count(); ++t)
-    s.two.indices.insert(s.two.indices.end(), {n + s.sheet.indices[3 * t], n + s.sheet.indices[3 * t + 2], n + s.sheet.indices[3 * t + 1]});
+  s.two = double_sided(s.sheet);
   return s;
 }
 

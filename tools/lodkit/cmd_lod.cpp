@@ -393,13 +393,13 @@ Command register_lod(CLI::App& root) {
               // (not with geomorphs or one vertex buffer, whose tables follow the vertices).
               // Double-sided likewise: the chain is built on the fronts, and each level gets its backs.
               if (!o->morph && !o->shared) form = surface_form(mesh);
-              if (form.changed()) mesh = std::move(form.mesh);  // (restore_form reads only the flags)
+              if (form.changed()) mesh = std::move(form.mesh);  // (restore_form without successors reads only the form's flags)
               ProgressBar bar("building LODs");
               options.progress = [&](double f) { bar.update(f); };
               reports.push_back({"", build_lod_chain(mesh, options), {}, {}});
               if (form.changed())
                 for (LodLevel& level : reports[0].chain.levels)
-                  restore_form(form, level.mesh), level.vertex_origin.clear(), level.vertex_successor.clear();
+                  level.vertex_origin.clear(), level.vertex_successor.clear(), restore_form(form, level.mesh, level.vertex_successor);
             }
             const double build_seconds = seconds_since(start);
             for (ChainReport& r : reports) set_switching(r, *o);

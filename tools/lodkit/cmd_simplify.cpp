@@ -64,44 +64,45 @@ Joined join(const std::vector<Mesh*>& meshes, const std::vector<size_t>& group) 
   return j;
 }
 
-// The simplified group back in its members, each with (when `maps`: the result's vertices are the
-// simplifier's, not a restored form's) its output vertices' input vertices among its own (origin)
-// and its input vertices' output vertices (successor, SimplifyResult's vertex_successor; ~0u for
-// none). A member whose triangles all collapsed is left empty (the glTF writer drops it).
+// The simplified group back in its members, each with its output vertices' input vertices among
+// its own (origin, when the result has SimplifyResult::vertex_origin: not a restored form's) and its
+// input vertices' output vertices (successor, SimplifyResult's vertex_successor; ~0u for none). A
+// member whose triangles all collapsed is left empty (the glTF writer drops it).
 struct Member {
   Mesh mesh;
   std::vector<uint32_t> origin, successor;
 };
-std::vector<Member> unjoin(const Joined& j, SimplifyResult& r, bool maps) {
+std::vector<Member> unjoin(const Joined& j, SimplifyResult& r) {
   std::vector<Member> members(j.offsets.size());
   if (j.alone) {
     members[0].mesh = std::move(r.mesh);
-    if (maps) members[0].origin = std::move(r.vertex_origin), members[0].successor = std::move(r.vertex_successor);
+    members[0].origin = std::move(r.vertex_origin), members[0].successor = std::move(r.vertex_successor);
     return members;
   }
+  const bool origins = !r.vertex_origin.empty();
   std::vector<uint32_t> index(r.mesh.vertex_count(), ~0u);  // joined output vertex -> its member's
+  std::vector<uint32_t> member(r.mesh.vertex_count(), ~0u);  // joined output vertex -> its member
   const auto end_of = [&](size_t k) { return k + 1 < j.offsets.size() ? j.offsets[k + 1] : uint32_t(j.joined.vertex_count()); };
   for (MaterialPart& part : split_by_material(r.mesh)) {
     const size_t k = size_t(part.material) - 1;
     if (part.material == 0 || k >= members.size()) throw_internal("simplify: a joined mesh's part has material id " + std::to_string(part.material));
     members[k].mesh = std::move(part.mesh);
-    if (!maps) continue;
     const uint32_t begin = j.offsets[k], end = end_of(k);
     for (uint32_t i = 0; i < part.vertices.size(); ++i) {
+      const uint32_t v = part.vertices[i];
+      index[v] = i, member[v] = uint32_t(k);
+      if (!origins) continue;
       // Wedges continue within their material, so a member's vertex comes from its own input.
-      const uint32_t v = part.vertices[i], from = r.vertex_origin[v];
+      const uint32_t from = r.vertex_origin[v];
       if (from < begin || from >= end) throw_internal("simplify: a joined mesh's vertex continues another member's");
       members[k].origin.push_back(from - begin);
-      index[v] = i;
     }
   }
-  for (size_t k = 0; k < members.size() && maps; ++k) {
-    const uint32_t begin = j.offsets[k], end = end_of(k);
-    for (uint32_t v = begin; v < end; ++v) {
+  for (size_t k = 0; k < members.size() && !r.vertex_successor.empty(); ++k) {
+    for (uint32_t v = j.offsets[k]; v < end_of(k); ++v) {
       const uint32_t to = r.vertex_successor[v];
       // Its own member's vertex (a wedge relinked across a material border would not be).
-      const bool own = to != ~0u && r.vertex_origin[to] >= begin && r.vertex_origin[to] < end;
-      members[k].successor.push_back(own ? index[to] : ~0u);
+      members[k].successor.push_back(to != ~0u && member[to] == k ? index[to] : ~0u);
     }
   }
   return members;
@@ -259,7 +260,10 @@ Command register_simplify(CLI::App& root) {
                 }
                 each.progress = [&, size](double f) { bar.update((double(done) + f * double(size)) / double(total)); };
                 SimplifyResult r = simplify(m, each);
-                restore_form(form, r.mesh);
+                // Restored, the result's vertices are new: no input vertex is one's origin; the
+                // successors are mapped to them.
+                restore_form(form, r.mesh, r.vertex_successor);
+                if (form.changed()) r.vertex_origin.clear();
                 done += size;
                 in_triangles += r.input_triangles, out_triangles += r.output_triangles, out_vertices += r.mesh.vertex_count();
                 error = std::max(error, r.error);
@@ -276,18 +280,17 @@ Command register_simplify(CLI::App& root) {
                 relative_error = std::max(relative_error, r.relative_error);
                 // Input vertices, unmoved: with --keep-vertices, or when nothing collapsed.
                 const bool unmoved = o->keep_vertices || (r.collapses == 0 && !form.changed());
-                std::vector<Member> members = unjoin(joined, r, !form.changed());
+                std::vector<Member> members = unjoin(joined, r);
                 for (size_t k = 0; k < group.size(); ++k) {
                   const size_t i = group[k];
                   Member& out = members[k];
                   changed[i] = out.mesh.positions != meshes[i]->positions || out.mesh.indices != meshes[i]->indices;
                   // The glTF streams lodkit does not model (morph targets, other attributes). Unmoved:
-                  // each survivor is its origin, so they stay exact for it. Moved: interpolated at each
-                  // vertex's point on the patch of the input it replaces. A changed form's result has
-                  // new vertices of another mesh: they are dropped.
+                  // each survivor is its origin, so they stay exact for it. Moved, or a restored form's
+                  // new vertices: interpolated at each vertex's point on the patch of the input it
+                  // replaces.
                   if (unmoved) file.renumbered(i, out.origin);
-                  else if (!form.changed()) file.renumbered(i, vertex_blends(*meshes[i], out.successor, out.mesh));
-                  else file.renumbered(i, std::vector<uint32_t>{});
+                  else file.renumbered(i, vertex_blends(*meshes[i], out.successor, out.mesh));
                   *meshes[i] = std::move(out.mesh);
                 }
               }
