@@ -81,6 +81,10 @@ struct PositionIds {
 };
 PositionIds position_ids(const Mesh& mesh);
 
+// Per vertex: the unit sum of the area-weighted normals of the triangles at its position (position
+// ids, so a UV seam does not crease it; in double). (0, 0, 0) where they cancel or there are none.
+std::vector<float3> smooth_normals(const Mesh& mesh);
+
 // Topological and geometric statistics. Topology is computed on position ids, so seams do not cut.
 struct ComponentStats {
   uint32_t vertices = 0;   // unique positions

@@ -1,5 +1,6 @@
 #include "core/hash.h"
 #include "core/heap.h"
+#include "core/vec3d.h"
 #include "lodkit/mesh.h"
 
 namespace lod {
@@ -50,6 +51,22 @@ PositionIds position_ids(const Mesh& mesh) {
   for (size_t v = 0; v < mesh.positions.size(); ++v) result.id[v] = welder.insert(mesh.positions[v]);
   result.count = welder.count();
   return result;
+}
+
+std::vector<float3> smooth_normals(const Mesh& mesh) {
+  const PositionIds ids = position_ids(mesh);
+  std::vector<core::vec3d> sum(ids.count);
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const core::vec3d n = core::triangle_cross(mesh, t);
+    for (int k = 0; k < 3; ++k) sum[ids.id[mesh.indices[3 * t + k]]] = sum[ids.id[mesh.indices[3 * t + k]]] + n;
+  }
+  std::vector<float3> normals(mesh.vertex_count());
+  for (size_t v = 0; v < normals.size(); ++v) {
+    const core::vec3d& n = sum[ids.id[v]];
+    const double l = core::length(n);
+    normals[v] = l > 0 ? float3{float(n.x / l), float(n.y / l), float(n.z / l)} : float3{0, 0, 0};
+  }
+  return normals;
 }
 
 }  // namespace lod

@@ -1,23 +1,12 @@
-// Internal: double-precision 3-vectors and the Garland–Heckbert quadric (A, b, c) with its weight.
-// Quadrics can be stored as 11 floats (Quadric) or doubles (QuadricD) and are evaluated in double.
+// Internal: the Garland–Heckbert quadric (A, b, c) with its weight. Quadrics can be stored as 11
+// floats (Quadric) or doubles (QuadricD) and are evaluated in double.
 #pragma once
 
 #include <cmath>
 
-namespace lod::core {
+#include "core/vec3d.h"
 
-struct vec3d {
-  double x = 0, y = 0, z = 0;
-  vec3d operator+(const vec3d& o) const { return {x + o.x, y + o.y, z + o.z}; }
-  vec3d operator-(const vec3d& o) const { return {x - o.x, y - o.y, z - o.z}; }
-  vec3d operator*(double s) const { return {x * s, y * s, z * s}; }
-};
-inline double dot(const vec3d& a, const vec3d& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline vec3d cross(const vec3d& a, const vec3d& b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-inline double length_squared(const vec3d& a) { return dot(a, a); }
-inline double length(const vec3d& a) { return std::sqrt(dot(a, a)); }
+namespace lod::core {
 
 // Q(p) = p^T A p + 2 b^T p + c, a sum of weighted squared distances to planes; `w` sums the weights
 // so that Q(p) / w is a mean squared distance.

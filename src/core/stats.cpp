@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "core/union_find.h"
+#include "core/vec3d.h"
 #include "lodkit/mesh.h"
 
 namespace lod {
@@ -51,12 +52,8 @@ MeshStats compute_stats(const Mesh& mesh) {
       ++s.degenerate_triangles;
       continue;
     }
-    const float3 &p = mesh.positions[mesh.indices[3 * t]], &q = mesh.positions[mesh.indices[3 * t + 1]],
-                 &r = mesh.positions[mesh.indices[3 * t + 2]];
-    double ux = double(q.x) - p.x, uy = double(q.y) - p.y, uz = double(q.z) - p.z;
-    double vx = double(r.x) - p.x, vy = double(r.y) - p.y, vz = double(r.z) - p.z;
-    double cx = uy * vz - uz * vy, cy = uz * vx - ux * vz, cz = ux * vy - uy * vx;
-    if (cx == 0 && cy == 0 && cz == 0) ++s.zero_area_triangles;
+    const core::vec3d n = core::triangle_cross(mesh, t);
+    if (n.x == 0 && n.y == 0 && n.z == 0) ++s.zero_area_triangles;
   }
 
   // Duplicate triangles: same sorted position-id triple as an earlier live triangle.

@@ -12,6 +12,7 @@
 
 #include "core/hash.h"
 #include "core/heap.h"
+#include "core/vec3d.h"
 #include "io/text_reader.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
@@ -119,12 +120,10 @@ Mesh read_ascii(std::span<const uint8_t> bytes, const std::string& name, const R
 }
 
 float3 facet_normal(const float3& a, const float3& b, const float3& c) {
-  const double ux = double(b.x) - a.x, uy = double(b.y) - a.y, uz = double(b.z) - a.z;
-  const double vx = double(c.x) - a.x, vy = double(c.y) - a.y, vz = double(c.z) - a.z;
-  const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-  const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
+  const core::vec3d n = core::triangle_cross(a, b, c);
+  const double length = core::length(n);
   if (!(length > 0)) return {0, 0, 0};
-  return {float(nx / length), float(ny / length), float(nz / length)};
+  return {float(n.x / length), float(n.y / length), float(n.z / length)};
 }
 
 

@@ -23,31 +23,10 @@ std::vector<std::vector<uint32_t>> images(const LodChain& chain) {
   return image;
 }
 
-// Unit normals of the finest level's vertices (area-weighted face normals, shared by position).
-std::vector<float3> vertex_normals(const Mesh& mesh) {
-  const PositionIds ids = position_ids(mesh);
-  std::vector<double> sum(3 * size_t(ids.count), 0.0);
-  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const float3 &a = mesh.positions[mesh.indices[3 * t]], &b = mesh.positions[mesh.indices[3 * t + 1]],
-                 &c = mesh.positions[mesh.indices[3 * t + 2]];
-    const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z, vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
-    const double n[3] = {uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx};
-    for (uint32_t k = 0; k < 3; ++k)
-      for (int i = 0; i < 3; ++i) sum[3 * size_t(ids.id[mesh.indices[3 * t + k]]) + i] += n[i];
-  }
-  std::vector<float3> out(mesh.vertex_count());
-  for (size_t v = 0; v < out.size(); ++v) {
-    const double* n = &sum[3 * size_t(ids.id[v])];
-    const double l = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (l > 0) out[v] = {float(n[0] / l), float(n[1] / l), float(n[2] / l)};
-  }
-  return out;
-}
-
 PoppingRun fly(const LodChain& chain, const std::vector<std::vector<uint32_t>>& image, const PoppingOptions& o,
                double transition_seconds) {
   const Mesh& finest = chain.levels[0].mesh;
-  const std::vector<float3> normal = vertex_normals(finest);
+  const std::vector<float3> normal = smooth_normals(finest);
   const BoundingSphere bounds = bounding_sphere(finest);
   const std::vector<RuntimeLevel> levels = runtime_levels(chain);
   LodRuntime runtime({.error_px = o.error_px, .transition_zone = transition_seconds > 0 ? o.transition_zone : 0.0,

@@ -13,6 +13,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include "core/parallel.h"
+#include "core/vec3d.h"
 #include "lodkit/error.h"
 #include "lodkit/measure.h"
 #include "measure/bvh.h"
@@ -102,22 +103,13 @@ struct Surface {
     double sum = 0;
     for (size_t t = 0; t < triangles; ++t) {
       area_before[t] = sum;
-      sum += triangle_area(t);
+      sum += core::triangle_area(*mesh, t);
     }
     area_before[triangles] = area = sum;
   }
 
   vec3f corner(size_t t, int k) const { return mesh->positions[mesh->indices[3 * t + k]]; }
   vec3f position(uint32_t id) const { return mesh->positions[position_vertex[id]]; }
-
-  double triangle_area(size_t t) const {
-    const float3 &a = mesh->positions[mesh->indices[3 * t]], &b = mesh->positions[mesh->indices[3 * t + 1]],
-                 &c = mesh->positions[mesh->indices[3 * t + 2]];
-    const double ux = double(b.x) - a.x, uy = double(b.y) - a.y, uz = double(b.z) - a.z;
-    const double vx = double(c.x) - a.x, vy = double(c.y) - a.y, vz = double(c.z) - a.z;
-    const double cx = uy * vz - uz * vy, cy = uz * vx - ux * vz, cz = ux * vy - uy * vx;
-    return 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
-  }
 
   // Unique edges by a counting sort on the smaller position id (linear time, no hashing).
   void find_edges() {

@@ -5,19 +5,12 @@
 #include <cmath>
 
 #include "core/adjacency.h"
+#include "core/vec3d.h"
 #include "lodkit/optimize.h"
 
 namespace lod {
 
 namespace {
-
-double triangle_area(const Mesh& m, uint32_t t) {
-  const float3 &p = m.positions[m.indices[3 * t]], &q = m.positions[m.indices[3 * t + 1]], &r = m.positions[m.indices[3 * t + 2]];
-  const double ux = double(q.x) - p.x, uy = double(q.y) - p.y, uz = double(q.z) - p.z;
-  const double vx = double(r.x) - p.x, vy = double(r.y) - p.y, vz = double(r.z) - p.z;
-  const double cx = uy * vz - uz * vy, cy = uz * vx - ux * vz, cz = ux * vy - uy * vx;
-  return 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
-}
 
 // Six times the signed volume of the tetrahedron (origin, p, q, r), positions taken relative to `o`
 // (a point of the part) so that a part far from the origin keeps its precision.
@@ -80,7 +73,7 @@ OrientResult orient(const Mesh& mesh, const OrientOptions& options) {
     } else {
       // Keep the winding most of the input area already had.
       double kept = 0, flipped = 0;
-      for (const uint32_t t : part) (flip[t] ? flipped : kept) += triangle_area(mesh, t);
+      for (const uint32_t t : part) (flip[t] ? flipped : kept) += core::triangle_area(mesh, t);
       reverse_all = flipped > kept;
     }
     if (reverse_all)

@@ -13,29 +13,6 @@ namespace lod {
 
 namespace {
 
-// Area-weighted normals, summed over every vertex at a position (position ids), so a mesh split at
-// UV seams still shades smoothly across them.
-std::vector<float3> vertex_normals(const Mesh& mesh) {
-  const PositionIds ids = position_ids(mesh);
-  std::vector<double> sum(size_t(ids.count) * 3, 0.0);
-  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const uint32_t* tri = &mesh.indices[t * 3];
-    const float3 &a = mesh.positions[tri[0]], &b = mesh.positions[tri[1]], &c = mesh.positions[tri[2]];
-    const double u[3] = {double(b.x) - a.x, double(b.y) - a.y, double(b.z) - a.z};
-    const double v[3] = {double(c.x) - a.x, double(c.y) - a.y, double(c.z) - a.z};
-    const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-    for (int k = 0; k < 3; ++k)
-      for (int d = 0; d < 3; ++d) sum[size_t(ids.id[tri[k]]) * 3 + d] += n[d];
-  }
-  std::vector<float3> normals(mesh.vertex_count());
-  for (size_t v = 0; v < normals.size(); ++v) {
-    const double* n = &sum[size_t(ids.id[v]) * 3];
-    const double l = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    normals[v] = l > 0 ? float3{float(n[0] / l), float(n[1] / l), float(n[2] / l)} : float3{0, 0, 0};
-  }
-  return normals;
-}
-
 GLuint make_buffer(const void* data, size_t bytes) {
   // A storage binding must name a non-empty buffer: short (or absent) streams are padded with zeros.
   std::vector<uint8_t> padded;
@@ -99,7 +76,7 @@ GpuMesh::GpuMesh(RenderContext& context, const Mesh& mesh, const std::string& na
   std::vector<float3> computed;
   const std::vector<float3>* normals = &mesh.normals;
   if (mesh.normals.empty()) {
-    computed = vertex_normals(mesh);
+    computed = smooth_normals(mesh);  // (summed at positions: smooth across UV seams)
     normals = &computed;
   }
   const size_t sizes[4] = {mesh.positions.size() * sizeof(float3), normals->size() * sizeof(float3),

@@ -4,6 +4,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "core/vec3d.h"
 #include "lodkit/error.h"
 #include "lodkit/simplify.h"
 #include "measure/triangle_distance.h"
@@ -67,10 +68,8 @@ std::vector<VertexBlend> vertex_blends(const Mesh& input, std::span<const uint32
   // double-sided surface only the vertex's own side does. (Without normals: every triangle.)
   const auto facing = [&](const uint32_t* c, size_t v) {
     if (output.normals.empty()) return true;
-    const float3 &a = input.positions[c[0]], &b = input.positions[c[1]], &d = input.positions[c[2]], &m = output.normals[v];
-    const double ux = double(b.x) - a.x, uy = double(b.y) - a.y, uz = double(b.z) - a.z;
-    const double vx = double(d.x) - a.x, vy = double(d.y) - a.y, vz = double(d.z) - a.z;
-    return (uy * vz - uz * vy) * m.x + (uz * vx - ux * vz) * m.y + (ux * vy - uy * vx) * m.z > 0;
+    const core::vec3d face = core::triangle_cross(input.positions[c[0]], input.positions[c[1]], input.positions[c[2]]);
+    return core::dot(face, core::to_double(output.normals[v])) > 0;
   };
 
   std::vector<VertexBlend> blends(n);

@@ -7,6 +7,7 @@
 #include <map>
 #include <optional>
 
+#include "core/vec3d.h"
 #include "lodkit/error.h"
 #include "lodkit/optimize.h"
 #include "lodkit/simplify.h"
@@ -126,13 +127,9 @@ std::vector<uint32_t> refacet(Mesh& mesh) {
   split.material_names = mesh.material_names, split.group_names = mesh.group_names;
   split.materials = mesh.materials, split.groups = mesh.groups;
   for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const float3 &a = mesh.positions[mesh.indices[3 * t]], &b = mesh.positions[mesh.indices[3 * t + 1]],
-                 &c = mesh.positions[mesh.indices[3 * t + 2]];
-    const double ux = double(b.x) - a.x, uy = double(b.y) - a.y, uz = double(b.z) - a.z;
-    const double vx = double(c.x) - a.x, vy = double(c.y) - a.y, vz = double(c.z) - a.z;
-    const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-    const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
-    const float3 n = length > 0 ? float3{float(nx / length), float(ny / length), float(nz / length)} : float3{0, 0, 1};
+    const core::vec3d m = core::triangle_cross(mesh, t);
+    const double length = core::length(m);
+    const float3 n = length > 0 ? float3{float(m.x / length), float(m.y / length), float(m.z / length)} : float3{0, 0, 1};
     for (int k = 0; k < 3; ++k) {
       split.indices.push_back(uint32_t(split.positions.size()));
       append_vertex(split, mesh, mesh.indices[3 * t + k]);

@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <vector>
 
 #include "core/shapes.h"
 #include "lodkit/error.h"
@@ -45,6 +47,32 @@ TEST(PositionIds, ManyPositionsGrowTheTable) {
   PositionIds ids = position_ids(m);
   EXPECT_EQ(ids.count, 100000u);
   for (size_t i = 0; i < 100000; ++i) ASSERT_EQ(ids.id[i], ids.id[i + 100000]);
+}
+
+// Hand-derived: a triangle in the z = 0 plane, wound counter-clockwise, faces +z; the same triangle
+// twice, once reversed, cancels. On a torus every vertex's normal is within the facets' tilt of the
+// round torus's, and the UV seam's copies of a position share one.
+TEST(SmoothNormals, AreaWeightedAtPositions) {
+  Mesh one;
+  one.positions = {{0, 0, 0}, {2, 0, 0}, {0, 3, 0}};
+  one.indices = {0, 1, 2};
+  for (const float3& n : smooth_normals(one)) EXPECT_EQ(n, (float3{0, 0, 1}));
+  one.indices.insert(one.indices.end(), {0, 2, 1});
+  for (const float3& n : smooth_normals(one)) EXPECT_EQ(n, (float3{0, 0, 0}));
+
+  const Mesh torus = shapes::torus(1.0f, 0.3f, 40, 20);
+  const std::vector<float3> normals = smooth_normals(torus);
+  ASSERT_EQ(normals.size(), torus.vertex_count());
+  const PositionIds ids = position_ids(torus);
+  std::vector<size_t> first(ids.count, SIZE_MAX);
+  for (size_t v = 0; v < torus.vertex_count(); ++v) {
+    const float3 &p = torus.positions[v], &n = normals[v];
+    const double r = std::hypot(double(p.x), double(p.y));
+    const double tx = (p.x - p.x / r) / 0.3, ty = (p.y - p.y / r) / 0.3, tz = p.z / 0.3;  // the round torus's
+    EXPECT_GT(n.x * tx + n.y * ty + n.z * tz, std::cos(0.1)) << v;  // (facets 9 and 18 degrees wide)
+    if (first[ids.id[v]] == SIZE_MAX) first[ids.id[v]] = v;
+    EXPECT_EQ(n, normals[first[ids.id[v]]]) << v;
+  }
 }
 
 TEST(Validate, AcceptsShapesAndRejectsBadData) {
