@@ -91,6 +91,12 @@ void check_flatten(const Scene& scene) {
   // flatten may refuse a scene whose node transforms overflow float, but only as bad input.
   const std::optional<Mesh> flat = run_step("gltf flatten", true, [&] { return flatten(scene); });
   if (flat) check_mesh(*flat, "gltf flatten");
+  // Its morph targets (one node's): one displacement per flattened vertex, or none.
+  const FlatMorphTargets morph = *run_step("gltf flatten_morph_targets", false, [&] { return flatten_morph_targets(scene); });
+  if (morph.nodes > 1 && !morph.targets.empty()) fail("flatten_morph_targets", "targets for several nodes' weights");
+  for (const MorphTarget& t : morph.targets)
+    if (flat && (t.positions.size() != flat->vertex_count() || (!t.normals.empty() && t.normals.size() != flat->vertex_count())))
+      fail("flatten_morph_targets", "a target's displacements are not one per flattened vertex");
 }
 
 // Each triangle as its lexicographically smallest rotation (winding kept; unique even when a

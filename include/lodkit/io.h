@@ -164,6 +164,20 @@ void write_scene(const Scene& scene, const std::filesystem::path& path, const Wr
 // Every primitive instance of the default scene, in world space, merged into one mesh.
 // Material ids are glTF material indices (+1, so 0 means "no material"); names follow.
 Mesh flatten(const Scene& scene);
+
+// The morph targets of flatten(scene), per vertex of it, when one node draws every morphing
+// primitive: its glTF mesh's targets (source_morph_targets' POSITION and NORMAL displacements), taken
+// to world space with the vertices (a normal's displacement to where the displaced normal goes; none
+// unless flatten keeps normals), and zero on every other instance's vertices. `node` is that node,
+// whose weights and weight clips drive them (Node::morph_weights_of; -1 for a scene without nodes).
+// `nodes` counts the nodes drawing morphing primitives: with more than one, `targets` is empty (one
+// merged mesh cannot follow several nodes' weights).
+struct FlatMorphTargets {
+  std::vector<MorphTarget> targets;
+  int32_t node = -1;
+  size_t nodes = 0;
+};
+FlatMorphTargets flatten_morph_targets(const Scene& scene);
 // A one-primitive scene around a mesh (no source document); materials become primitives.
 Scene scene_from_mesh(const Mesh& mesh);
 // A mesh's triangles by material id, ascending, each part with only the vertices its triangles use,

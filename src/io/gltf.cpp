@@ -1463,10 +1463,23 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     }
     node.mesh = mesh_remap[m];
   }
-  for (tg::Animation& anim : model.animations)
+  for (tg::Animation& anim : model.animations) {
     std::erase_if(anim.channels, [&](const tg::AnimationChannel& ch) {
       return ch.target_path == "weights" && ch.target_node >= 0 && weights_gone[size_t(ch.target_node)];
     });
+    // The samplers no channel uses any more go too (their accessors with them, below).
+    std::vector<int> sampler_remap(anim.samplers.size(), -1);
+    for (const tg::AnimationChannel& ch : anim.channels)
+      if (ch.sampler >= 0 && size_t(ch.sampler) < sampler_remap.size()) sampler_remap[size_t(ch.sampler)] = 0;
+    std::vector<tg::AnimationSampler> samplers;
+    for (size_t s = 0; s < sampler_remap.size(); ++s)
+      if (sampler_remap[s] == 0) sampler_remap[s] = int(samplers.size()), samplers.push_back(std::move(anim.samplers[s]));
+    anim.samplers = std::move(samplers);
+    for (tg::AnimationChannel& ch : anim.channels)
+      if (ch.sampler >= 0 && size_t(ch.sampler) < sampler_remap.size()) ch.sampler = sampler_remap[size_t(ch.sampler)];
+  }
+  // A clip left without channels goes: glTF wants at least one.
+  std::erase_if(model.animations, [](const tg::Animation& anim) { return anim.channels.empty(); });
   {
     std::vector<tg::Mesh> meshes;
     for (size_t m = 0; m < mesh_count; ++m)

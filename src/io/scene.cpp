@@ -60,6 +60,36 @@ Matrix local_matrix(const Node& node) {
 struct Instance {
   size_t primitive;
   Matrix world;
+  int32_t node = -1;  // that draws it
+};
+
+float3 normalized(double x, double y, double z, const float3& fallback) {
+  const double length = std::sqrt(x * x + y * y + z * z);
+  if (!(length > 0) || !std::isfinite(length)) return fallback;
+  return {float(x / length), float(y / length), float(z / length)};
+}
+
+// A world matrix as flatten applies it: positions by `world`, normals by the inverse transpose of
+// its upper 3x3 (its cofactor matrix over the determinant), winding and handedness flipped when it
+// mirrors.
+struct Placement {
+  bool identity, mirrored;
+  std::array<double, 9> normal;  // row-major: n' = N * n
+
+  explicit Placement(const Matrix& m) : identity(m == identity_matrix) {
+    const double a = m[0], b = m[4], c = m[8], d = m[1], e = m[5], f = m[9], g = m[2], h = m[6], i = m[10];
+    const double det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
+    const double scale = det != 0 ? 1 / det : 1;
+    normal = {(e * i - f * h) * scale, (f * g - d * i) * scale, (d * h - e * g) * scale,
+              (c * h - b * i) * scale, (a * i - c * g) * scale, (b * g - a * h) * scale,
+              (b * f - c * e) * scale, (c * d - a * f) * scale, (a * e - b * d) * scale};
+    mirrored = det < 0;
+  }
+  float3 apply_to_normal(const float3& v) const {
+    const auto& n = normal;
+    return normalized(n[0] * v.x + n[1] * v.y + n[2] * v.z, n[3] * v.x + n[4] * v.y + n[5] * v.z,
+                      n[6] * v.x + n[7] * v.y + n[8] * v.z, v);
+  }
 };
 
 // Every (primitive, world matrix) pair of the default scene, in depth-first node order.
@@ -92,11 +122,11 @@ std::vector<Instance> collect_instances(const Scene& scene) {
       const Matrix& placement = node.skin >= 0 ? identity_matrix : world;
       if (found != primitives_of_mesh.end()) {
         if (node.gpu_instances.empty()) {
-          for (size_t p : found->second) instances.push_back({p, placement});
+          for (size_t p : found->second) instances.push_back({p, placement, index});
         } else {
           for (const Node::GpuInstance& gpu : node.gpu_instances) {
             const Matrix each = multiply(placement, trs_matrix(gpu.translation, gpu.rotation, gpu.scale));
-            for (size_t p : found->second) instances.push_back({p, each});
+            for (size_t p : found->second) instances.push_back({p, each, index});
           }
         }
       }
@@ -106,11 +136,6 @@ std::vector<Instance> collect_instances(const Scene& scene) {
   return instances;
 }
 
-float3 normalized(double x, double y, double z, const float3& fallback) {
-  const double length = std::sqrt(x * x + y * y + z * z);
-  if (!(length > 0) || !std::isfinite(length)) return fallback;
-  return {float(x / length), float(y / length), float(z / length)};
-}
 
 }  // namespace
 
@@ -160,17 +185,9 @@ Mesh flatten(const Scene& scene) {
     const Primitive& prim = scene.primitives[inst.primitive];
     const Mesh& mesh = prim.mesh;
     const uint32_t base = uint32_t(out.positions.size());
+    const Placement place(inst.world);
     const Matrix& m = inst.world;
-    const bool identity = m == identity_matrix;
-    // Normals use the inverse transpose of the upper 3x3: its cofactor matrix divided by the determinant.
-    const double a = m[0], b = m[4], c = m[8], d = m[1], e = m[5], f = m[9], g = m[2], h = m[6], i = m[10];
-    const double det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
-    const double scale = det != 0 ? 1 / det : 1;
-    const std::array<double, 9> normal_matrix = {  // row-major: n' = N * n
-        (e * i - f * h) * scale, (f * g - d * i) * scale, (d * h - e * g) * scale,
-        (c * h - b * i) * scale, (a * i - c * g) * scale, (b * g - a * h) * scale,
-        (b * f - c * e) * scale, (c * d - a * f) * scale, (a * e - b * d) * scale};
-    const bool mirrored = det < 0;
+    const bool identity = place.identity, mirrored = place.mirrored;
 
     if (identity) {
       out.positions.insert(out.positions.end(), mesh.positions.begin(), mesh.positions.end());
@@ -191,10 +208,7 @@ Mesh flatten(const Scene& scene) {
       if (identity) {
         out.normals.insert(out.normals.end(), mesh.normals.begin(), mesh.normals.end());
       } else {
-        const auto& n = normal_matrix;
-        for (const float3& v : mesh.normals)
-          out.normals.push_back(normalized(n[0] * v.x + n[1] * v.y + n[2] * v.z, n[3] * v.x + n[4] * v.y + n[5] * v.z,
-                                           n[6] * v.x + n[7] * v.y + n[8] * v.z, v));
+        for (const float3& v : mesh.normals) out.normals.push_back(place.apply_to_normal(v));
       }
     }
     if (tangents) {
@@ -239,6 +253,64 @@ Mesh flatten(const Scene& scene) {
     for (uint32_t id : out.materials) max_id = std::max(max_id, id);
     out.material_names.assign(std::max<size_t>(max_id, scene.material_names.size()) + 1, std::string());
     for (size_t k = 0; k < scene.material_names.size(); ++k) out.material_names[k + 1] = scene.material_names[k];
+  }
+  return out;
+}
+
+FlatMorphTargets flatten_morph_targets(const Scene& scene) {
+  FlatMorphTargets out;
+  const std::vector<Instance> instances = collect_instances(scene);
+  std::vector<std::vector<MorphTarget>> source(scene.primitives.size());  // decoded once per primitive
+  std::vector<bool> decoded(scene.primitives.size(), false);
+  std::vector<int32_t> nodes;
+  size_t vertices = 0, count = 0;
+  bool normals = !instances.empty(), target_normals = false;
+  for (const Instance& inst : instances) {
+    const Mesh& mesh = scene.primitives[inst.primitive].mesh;
+    if (!decoded[inst.primitive]) source[inst.primitive] = source_morph_targets(scene, inst.primitive), decoded[inst.primitive] = true;
+    const std::vector<MorphTarget>& targets = source[inst.primitive];
+    if (!targets.empty() && std::find(nodes.begin(), nodes.end(), inst.node) == nodes.end()) nodes.push_back(inst.node);
+    count = std::max(count, targets.size());
+    for (const MorphTarget& t : targets) target_normals = target_normals || !t.normals.empty();
+    normals = normals && !mesh.normals.empty();  // (as flatten keeps them)
+    vertices += mesh.vertex_count();
+  }
+  out.nodes = nodes.size();
+  if (nodes.size() != 1) return out;
+  out.node = nodes[0];
+  target_normals = target_normals && normals;
+  out.targets.resize(count);
+  for (MorphTarget& t : out.targets) {
+    core::resize_huge(t.positions, vertices);
+    if (target_normals) core::resize_huge(t.normals, vertices);
+  }
+  size_t base = 0;
+  for (const Instance& inst : instances) {
+    const Mesh& mesh = scene.primitives[inst.primitive].mesh;
+    const std::vector<MorphTarget>& targets = source[inst.primitive];
+    const Placement place(inst.world);
+    const Matrix& m = inst.world;
+    for (size_t k = 0; k < targets.size(); ++k) {
+      for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+        const float3& d = targets[k].positions[v];
+        out.targets[k].positions[base + v] =
+            place.identity ? d
+                           : float3{float(m[0] * d.x + m[4] * d.y + m[8] * d.z), float(m[1] * d.x + m[5] * d.y + m[9] * d.z),
+                                    float(m[2] * d.x + m[6] * d.y + m[10] * d.z)};
+      }
+      if (!target_normals || targets[k].normals.empty()) continue;
+      for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+        // Where the displaced normal goes, less where the normal goes (flatten's own normal).
+        const float3 &n = mesh.normals[v], &d = targets[k].normals[v];
+        if (place.identity) {
+          out.targets[k].normals[base + v] = d;
+          continue;
+        }
+        const float3 to = place.apply_to_normal({n.x + d.x, n.y + d.y, n.z + d.z}), from = place.apply_to_normal(n);
+        out.targets[k].normals[base + v] = {to.x - from.x, to.y - from.y, to.z - from.z};
+      }
+    }
+    base += mesh.vertex_count();
   }
   return out;
 }

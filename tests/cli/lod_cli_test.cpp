@@ -16,6 +16,7 @@
 #include "lodkit/skin.h"
 #include "skin/fixtures.h"
 #include "optimize/optimize_test_support.h"
+#include "cli/torus_morph.h"
 #include "test_support.h"
 
 namespace lod {
@@ -458,6 +459,91 @@ TEST(CliLod, SkinnedLevelsKeepTheirMorphTargets) {
     }
     test::expect_valid_gltf({dir / "lod.glb"});
   }
+}
+
+// A static glTF whose one node draws a morphing torus (scaled by 2 and moved): every level of the
+// chain keeps the morph target, in world space (the levels are flattened), interpolated where the
+// vertices moved, and the clip that drives the node's weight drives each level's. Drawn by two
+// nodes, the target cannot follow both nodes' weights in one mesh: it is dropped, and said so.
+TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
+  test::TempDir dir;
+  Scene input = scene_from_mesh(shapes::torus(1.0f, 0.3f, 40, 20));
+  const auto offset = [](const float3& p) { return float3{0.5f * p.z, 0.25f * p.x, -0.4f * p.y}; };
+  const auto inverse = [](const float3& o) { return float3{4.0f * o.y, -2.5f * o.z, 2.0f * o.x}; };
+  MorphTarget target;
+  for (const float3& p : input.primitives[0].mesh.positions) target.positions.push_back(offset(p));
+  input.primitives[0].targets.push_back(target);
+  ASSERT_EQ(input.nodes.size(), 1u);
+  const float3 move = {1, 2, 3};
+  input.nodes[0].translation = move, input.nodes[0].scale = {2, 2, 2};
+  Animation clip;
+  clip.channels.push_back({.node = 0, .path = AnimationPath::weights, .times = {0, 1}, .values = {0, 1}, .components = 1});
+  input.animations.push_back(clip);
+  write_scene(input, dir / "one.glb");
+
+  const test::RunResult r = test::run_cli({"lod", (dir / "one.glb").string(), "-o", (dir / "lod.glb").string(),
+                                           "--ratios", "1,0.5,0.2", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["morph_targets"], 1);
+  EXPECT_FALSE(report["morph_targets_dropped"].get<bool>());
+  const Scene out = read_scene(dir / "lod.glb");
+  const nlohmann::json doc = glb_json(dir / "lod.glb");
+  size_t levels = 0;
+  for (size_t n = 0; n < doc["nodes"].size(); ++n) {
+    const nlohmann::json& node = doc["nodes"][n];
+    if (!node.contains("extras") || !node["extras"].contains("lodkit")) continue;
+    ++levels;
+    const size_t mesh = node["mesh"];
+    ASSERT_EQ(doc["meshes"][mesh]["primitives"].size(), 1u);
+    ASSERT_EQ(doc["meshes"][mesh]["primitives"][0]["targets"].size(), 1u) << "node " << n;
+    const Mesh* level = nullptr;
+    for (const Primitive& p : out.primitives)
+      if (p.gltf_mesh == mesh) level = &p.mesh;
+    ASSERT_NE(level, nullptr);
+    // Back in the torus's own space: positions less the move, over 2, and offsets over 2.
+    Mesh local = *level;
+    for (float3& p : local.positions) p = {(p.x - move.x) / 2, (p.y - move.y) / 2, (p.z - move.z) / 2};
+    std::vector<float3> offsets = test::glb_morph_positions(dir / "lod.glb", mesh);
+    for (float3& d : offsets) d = {d.x / 2, d.y / 2, d.z / 2};
+    const size_t moved = test::expect_points_on_torus(local, offsets, inverse, "level node " + std::to_string(n));
+    if (level->triangle_count() < 1600) {
+      EXPECT_GT(moved, local.vertex_count() / 10) << "node " << n;
+    }
+    // The clip drives the level's weight too.
+    size_t copies = 0;
+    for (const auto& channel : doc["animations"][0]["channels"])
+      copies += channel["target"]["path"] == "weights" && channel["target"]["node"] == n;
+    EXPECT_EQ(copies, 1u) << "node " << n;
+  }
+  EXPECT_EQ(levels, 3u);
+  test::expect_valid_gltf({dir / "lod.glb"});
+
+  // The same mesh drawn by a second node.
+  Node second = input.nodes[0];
+  second.translation = {5, 0, 0};
+  input.nodes.push_back(second);
+  input.roots.push_back(1);
+  // A channel that moves it, after the weights' one in the first clip: kept, on its own sampler. A
+  // second clip drives the weights only: nothing of it is left.
+  input.animations[0].channels.push_back(
+      {.node = 1, .path = AnimationPath::translation, .times = {0, 1}, .values = {5, 0, 0, 6, 0, 0}, .components = 3});
+  input.animations.push_back(clip);
+  write_scene(input, dir / "two.glb");
+  const test::RunResult two = test::run_cli({"lod", (dir / "two.glb").string(), "-o", (dir / "lod2.glb").string(),
+                                             "--ratios", "1,0.5"});
+  ASSERT_EQ(two.exit_code, 0) << two.err;
+  EXPECT_NE(two.out.find("morph targets dropped: 2 nodes"), std::string::npos) << two.out;
+  EXPECT_EQ(nlohmann::json::parse(test::run_cli({"info", "--json", (dir / "lod2.glb").string()}).out)["gltf"]["morph_targets"], 0);
+  // The weights' channels go with their samplers, and the clip left empty (invalid glTF); the
+  // translation's stays, its sampler renumbered.
+  const nlohmann::json doc2 = glb_json(dir / "lod2.glb");
+  ASSERT_EQ(doc2["animations"].size(), 1u);
+  ASSERT_EQ(doc2["animations"][0]["channels"].size(), 1u);
+  EXPECT_EQ(doc2["animations"][0]["channels"][0]["target"]["path"], "translation");
+  EXPECT_EQ(doc2["animations"][0]["channels"][0]["sampler"], 0);
+  EXPECT_EQ(doc2["animations"][0]["samplers"].size(), 1u);
+  test::expect_valid_gltf({dir / "lod2.glb"});
 }
 
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {

@@ -19,32 +19,11 @@
 #include "lodkit/simplify.h"
 #include "optimize/optimize_test_support.h"
 #include "simplify/form_fixtures.h"
+#include "cli/torus_morph.h"
 #include "test_support.h"
 
 namespace lod {
 namespace {
-
-// Per vertex of a simplified torus(1, 0.3, 40, 20), the input point its morph offset stands for
-// (`inverse` of it): checks that it lies on the input torus, about as near the vertex as the torus
-// is. Returns how many are off the vertex (the vertex moved off the input surface).
-template <class Inverse>
-size_t expect_points_on_torus(const Mesh& moved, const std::vector<float3>& offsets, Inverse inverse, const std::string& label) {
-  EXPECT_EQ(offsets.size(), moved.vertex_count()) << label;
-  size_t off_input = 0;
-  for (size_t v = 0; v < moved.vertex_count() && v < offsets.size(); ++v) {
-    const float3 p = moved.positions[v], q = inverse(offsets[v]);
-    // On the polygonal torus: within the sag of its chords around the ring and the tube
-    // (1.3 (1 - cos(pi / 40)) + 0.3 (1 - cos(pi / 20)) < 0.0078) of the round one.
-    const double ring = std::hypot(double(q.x), double(q.y)) - 1.0;
-    EXPECT_LT(std::fabs(std::hypot(ring, double(q.z)) - 0.3), 0.0078) << label << " vertex " << v;
-    // And about as near the vertex as the torus is (the vertex's distance to the round torus, plus the sag).
-    const double d = std::hypot(double(p.x) - q.x, double(p.y) - q.y, double(p.z) - q.z);
-    const double off = std::fabs(std::hypot(std::hypot(double(p.x), double(p.y)) - 1.0, double(p.z)) - 0.3);
-    EXPECT_LT(d, off + 0.0078) << label << " vertex " << v;
-    off_input += d > 1e-4;
-  }
-  return off_input;
-}
 
 // A glTF morph target (here each vertex's offset is a linear, invertible function of its position).
 // --keep-vertices keeps input vertices unmoved, so it keeps their offsets exactly. Moved vertices get
@@ -77,7 +56,7 @@ TEST(CliSimplify, KeepsMorphTargetsExactOrInterpolated) {
     offsets = test::glb_morph_positions(dir / "moved.glb");
     ASSERT_EQ(offsets.size(), moved.vertex_count());
     // The vertices moved: offsets were interpolated.
-    EXPECT_GT(expect_points_on_torus(moved, offsets, inverse, ratio), moved.vertex_count() / 10) << ratio;
+    EXPECT_GT(test::expect_points_on_torus(moved, offsets, inverse, ratio), moved.vertex_count() / 10) << ratio;
     test::expect_valid_gltf({dir / "subset.glb", dir / "moved.glb"});
     // lodkit info counts the blend shape.
     const test::RunResult info = test::run_cli({"info", "--json", (dir / "moved.glb").string()});
@@ -121,7 +100,7 @@ TEST(CliSimplify, KeepsMorphTargetsThroughFlatShadingAndDoubleSides) {
     EXPECT_LE(moved.triangle_count(), mesh.triangle_count() / 4 + 2) << name;
     const std::vector<MorphTarget> targets = source_morph_targets(result, 0);
     ASSERT_EQ(targets.size(), 1u) << name;
-    EXPECT_GT(expect_points_on_torus(moved, targets[0].positions, inverse, name), moved.vertex_count() / 10) << name;
+    EXPECT_GT(test::expect_points_on_torus(moved, targets[0].positions, inverse, name), moved.vertex_count() / 10) << name;
     ASSERT_EQ(targets[0].normals.size(), moved.vertex_count()) << name;
     size_t turned = 0;  // vertices whose normal is off the round torus's by more than 60 degrees
     for (size_t v = 0; v < moved.vertex_count(); ++v) {

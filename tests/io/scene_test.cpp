@@ -162,6 +162,51 @@ TEST(SceneFlatten, SkinnedMeshesStayInBindPose) {
   EXPECT_EQ(flatten(scene).positions, unit_triangle().positions);
 }
 
+// Morph targets of a flattened scene, by hand: node 0 scales its mesh by (2, 1, 1), then turns it a
+// quarter about +z (x to y). A displacement (1, 0, 0) becomes (0, 2, 0). A normal (0, 0, 1)
+// displaced by (1, 0, 0) is (1, 0, 1), which the inverse transpose takes to (0, 0.5, 1): unit,
+// (0, 0.447214, 0.894427), so the displacement is (0, 0.447214, -0.105573). Node 1's mesh has no
+// targets: zero there. Drawn by a second node too, the targets are not given (two nodes' weights).
+TEST(SceneFlatten, MorphTargetsGoToWorldSpaceWithTheirNode) {
+  test::TempDir dir;
+  Scene scene;
+  scene.primitives.push_back(primitive(unit_triangle(), 0));
+  scene.primitives.push_back(primitive(unit_triangle(), 1));
+  MorphTarget target;
+  target.positions.assign(3, {1, 0, 0});
+  target.normals.assign(3, {1, 0, 0});
+  scene.primitives[0].targets.push_back(target);
+  Node turned, plain;
+  turned.mesh = 0, turned.scale = {2, 1, 1}, turned.rotation = {0, 0, std::sqrt(0.5f), std::sqrt(0.5f)};
+  plain.mesh = 1, plain.translation = {0, 0, 3};
+  scene.nodes = {plain, turned};
+  scene.roots = {0, 1};
+  write_scene(scene, dir / "morph.glb");
+  const Scene read = read_scene(dir / "morph.glb");
+  const Mesh flat = flatten(read);
+  const FlatMorphTargets morph = flatten_morph_targets(read);
+  EXPECT_EQ(morph.nodes, 1u);
+  EXPECT_EQ(morph.node, 1);
+  ASSERT_EQ(morph.targets.size(), 1u);
+  ASSERT_EQ(morph.targets[0].positions.size(), flat.vertex_count());
+  ASSERT_EQ(morph.targets[0].normals.size(), flat.vertex_count());
+  for (size_t v = 0; v < 3; ++v) {  // node 0's vertices come first (depth-first order)
+    EXPECT_EQ(morph.targets[0].positions[v], (float3{0, 0, 0}));
+    EXPECT_EQ(morph.targets[0].normals[v], (float3{0, 0, 0}));
+  }
+  for (size_t v = 3; v < 6; ++v) {
+    expect_near(morph.targets[0].positions[v], {0, 2, 0});
+    expect_near(morph.targets[0].normals[v], {0, 0.447214f, -0.105573f});
+  }
+
+  scene.nodes.push_back(turned);
+  scene.roots.push_back(2);
+  write_scene(scene, dir / "twice.glb");
+  const FlatMorphTargets twice = flatten_morph_targets(read_scene(dir / "twice.glb"));
+  EXPECT_EQ(twice.nodes, 2u);
+  EXPECT_TRUE(twice.targets.empty());
+}
+
 TEST(SceneFlatten, NoNodesUsesEachMeshOnceUntransformed) {
   Scene scene;
   Mesh second = unit_triangle();

@@ -9,6 +9,9 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <string>
+#include <unordered_map>
+#include <vector>
 
 #include "commands.h"
 #include "lodkit/error.h"
@@ -48,13 +51,69 @@ std::vector<float> parse_list(const std::string& text, const char* option) {
   return values;
 }
 
+// A blend of per-vertex displacements.
+float3 blend(const std::vector<float3>& values, const VertexBlend& b) {
+  float3 out;
+  for (size_t k = 0; k < 3; ++k) {
+    const float3& v = values[b.vertex[k]];
+    out.x += b.weight[k] * v.x, out.y += b.weight[k] * v.y, out.z += b.weight[k] * v.z;
+  }
+  return out;
+}
+
+// Morph targets at blends of their vertices (lod::vertex_blends): a level's, from its input's.
+std::vector<MorphTarget> blended_targets(const std::vector<MorphTarget>& targets, const std::vector<VertexBlend>& at) {
+  std::vector<MorphTarget> out(targets.size());
+  for (size_t k = 0; k < targets.size(); ++k)
+    for (const VertexBlend& b : at) {
+      out[k].positions.push_back(blend(targets[k].positions, b));
+      if (!targets[k].normals.empty()) out[k].normals.push_back(blend(targets[k].normals, b));
+    }
+  return out;
+}
+
+// Per vertex, a class shared exactly by the vertices whose displacements are all equal (bitwise), for
+// a weld that must keep the others apart (WeldOptions::vertex_classes); empty without targets.
+std::vector<uint32_t> displacement_classes(const std::vector<MorphTarget>& targets) {
+  if (targets.empty()) return {};
+  std::unordered_map<std::string, uint32_t> ids;  // displacements' bytes -> class
+  std::vector<uint32_t> classes(targets[0].positions.size());
+  std::string key;
+  for (size_t v = 0; v < classes.size(); ++v) {
+    key.clear();
+    for (const MorphTarget& t : targets) {
+      key.append(reinterpret_cast<const char*>(&t.positions[v]), sizeof(float3));
+      if (!t.normals.empty()) key.append(reinterpret_cast<const char*>(&t.normals[v]), sizeof(float3));
+    }
+    classes[v] = ids.try_emplace(key, uint32_t(ids.size())).first->second;
+  }
+  return classes;
+}
+
+// The target on a welded mesh's vertices, each from its first source vertex (weld_duplicates').
+MorphTarget renumbered(const MorphTarget& t, const std::vector<uint32_t>& first) {
+  MorphTarget out;
+  for (const uint32_t v : first) {
+    out.positions.push_back(t.positions[v]);
+    if (!t.normals.empty()) out.normals.push_back(t.normals[v]);
+  }
+  return out;
+}
+
+// A static chain's morph targets: per level, the flattened input's at the level's vertices, driven
+// by one source node's weights.
+struct LevelTargets {
+  std::vector<std::vector<MorphTarget>> levels;
+  int32_t node = -1;
+};
+
 // The glTF: one mesh and one node per level, the first node listing the others (MSFT_lod); each
 // mesh has a primitive per material. From a static glTF (`source`, flattened into the chain's input,
 // so material id k + 1 is its material k): the source document with its triangles replaced by the
 // levels, so materials, textures and everything else stay; its nodes remain, without those meshes.
 // Otherwise a new document, with the input's material names.
 Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, const std::vector<double>& coverage,
-                  const Scene* source) {
+                  const Scene* source, const LevelTargets& targets) {
   Scene scene;
   uint32_t mesh_base = 0;
   int32_t node_base = 0;
@@ -106,7 +165,15 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
     for (MaterialPart& part : split_by_material(level)) {
       Primitive prim;
       prim.mesh = std::move(part.mesh);
-      if (i < chain.morphs.size()) {
+      if (i < targets.levels.size() && !targets.levels[i].empty()) {
+        for (const MorphTarget& t : targets.levels[i]) {
+          MorphTarget& part_target = prim.targets.emplace_back();
+          for (const uint32_t v : part.vertices) {
+            part_target.positions.push_back(t.positions[v]);
+            if (!t.normals.empty()) part_target.normals.push_back(t.normals[v]);
+          }
+        }
+      } else if (i < chain.morphs.size()) {
         // The geomorph as a glTF morph target: weight t gives (1 - t) P + t P_target, positions and
         // normals, in any viewer; LODKIT_geomorph in the extras says where it leads.
         const Mesh& coarse = chain.levels[i + 1].mesh;
@@ -137,6 +204,7 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
                                          {"relative_error", level.relative_error},
                                          {"switch_distance", distances[i]}}}};
     if (i < chain.morphs.size()) extras["LODKIT_geomorph"] = {{"target", 0}, {"to_node", node_base + int32_t(i) + 1}};
+    if (i < targets.levels.size() && !targets.levels[i].empty()) node.morph_weights_of = targets.node;
     if (!chain.shared.prefix.empty()) extras["lodkit"]["vertex_prefix"] = chain.shared.prefix[i];
     if (i == 0) {
       for (size_t k = 1; k < chain.levels.size(); ++k) node.lod_ids.push_back(node_base + int32_t(k));
@@ -225,16 +293,6 @@ std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<Ski
   return reports;
 }
 
-// A blend of per-vertex displacements.
-float3 blend(const std::vector<float3>& values, const VertexBlend& b) {
-  float3 out;
-  for (size_t k = 0; k < 3; ++k) {
-    const float3& v = values[b.vertex[k]];
-    out.x += b.weight[k] * v.x, out.y += b.weight[k] * v.y, out.z += b.weight[k] * v.z;
-  }
-  return out;
-}
-
 // The input scene with each skinned primitive's levels: level 0 replaces the primitive's geometry,
 // level i > 0 becomes primitive 0 of a new glTF mesh drawn by a new node with the same skin, listed
 // in the skinned node's MSFT_lod. Skeleton, skins, animations, materials and everything else of the
@@ -284,16 +342,7 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
       Primitive prim;
       prim.mesh = level.mesh;
       prim.material = source.material;
-      if (!targets.empty()) {
-        const std::vector<VertexBlend> at = blends(level);
-        for (const MorphTarget& t : targets) {
-          MorphTarget& out = prim.targets.emplace_back();
-          for (const VertexBlend& b : at) {
-            out.positions.push_back(blend(t.positions, b));
-            if (!t.normals.empty()) out.normals.push_back(blend(t.normals, b));
-          }
-        }
-      }
+      if (!targets.empty()) prim.targets = blended_targets(targets, blends(level));
       prim.gltf_mesh = next_mesh++;
       prim.gltf_primitive = 0;
       scene.primitives.push_back(std::move(prim));
@@ -378,6 +427,8 @@ Command register_lod(CLI::App& root) {
 
             std::vector<ChainReport> reports;
             SurfaceForm form;  // static input: built on the fronts, or without face normals (reported)
+            LevelTargets level_targets;  // static glTF input with one morphing node: its blend shapes
+            size_t morphing_nodes = 0;
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
               if (o->morph) throw_usage("--morph: skinned input morphs at run time (lod::SkinnedGeomorph), not as glTF morph targets");
@@ -388,18 +439,31 @@ Command register_lod(CLI::App& root) {
                                       [&](double f) { bar.update(f); });
             } else {
               validate(mesh, o->input);
-              weld_duplicates(mesh, {});  // the chain replaces the input's geometry: nothing to carry
+              // Morph targets of one node go to every level, interpolated where the vertices moved
+              // (not with geomorphs, which are the levels' morph targets, or one vertex buffer).
+              FlatMorphTargets morph;
+              if (scene.source && !o->morph && !o->shared) morph = flatten_morph_targets(scene);
+              morphing_nodes = morph.nodes;
+              // The chain replaces the input's geometry: only the morph targets to carry, so vertices
+              // whose displacements differ stay apart.
+              const std::vector<uint32_t> first = weld_duplicates(mesh, displacement_classes(morph.targets));
+              if (!first.empty())
+                for (MorphTarget& t : morph.targets) t = renumbered(t, first);
               // Flat-shaded: the chain is built without the normals, then each level faceted again
               // (not with geomorphs or one vertex buffer, whose tables follow the vertices).
               // Double-sided likewise: the chain is built on the fronts, and each level gets its backs.
               if (!o->morph && !o->shared) form = surface_form(mesh);
-              if (form.changed()) mesh = std::move(form.mesh);  // (restore_form without successors reads only the form's flags)
+              const Mesh& built_on = form.to_simplify(mesh);
               ProgressBar bar("building LODs");
               options.progress = [&](double f) { bar.update(f); };
-              reports.push_back({"", build_lod_chain(mesh, options), {}, {}});
-              if (form.changed())
-                for (LodLevel& level : reports[0].chain.levels)
-                  level.vertex_origin.clear(), level.vertex_successor.clear(), restore_form(form, level.mesh, level.vertex_successor);
+              reports.push_back({"", build_lod_chain(built_on, options), {}, {}});
+              for (LodLevel& level : reports[0].chain.levels) {
+                if (form.changed()) level.vertex_origin.clear(), restore_form(form, level.mesh, level.vertex_successor);
+                if (!morph.targets.empty())
+                  level_targets.levels.push_back(blended_targets(morph.targets, vertex_blends(mesh, level.vertex_successor, level.mesh)));
+              }
+              level_targets.node = morph.node;
+              if (form.changed()) mesh = std::move(form.mesh);  // the progressive mesh's input
             }
             const double build_seconds = seconds_since(start);
             for (ChainReport& r : reports) set_switching(r, *o);
@@ -408,7 +472,8 @@ Command register_lod(CLI::App& root) {
             if (!skinned.empty()) {
               write_scene(skinned_scene(std::move(scene), skinned, reports), o->output, {.meshopt_compression = o->compress});
             } else {
-              write_scene(chain_scene(reports[0].chain, reports[0].distances, reports[0].coverage, scene.source ? &scene : nullptr),
+              write_scene(chain_scene(reports[0].chain, reports[0].distances, reports[0].coverage, scene.source ? &scene : nullptr,
+                                      level_targets),
                           o->output, {.meshopt_compression = o->compress});
               if (!o->lpm.empty()) {
                 // The progressive mesh spans the input down to the coarsest level's size.
@@ -426,7 +491,9 @@ Command register_lod(CLI::App& root) {
               nlohmann::json j = {{"input", o->input}, {"output", o->output}, {"diagonal", reports[0].chain.diagonal},
                                   {"levels", levels_json(reports[0])}, {"load_seconds", load_seconds},
                                   {"build_seconds", build_seconds}, {"write_seconds", write_seconds},
-                                  {"flat_shaded", form.flat_shaded}, {"double_sided", form.double_sided}};
+                                  {"flat_shaded", form.flat_shaded}, {"double_sided", form.double_sided},
+                                  {"morph_targets", level_targets.levels.empty() ? 0 : level_targets.levels[0].size()},
+                                  {"morph_targets_dropped", morphing_nodes > 1}};
               if (!skinned.empty())
                 j["skinned"] = {{"mode", o->skin_mode}, {"poses", o->poses}, {"chains", chains}};
               fmt::print("{}\n", j.dump(2));
@@ -446,6 +513,10 @@ Command register_lod(CLI::App& root) {
                          skinned.empty() ? "" : ", bind pose", o->error_px, o->screen_height, o->fov_degrees);
               if (form.flat_shaded) fmt::print("flat-shaded: each level built without the normals, faceted again\n");
               if (form.double_sided) fmt::print("double-sided: each level built on the fronts, backs made again\n");
+              if (!level_targets.levels.empty() && !level_targets.levels[0].empty())
+                fmt::print("morph targets: {} on every level, interpolated where the vertices moved\n", level_targets.levels[0].size());
+              if (morphing_nodes > 1)
+                fmt::print("morph targets dropped: {} nodes draw morphing meshes, and the levels are one mesh\n", morphing_nodes);
               fmt::print("loaded in {:.3f}s, built in {:.3f}s, wrote {} in {:.3f}s\n", load_seconds, build_seconds,
                          o->output, write_seconds);
             }
