@@ -463,8 +463,8 @@ TEST(CliLod, SkinnedLevelsKeepTheirMorphTargets) {
 
 // A static glTF whose one node draws a morphing torus (scaled by 2 and moved): every level of the
 // chain keeps the morph target, in world space (the levels are flattened), interpolated where the
-// vertices moved, and the clip that drives the node's weight drives each level's. Drawn by two
-// nodes, the target cannot follow both nodes' weights in one mesh: it is dropped, and said so.
+// vertices moved, and the clip that drives the node's weight drives each level's. With geomorphs, or
+// drawn by two nodes (one mesh cannot follow both nodes' weights), it is dropped, and said so.
 TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
   test::TempDir dir;
   Scene input = scene_from_mesh(shapes::torus(1.0f, 0.3f, 40, 20));
@@ -518,6 +518,12 @@ TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
   }
   EXPECT_EQ(levels, 3u);
   test::expect_valid_gltf({dir / "lod.glb"});
+  // With geomorphs, which are the levels' morph targets, they are dropped and the report says so.
+  const test::RunResult geomorphs = test::run_cli({"lod", (dir / "one.glb").string(), "-o", (dir / "geomorph.glb").string(),
+                                                   "--ratios", "1,0.5", "--morph", "--json"});
+  ASSERT_EQ(geomorphs.exit_code, 0) << geomorphs.err;
+  EXPECT_TRUE(nlohmann::json::parse(geomorphs.out)["morph_targets_dropped"].get<bool>());
+  test::expect_valid_gltf({dir / "geomorph.glb"});
 
   // The same mesh drawn by a second node.
   Node second = input.nodes[0];

@@ -428,7 +428,7 @@ Command register_lod(CLI::App& root) {
             std::vector<ChainReport> reports;
             SurfaceForm form;  // static input: built on the fronts, or without face normals (reported)
             LevelTargets level_targets;  // static glTF input with one morphing node: its blend shapes
-            size_t morphing_nodes = 0;
+            std::string targets_dropped;  // why the input's morph targets are not on the levels, if they are not
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
               if (o->morph) throw_usage("--morph: skinned input morphs at run time (lod::SkinnedGeomorph), not as glTF morph targets");
@@ -442,8 +442,11 @@ Command register_lod(CLI::App& root) {
               // Morph targets of one node go to every level, interpolated where the vertices moved
               // (not with geomorphs, which are the levels' morph targets, or one vertex buffer).
               FlatMorphTargets morph;
-              if (scene.source && !o->morph && !o->shared) morph = flatten_morph_targets(scene);
-              morphing_nodes = morph.nodes;
+              if (scene.source) morph = flatten_morph_targets(scene);
+              if (morph.nodes > 1) targets_dropped = fmt::format("{} nodes draw morphing meshes, and the levels are one mesh", morph.nodes);
+              else if (morph.nodes == 1 && o->morph) targets_dropped = "--morph: the geomorphs are the levels' morph targets";
+              else if (morph.nodes == 1 && o->shared) targets_dropped = "--shared-vertices does not carry them yet";
+              if (!targets_dropped.empty()) morph.targets.clear();
               // The chain replaces the input's geometry: only the morph targets to carry, so vertices
               // whose displacements differ stay apart.
               const std::vector<uint32_t> first = weld_duplicates(mesh, displacement_classes(morph.targets));
@@ -493,7 +496,7 @@ Command register_lod(CLI::App& root) {
                                   {"build_seconds", build_seconds}, {"write_seconds", write_seconds},
                                   {"flat_shaded", form.flat_shaded}, {"double_sided", form.double_sided},
                                   {"morph_targets", level_targets.levels.empty() ? 0 : level_targets.levels[0].size()},
-                                  {"morph_targets_dropped", morphing_nodes > 1}};
+                                  {"morph_targets_dropped", !targets_dropped.empty()}};
               if (!skinned.empty())
                 j["skinned"] = {{"mode", o->skin_mode}, {"poses", o->poses}, {"chains", chains}};
               fmt::print("{}\n", j.dump(2));
@@ -515,8 +518,7 @@ Command register_lod(CLI::App& root) {
               if (form.double_sided) fmt::print("double-sided: each level built on the fronts, backs made again\n");
               if (!level_targets.levels.empty() && !level_targets.levels[0].empty())
                 fmt::print("morph targets: {} on every level, interpolated where the vertices moved\n", level_targets.levels[0].size());
-              if (morphing_nodes > 1)
-                fmt::print("morph targets dropped: {} nodes draw morphing meshes, and the levels are one mesh\n", morphing_nodes);
+              if (!targets_dropped.empty()) fmt::print("morph targets dropped: {}\n", targets_dropped);
               fmt::print("loaded in {:.3f}s, built in {:.3f}s, wrote {} in {:.3f}s\n", load_seconds, build_seconds,
                          o->output, write_seconds);
             }
