@@ -396,10 +396,8 @@ TEST(CliLod, SkinnedLevelsKeepTheirMorphTargets) {
   const std::vector<SkinnedPrimitive> skinned = skinned_primitives(input);
   ASSERT_EQ(skinned.size(), 1u);
   Primitive& body = input.primitives[skinned[0].primitive];
-  const auto offset = [](const float3& p) { return float3{0.5f * p.z, 0.25f * p.x, -0.4f * p.y}; };
-  const auto inverse = [](const float3& o) { return float3{4.0f * o.y, -2.5f * o.z, 2.0f * o.x}; };
   MorphTarget blend;
-  for (const float3& p : body.mesh.positions) blend.positions.push_back(offset(p));
+  for (const float3& p : body.mesh.positions) blend.positions.push_back(test::morph_offset(p));
   body.targets.push_back(blend);
   AnimationChannel smile{.node = int32_t(skinned[0].node), .path = AnimationPath::weights, .times = {0, 1, 2},
                          .values = {0, 1, 0}, .components = 1};
@@ -438,9 +436,9 @@ TEST(CliLod, SkinnedLevelsKeepTheirMorphTargets) {
       ASSERT_EQ(offsets.size(), level->vertex_count());
       const bool exact = n == node && std::string(ratios) == "1,0.4";
       for (size_t v = 0; v < level->vertex_count(); ++v) {
-        const float3 p = level->positions[v], q = inverse(offsets[v]);
+        const float3 p = level->positions[v], q = test::morph_offset_inverse(offsets[v]);
         if (exact) {
-          ASSERT_EQ(offsets[v], offset(p)) << "vertex " << v;
+          ASSERT_EQ(offsets[v], test::morph_offset(p)) << "vertex " << v;
           continue;
         }
         ASSERT_LT(to_input(q), 1e-4 * diagonal) << ratios << " node " << n << " vertex " << v;
@@ -467,12 +465,7 @@ TEST(CliLod, SkinnedLevelsKeepTheirMorphTargets) {
 // drawn by two nodes (one mesh cannot follow both nodes' weights), it is dropped, and said so.
 TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
   test::TempDir dir;
-  Scene input = scene_from_mesh(shapes::torus(1.0f, 0.3f, 40, 20));
-  const auto offset = [](const float3& p) { return float3{0.5f * p.z, 0.25f * p.x, -0.4f * p.y}; };
-  const auto inverse = [](const float3& o) { return float3{4.0f * o.y, -2.5f * o.z, 2.0f * o.x}; };
-  MorphTarget target;
-  for (const float3& p : input.primitives[0].mesh.positions) target.positions.push_back(offset(p));
-  input.primitives[0].targets.push_back(target);
+  Scene input = test::morphing_torus();
   ASSERT_EQ(input.nodes.size(), 1u);
   const float3 move = {1, 2, 3};
   input.nodes[0].translation = move, input.nodes[0].scale = {2, 2, 2};
@@ -506,7 +499,7 @@ TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
     for (float3& p : local.positions) p = {(p.x - move.x) / 2, (p.y - move.y) / 2, (p.z - move.z) / 2};
     std::vector<float3> offsets = test::glb_morph_positions(dir / "lod.glb", mesh);
     for (float3& d : offsets) d = {d.x / 2, d.y / 2, d.z / 2};
-    const size_t moved = test::expect_points_on_torus(local, offsets, inverse, "level node " + std::to_string(n));
+    const size_t moved = test::expect_points_on_torus(local, offsets, "level node " + std::to_string(n));
     if (level->triangle_count() < 1600) {
       EXPECT_GT(moved, local.vertex_count() / 10) << "node " << n;
     }
