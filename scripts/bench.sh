@@ -285,7 +285,7 @@ area_compress() {
   echo "whole run: $((SECONDS - started)) s"
 }
 
-# ---- morphs: a blend shape carried through simplify (lod::vertex_blends) --------------------------
+# ---- morphs: a blend shape carried through simplify (lod::vertex_blends), plain and through the forms
 area_morphs() {
   [ $# -le 1 ] || usage
   local runs=${1:-3}
