@@ -48,7 +48,11 @@ struct WriteOptions {
 struct MorphTarget {
   std::vector<float3> positions;  // one per vertex
   std::vector<float3> normals;    // empty, or one per vertex
+  std::vector<float3> tangents;   // empty, or one per vertex (of the tangent's xyz)
 };
+// A target's streams, for code that treats them alike (positions first; the others may be empty).
+inline constexpr std::array<std::vector<float3> MorphTarget::*, 3> morph_streams = {
+    &MorphTarget::positions, &MorphTarget::normals, &MorphTarget::tangents};
 
 struct Primitive {
   Mesh mesh;                    // triangles only; materials[] is empty (the primitive has one material)
@@ -166,9 +170,9 @@ void write_scene(const Scene& scene, const std::filesystem::path& path, const Wr
 Mesh flatten(const Scene& scene);
 
 // The morph targets of flatten(scene), per vertex of it, when one node draws every morphing
-// primitive: its glTF mesh's targets (source_morph_targets' POSITION and NORMAL displacements), taken
-// to world space with the vertices (a normal's displacement to where the displaced normal goes; none
-// unless flatten keeps normals), and zero on every other instance's vertices. `node` is that node,
+// primitive: its glTF mesh's targets (source_morph_targets' displacements), taken to world space
+// with the vertices (a normal's or tangent's displacement to where the displaced one goes; none
+// unless flatten keeps those streams), and zero on every other instance's vertices. `node` is that node,
 // whose weights and weight clips drive them (Node::morph_weights_of; -1 for a scene without nodes).
 // `nodes` counts the nodes drawing morphing primitives: with more than one, `targets` is empty (one
 // merged mesh cannot follow several nodes' weights).
@@ -197,8 +201,8 @@ std::vector<MaterialPart> split_by_material(const Mesh& mesh);
 // not be written. A weld that keeps classes apart (WeldOptions::vertex_classes) keeps them exact.
 std::vector<uint32_t> source_vertex_classes(const Scene& scene, size_t primitive);
 
-// The source glTF primitive's morph targets (POSITION and NORMAL displacements; other semantics are
-// not decoded), per vertex of the scene primitive (through Primitive::source_vertices). Empty when it
+// The source glTF primitive's morph targets (POSITION, NORMAL and TANGENT displacements; other
+// semantics are not decoded), per vertex of the scene primitive (through Primitive::source_vertices). Empty when it
 // has none or its vertices are not the source's.
 std::vector<MorphTarget> source_morph_targets(const Scene& scene, size_t primitive);
 

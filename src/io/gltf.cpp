@@ -1235,8 +1235,11 @@ class BinWriter {
         model_.accessors[size_t(moved)].minValues = low;
         model_.accessors[size_t(moved)].maxValues = high;
         attributes["POSITION"] = moved;
-        if (!target.normals.empty())
+        // A displacement of a stream the mesh does not have would be invalid: it has none to move.
+        if (!target.normals.empty() && !mesh.normals.empty())
           attributes["NORMAL"] = add_accessor(target.normals, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
+        if (!target.tangents.empty() && !mesh.tangents.empty())
+          attributes["TANGENT"] = add_accessor(target.tangents, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
         prim.targets.push_back(std::move(attributes));
       }
     add_indices(mesh, prim);
@@ -1337,7 +1340,8 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     }
     for (const MorphTarget& target : scene.primitives[i].targets)
       if (target.positions.size() != scene.primitives[i].mesh.vertex_count() ||
-          (!target.normals.empty() && target.normals.size() != target.positions.size()))
+          (!target.normals.empty() && target.normals.size() != target.positions.size()) ||
+          (!target.tangents.empty() && target.tangents.size() != target.positions.size()))
         throw_usage(where + ": a morph target does not have one entry per vertex");
   }
 
@@ -2265,12 +2269,13 @@ std::vector<MorphTarget> source_morph_targets(const Scene& scene, size_t primiti
     const auto& attributes = map.primitive->targets[k];
     MorphTarget& t = targets.emplace_back();
     t.positions.assign(map.vertex.size(), float3{});
-    for (const char* semantic : {"POSITION", "NORMAL"}) {
-      const auto it = attributes.find(semantic);
+    const char* semantics[] = {"POSITION", "NORMAL", "TANGENT"};  // (morph_streams' order)
+    for (size_t s = 0; s < 3; ++s) {
+      const auto it = attributes.find(semantics[s]);
       if (it == attributes.end()) continue;
       // (VEC3: the reader refuses other types.)
       const std::vector<float3> values = doc.decode_floats<float3>(it->second);
-      std::vector<float3>& out = semantic[0] == 'P' ? t.positions : t.normals;
+      std::vector<float3>& out = t.*morph_streams[s];
       out.resize(map.vertex.size());
       for (size_t v = 0; v < map.vertex.size(); ++v) out[v] = values[map.vertex[v]];
     }

@@ -73,10 +73,11 @@ float3 normalized(double x, double y, double z, const float3& fallback) {
 // its upper 3x3 (its cofactor matrix over the determinant), winding and handedness flipped when it
 // mirrors.
 struct Placement {
+  Matrix world;
   bool identity, mirrored;
   std::array<double, 9> normal;  // row-major: n' = N * n
 
-  explicit Placement(const Matrix& m) : identity(m == identity_matrix) {
+  explicit Placement(const Matrix& m) : world(m), identity(m == identity_matrix) {
     const double a = m[0], b = m[4], c = m[8], d = m[1], e = m[5], f = m[9], g = m[2], h = m[6], i = m[10];
     const double det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
     const double scale = det != 0 ? 1 / det : 1;
@@ -89,6 +90,11 @@ struct Placement {
     const auto& n = normal;
     return normalized(n[0] * v.x + n[1] * v.y + n[2] * v.z, n[3] * v.x + n[4] * v.y + n[5] * v.z,
                       n[6] * v.x + n[7] * v.y + n[8] * v.z, v);
+  }
+  // A tangent's xyz goes with the surface: by the upper 3x3 itself.
+  float3 apply_to_tangent(const float3& t) const {
+    return normalized(world[0] * t.x + world[4] * t.y + world[8] * t.z, world[1] * t.x + world[5] * t.y + world[9] * t.z,
+                      world[2] * t.x + world[6] * t.y + world[10] * t.z, t);
   }
 };
 
@@ -216,8 +222,7 @@ Mesh flatten(const Scene& scene) {
         out.tangents.insert(out.tangents.end(), mesh.tangents.begin(), mesh.tangents.end());
       } else {
         for (const float4& t : mesh.tangents) {
-          const float3 xyz = normalized(m[0] * t.x + m[4] * t.y + m[8] * t.z, m[1] * t.x + m[5] * t.y + m[9] * t.z,
-                                        m[2] * t.x + m[6] * t.y + m[10] * t.z, {t.x, t.y, t.z});
+          const float3 xyz = place.apply_to_tangent({t.x, t.y, t.z});
           // A mirroring transform flips the bitangent, so the handedness flips with it.
           out.tangents.push_back({xyz.x, xyz.y, xyz.z, mirrored ? -t.w : t.w});
         }
@@ -264,25 +269,28 @@ FlatMorphTargets flatten_morph_targets(const Scene& scene) {
   std::vector<bool> decoded(scene.primitives.size(), false);
   std::vector<int32_t> nodes;
   size_t vertices = 0, count = 0;
-  bool normals = !instances.empty(), target_normals = false;
+  // flatten keeps normals and tangents when every instance has them; their displacements then.
+  bool normals = !instances.empty(), tangents = !instances.empty(), target_normals = false, target_tangents = false;
   for (const Instance& inst : instances) {
     const Mesh& mesh = scene.primitives[inst.primitive].mesh;
     if (!decoded[inst.primitive]) source[inst.primitive] = source_morph_targets(scene, inst.primitive), decoded[inst.primitive] = true;
     const std::vector<MorphTarget>& targets = source[inst.primitive];
     if (!targets.empty() && std::find(nodes.begin(), nodes.end(), inst.node) == nodes.end()) nodes.push_back(inst.node);
     count = std::max(count, targets.size());
-    for (const MorphTarget& t : targets) target_normals = target_normals || !t.normals.empty();
-    normals = normals && !mesh.normals.empty();  // (as flatten keeps them)
+    for (const MorphTarget& t : targets)
+      target_normals = target_normals || !t.normals.empty(), target_tangents = target_tangents || !t.tangents.empty();
+    normals = normals && !mesh.normals.empty(), tangents = tangents && !mesh.tangents.empty();
     vertices += mesh.vertex_count();
   }
   out.nodes = nodes.size();
   if (nodes.size() != 1) return out;
   out.node = nodes[0];
-  target_normals = target_normals && normals;
+  target_normals = target_normals && normals, target_tangents = target_tangents && tangents;
   out.targets.resize(count);
   for (MorphTarget& t : out.targets) {
     core::resize_huge(t.positions, vertices);
     if (target_normals) core::resize_huge(t.normals, vertices);
+    if (target_tangents) core::resize_huge(t.tangents, vertices);
   }
   size_t base = 0;
   for (const Instance& inst : instances) {
@@ -298,17 +306,19 @@ FlatMorphTargets flatten_morph_targets(const Scene& scene) {
                            : float3{float(m[0] * d.x + m[4] * d.y + m[8] * d.z), float(m[1] * d.x + m[5] * d.y + m[9] * d.z),
                                     float(m[2] * d.x + m[6] * d.y + m[10] * d.z)};
       }
-      if (!target_normals || targets[k].normals.empty()) continue;
-      for (size_t v = 0; v < mesh.vertex_count(); ++v) {
-        // Where the displaced normal goes, less where the normal goes (flatten's own normal).
-        const float3 &n = mesh.normals[v], &d = targets[k].normals[v];
-        if (place.identity) {
-          out.targets[k].normals[base + v] = d;
-          continue;
+      // A normal's or tangent's: where the displaced one goes, less where it goes (flatten's own).
+      if (target_normals && !targets[k].normals.empty())
+        for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+          const float3 &n = mesh.normals[v], &d = targets[k].normals[v];
+          const float3 to = place.apply_to_normal({n.x + d.x, n.y + d.y, n.z + d.z}), from = place.apply_to_normal(n);
+          out.targets[k].normals[base + v] = place.identity ? d : float3{to.x - from.x, to.y - from.y, to.z - from.z};
         }
-        const float3 to = place.apply_to_normal({n.x + d.x, n.y + d.y, n.z + d.z}), from = place.apply_to_normal(n);
-        out.targets[k].normals[base + v] = {to.x - from.x, to.y - from.y, to.z - from.z};
-      }
+      if (target_tangents && !targets[k].tangents.empty())
+        for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+          const float3 t = {mesh.tangents[v].x, mesh.tangents[v].y, mesh.tangents[v].z}, &d = targets[k].tangents[v];
+          const float3 to = place.apply_to_tangent({t.x + d.x, t.y + d.y, t.z + d.z}), from = place.apply_to_tangent(t);
+          out.targets[k].tangents[base + v] = place.identity ? d : float3{to.x - from.x, to.y - from.y, to.z - from.z};
+        }
     }
     base += mesh.vertex_count();
   }

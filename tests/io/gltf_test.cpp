@@ -787,6 +787,34 @@ TEST(GltfWrite, MorphTargetsKeptWhileTheVertexCountIsUnchanged) {
   EXPECT_EQ(w.doc["accessors"].size(), 2u);  // POSITION + indices
 }
 
+// Primitive::targets are written with the streams the mesh has (a NORMAL or TANGENT displacement of
+// a mesh without normals or tangents would be invalid) and read back by source_morph_targets.
+TEST(GltfWrite, TargetsMoveOnlyStreamsTheMeshHas) {
+  TempDir dir;
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.tangents = {{1, 0, 0, 1}, {1, 0, 0, 1}, {1, 0, 0, 1}};
+  m.indices = {0, 1, 2};
+  Scene scene = scene_from_mesh(m);
+  MorphTarget t;
+  t.positions = {{0, 0, 1}, {0, 0, 2}, {0, 0, 3}};
+  t.normals = {{1, 0, 0}, {1, 0, 0}, {1, 0, 0}};    // the mesh has no normals: not written
+  t.tangents = {{0, 1, 0}, {0, 2, 0}, {0, 3, 0}};  // it has tangents: written
+  scene.primitives[0].targets.push_back(t);
+  write_scene(scene, dir / "t.glb");
+  const Written w = load_written(dir / "t.glb");
+  const Json& target = w.doc["meshes"][0]["primitives"][0]["targets"][0];
+  EXPECT_TRUE(target.contains("POSITION"));
+  EXPECT_FALSE(target.contains("NORMAL"));
+  ASSERT_TRUE(target.contains("TANGENT"));
+  EXPECT_EQ(accessor_floats(w, target["TANGENT"]), (std::vector<float>{0, 1, 0, 0, 2, 0, 0, 3, 0}));
+  const std::vector<MorphTarget> read = source_morph_targets(read_scene(dir / "t.glb"), 0);
+  ASSERT_EQ(read.size(), 1u);
+  EXPECT_EQ(read[0].positions, t.positions);
+  EXPECT_TRUE(read[0].normals.empty());
+  EXPECT_EQ(read[0].tangents, t.tangents);
+}
+
 // Primitive::source_vertices: a renumbered subset of the source's vertices keeps the streams lodkit
 // does not model (a sparse morph target, a 2-byte application attribute), each vertex's own values,
 // with the target's POSITION bounds recomputed and elements padded to 4 bytes.

@@ -165,8 +165,9 @@ TEST(SceneFlatten, SkinnedMeshesStayInBindPose) {
 // Morph targets of a flattened scene, by hand: node 0 scales its mesh by (2, 1, 1), then turns it a
 // quarter about +z (x to y). A displacement (1, 0, 0) becomes (0, 2, 0). A normal (0, 0, 1)
 // displaced by (1, 0, 0) is (1, 0, 1), which the inverse transpose takes to (0, 0.5, 1): unit,
-// (0, 0.447214, 0.894427), so the displacement is (0, 0.447214, -0.105573). Node 1's mesh has no
-// targets: zero there. Drawn by a second node too, the targets are not given (two nodes' weights).
+// (0, 0.447214, 0.894427), so the displacement is (0, 0.447214, -0.105573). A tangent (1, 0, 0)
+// displaced by (0, 1, 0) is (1, 1, 0), which the 3x3 takes to (-1, 2, 0): unit, (-0.447214,
+// 0.894427, 0), less the tangent's own (0, 1, 0). Node 1's mesh has no targets: zero there. Drawn by a second node too, the targets are not given (two nodes' weights).
 TEST(SceneFlatten, MorphTargetsGoToWorldSpaceWithTheirNode) {
   test::TempDir dir;
   Scene scene;
@@ -175,6 +176,7 @@ TEST(SceneFlatten, MorphTargetsGoToWorldSpaceWithTheirNode) {
   MorphTarget target;
   target.positions.assign(3, {1, 0, 0});
   target.normals.assign(3, {1, 0, 0});
+  target.tangents.assign(3, {0, 1, 0});
   scene.primitives[0].targets.push_back(target);
   Node turned, plain;
   turned.mesh = 0, turned.scale = {2, 1, 1}, turned.rotation = {0, 0, std::sqrt(0.5f), std::sqrt(0.5f)};
@@ -190,13 +192,16 @@ TEST(SceneFlatten, MorphTargetsGoToWorldSpaceWithTheirNode) {
   ASSERT_EQ(morph.targets.size(), 1u);
   ASSERT_EQ(morph.targets[0].positions.size(), flat.vertex_count());
   ASSERT_EQ(morph.targets[0].normals.size(), flat.vertex_count());
+  ASSERT_EQ(morph.targets[0].tangents.size(), flat.vertex_count());
   for (size_t v = 0; v < 3; ++v) {  // node 0's vertices come first (depth-first order)
     EXPECT_EQ(morph.targets[0].positions[v], (float3{0, 0, 0}));
     EXPECT_EQ(morph.targets[0].normals[v], (float3{0, 0, 0}));
+    EXPECT_EQ(morph.targets[0].tangents[v], (float3{0, 0, 0}));
   }
   for (size_t v = 3; v < 6; ++v) {
     expect_near(morph.targets[0].positions[v], {0, 2, 0});
     expect_near(morph.targets[0].normals[v], {0, 0.447214f, -0.105573f});
+    expect_near(morph.targets[0].tangents[v], {-0.447214f, -0.105573f, 0});
   }
 
   scene.nodes.push_back(turned);

@@ -65,10 +65,9 @@ float3 blend(const std::vector<float3>& values, const VertexBlend& b) {
 std::vector<MorphTarget> blended_targets(const std::vector<MorphTarget>& targets, const std::vector<VertexBlend>& at) {
   std::vector<MorphTarget> out(targets.size());
   for (size_t k = 0; k < targets.size(); ++k)
-    for (const VertexBlend& b : at) {
-      out[k].positions.push_back(blend(targets[k].positions, b));
-      if (!targets[k].normals.empty()) out[k].normals.push_back(blend(targets[k].normals, b));
-    }
+    for (const auto stream : morph_streams)
+      if (!(targets[k].*stream).empty())
+        for (const VertexBlend& b : at) (out[k].*stream).push_back(blend(targets[k].*stream, b));
   return out;
 }
 
@@ -81,22 +80,21 @@ std::vector<uint32_t> displacement_classes(const std::vector<MorphTarget>& targe
   std::string key;
   for (size_t v = 0; v < classes.size(); ++v) {
     key.clear();
-    for (const MorphTarget& t : targets) {
-      key.append(reinterpret_cast<const char*>(&t.positions[v]), sizeof(float3));
-      if (!t.normals.empty()) key.append(reinterpret_cast<const char*>(&t.normals[v]), sizeof(float3));
-    }
+    for (const MorphTarget& t : targets)
+      for (const auto stream : morph_streams)
+        if (!(t.*stream).empty()) key.append(reinterpret_cast<const char*>(&(t.*stream)[v]), sizeof(float3));
     classes[v] = ids.try_emplace(key, uint32_t(ids.size())).first->second;
   }
   return classes;
 }
 
-// The target on a welded mesh's vertices, each from its first source vertex (weld_duplicates').
-MorphTarget renumbered(const MorphTarget& t, const std::vector<uint32_t>& first) {
+// The target on other vertices: vertex i takes `from[i]`'s displacements (a weld's first source
+// vertices, a level part's vertices).
+MorphTarget renumbered(const MorphTarget& t, const std::vector<uint32_t>& from) {
   MorphTarget out;
-  for (const uint32_t v : first) {
-    out.positions.push_back(t.positions[v]);
-    if (!t.normals.empty()) out.normals.push_back(t.normals[v]);
-  }
+  for (const auto stream : morph_streams)
+    if (!(t.*stream).empty())
+      for (const uint32_t v : from) (out.*stream).push_back((t.*stream)[v]);
   return out;
 }
 
@@ -166,13 +164,7 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
       Primitive prim;
       prim.mesh = std::move(part.mesh);
       if (i < targets.levels.size() && !targets.levels[i].empty()) {
-        for (const MorphTarget& t : targets.levels[i]) {
-          MorphTarget& part_target = prim.targets.emplace_back();
-          for (const uint32_t v : part.vertices) {
-            part_target.positions.push_back(t.positions[v]);
-            if (!t.normals.empty()) part_target.normals.push_back(t.normals[v]);
-          }
-        }
+        for (const MorphTarget& t : targets.levels[i]) prim.targets.push_back(renumbered(t, part.vertices));
       } else if (i < chain.morphs.size()) {
         // The geomorph as a glTF morph target: weight t gives (1 - t) P + t P_target, positions and
         // normals, in any viewer; LODKIT_geomorph in the extras says where it leads.
