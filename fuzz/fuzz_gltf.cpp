@@ -190,12 +190,15 @@ void check_morph_targets(const Scene& scene, const Scene& reversed_scene) {
     if (a->size() != b->size()) fail(where, "a different target count once its vertices are reversed");
     for (size_t k = 0; k < a->size(); ++k) {
       const MorphTarget &x = (*a)[k], &y = (*b)[k];
-      if (x.positions.size() != n || (!x.normals.empty() && x.normals.size() != n) || x.normals.size() != y.normals.size())
-        fail(where, "target " + std::to_string(k) + " does not have one entry per vertex");
-      for (size_t v = 0; v < n; ++v)
-        if (std::memcmp(&x.positions[v], &y.positions[n - 1 - v], sizeof(float3)) ||
-            (!x.normals.empty() && std::memcmp(&x.normals[v], &y.normals[n - 1 - v], sizeof(float3))))
-          fail(where, "target " + std::to_string(k) + " differs at vertex " + std::to_string(v) + " once its vertices are reversed");
+      if (x.positions.size() != n) fail(where, "target " + std::to_string(k) + " does not have one entry per vertex");
+      for (const auto stream : morph_streams) {
+        const std::vector<float3> &xs = x.*stream, &ys = y.*stream;
+        if ((!xs.empty() && xs.size() != n) || xs.size() != ys.size())
+          fail(where, "target " + std::to_string(k) + " does not have one entry per vertex");
+        for (size_t v = 0; v < xs.size(); ++v)
+          if (std::memcmp(&xs[v], &ys[n - 1 - v], sizeof(float3)))
+            fail(where, "target " + std::to_string(k) + " differs at vertex " + std::to_string(v) + " once its vertices are reversed");
+      }
     }
   }
 }
