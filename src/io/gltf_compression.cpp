@@ -182,9 +182,17 @@ class Decoder {
     if (mode == "ATTRIBUTES") rc = meshopt_decodeVertexBuffer(out, size_t(count), size_t(stride), source, size_t(length));
     else if (mode == "TRIANGLES") rc = meshopt_decodeIndexBuffer(out, size_t(count), size_t(stride), source, size_t(length));
     else rc = meshopt_decodeIndexSequence(out, size_t(count), size_t(stride), source, size_t(length));
-    if (rc != 0)
+    if (rc != 0) {
+      // A vertex stream's first byte is 0xa0 plus its codec version. Version 1 (meshoptimizer 0.23,
+      // which KHR_meshopt_compression allows) is not corrupt, only newer than the linked library.
+      std::string why = "corrupt, or a newer bitstream version";
+      if (mode == "ATTRIBUTES" && length > 0 && (source[0] & 0xf0) == 0xa0 && (source[0] & 0x0f) != 0)
+        why = "vertex codec version " + std::to_string(source[0] & 0x0f) + ", newer than this build's meshoptimizer " +
+              std::to_string(MESHOPTIMIZER_VERSION / 1000) + "." + std::to_string(MESHOPTIMIZER_VERSION % 1000 / 10) +
+              " decodes";
       fail(where + ": bytes " + str(offset) + ".." + str(offset + length) + " of buffers[" + str(buffer) + "] do not decode as " +
-           mode + " data (meshoptimizer error " + std::to_string(rc) + ": corrupt, or a newer bitstream version)");
+           mode + " data (meshoptimizer error " + std::to_string(rc) + ": " + why + ")");
+    }
     if (filter == "OCTAHEDRAL") meshopt_decodeFilterOct(out, size_t(count), size_t(stride));
     else if (filter == "QUATERNION") meshopt_decodeFilterQuat(out, size_t(count), size_t(stride));
     else if (filter == "EXPONENTIAL") meshopt_decodeFilterExp(out, size_t(count), size_t(stride));

@@ -328,6 +328,17 @@ TEST(GltfCompression, BrokenMeshoptFilesAreRefused) {
   g.bin[ext(g, tri).value("byteOffset", size_t(0))] = 0x00;  // the stream's header byte
   expect_refused(g, "header.glb", "do not decode as TRIANGLES");
 
+  // A vertex stream of codec version 1 (0xa1: meshoptimizer 0.23's, which KHR_meshopt_compression
+  // allows) is named as such, not as corrupt.
+  size_t attributes = 0;
+  while (attributes < good.doc["bufferViews"].size() && good.doc["bufferViews"][attributes]["extensions"][kMeshopt]["mode"] != "ATTRIBUTES")
+    ++attributes;
+  ASSERT_LT(attributes, good.doc["bufferViews"].size());
+  g = good;
+  ASSERT_EQ(g.bin[ext(g, attributes).value("byteOffset", size_t(0))], 0xa0);  // version 0, as the spec says
+  g.bin[ext(g, attributes).value("byteOffset", size_t(0))] = 0xa1;
+  expect_refused(g, "v1.glb", "vertex codec version 1, newer than this build's meshoptimizer");
+
   // Flipped bytes anywhere in the compressed data: read, or refused with a message (never a crash).
   std::mt19937 rng(12345);
   for (int trial = 0; trial < 300; ++trial) {
