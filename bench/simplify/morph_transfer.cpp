@@ -66,9 +66,7 @@ std::vector<float3> interpolated(const std::vector<float3>& offsets, const std::
 Mesh flat_shaded(const Mesh& mesh) {
   Mesh flat;
   for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const core::vec3d n = core::triangle_cross(mesh, t);
-    const double l = core::length(n);
-    const float3 unit = l > 0 ? float3{float(n.x / l), float(n.y / l), float(n.z / l)} : float3{0, 0, 1};
+    const float3 unit = core::unit_float3(core::triangle_cross(mesh, t), {0, 0, 1});
     for (int k = 0; k < 3; ++k) {
       flat.indices.push_back(uint32_t(flat.positions.size()));
       flat.positions.push_back(mesh.positions[mesh.indices[3 * t + k]]);

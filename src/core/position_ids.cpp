@@ -62,9 +62,7 @@ std::vector<float3> smooth_normals(const Mesh& mesh) {
   }
   std::vector<float3> normals(mesh.vertex_count());
   for (size_t v = 0; v < normals.size(); ++v) {
-    const core::vec3d& n = sum[ids.id[v]];
-    const double l = core::length(n);
-    normals[v] = l > 0 ? float3{float(n.x / l), float(n.y / l), float(n.z / l)} : float3{0, 0, 0};
+    normals[v] = core::unit_float3(sum[ids.id[v]], {0, 0, 0});
   }
   return normals;
 }

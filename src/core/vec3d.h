@@ -22,6 +22,11 @@ inline vec3d cross(const vec3d& a, const vec3d& b) {
 inline double length_squared(const vec3d& a) { return dot(a, a); }
 inline double length(const vec3d& a) { return std::sqrt(dot(a, a)); }
 inline vec3d to_double(const float3& p) { return {p.x, p.y, p.z}; }
+// v / |v| in float, or `fallback` when v has no length (or is not finite).
+inline float3 unit_float3(const vec3d& v, const float3& fallback) {
+  const double l = length(v);
+  return l > 0 && std::isfinite(l) ? float3{float(v.x / l), float(v.y / l), float(v.z / l)} : fallback;
+}
 
 // The cross product of triangle abc's edges from a: its normal (by the winding) times twice its area.
 inline vec3d triangle_cross(const float3& a, const float3& b, const float3& c) {

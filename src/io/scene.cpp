@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/heap.h"
+#include "core/vec3d.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
 
@@ -63,11 +64,7 @@ struct Instance {
   int32_t node = -1;  // that draws it
 };
 
-float3 normalized(double x, double y, double z, const float3& fallback) {
-  const double length = std::sqrt(x * x + y * y + z * z);
-  if (!(length > 0) || !std::isfinite(length)) return fallback;
-  return {float(x / length), float(y / length), float(z / length)};
-}
+float3 normalized(double x, double y, double z, const float3& fallback) { return core::unit_float3({x, y, z}, fallback); }
 
 // A world matrix as flatten applies it: positions by `world`, normals by the inverse transpose of
 // its upper 3x3 (its cofactor matrix over the determinant), winding and handedness flipped when it

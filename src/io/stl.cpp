@@ -120,10 +120,7 @@ Mesh read_ascii(std::span<const uint8_t> bytes, const std::string& name, const R
 }
 
 float3 facet_normal(const float3& a, const float3& b, const float3& c) {
-  const core::vec3d n = core::triangle_cross(a, b, c);
-  const double length = core::length(n);
-  if (!(length > 0)) return {0, 0, 0};
-  return {float(n.x / length), float(n.y / length), float(n.z / length)};
+  return core::unit_float3(core::triangle_cross(a, b, c), {0, 0, 0});
 }
 
 

@@ -127,9 +127,7 @@ std::vector<uint32_t> refacet(Mesh& mesh) {
   split.material_names = mesh.material_names, split.group_names = mesh.group_names;
   split.materials = mesh.materials, split.groups = mesh.groups;
   for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const core::vec3d m = core::triangle_cross(mesh, t);
-    const double length = core::length(m);
-    const float3 n = length > 0 ? float3{float(m.x / length), float(m.y / length), float(m.z / length)} : float3{0, 0, 1};
+    const float3 n = core::unit_float3(core::triangle_cross(mesh, t), {0, 0, 1});
     for (int k = 0; k < 3; ++k) {
       split.indices.push_back(uint32_t(split.positions.size()));
       append_vertex(split, mesh, mesh.indices[3 * t + k]);
