@@ -58,12 +58,10 @@ std::vector<float3> smooth_normals(const Mesh& mesh) {
   std::vector<core::vec3d> sum(ids.count);
   for (size_t t = 0; t < mesh.triangle_count(); ++t) {
     const core::vec3d n = core::triangle_cross(mesh, t);
-    for (int k = 0; k < 3; ++k) sum[ids.id[mesh.indices[3 * t + k]]] = sum[ids.id[mesh.indices[3 * t + k]]] + n;
+    for (int k = 0; k < 3; ++k) sum[ids.id[mesh.indices[3 * t + k]]] += n;
   }
   std::vector<float3> normals(mesh.vertex_count());
-  for (size_t v = 0; v < normals.size(); ++v) {
-    normals[v] = core::unit_float3(sum[ids.id[v]], {0, 0, 0});
-  }
+  for (size_t v = 0; v < normals.size(); ++v) normals[v] = core::unit_float3(sum[ids.id[v]], {0, 0, 0});
   return normals;
 }
 

@@ -14,6 +14,7 @@ struct vec3d {
   vec3d operator+(const vec3d& o) const { return {x + o.x, y + o.y, z + o.z}; }
   vec3d operator-(const vec3d& o) const { return {x - o.x, y - o.y, z - o.z}; }
   vec3d operator*(double s) const { return {x * s, y * s, z * s}; }
+  vec3d& operator+=(const vec3d& o) { return *this = *this + o; }
 };
 inline double dot(const vec3d& a, const vec3d& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline vec3d cross(const vec3d& a, const vec3d& b) {

@@ -64,8 +64,6 @@ struct Instance {
   int32_t node = -1;  // that draws it
 };
 
-float3 normalized(double x, double y, double z, const float3& fallback) { return core::unit_float3({x, y, z}, fallback); }
-
 // A world matrix as flatten applies it: positions by `world`, normals by the inverse transpose of
 // its upper 3x3 (its cofactor matrix over the determinant), winding and handedness flipped when it
 // mirrors.
@@ -83,16 +81,19 @@ struct Placement {
               (b * f - c * e) * scale, (c * d - a * f) * scale, (a * e - b * d) * scale};
     mirrored = det < 0;
   }
+  // The upper 3x3 times v: a displacement's image.
+  core::vec3d linear(const float3& v) const {
+    return {world[0] * v.x + world[4] * v.y + world[8] * v.z, world[1] * v.x + world[5] * v.y + world[9] * v.z,
+            world[2] * v.x + world[6] * v.y + world[10] * v.z};
+  }
   float3 apply_to_normal(const float3& v) const {
     const auto& n = normal;
-    return normalized(n[0] * v.x + n[1] * v.y + n[2] * v.z, n[3] * v.x + n[4] * v.y + n[5] * v.z,
-                      n[6] * v.x + n[7] * v.y + n[8] * v.z, v);
+    return core::unit_float3({n[0] * v.x + n[1] * v.y + n[2] * v.z, n[3] * v.x + n[4] * v.y + n[5] * v.z,
+                              n[6] * v.x + n[7] * v.y + n[8] * v.z},
+                             v);
   }
   // A tangent's xyz goes with the surface: by the upper 3x3 itself.
-  float3 apply_to_tangent(const float3& t) const {
-    return normalized(world[0] * t.x + world[4] * t.y + world[8] * t.z, world[1] * t.x + world[5] * t.y + world[9] * t.z,
-                      world[2] * t.x + world[6] * t.y + world[10] * t.z, t);
-  }
+  float3 apply_to_tangent(const float3& t) const { return core::unit_float3(linear(t), t); }
 };
 
 // Every (primitive, world matrix) pair of the default scene, in depth-first node order.
@@ -294,28 +295,29 @@ FlatMorphTargets flatten_morph_targets(const Scene& scene) {
     const Mesh& mesh = scene.primitives[inst.primitive].mesh;
     const std::vector<MorphTarget>& targets = source[inst.primitive];
     const Placement place(inst.world);
-    const Matrix& m = inst.world;
+    // A normal's or tangent's displacement: where the displaced one goes, less where it goes
+    // (flatten's own). `apply` is the placement's map for that stream.
+    const auto unit_displacements = [&](const std::vector<float3>& in, std::vector<float3>& out_stream, auto base_of, auto apply) {
+      for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+        const float3 b = base_of(v), &d = in[v];
+        const float3 to = apply(float3{b.x + d.x, b.y + d.y, b.z + d.z}), from = apply(b);
+        out_stream[base + v] = place.identity ? d : float3{to.x - from.x, to.y - from.y, to.z - from.z};
+      }
+    };
     for (size_t k = 0; k < targets.size(); ++k) {
       for (size_t v = 0; v < mesh.vertex_count(); ++v) {
         const float3& d = targets[k].positions[v];
-        out.targets[k].positions[base + v] =
-            place.identity ? d
-                           : float3{float(m[0] * d.x + m[4] * d.y + m[8] * d.z), float(m[1] * d.x + m[5] * d.y + m[9] * d.z),
-                                    float(m[2] * d.x + m[6] * d.y + m[10] * d.z)};
+        const core::vec3d moved = place.linear(d);
+        out.targets[k].positions[base + v] = place.identity ? d : float3{float(moved.x), float(moved.y), float(moved.z)};
       }
-      // A normal's or tangent's: where the displaced one goes, less where it goes (flatten's own).
       if (target_normals && !targets[k].normals.empty())
-        for (size_t v = 0; v < mesh.vertex_count(); ++v) {
-          const float3 &n = mesh.normals[v], &d = targets[k].normals[v];
-          const float3 to = place.apply_to_normal({n.x + d.x, n.y + d.y, n.z + d.z}), from = place.apply_to_normal(n);
-          out.targets[k].normals[base + v] = place.identity ? d : float3{to.x - from.x, to.y - from.y, to.z - from.z};
-        }
+        unit_displacements(targets[k].normals, out.targets[k].normals, [&](size_t v) { return mesh.normals[v]; },
+                           [&](const float3& n) { return place.apply_to_normal(n); });
       if (target_tangents && !targets[k].tangents.empty())
-        for (size_t v = 0; v < mesh.vertex_count(); ++v) {
-          const float3 t = {mesh.tangents[v].x, mesh.tangents[v].y, mesh.tangents[v].z}, &d = targets[k].tangents[v];
-          const float3 to = place.apply_to_tangent({t.x + d.x, t.y + d.y, t.z + d.z}), from = place.apply_to_tangent(t);
-          out.targets[k].tangents[base + v] = place.identity ? d : float3{to.x - from.x, to.y - from.y, to.z - from.z};
-        }
+        unit_displacements(
+            targets[k].tangents, out.targets[k].tangents,
+            [&](size_t v) { return float3{mesh.tangents[v].x, mesh.tangents[v].y, mesh.tangents[v].z}; },
+            [&](const float3& t) { return place.apply_to_tangent(t); });
     }
     base += mesh.vertex_count();
   }

@@ -194,31 +194,34 @@ SurfaceForm surface_form(const Mesh& mesh) {
     }
     form.flat_shaded = true, form.mesh = std::move(welded.mesh);  // (`sided` may be form.mesh: last)
   }
-  if (!form.changed()) form.source.clear(), form.back.clear();
   return form;
 }
 
 void restore_form(const SurfaceForm& form, Mesh& result, std::vector<uint32_t>& vertex_successor) {
   if (!form.changed()) return;
-  const bool track = !vertex_successor.empty();
-  if (track && (vertex_successor.size() != form.mesh.vertex_count() || form.source.size() != form.back.size()))
+  if (vertex_successor.empty()) {  // nothing to map
+    if (form.flat_shaded) refacet(result);
+    if (form.double_sided) add_back_faces(result);
+    return;
+  }
+  if (vertex_successor.size() != form.mesh.vertex_count() || form.source.size() != form.back.size())
     throw_usage("restore_form: " + std::to_string(vertex_successor.size()) + " successors for a form of " +
                 std::to_string(form.mesh.vertex_count()) + " vertices");
   // Each input vertex's successor in the simplified form (UINT32_MAX: none).
   std::vector<uint32_t> successor(form.source.size(), UINT32_MAX);
-  for (size_t u = 0; u < successor.size() && track; ++u)
+  for (size_t u = 0; u < successor.size(); ++u)
     if (form.source[u] < vertex_successor.size()) successor[u] = vertex_successor[form.source[u]];
   if (form.flat_shaded) {
     // A successor's faceted copies are at its corners: the corner whose face normal is nearest.
     // (refacet keeps the corners in order: corner c of the result is corner c of the smooth mesh.)
     const size_t smooth = result.vertex_count();
-    std::vector<uint32_t> first(smooth + 1, 0), corners(track ? result.indices.size() : 0);
+    std::vector<uint32_t> first(smooth + 1, 0), corners(result.indices.size());
     for (size_t c = 0; c < corners.size(); ++c) ++first[result.indices[c] + 1];
     for (size_t v = 0; v < smooth; ++v) first[v + 1] += first[v];
     std::vector<uint32_t> fill(first.begin(), first.end() - 1);
     for (uint32_t c = 0; c < corners.size(); ++c) corners[fill[result.indices[c]]++] = c;
     const std::vector<uint32_t> corner_vertex = refacet(result);
-    for (size_t u = 0; u < successor.size() && track; ++u) {
+    for (size_t u = 0; u < successor.size(); ++u) {
       const uint32_t r = successor[u];
       if (r >= smooth) continue;
       const float3& n = form.facet[u];
@@ -231,8 +234,7 @@ void restore_form(const SurfaceForm& form, Mesh& result, std::vector<uint32_t>& 
       successor[u] = UINT32_MAX;  // (a vertex no triangle uses has no copy)
       for (uint32_t i = first[r]; i < first[r + 1]; ++i) {
         if (any_own && !own(corners[i])) continue;
-        const float3& m = result.normals[corner_vertex[corners[i]]];
-        const double dot = double(m.x) * n.x + double(m.y) * n.y + double(m.z) * n.z;
+        const double dot = core::dot(core::to_double(result.normals[corner_vertex[corners[i]]]), core::to_double(n));
         if (dot > best_dot) best_dot = dot, successor[u] = corner_vertex[corners[i]];  // ties: the first corner
       }
     }
@@ -240,10 +242,10 @@ void restore_form(const SurfaceForm& form, Mesh& result, std::vector<uint32_t>& 
   if (form.double_sided) {
     const size_t fronts = result.vertex_count();
     const std::vector<uint32_t> vertex = add_back_faces(result);
-    for (size_t u = 0; u < successor.size() && track; ++u)
+    for (size_t u = 0; u < successor.size(); ++u)
       if (successor[u] < fronts) successor[u] = vertex[successor[u] + (form.back[u] ? fronts : 0)];
   }
-  if (track) vertex_successor = std::move(successor);
+  vertex_successor = std::move(successor);
 }
 
 }  // namespace lod
