@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "core/buckets.h"
 #include "lodkit/error.h"
 
 namespace lod::core {
@@ -16,34 +17,28 @@ TriangleAdjacency triangle_adjacency(std::span<const uint32_t> indices, std::spa
   adj.twin_same_direction.assign(3 * F, 0);
   adj.degenerate.assign(F, 0);
 
-  // Bucket every half-edge of a live triangle under its smaller key (counting sort).
-  std::vector<uint32_t> start(id_count + 1, 0);
   for (size_t t = 0; t < F; ++t) {
     const uint32_t a = key(3 * t), b = key(3 * t + 1), c = key(3 * t + 2);
     if (a >= id_count || b >= id_count || c >= id_count) throw_internal("triangle_adjacency: vertex id out of range");
     if (a == b || b == c || a == c) {
       adj.degenerate[t] = 1;
       ++adj.degenerate_triangles;
-      continue;
     }
-    ++start[std::min(a, b) + 1], ++start[std::min(b, c) + 1], ++start[std::min(c, a) + 1];
   }
-  for (size_t v = 0; v < id_count; ++v) start[v + 1] += start[v];
+  // Every half-edge of a live triangle under its smaller key.
   struct Entry {
     uint32_t other;     // the larger key
     uint32_t halfedge;  // 3 * t + k
   };
-  std::vector<Entry> entries(start[id_count]);
-  {
-    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+  Buckets<Entry> edges = bucket<Entry>(id_count, [&](auto&& emit) {
     for (size_t t = 0; t < F; ++t) {
       if (adj.degenerate[t]) continue;
       for (uint32_t k = 0; k < 3; ++k) {
         const uint32_t a = key(3 * t + k), b = key(3 * t + (k + 1) % 3);
-        entries[fill[std::min(a, b)]++] = {std::max(a, b), uint32_t(3 * t + k)};
+        emit(std::min(a, b), Entry{std::max(a, b), uint32_t(3 * t + k)});
       }
     }
-  }
+  });
   // Within a bucket (a handful of entries), equal `other` keys are one edge. Entries were filled in
   // half-edge order, so a stable sort keeps the result independent of anything but the input.
   auto starts_at_smaller = [&](uint32_t h) {
@@ -51,8 +46,8 @@ TriangleAdjacency triangle_adjacency(std::span<const uint32_t> indices, std::spa
     return key(3 * t + k) < key(3 * t + (k + 1) % 3);
   };
   for (size_t v = 0; v < id_count; ++v) {
-    Entry* begin = entries.data() + start[v];
-    Entry* end = entries.data() + start[v + 1];
+    Entry* begin = edges[v].data();
+    Entry* end = begin + edges[v].size();
     // Insertion sort: buckets are tiny.
     for (Entry* i = begin + 1; i < end; ++i)
       for (Entry* j = i; j > begin && j[-1].other > j[0].other; --j) std::swap(j[-1], j[0]);

@@ -7,6 +7,7 @@
 #include <limits>
 #include <tuple>
 
+#include "core/buckets.h"
 #include "core/union_find.h"
 #include "core/vec3d.h"
 #include "lodkit/mesh.h"
@@ -208,18 +209,13 @@ MeshStats compute_stats(const Mesh& mesh) {
   // component (a Moebius strip, a Klein bottle) cannot be wound consistently.
   std::vector<uint8_t> component_orientable(s.components.size(), 1);
   {
-    std::vector<uint32_t> offsets(F + 1, 0);
-    for (const Link& l : manifold_links) {
-      ++offsets[l.a + 1];
-      ++offsets[l.b + 1];
-    }
-    for (uint32_t t = 0; t < F; ++t) offsets[t + 1] += offsets[t];
-    std::vector<std::pair<uint32_t, uint8_t>> adjacency(offsets[F]);
-    std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
-    for (const Link& l : manifold_links) {
-      adjacency[fill[l.a]++] = {l.b, uint8_t(l.same_direction)};
-      adjacency[fill[l.b]++] = {l.a, uint8_t(l.same_direction)};
-    }
+    using Neighbour = std::pair<uint32_t, uint8_t>;  // (triangle, same direction)
+    const core::Buckets<Neighbour> adjacency = core::bucket<Neighbour>(F, [&](auto&& emit) {
+      for (const Link& l : manifold_links) {
+        emit(l.a, Neighbour{l.b, uint8_t(l.same_direction)});
+        emit(l.b, Neighbour{l.a, uint8_t(l.same_direction)});
+      }
+    });
     std::vector<uint8_t> flip(F, 2);  // 2 = not visited
     std::vector<uint32_t> stack;
     for (uint32_t t0 = 0; t0 < F; ++t0) {
@@ -229,8 +225,7 @@ MeshStats compute_stats(const Mesh& mesh) {
       while (!stack.empty()) {
         uint32_t t = stack.back();
         stack.pop_back();
-        for (uint32_t e = offsets[t]; e < offsets[t + 1]; ++e) {
-          auto [n, same] = adjacency[e];
+        for (const auto& [n, same] : adjacency[t]) {
           uint8_t want = uint8_t(flip[t] ^ same);
           if (flip[n] == 2) {
             flip[n] = want;

@@ -24,6 +24,7 @@
 #include <emmintrin.h>
 #endif
 
+#include "core/buckets.h"
 #include "lodkit/error.h"
 #include "lodkit/optimize.h"
 #include "optimize/vertex_cache.h"
@@ -59,15 +60,13 @@ std::vector<uint32_t> greedy_cache_order(std::span<const uint32_t> indices, size
   };
 
   // Vertex -> triangles (CSR). The first live[v] entries of each list are the triangles not yet emitted.
-  std::vector<uint32_t> offset(V + 1, 0), live(V, 0);
-  for (const uint32_t i : indices) ++offset[i + 1];
-  for (uint32_t v = 0; v < V; ++v) offset[v + 1] += offset[v];
-  std::vector<uint32_t> triangles(indices.size());
-  for (uint32_t t = 0; t < F; ++t)
-    for (uint32_t k = 0; k < 3; ++k) {
-      const uint32_t v = indices[3 * t + k];
-      triangles[offset[v] + live[v]++] = t;
-    }
+  core::Buckets<uint32_t> around = core::bucket<uint32_t>(V, [&](auto&& emit) {
+    for (uint32_t c = 0; c < indices.size(); ++c) emit(indices[c], c / 3);
+  });
+  const std::vector<uint32_t>& offset = around.first;
+  std::vector<uint32_t>& triangles = around.items;
+  std::vector<uint32_t> live(V);
+  for (uint32_t v = 0; v < V; ++v) live[v] = offset[v + 1] - offset[v];
 
   std::vector<uint32_t> position(V, K);  // cache position, K when not cached
   std::vector<float> score(V);

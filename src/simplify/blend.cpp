@@ -4,6 +4,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "core/buckets.h"
 #include "core/vec3d.h"
 #include "lodkit/error.h"
 #include "lodkit/simplify.h"
@@ -32,22 +33,14 @@ std::vector<VertexBlend> vertex_blends(const Mesh& input, std::span<const uint32
     if (s[1] == s[0]) s[1] = none;
     if (s[2] == s[0] || s[2] == s[1]) s[2] = none;
   };
-  std::vector<uint32_t> first(size_t(out.count) + 1, 0), region;
-  for (size_t t = 0; t < triangles; ++t) {
-    uint32_t s[3];
-    positions(t, s);
-    for (const uint32_t p : s)
-      if (p != none) ++first[p + 1];
-  }
-  for (size_t p = 0; p < out.count; ++p) first[p + 1] += first[p];
-  region.resize(first[out.count]);
-  std::vector<uint32_t> fill(first.begin(), first.end() - 1);
-  for (size_t t = 0; t < triangles; ++t) {
-    uint32_t s[3];
-    positions(t, s);
-    for (const uint32_t p : s)
-      if (p != none) region[fill[p]++] = uint32_t(t);
-  }
+  const core::Buckets<uint32_t> region = core::bucket<uint32_t>(out.count, [&](auto&& emit) {
+    for (size_t t = 0; t < triangles; ++t) {
+      uint32_t s[3];
+      positions(t, s);
+      for (const uint32_t p : s)
+        if (p != none) emit(p, uint32_t(t));
+    }
+  });
   // The input vertices at each input position that became each output vertex, to give a blend the
   // corners on its own vertex's side of a seam: (input position, output vertex) -> input vertex.
   // Only positions with several input vertices (seams) can have a choice.
@@ -75,7 +68,7 @@ std::vector<VertexBlend> vertex_blends(const Mesh& input, std::span<const uint32
   std::vector<VertexBlend> blends(n);
   for (size_t v = 0; v < n; ++v) {
     const uint32_t p = out.id[v];
-    if (first[p] == first[p + 1])
+    if (region[p].empty())
       throw_usage("vertex_blends: output vertex " + std::to_string(v) + " has no input vertex among its successors' sources");
     // The nearest point of the patch; and, within a thousandth of the diagonal of it, of the
     // triangles on the vertex's own side of a seam (a corner became this very wedge), else of those
@@ -84,12 +77,11 @@ std::vector<VertexBlend> vertex_blends(const Mesh& input, std::span<const uint32
     const measure::vec3f x = output.positions[v];
     double best = INFINITY, best_own = INFINITY, best_facing = INFINITY;
     // Until a distance is finite (coordinates near the float range overflow): a corner of the patch.
-    const uint32_t* c0 = &input.indices[3 * size_t(region[first[p]])];
+    const uint32_t* c0 = &input.indices[3 * size_t(region[p][0])];
     uint32_t k0 = 0;
     while (k0 < 2 && (vertex_successor[c0[k0]] == none || out.id[vertex_successor[c0[k0]]] != p)) ++k0;
     VertexBlend any{{c0[k0], c0[k0], c0[k0]}, {1.0f, 0.0f, 0.0f}}, own, facing_one;
-    for (uint32_t i = first[p]; i < first[p + 1]; ++i) {
-      const uint32_t t = region[i];
+    for (const uint32_t t : region[p]) {
       const uint32_t* c = &input.indices[3 * size_t(t)];
       const measure::TrianglePoint q =
           measure::closest_on_triangle(x, input.positions[c[0]], input.positions[c[1]], input.positions[c[2]]);

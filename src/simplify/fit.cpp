@@ -7,6 +7,7 @@
 #include <optional>
 #include <tuple>
 
+#include "core/buckets.h"
 #include "core/heap.h"
 #include "core/parallel.h"
 #include "core/union_find.h"
@@ -121,18 +122,15 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
   if (triangles == 0 || n == 0) return;
   const size_t chunks = (triangles + chunk_triangles - 1) / chunk_triangles;
   const auto chunk_of = [&](size_t t) { return size_t(s.position_of[input.indices[3 * t]]) * chunks / s.position_count; };
-  std::vector<uint32_t> first(chunks + 1, 0), order = core::make_huge<uint32_t>(triangles);
-  for (size_t t = 0; t < triangles; ++t) ++first[chunk_of(t) + 1];
-  std::partial_sum(first.begin(), first.end(), first.begin());
-  {
-    std::vector<uint32_t> fill(first.begin(), first.end() - 1);
-    for (size_t t = 0; t < triangles; ++t) order[fill[chunk_of(t)]++] = uint32_t(t);  // increasing within a chunk
-  }
+  const core::Buckets<uint32_t> chunk = core::bucket<uint32_t>(chunks, [&](auto&& emit) {
+    for (size_t t = 0; t < triangles; ++t) emit(chunk_of(t), uint32_t(t));  // increasing within a chunk
+  });
+  const std::vector<uint32_t>&first = chunk.first, &order = chunk.items;
   // Each chunk's tree is built over its triangles in the Morton order of their first corners (by
   // position id, then triangle) by halving, not by SAH: about 2^17 triangles per tree against one
   // query per result edge, so the build was most of this search's time. `coherent` lists the chunk's
   // triangles so, as indices within the chunk (a counting sort over the chunk's position ids).
-  std::vector<uint32_t> coherent, start;
+  std::vector<uint32_t> coherent;
   Mesh part;
   core::copy_huge(part.positions, input.positions);
   for (size_t c = 0; c < chunks; ++c) {
@@ -153,11 +151,9 @@ void closest_on_input(const State& s, const std::vector<measure::vec3f>& points,
       const auto key = [&](uint32_t i) { return s.position_of[input.indices[3 * size_t(order[i])]]; };
       uint32_t low = key(first[c]), high = low;
       for (uint32_t i = first[c]; i < first[c + 1]; ++i) low = std::min(low, key(i)), high = std::max(high, key(i));
-      start.assign(size_t(high - low) + 2, 0);
-      for (uint32_t i = first[c]; i < first[c + 1]; ++i) ++start[key(i) - low + 1];
-      std::partial_sum(start.begin(), start.end(), start.begin());
-      coherent.resize(first[c + 1] - first[c]);
-      for (uint32_t i = first[c]; i < first[c + 1]; ++i) coherent[start[key(i) - low]++] = i - first[c];
+      coherent = core::bucket<uint32_t>(size_t(high - low) + 1, [&](auto&& emit) {
+                   for (uint32_t i = first[c]; i < first[c + 1]; ++i) emit(key(i) - low, i - first[c]);
+                 }).items;
     }
     const measure::TriangleBvh bvh(part, coherent, s.threads);
     // Groups of consecutive points (neighbours on the result) share one traversal (closest_group,
@@ -241,28 +237,23 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
   std::vector<uint32_t> vertex_slot = core::make_huge<uint32_t>(input.vertex_count());
   for (size_t v = 0; v < input.vertex_count(); ++v) vertex_slot[v] = slot[last(s.position_of[v])];
   std::vector<double> share = core::make_huge<double>(input.vertex_count(), 0.0), mass(m, 0.0);
-  std::vector<uint32_t> candidates_first(m + 1, 0), candidates;
-  for (int fill = 0; fill < 2; ++fill) {
+  core::Buckets<uint32_t> candidate = core::bucket<uint32_t>(m, [&](auto&& emit) {
     for (size_t t = 0; t < triangles; ++t) {
       const uint32_t* corner = &input.indices[3 * t];
       const uint32_t j[3] = {vertex_slot[corner[0]], vertex_slot[corner[1]], vertex_slot[corner[2]]};
-      for (uint32_t k = 0; k < 3; ++k) {
-        if (j[k] == none || (k > 0 && j[k] == j[0]) || (k > 1 && j[k] == j[1])) continue;
-        if (fill) candidates[candidates_first[j[k]]++] = uint32_t(t);
-        else ++candidates_first[j[k] + 1];
-      }
-      if (fill) continue;
-      vec3d p[3];
-      for (uint32_t k = 0; k < 3; ++k) p[k] = s.normalized_input(input.positions[corner[k]]);
-      const double third = length(cross(p[1] - p[0], p[2] - p[0])) / 6;
-      for (uint32_t k = 0; k < 3; ++k) share[corner[k]] += third;
+      for (uint32_t k = 0; k < 3; ++k)
+        if (j[k] != none && !(k > 0 && j[k] == j[0]) && !(k > 1 && j[k] == j[1])) emit(j[k], uint32_t(t));
     }
-    if (fill) break;
-    for (size_t j = 0; j < m; ++j) candidates_first[j + 1] += candidates_first[j];
-    candidates.resize(candidates_first[m]);
+  });
+  const std::vector<uint32_t>& candidates_first = candidate.first;
+  std::vector<uint32_t>& candidates = candidate.items;
+  for (size_t t = 0; t < triangles; ++t) {
+    const uint32_t* corner = &input.indices[3 * t];
+    vec3d p[3];
+    for (uint32_t k = 0; k < 3; ++k) p[k] = s.normalized_input(input.positions[corner[k]]);
+    const double third = length(cross(p[1] - p[0], p[2] - p[0])) / 6;
+    for (uint32_t k = 0; k < 3; ++k) share[corner[k]] += third;
   }
-  std::rotate(candidates_first.rbegin(), candidates_first.rbegin() + 1, candidates_first.rend());  // back to starts
-  candidates_first[0] = 0;
   for (size_t v = 0; v < input.vertex_count(); ++v)
     if (vertex_slot[v] != none) mass[vertex_slot[v]] += share[v];
   // Every input vertex is a sample, up to sample_budget of them. Far down a large input, with many
@@ -285,10 +276,10 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
   // stay in sample order.
   // (A counting sort by slot; a sample at no slot goes last.)
   const auto sample_slot = [&](size_t i) { return std::min<size_t>(vertex_slot[samples[i]], m); };
-  std::vector<uint32_t> slot_start(m + 2, 0), by_slot(samples.size()), group_first;
-  for (size_t i = 0; i < samples.size(); ++i) ++slot_start[sample_slot(i) + 1];
-  std::partial_sum(slot_start.begin(), slot_start.end(), slot_start.begin());
-  for (size_t i = 0; i < samples.size(); ++i) by_slot[slot_start[sample_slot(i)]++] = uint32_t(i);
+  const std::vector<uint32_t> by_slot = core::bucket<uint32_t>(m + 1, [&](auto&& emit) {
+                                          for (size_t i = 0; i < samples.size(); ++i) emit(sample_slot(i), uint32_t(i));
+                                        }).items;
+  std::vector<uint32_t> group_first;
   for (size_t k = 0; k < by_slot.size(); ++k)
     if (k == 0 || sample_slot(by_slot[k]) != sample_slot(by_slot[k - 1]) || k - group_first.back() == max_group)
       group_first.push_back(uint32_t(k));

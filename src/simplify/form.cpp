@@ -7,6 +7,7 @@
 #include <map>
 #include <optional>
 
+#include "core/buckets.h"
 #include "core/vec3d.h"
 #include "lodkit/error.h"
 #include "lodkit/optimize.h"
@@ -215,11 +216,9 @@ void restore_form(const SurfaceForm& form, Mesh& result, std::vector<uint32_t>& 
     // A successor's faceted copies are at its corners: the corner whose face normal is nearest.
     // (refacet keeps the corners in order: corner c of the result is corner c of the smooth mesh.)
     const size_t smooth = result.vertex_count();
-    std::vector<uint32_t> first(smooth + 1, 0), corners(result.indices.size());
-    for (size_t c = 0; c < corners.size(); ++c) ++first[result.indices[c] + 1];
-    for (size_t v = 0; v < smooth; ++v) first[v + 1] += first[v];
-    std::vector<uint32_t> fill(first.begin(), first.end() - 1);
-    for (uint32_t c = 0; c < corners.size(); ++c) corners[fill[result.indices[c]]++] = c;
+    const core::Buckets<uint32_t> corners = core::bucket<uint32_t>(smooth, [&](auto&& emit) {
+      for (uint32_t c = 0; c < result.indices.size(); ++c) emit(result.indices[c], c);
+    });
     const std::vector<uint32_t> corner_vertex = refacet(result);
     for (size_t u = 0; u < successor.size(); ++u) {
       const uint32_t r = successor[u];
@@ -229,13 +228,13 @@ void restore_form(const SurfaceForm& form, Mesh& result, std::vector<uint32_t>& 
       const auto own = [&](uint32_t c) {
         return form.material.empty() || result.materials.empty() || result.materials[c / 3] == form.material[u];
       };
-      const bool any_own = std::any_of(corners.data() + first[r], corners.data() + first[r + 1], own);
+      const bool any_own = std::any_of(corners[r].begin(), corners[r].end(), own);
       double best_dot = -INFINITY;
       successor[u] = UINT32_MAX;  // (a vertex no triangle uses has no copy)
-      for (uint32_t i = first[r]; i < first[r + 1]; ++i) {
-        if (any_own && !own(corners[i])) continue;
-        const double dot = core::dot(core::to_double(result.normals[corner_vertex[corners[i]]]), core::to_double(n));
-        if (dot > best_dot) best_dot = dot, successor[u] = corner_vertex[corners[i]];  // ties: the first corner
+      for (const uint32_t c : corners[r]) {
+        if (any_own && !own(c)) continue;
+        const double dot = core::dot(core::to_double(result.normals[corner_vertex[c]]), core::to_double(n));
+        if (dot > best_dot) best_dot = dot, successor[u] = corner_vertex[c];  // ties: the first corner
       }
     }
   }
