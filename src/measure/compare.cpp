@@ -12,6 +12,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
+#include "core/buckets.h"
 #include "core/parallel.h"
 #include "core/vec3d.h"
 #include "lodkit/error.h"
@@ -114,26 +115,18 @@ struct Surface {
   // Unique edges by a counting sort on the smaller position id (linear time, no hashing).
   void find_edges() {
     const Mesh& m = *mesh;
-    std::vector<uint32_t> start(size_t(ids.count) + 1, 0);
     const size_t triangles = m.triangle_count();
-    auto edge = [&](size_t t, int k, uint32_t& lo, uint32_t& hi) {
-      const uint32_t p = ids.id[m.indices[3 * t + k]], q = ids.id[m.indices[3 * t + (k + 1) % 3]];
-      lo = std::min(p, q), hi = std::max(p, q);
-      return p != q;
-    };
-    uint32_t lo, hi;
-    for (size_t t = 0; t < triangles; ++t)
-      for (int k = 0; k < 3; ++k)
-        if (edge(t, k, lo, hi)) ++start[lo + 1];
-    for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
-    std::vector<std::pair<uint32_t, uint32_t>> bucket(start.back());  // (hi, triangle)
-    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-    for (size_t t = 0; t < triangles; ++t)
-      for (int k = 0; k < 3; ++k)
-        if (edge(t, k, lo, hi)) bucket[fill[lo]++] = {hi, uint32_t(t)};
+    // Each edge under its lower position id, as (higher id, triangle).
+    core::Buckets<std::pair<uint32_t, uint32_t>> around = core::bucket<std::pair<uint32_t, uint32_t>>(ids.count, [&](auto&& emit) {
+      for (size_t t = 0; t < triangles; ++t)
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t p = ids.id[m.indices[3 * t + k]], q = ids.id[m.indices[3 * t + (k + 1) % 3]];
+          if (p != q) emit(std::min(p, q), std::pair{std::max(p, q), uint32_t(t)});
+        }
+    });
     edges.clear();
     for (const uint32_t p : position_order) {
-      auto first = bucket.begin() + start[p], last = bucket.begin() + start[p + 1];
+      const auto first = around[p].begin(), last = around[p].end();
       std::sort(first, last);  // a handful of entries; equal hi keep the lowest triangle first
       for (auto it = first; it != last; ++it)
         if (it == first || it->first != (it - 1)->first) edges.push_back({p, it->first, it->second});

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <numeric>
 #include <optional>
 #include <tuple>
 
@@ -374,18 +373,15 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
   };
   // Per result triangle, the samples whose feet lie in it, and each sample's squared distance to
   // its foot (for the flips, on the feet of the iterations that flip).
-  std::vector<uint32_t> foot_first, foot_samples;
+  core::Buckets<uint32_t> feet;
   std::vector<float> foot_distance(flips ? samples.size() : 0, 0.0f);
   // Edges are flipped before the first iteration's sweeps and again, with the far ones, before the
   // sweeps of iteration reflip_at (see far_edge).
   const auto flip_round = [&](uint32_t iteration) { return flips && (iteration == 0 || iteration == reflip_at); };
   const auto file_feet = [&]() {
-    foot_first.assign(result_triangles + 1, 0);
-    foot_samples.resize(samples.size());
-    for (const Foot& f : foot) ++foot_first[f.triangle + 1];
-    std::partial_sum(foot_first.begin(), foot_first.end(), foot_first.begin());
-    std::vector<uint32_t> fill(foot_first.begin(), foot_first.end() - 1);
-    for (size_t i = 0; i < foot.size(); ++i) foot_samples[fill[foot[i].triangle]++] = uint32_t(i);
+    feet = core::bucket<uint32_t>(result_triangles, [&](auto&& emit) {
+      for (size_t i = 0; i < foot.size(); ++i) emit(foot[i].triangle, uint32_t(i));
+    });
   };
   // The triangle of result triangle t's corners, prepared for distance queries.
   const auto prepared = [&](size_t t) {
@@ -438,9 +434,9 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
       // there is nothing to gain.
       double old_sum = 0, weights = 0;
       for (const uint32_t t : {sides_of[2 * e] / 3, sides_of[2 * e + 1] / 3})
-        for (uint32_t k = foot_first[t]; k < foot_first[t + 1]; ++k) {
-          const double a = share[samples[foot_samples[k]]];
-          old_sum += a * foot_distance[foot_samples[k]], weights += a;
+        for (const uint32_t i : feet[t]) {
+          const double a = share[samples[i]];
+          old_sum += a * foot_distance[i], weights += a;
         }
       const bool far = far_level > 0 && length_squared(edge_residual[e]) > far_level;
       if (!far && !(old_sum * scale2 > flip_noise * weights)) return;
@@ -477,8 +473,8 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
       const measure::PreparedTriangle new1 = measure::prepare_triangle(fp, fx, fr), new2 = measure::prepare_triangle(fq, fr, fx);
       double new_sum = 0;
       for (const uint32_t t : {f.t1, f.t2})
-        for (uint32_t k = foot_first[t]; k < foot_first[t + 1]; ++k) {
-          const uint32_t v = samples[foot_samples[k]];
+        for (const uint32_t i : feet[t]) {
+          const uint32_t v = samples[i];
           const measure::vec3f point(input.positions[v]);
           new_sum += share[v] * std::min(measure::closest_distance_squared(point, new1), measure::closest_distance_squared(point, new2));
         }
@@ -575,8 +571,7 @@ uint32_t fit_positions(State& s, uint32_t iterations, double weight, double edge
       else edge_target[f.edge] = (measure::vec3f(result.positions[r]) + measure::vec3f(result.positions[x])) * 0.5f;
       const measure::PreparedTriangle new1 = prepared(f.t1), new2 = prepared(f.t2);
       for (const uint32_t t : {f.t1, f.t2})
-        for (uint32_t k = foot_first[t]; k < foot_first[t + 1]; ++k) {
-          const uint32_t i_sample = foot_samples[k];
+        for (const uint32_t i_sample : feet[t]) {
           const measure::vec3f point(input.positions[samples[i_sample]]);
           const measure::TrianglePoint h1 = measure::closest_on_triangle(point, new1), h2 = measure::closest_on_triangle(point, new2);
           foot[i_sample] = h1.distance_squared <= h2.distance_squared ? Foot{f.t1, h1.v, h1.w} : Foot{f.t2, h2.v, h2.w};
