@@ -121,6 +121,28 @@ double component_value(const uint8_t* p, int component_type) {
   });
 }
 
+// A component's value as a reader sees it: integers divided out when normalized (glTF's rule:
+// signed ones clamped at -1), else as stored.
+template <class T>
+float component_to_float(T v, bool normalized) {
+  if constexpr (std::is_same_v<T, float>) {
+    return v;
+  } else {
+    if (!normalized) return float(v);
+    if constexpr (std::is_same_v<T, int8_t>) return std::max(float(v) / 127.0f, -1.0f);
+    if constexpr (std::is_same_v<T, uint8_t>) return float(v) / 255.0f;
+    if constexpr (std::is_same_v<T, int16_t>) return std::max(float(v) / 32767.0f, -1.0f);
+    if constexpr (std::is_same_v<T, uint16_t>) return float(v) / 65535.0f;
+    return float(v);  // 32-bit integers are never normalized in glTF
+  }
+}
+float component_float(const uint8_t* p, int component_type, bool normalized) {
+  return with_component_type(component_type, [&](auto v) {
+    std::memcpy(&v, p, sizeof v);
+    return component_to_float(v, normalized);
+  });
+}
+
 // Stores a value in one component, rounded and clamped to an integer type's range.
 void store_component(double value, uint8_t* p, int component_type) {
   with_component_type(component_type, [&](auto v) {
@@ -526,7 +548,7 @@ class Document {
     std::vector<Out> out(acc.count);
     read_elements<n>(index, [&](size_t i, const auto* raw) {
       float values[n];
-      for (size_t c = 0; c < n; ++c) values[c] = to_float(raw[c], normalized);
+      for (size_t c = 0; c < n; ++c) values[c] = component_to_float(raw[c], normalized);
       std::memcpy(&out[i], values, sizeof values);
     });
     return out;
@@ -547,20 +569,6 @@ class Document {
   }
 
  private:
-  template <class T>
-  static float to_float(T v, bool normalized) {
-    if constexpr (std::is_same_v<T, float>) {
-      return v;
-    } else {
-      if (!normalized) return float(v);
-      if constexpr (std::is_same_v<T, int8_t>) return std::max(float(v) / 127.0f, -1.0f);
-      if constexpr (std::is_same_v<T, uint8_t>) return float(v) / 255.0f;
-      if constexpr (std::is_same_v<T, int16_t>) return std::max(float(v) / 32767.0f, -1.0f);
-      if constexpr (std::is_same_v<T, uint16_t>) return float(v) / 65535.0f;
-      return float(v);  // 32-bit integers are never normalized in glTF
-    }
-  }
-
   const uint8_t* view_bytes(int view_index) const {
     const tg::BufferView& view = model_.bufferViews[size_t(view_index)];
     return model_.buffers[size_t(view.buffer)].data.data() + view.byteOffset;
@@ -1124,9 +1132,88 @@ struct Slot {
   int mesh = 0, primitive = 0;  // where a Scene primitive lives in the model being written
 };
 
+// ---- KHR_mesh_quantization (WriteOptions::quantize) ----------------------------------------------
+
+// The document's position grid: p = offset + scale * q, q an integer in [0, top] per axis. One scale
+// on every axis, so that normals mean the same on the grid (gltfpack's choice too); one grid for
+// every mesh, so that meshes which meet (a character's parts, LOD levels) still meet exactly.
+struct PositionGrid {
+  double offset[3] = {0, 0, 0};
+  double scale = 1;
+  double top = 0;  // 2^bits - 1; 0: no grid (positions stay floats)
+};
+
+// How BinWriter stores one primitive's streams.
+struct StreamCoding {
+  bool quantize = false;               // normals, tangents, UVs, colours and weights in fewer bits
+  const PositionGrid* grid = nullptr;  // positions and target positions on this grid
+};
+
+// Each element's float components (float2, float3, float4), stored as integers I = code(value,
+// component), packed.
+template <class I, class T, class Code>
+std::vector<uint8_t> pack_components(const std::vector<T>& values, Code&& code) {
+  constexpr size_t n = sizeof(T) / sizeof(float);
+  static_assert(sizeof(T) == n * sizeof(float), "T must be tightly packed floats");
+  std::vector<uint8_t> out(values.size() * n * sizeof(I));
+  for (size_t i = 0; i < values.size(); ++i) {
+    float f[n];
+    std::memcpy(f, &values[i], sizeof f);
+    for (size_t c = 0; c < n; ++c) {
+      const I q = I(code(f[c], c));
+      std::memcpy(out.data() + (i * n + c) * sizeof(I), &q, sizeof q);
+    }
+  }
+  return out;
+}
+
+template <class T>
+bool all_in_unit_range(const std::vector<T>& values) {
+  const auto* f = reinterpret_cast<const float*>(values.data());
+  return std::all_of(f, f + values.size() * (sizeof(T) / sizeof(float)), [](float x) { return x >= 0.0f && x <= 1.0f; });
+}
+
+// Signed normalized bytes (normals, tangents): round(x * 127).
+template <class T>
+std::vector<uint8_t> snorm8(const std::vector<T>& values) {
+  return pack_components<int8_t>(values, [](float x, size_t) { return std::lround(std::clamp(x, -1.0f, 1.0f) * 127.0f); });
+}
+// Unsigned normalized integers of type I (UVs, colours): round(x * max).
+template <class I, class T>
+std::vector<uint8_t> unorm(const std::vector<T>& values) {
+  const float top = float(std::numeric_limits<I>::max());
+  return pack_components<I>(values, [top](float x, size_t) { return std::lround(std::clamp(x, 0.0f, 1.0f) * top); });
+}
+
+// A skinned vertex's weights (one or two sets) in normalized unsigned bytes that sum to exactly 255,
+// as glTF asks of quantized weights: rounded, the largest taking the difference.
+std::array<std::vector<uint8_t>, 2> unorm8_weights(const std::vector<float4>& first, const std::vector<float4>& second) {
+  const size_t n = first.size(), sets = second.empty() ? 1 : 2;
+  std::array<std::vector<uint8_t>, 2> out{std::vector<uint8_t>(4 * n), std::vector<uint8_t>(second.empty() ? 0 : 4 * n)};
+  for (size_t v = 0; v < n; ++v) {
+    float w[8] = {};
+    std::memcpy(w, &first[v], sizeof(float4));
+    if (sets == 2) std::memcpy(w + 4, &second[v], sizeof(float4));
+    double total = 0;
+    for (float& x : w) total += x = std::isfinite(x) ? std::max(x, 0.0f) : 0.0f;
+    int q[8] = {}, sum = 0, largest = 0;
+    for (size_t k = 0; k < 4 * sets; ++k) {
+      q[k] = total > 0 ? int(std::lround(w[k] / total * 255.0)) : 0;
+      sum += q[k];
+      if (q[k] > q[largest]) largest = int(k);
+    }
+    if (total > 0) q[largest] += 255 - sum;
+    for (size_t k = 0; k < 4 * sets; ++k) out[k / 4][4 * v + k % 4] = uint8_t(q[k]);
+  }
+  return out;
+}
+
 class BinWriter {
  public:
   BinWriter(tg::Model& model, std::vector<uint8_t>& bin) : model_(model), bin_(bin) {}
+
+  // Whether a stream was written in a form only KHR_mesh_quantization allows.
+  bool used_quantization() const { return used_quantization_; }
 
   void align() { bin_.resize((bin_.size() + 3) & ~size_t(3), 0); }
 
@@ -1156,8 +1243,9 @@ class BinWriter {
   }
 
   // A vertex stream of `like`'s type from tightly packed elements; each element padded to 4 bytes
-  // (glTF's vertex attribute alignment). Bounds where `like` had them (a POSITION must).
-  int add_vertex_stream(const std::vector<uint8_t>& packed, const tg::Accessor& like) {
+  // (glTF's vertex attribute alignment). With `bounds`, the accessor's min and max (a POSITION must
+  // have them), in stored units.
+  int add_vertex_stream(const std::vector<uint8_t>& packed, const tg::Accessor& like, bool bounds) {
     const size_t element = element_bytes(like.componentType, like.type), stride = (element + 3) & ~size_t(3);
     const size_t count = element ? packed.size() / element : 0;
     std::vector<uint8_t> bytes(count * stride, 0);
@@ -1170,7 +1258,7 @@ class BinWriter {
     acc.count = count;
     acc.normalized = like.normalized;
     acc.name = like.name;
-    if (!like.minValues.empty() && !like.maxValues.empty() && count) {
+    if (bounds && count) {
       const size_t n = type_components(like.type), size = component_bytes(like.componentType);
       acc.minValues.assign(n, INFINITY);
       acc.maxValues.assign(n, -INFINITY);
@@ -1184,25 +1272,74 @@ class BinWriter {
     return int(model_.accessors.size() - 1);
   }
 
-  // Appends the Mesh's streams and indices; returns nothing, fills the primitive's references.
-  void add_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim) {
+  // Packed integer elements as a vertex stream.
+  int add_packed(const std::vector<uint8_t>& packed, int component_type, int type, bool normalized, bool bounds = false) {
+    tg::Accessor like;
+    like.componentType = component_type;
+    like.type = type;
+    like.normalized = normalized;
+    return add_vertex_stream(packed, like, bounds);
+  }
+
+  // A float stream in fewer bits where `coding` asks for it and the values allow it.
+  template <class T>
+  int add_float_stream(const std::vector<T>& values, int type, const char* semantic, const StreamCoding& coding) {
     const int array = TINYGLTF_TARGET_ARRAY_BUFFER;
-    const int position = add_accessor(mesh.positions, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
-    float3 lo, hi;
-    bounding_box(mesh, lo, hi);
-    model_.accessors[size_t(position)].minValues = {lo.x, lo.y, lo.z};
-    model_.accessors[size_t(position)].maxValues = {hi.x, hi.y, hi.z};
-    prim.attributes["POSITION"] = position;
-    if (!mesh.normals.empty())
-      prim.attributes["NORMAL"] = add_accessor(mesh.normals, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
-    if (!mesh.tangents.empty())
-      prim.attributes["TANGENT"] = add_accessor(mesh.tangents, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
+    if (coding.quantize) {
+      const std::string_view name = semantic;
+      // (Core glTF allows integer UVs and colours; integer normals and tangents need the extension.)
+      if (name == "NORMAL" || name == "TANGENT")
+        return used_quantization_ = true, add_packed(snorm8(values), TINYGLTF_COMPONENT_TYPE_BYTE, type, true);
+      if (name.starts_with("TEXCOORD") && all_in_unit_range(values))
+        return add_packed(unorm<uint16_t>(values), TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, type, true);
+      if (name == "COLOR_0" && all_in_unit_range(values))
+        return add_packed(unorm<uint8_t>(values), TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, type, true);
+    }
+    return add_accessor(values, TINYGLTF_COMPONENT_TYPE_FLOAT, type, array);
+  }
+
+  // Positions: floats with their bounds, or on the grid in unsigned shorts.
+  int add_positions(const std::vector<float3>& positions, const PositionGrid* grid) {
+    if (!grid) {
+      const int index = add_accessor(positions, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, TINYGLTF_TARGET_ARRAY_BUFFER);
+      set_float_bounds(index, positions);
+      return index;
+    }
+    used_quantization_ = true;
+    const auto on_grid = [grid](float x, size_t c) { return std::lround(std::clamp((x - grid->offset[c]) / grid->scale, 0.0, grid->top)); };
+    return add_packed(pack_components<uint16_t>(positions, on_grid), TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC3,
+                      false, true);
+  }
+
+  // A morph target's position displacements: floats, or in grid steps (shorts, or floats where a
+  // displacement is too long for a short).
+  int add_displacements(const std::vector<float3>& d, const PositionGrid* grid) {
+    if (!grid) {
+      const int index = add_accessor(d, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, TINYGLTF_TARGET_ARRAY_BUFFER);
+      set_float_bounds(index, d);
+      return index;
+    }
+    const double step = grid->scale;
+    const float* f = reinterpret_cast<const float*>(d.data());
+    used_quantization_ = true;  // (a float target on a grid: its mesh's positions need the extension)
+    if (std::all_of(f, f + 3 * d.size(), [step](float x) { return std::fabs(x / step) <= 32767.0; }))
+      return add_packed(pack_components<int16_t>(d, [step](float x, size_t) { return std::lround(x / step); }),
+                        TINYGLTF_COMPONENT_TYPE_SHORT, TINYGLTF_TYPE_VEC3, false, true);
+    std::vector<float3> steps(d.size());
+    for (size_t v = 0; v < d.size(); ++v) steps[v] = {float(d[v].x / step), float(d[v].y / step), float(d[v].z / step)};
+    return add_displacements(steps, nullptr);
+  }
+
+  // Appends the Mesh's streams and indices; returns nothing, fills the primitive's references.
+  void add_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim, const StreamCoding& coding) {
+    const int array = TINYGLTF_TARGET_ARRAY_BUFFER;
+    prim.attributes["POSITION"] = add_positions(mesh.positions, coding.grid);
+    if (!mesh.normals.empty()) prim.attributes["NORMAL"] = add_float_stream(mesh.normals, TINYGLTF_TYPE_VEC3, "NORMAL", coding);
+    if (!mesh.tangents.empty()) prim.attributes["TANGENT"] = add_float_stream(mesh.tangents, TINYGLTF_TYPE_VEC4, "TANGENT", coding);
     for (size_t k = 0; k < max_uv_sets; ++k)
       if (!mesh.uvs[k].empty())
-        prim.attributes["TEXCOORD_" + str(k)] =
-            add_accessor(mesh.uvs[k], TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, array);
-    if (!mesh.colors.empty())
-      prim.attributes["COLOR_0"] = add_accessor(mesh.colors, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
+        prim.attributes["TEXCOORD_" + str(k)] = add_float_stream(mesh.uvs[k], TINYGLTF_TYPE_VEC2, "TEXCOORD", coding);
+    if (!mesh.colors.empty()) prim.attributes["COLOR_0"] = add_float_stream(mesh.colors, TINYGLTF_TYPE_VEC4, "COLOR_0", coding);
     // Joint indices in bytes when every one fits (skeletons of up to 256 joints): the same values
     // in half the space.
     const auto fits_byte = [](const std::vector<ushort4>& joints) {
@@ -1216,26 +1353,33 @@ class BinWriter {
         for (int k = 0; k < 4; ++k) narrow[v][size_t(k)] = uint8_t(joints[v][size_t(k)]);
       return add_accessor(narrow, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_TYPE_VEC4, array);
     };
-    if (!mesh.joints.empty()) prim.attributes["JOINTS_0"] = add_joints(mesh.joints);
-    if (!mesh.weights.empty())
-      prim.attributes["WEIGHTS_0"] = add_accessor(mesh.weights, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
-    if (!mesh.joints1.empty()) prim.attributes["JOINTS_1"] = add_joints(mesh.joints1);
-    if (!mesh.weights1.empty())
-      prim.attributes["WEIGHTS_1"] = add_accessor(mesh.weights1, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
+    if (coding.quantize && !mesh.weights.empty()) {
+      const auto packed = unorm8_weights(mesh.weights, mesh.weights1);
+      // A joint whose weight rounded to zero becomes joint 0, as glTF asks of unused joints.
+      const std::vector<ushort4>* joints[2] = {&mesh.joints, &mesh.joints1};
+      for (size_t set = 0; set < 2; ++set) {
+        if (packed[set].empty()) continue;
+        std::vector<ushort4> used = *joints[set];
+        for (size_t v = 0; v < used.size(); ++v)
+          for (size_t k = 0; k < 4; ++k)
+            if (4 * v + k < packed[set].size() && packed[set][4 * v + k] == 0) used[v][k] = 0;
+        if (!used.empty()) prim.attributes["JOINTS_" + str(set)] = add_joints(used);
+        prim.attributes["WEIGHTS_" + str(set)] = add_packed(packed[set], TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_TYPE_VEC4, true);
+      }
+    } else {
+      if (!mesh.joints.empty()) prim.attributes["JOINTS_0"] = add_joints(mesh.joints);
+      if (!mesh.weights.empty())
+        prim.attributes["WEIGHTS_0"] = add_accessor(mesh.weights, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
+      if (!mesh.joints1.empty()) prim.attributes["JOINTS_1"] = add_joints(mesh.joints1);
+      if (!mesh.weights1.empty())
+        prim.attributes["WEIGHTS_1"] = add_accessor(mesh.weights1, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
+    }
     if (prim.targets.empty())
       for (const MorphTarget& target : targets) {
         std::map<std::string, int> attributes;
-        const int moved = add_accessor(target.positions, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
-        std::vector<double> low(3, 0.0), high(3, 0.0);  // glTF requires the bounds of a target's POSITION
-        for (size_t v = 0; v < target.positions.size(); ++v) {
-          const float3& d = target.positions[v];
-          const double c[3] = {d.x, d.y, d.z};
-          for (int k = 0; k < 3; ++k) low[k] = v ? std::min(low[k], c[k]) : c[k], high[k] = v ? std::max(high[k], c[k]) : c[k];
-        }
-        model_.accessors[size_t(moved)].minValues = low;
-        model_.accessors[size_t(moved)].maxValues = high;
-        attributes["POSITION"] = moved;
+        attributes["POSITION"] = add_displacements(target.positions, coding.grid);
         // A displacement of a stream the mesh does not have would be invalid: it has none to move.
+        // (Normal and tangent displacements stay floats: they may exceed a normalized range.)
         if (!target.normals.empty() && !mesh.normals.empty())
           attributes["NORMAL"] = add_accessor(target.normals, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
         if (!target.tangents.empty() && !mesh.tangents.empty())
@@ -1259,9 +1403,24 @@ class BinWriter {
     prim.mode = TINYGLTF_MODE_TRIANGLES;
   }
 
+  // An accessor's min and max (glTF requires them of a POSITION, a target's too).
+  template <class T>
+  void set_float_bounds(int index, const std::vector<T>& values) {
+    constexpr size_t n = sizeof(T) / sizeof(float);
+    std::vector<double> low(n, 0.0), high(n, 0.0);
+    for (size_t v = 0; v < values.size(); ++v) {
+      float c[n];
+      std::memcpy(c, &values[v], sizeof c);
+      for (size_t k = 0; k < n; ++k) low[k] = v ? std::min(low[k], double(c[k])) : c[k], high[k] = v ? std::max(high[k], double(c[k])) : c[k];
+    }
+    model_.accessors[size_t(index)].minValues = std::move(low);
+    model_.accessors[size_t(index)].maxValues = std::move(high);
+  }
+
  private:
   tg::Model& model_;
   std::vector<uint8_t>& bin_;
+  bool used_quantization_ = false;
 };
 
 // A Mesh the writer can turn into valid accessors: streams sized, indices in range, positions finite.
@@ -1309,7 +1468,131 @@ void for_each_instancing_accessor(tg::Node& node, size_t accessor_count, F&& f) 
 // Replaces the geometry of the triangle primitives listed in `slots` by scene.primitives[i].mesh,
 // drops what nothing references any more, and packs the surviving bufferViews and the new geometry
 // into one buffer (returned; buffer 0 of the model, whose `buffers` list is left empty).
-std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, const std::vector<Slot>& slots) {
+// Which meshes of the rebuilt document take positions on the grid, and the grid: meshes whose
+// every primitive lodkit writes (`regenerated[m]`: a point or line primitive kept as it was stays
+// in mesh space), that no node instances on the GPU (the instances' transforms would have to move
+// the grid), and whose skins serve only such meshes (a skin takes the grid in its inverse bind
+// matrices, which must be plain floats). The grid spans those meshes' positions.
+std::vector<bool> grid_meshes(const tg::Model& model, const std::vector<bool>& regenerated) {
+  std::vector<bool> on = regenerated;
+  for (const tg::Node& node : model.nodes)
+    if (node.mesh >= 0 && node.extensions.count(gpu_instancing)) on[size_t(node.mesh)] = false;
+  std::vector<bool> skin_ok(model.skins.size(), true);
+  for (size_t s = 0; s < model.skins.size(); ++s) {
+    const int ibm = model.skins[s].inverseBindMatrices;
+    if (ibm < 0) continue;
+    const tg::Accessor& acc = model.accessors[size_t(ibm)];
+    skin_ok[s] = acc.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT && acc.type == TINYGLTF_TYPE_MAT4 && !acc.sparse.isSparse &&
+                 acc.bufferView >= 0;
+  }
+  for (bool changed = true; changed;) {  // a mesh off the grid takes its skins off, and theirs the other meshes
+    changed = false;
+    for (const tg::Node& node : model.nodes) {
+      if (node.mesh < 0 || node.skin < 0 || size_t(node.skin) >= skin_ok.size()) continue;
+      const size_t m = size_t(node.mesh), s = size_t(node.skin);
+      if (on[m] != skin_ok[s]) on[m] = skin_ok[s] = false, changed = true;
+    }
+  }
+  return on;
+}
+
+PositionGrid position_grid(const std::vector<const Mesh*>& meshes, int bits) {
+  PositionGrid grid;
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (const Mesh* mesh : meshes)
+    for (const float3& p : mesh->positions) {
+      const double c[3] = {p.x, p.y, p.z};
+      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], c[k]), hi[k] = std::max(hi[k], c[k]);
+    }
+  if (!(lo[0] <= hi[0])) return grid;  // no positions
+  grid.top = double((uint32_t(1) << bits) - 1);
+  const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+  for (int k = 0; k < 3; ++k) grid.offset[k] = lo[k];
+  grid.scale = extent > 0 ? extent / grid.top : 1.0;
+  return grid;
+}
+
+// Puts the grid's dequantization where each grid mesh enters its space: every node drawing one
+// (in its transform; in a new child node that draws the mesh instead when the node has children,
+// which must not take the grid, or animated translation, rotation or scale, which would overwrite
+// it) and every skin of one (its inverse bind matrices, read from `bin`).
+void place_position_grid(tg::Model& model, std::vector<uint8_t>& bin, BinWriter& writer, const PositionGrid& grid,
+                         const std::vector<bool>& on_grid) {
+  const double s = grid.scale, *o = grid.offset;
+  std::vector<bool> animated(model.nodes.size(), false), skin_on(model.skins.size(), false);
+  for (const tg::Animation& anim : model.animations)
+    for (const tg::AnimationChannel& ch : anim.channels)
+      if (ch.target_node >= 0 && size_t(ch.target_node) < animated.size() && ch.target_path != "weights")
+        animated[size_t(ch.target_node)] = true;
+  const size_t nodes = model.nodes.size();
+  for (size_t n = 0; n < nodes; ++n) {
+    if (model.nodes[n].mesh < 0 || !on_grid[size_t(model.nodes[n].mesh)]) continue;
+    if (model.nodes[n].skin >= 0) {  // a skinned mesh's node transform does not apply
+      skin_on[size_t(model.nodes[n].skin)] = true;
+      continue;
+    }
+    if (!model.nodes[n].children.empty() || animated[n]) {
+      tg::Node child;
+      child.mesh = std::exchange(model.nodes[n].mesh, -1);
+      child.weights = std::move(model.nodes[n].weights);
+      model.nodes[n].weights.clear();
+      child.translation = {o[0], o[1], o[2]};
+      child.scale = {s, s, s};
+      const int index = int(model.nodes.size());
+      model.nodes[n].children.push_back(index);
+      for (tg::Animation& anim : model.animations)
+        for (tg::AnimationChannel& ch : anim.channels)
+          if (ch.target_node == int(n) && ch.target_path == "weights") ch.target_node = index;
+      model.nodes.push_back(std::move(child));
+      continue;
+    }
+    tg::Node& node = model.nodes[n];
+    if (node.matrix.size() == 16) {  // M * D (column-major): the columns scaled, D's offset moved by M
+      std::vector<double>& m = node.matrix;
+      for (int r = 0; r < 4; ++r) m[12 + r] += m[r] * o[0] + m[4 + r] * o[1] + m[8 + r] * o[2];
+      for (size_t c = 0; c < 12; ++c) m[c] *= s;
+      continue;
+    }
+    // T R S D = T' R S' with S' = S s and T' = T + R (S o).
+    const std::vector<double> scale = node.scale.size() == 3 ? node.scale : std::vector<double>{1, 1, 1};
+    const double q[4] = {node.rotation.size() == 4 ? node.rotation[0] : 0, node.rotation.size() == 4 ? node.rotation[1] : 0,
+                         node.rotation.size() == 4 ? node.rotation[2] : 0, node.rotation.size() == 4 ? node.rotation[3] : 1};
+    const double v[3] = {scale[0] * o[0], scale[1] * o[1], scale[2] * o[2]};
+    // v + 2 w (q x v) + 2 q x (q x v), q = (x, y, z) and w its real part.
+    const double c1[3] = {q[1] * v[2] - q[2] * v[1], q[2] * v[0] - q[0] * v[2], q[0] * v[1] - q[1] * v[0]};
+    const double c2[3] = {q[1] * c1[2] - q[2] * c1[1], q[2] * c1[0] - q[0] * c1[2], q[0] * c1[1] - q[1] * c1[0]};
+    std::vector<double> t = node.translation.size() == 3 ? node.translation : std::vector<double>{0, 0, 0};
+    for (int k = 0; k < 3; ++k) t[size_t(k)] += v[k] + 2 * q[3] * c1[k] + 2 * c2[k];
+    node.translation = t;
+    node.scale = {scale[0] * s, scale[1] * s, scale[2] * s};
+  }
+  // Inverse bind matrices B become B D: a skinned vertex B p is B D q.
+  for (size_t k = 0; k < model.skins.size(); ++k) {
+    if (!skin_on[k]) continue;
+    tg::Skin& skin = model.skins[k];
+    const size_t joints = skin.joints.size();
+    std::vector<float> matrices(16 * joints, 0.0f);
+    for (size_t j = 0; j < joints; ++j)
+      for (int d = 0; d < 4; ++d) matrices[16 * j + 5 * size_t(d)] = 1.0f;  // no accessor: identities
+    if (skin.inverseBindMatrices >= 0) {
+      const tg::Accessor& acc = model.accessors[size_t(skin.inverseBindMatrices)];
+      const tg::BufferView& view = model.bufferViews[size_t(acc.bufferView)];
+      const size_t stride = view.byteStride ? view.byteStride : 64;
+      for (size_t j = 0; j < std::min<size_t>(joints, acc.count); ++j)
+        std::memcpy(&matrices[16 * j], bin.data() + view.byteOffset + acc.byteOffset + j * stride, 64);
+    }
+    for (size_t j = 0; j < joints; ++j) {
+      float* m = &matrices[16 * j];
+      for (int r = 0; r < 4; ++r) m[12 + r] = float(m[12 + r] + m[r] * o[0] + m[4 + r] * o[1] + m[8 + r] * o[2]);
+      for (int c = 0; c < 12; ++c) m[c] = float(m[c] * s);
+    }
+    skin.inverseBindMatrices = writer.add_accessor(matrices, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_MAT4, 0);
+    model.accessors.back().count = joints;
+  }
+}
+
+std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, const std::vector<Slot>& slots,
+                                      const WriteOptions& options) {
   const size_t mesh_count = model.meshes.size();
   // Which scene primitive replaces each glTF primitive (-1: none).
   std::vector<std::vector<int>> replaced_by(mesh_count);
@@ -1379,9 +1662,16 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
       const Mesh& geometry = scene.primitives[size_t(owner)].mesh;
       if (geometry.indices.empty()) continue;
       auto position = prim.attributes.find("POSITION");
-      const std::vector<uint32_t>& map = scene.primitives[size_t(owner)].source_vertices;
       const std::vector<std::array<float, 3>>& weights = scene.primitives[size_t(owner)].source_weights;
       const size_t source_count = position != prim.attributes.end() ? model.accessors[size_t(position->second)].count : 0;
+      // Quantized, the streams kept as they are get rewritten too (a target's positions go on the
+      // grid): through the identity map.
+      std::vector<uint32_t> identity;
+      if (options.quantize && scene.primitives[size_t(owner)].source_vertices.empty() && source_count == geometry.vertex_count()) {
+        identity.resize(source_count);
+        std::iota(identity.begin(), identity.end(), 0u);
+      }
+      const std::vector<uint32_t>& map = identity.empty() ? scene.primitives[size_t(owner)].source_vertices : identity;
       if (!map.empty()) {
         const std::string where = "cannot write glTF: scene primitive " + str(size_t(owner)) + "'s source_vertices";
         const size_t per_vertex = weights.empty() ? 1 : 3;
@@ -1577,26 +1867,67 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
   model.bufferViews = std::move(views);
   model.buffers.clear();
 
+  // Quantized: the meshes whose positions go on the grid, and the grid.
+  PositionGrid grid;
+  std::vector<bool> on_grid(model.meshes.size(), false);
+  if (options.quantize) {
+    if (options.position_bits < 1 || options.position_bits > 16)
+      throw_usage("cannot write glTF: position_bits is " + std::to_string(options.position_bits) + ", not 1 to 16");
+    std::vector<size_t> regenerated(model.meshes.size(), 0);
+    for (const Pending& p : pending) ++regenerated[p.mesh];
+    for (size_t m = 0; m < on_grid.size(); ++m) on_grid[m] = regenerated[m] == model.meshes[m].primitives.size();
+    on_grid = grid_meshes(model, on_grid);
+    std::vector<const Mesh*> meshes;
+    for (const Pending& p : pending)
+      if (on_grid[p.mesh]) meshes.push_back(&scene.primitives[p.scene_primitive].mesh);
+    grid = position_grid(meshes, options.position_bits);
+    if (grid.top == 0) on_grid.assign(on_grid.size(), false);
+  }
+
   BinWriter writer(model, bin);
   std::vector<const tg::Primitive*> written(scene.primitives.size(), nullptr);
+  std::vector<size_t> written_mesh(scene.primitives.size(), 0);
   for (const Pending& p : pending) {
     const Primitive& in = scene.primitives[p.scene_primitive];
     tg::Primitive& out = model.meshes[p.mesh].primitives[p.primitive];
     const int32_t shared = in.shares_vertices_with;
     const std::vector<Gathered>& extra = gathered[p.scene_primitive];
-    if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && in.targets.empty() && extra.empty()) {
+    const StreamCoding coding{options.quantize, on_grid[p.mesh] ? &grid : nullptr};
+    if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && in.targets.empty() && extra.empty() &&
+        on_grid[written_mesh[size_t(shared)]] == on_grid[p.mesh]) {
       out.attributes = written[size_t(shared)]->attributes;  // one vertex buffer, several index buffers
       writer.add_indices(in.mesh, out);
     } else {
-      writer.add_geometry(in.mesh, in.targets, out);
+      writer.add_geometry(in.mesh, in.targets, out, coding);
     }
     for (const Gathered& g : extra) {
       if (g.target >= int(out.targets.size())) continue;  // the mesh lost its morph targets (another primitive)
-      const int index = writer.add_vertex_stream(g.bytes, g.like);
+      int index;
+      if (g.target >= 0 && g.semantic == "POSITION" && coding.grid) {  // displacements in grid steps
+        const size_t element = element_bytes(g.like.componentType, g.like.type), size = component_bytes(g.like.componentType);
+        std::vector<float3> d(element ? g.bytes.size() / element : 0);
+        for (size_t v = 0; v < d.size(); ++v) {
+          const uint8_t* e = g.bytes.data() + v * element;
+          d[v] = {component_float(e, g.like.componentType, g.like.normalized), component_float(e + size, g.like.componentType, g.like.normalized),
+                  component_float(e + 2 * size, g.like.componentType, g.like.normalized)};
+        }
+        index = writer.add_displacements(d, coding.grid);
+      } else {
+        index = writer.add_vertex_stream(g.bytes, g.like, !g.like.minValues.empty() && !g.like.maxValues.empty());
+      }
       if (g.target < 0) out.attributes[g.semantic] = index;
       else out.targets[size_t(g.target)][g.semantic] = index;
     }
     written[p.scene_primitive] = &out;
+    written_mesh[p.scene_primitive] = p.mesh;
+  }
+  if (std::find(on_grid.begin(), on_grid.end(), true) != on_grid.end()) place_position_grid(model, bin, writer, grid, on_grid);
+  if (writer.used_quantization()) {
+    const std::string ext = "KHR_mesh_quantization";
+    if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), ext) == model.extensionsUsed.end())
+      model.extensionsUsed.push_back(ext);
+    if (std::find(model.extensionsRequired.begin(), model.extensionsRequired.end(), ext) == model.extensionsRequired.end())
+      model.extensionsRequired.push_back(ext);
   }
   return bin;
 }
@@ -2294,7 +2625,7 @@ void write_gltf(const Scene& scene, const std::filesystem::path& path, const Wri
   } else {
     model = model_from_scene(scene, slots);
   }
-  std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots);
+  std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots, options);
   // MSFT_lod and instancing are declared only while a node still uses them.
   for (const std::string ext : {"MSFT_lod", gpu_instancing})
     if (std::none_of(model.nodes.begin(), model.nodes.end(), [&](const tg::Node& n) { return n.extensions.count(ext) > 0; }))

@@ -21,7 +21,7 @@ namespace {
 struct ConvertOptions {
   std::string input, output, output_flag;
   bool ascii = false;
-  bool compress = false;
+  WriteOptions gltf;  // -c, -q (binary comes from --ascii)
   bool force = false;
   bool json = false;
 };
@@ -59,10 +59,15 @@ void GeometryFile::write(const std::string& output, const WriteOptions& options)
   else write_mesh(mesh_, output, options);
 }
 
-void add_compress_flag(CLI::App* app, bool& compress) {
-  app->add_flag("-c,--compress", compress,
-                "glTF output: compress geometry and animation with EXT_meshopt_compression (no quantization; "
+void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
+  app->add_flag("-c,--compress", options.meshopt_compression,
+                "glTF output: compress geometry and animation with EXT_meshopt_compression (lossless; "
                 "the extension becomes required)");
+  app->add_flag("-q,--quantize", options.quantize,
+                "glTF output: vertex streams in fewer bits (KHR_mesh_quantization, then required): positions on a "
+                "grid of --position-bits, normals and tangents in bytes, UVs in 16 bits, colours and weights in bytes");
+  app->add_option("--position-bits", options.position_bits, "With -q: bits per position coordinate (default 14)")
+      ->check(CLI::Range(1, 16));
 }
 
 void GeometryFile::forget_lod_facts(const std::vector<bool>& changed) {
@@ -177,7 +182,7 @@ Command register_convert(CLI::App& root) {
   app->add_option("output", options->output, "Output mesh file; the format follows the extension");
   app->add_option("-o,--output", options->output_flag, "Output mesh file (same as the second argument)");
   app->add_flag("--ascii", options->ascii, "Write PLY and STL as text instead of binary");
-  add_compress_flag(app, options->compress);
+  add_gltf_output_flags(app, options->gltf);
   app->add_flag("--force", options->force, "Allow writing over the input file");
   app->add_flag("--json", options->json, "Print a machine-readable report on stdout");
   return {app, [options] {
@@ -215,7 +220,8 @@ Command register_convert(CLI::App& root) {
             if (as_scene) for (const Primitive& p : scene.primitives) count(p.mesh);
             else count(mesh);
             start = std::chrono::steady_clock::now();
-            const WriteOptions write_options{.binary = !o.ascii, .meshopt_compression = o.compress};
+            WriteOptions write_options = o.gltf;
+            write_options.binary = !o.ascii;
             if (as_scene) write_scene(scene, o.output, write_options);
             else write_mesh(mesh, o.output, write_options);
             double write_seconds = seconds_since(start);

@@ -28,7 +28,8 @@ struct LodCommand {
   std::string input, output, ratios, errors, metric = "cqem", attributes, lpm;
   uint32_t levels = 0;
   float error_px = 1.0f, screen_height = 1080.0f, fov_degrees = 60.0f;
-  bool from_input = false, morph = false, shared = false, json = false, force = false, compress = false;
+  bool from_input = false, morph = false, shared = false, json = false, force = false;
+  WriteOptions gltf;  // -c, -q
   unsigned threads = 0;
   std::string skin_mode = "multipose";
   uint32_t poses = 16;
@@ -377,7 +378,7 @@ Command register_lod(CLI::App& root) {
   app->add_option("--lpm", o->lpm, "Also write a progressive mesh (.lpm) down to the coarsest level");
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
-  add_compress_flag(app, o->compress);
+  add_gltf_output_flags(app, o->gltf);
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
   return {app, [o] {
             const FileFormat format = format_from_path(o->output);
@@ -400,7 +401,7 @@ Command register_lod(CLI::App& root) {
             options.simplify.threads = o->threads;
             // Compressed output: the levels in the LRU-style order meshoptimizer's codecs favour
             // (bunny00's chain 4% smaller than in the FIFO order; bench/README.md, compress).
-            if (o->compress) options.cache.policy = CachePolicy::lru;
+            if (o->gltf.meshopt_compression) options.cache.policy = CachePolicy::lru;
             if (!o->attributes.empty()) parse_attributes(o->attributes, options.simplify);
 
             auto start = std::chrono::steady_clock::now();
@@ -465,11 +466,11 @@ Command register_lod(CLI::App& root) {
 
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
-              write_scene(skinned_scene(std::move(scene), skinned, reports), o->output, {.meshopt_compression = o->compress});
+              write_scene(skinned_scene(std::move(scene), skinned, reports), o->output, o->gltf);
             } else {
               write_scene(chain_scene(reports[0].chain, reports[0].distances, reports[0].coverage, scene.source ? &scene : nullptr,
                                       level_targets),
-                          o->output, {.meshopt_compression = o->compress});
+                          o->output, o->gltf);
               if (!o->lpm.empty()) {
                 // The progressive mesh spans the input down to the coarsest level's size.
                 SimplifyOptions so = options.simplify;

@@ -23,7 +23,8 @@ struct OptimizeCommand {
   float weld = -1;  // -1: no weld; 0: exact; > 0: tolerance (object space)
   double overdraw = -1;  // -1: no overdraw pass; else its threshold (misses relative to the cache order)
   float attribute_tolerance = 0;
-  bool weld_positions = false, orient = false, lru = false, restart = false, no_fetch = false, json = false, force = false, compress = false;
+  bool weld_positions = false, orient = false, lru = false, restart = false, no_fetch = false, json = false, force = false;
+  WriteOptions gltf;  // -c, -q
   uint32_t cache = 16;
 };
 
@@ -63,7 +64,7 @@ Command register_optimize(CLI::App& root) {
   app->add_flag("--lru", o->lru, "Optimize for an LRU cache (default FIFO)");
   app->add_flag("--no-fetch", o->no_fetch, "Keep the vertex order (no renumbering by first use)");
   app->add_flag("--force", o->force, "Allow writing over the input file");
-  add_compress_flag(app, o->compress);
+  add_gltf_output_flags(app, o->gltf);
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
   return {app, [o, app] {
             const bool weld_given = app->count("--weld") > 0;
@@ -159,7 +160,7 @@ Command register_optimize(CLI::App& root) {
                            static_cast<unsigned long long>(non_orientable));
 
             start = std::chrono::steady_clock::now();
-            file.write(o->output, {.meshopt_compression = o->compress});
+            file.write(o->output, o->gltf);
             if (!o->strip_indices.empty()) write_indices(o->strip_indices, strip_buffer);
             const double write_seconds = seconds_since(start);
 

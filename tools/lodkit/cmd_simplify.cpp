@@ -25,7 +25,8 @@ struct SimplifyCommand {
   float ratio = 0, error = 0, aggregate = 0;
   uint64_t triangles = 0;
   std::string metric = "cqem", attributes;
-  bool keep_vertices = false, lock_border = false, prune = false, json = false, force = false, compress = false;
+  bool keep_vertices = false, lock_border = false, prune = false, json = false, force = false;
+  WriteOptions gltf;  // -c, -q
   unsigned threads = 0;
   uint32_t fit = SimplifyOptions{}.fit_iterations;
   bool no_flips = false, no_search = false;
@@ -176,7 +177,7 @@ Command register_simplify(CLI::App& root) {
                 "up to 32,768 triangles simplified to 1,024 or fewer (qem and cqem; keeps the result nearest the input)");
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
-  add_compress_flag(app, o->compress);
+  add_gltf_output_flags(app, o->gltf);
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
   return {app, [o, app] {
             // Which targets were given (every value is meaningful, so no sentinel tells).
@@ -298,7 +299,7 @@ Command register_simplify(CLI::App& root) {
             file.forget_lod_facts(changed);
             const double simplify_seconds = seconds_since(start);
             start = std::chrono::steady_clock::now();
-            file.write(o->output, {.meshopt_compression = o->compress});
+            file.write(o->output, o->gltf);
             const double write_seconds = seconds_since(start);
 
             if (o->json) {

@@ -82,8 +82,8 @@ void blend_sources(Primitive& p, const std::vector<VertexBlend>& blends);
 // vertex, or nothing when no two vertices were the same (the mesh is then untouched).
 std::vector<uint32_t> weld_duplicates(Mesh& mesh, std::span<const uint32_t> classes);
 
-// -c/--compress on a command that writes glTF: WriteOptions::meshopt_compression.
-void add_compress_flag(CLI::App* app, bool& compress);
+// -c/--compress, -q/--quantize and --position-bits on a command that writes glTF.
+void add_gltf_output_flags(CLI::App* app, WriteOptions& options);
 
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);

@@ -1,0 +1,280 @@
+// glTF output with WriteOptions::quantize (KHR_mesh_quantization): the stored integers against
+// values worked out by hand, and whole scenes read back within the quantization step of their float
+// twin, in world space: plain, matrix and animated nodes, a node with children, a skinned animated
+// character (posed), morph targets; every file through the Khronos validator.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/shapes.h"
+#include "lodkit/io.h"
+#include "lodkit/skin.h"
+#include "skin/fixtures.h"
+#include "test_support.h"
+
+namespace lod {
+namespace {
+
+using Json = nlohmann::json;
+using test::TempDir;
+
+bool contains(const Json& list, const std::string& name) {
+  return list.is_array() && std::find(list.begin(), list.end(), name) != list.end();
+}
+
+double distance(const float3& a, const float3& b) { return std::hypot(double(a.x) - b.x, double(a.y) - b.y, double(a.z) - b.z); }
+
+// The accessor's stored components, read from the GLB's BIN chunk without lodkit (bufferView stride
+// honoured), as doubles.
+template <class T>
+std::vector<double> stored(const test::Glb& glb, size_t accessor, size_t components) {
+  const Json& a = glb.doc["accessors"][accessor];
+  const Json& view = glb.doc["bufferViews"][a["bufferView"].get<size_t>()];
+  const size_t stride = view.value("byteStride", components * sizeof(T));
+  const size_t start = view.value("byteOffset", size_t(0)) + a.value("byteOffset", size_t(0));
+  std::vector<double> out;
+  for (size_t i = 0; i < a["count"].get<size_t>(); ++i)
+    for (size_t c = 0; c < components; ++c) {
+      T v;
+      std::memcpy(&v, glb.bin.data() + start + i * stride + c * sizeof(T), sizeof v);
+      out.push_back(double(v));
+    }
+  return out;
+}
+
+// One triangle at (1, 2, 3), (4, 2, 3), (1, 3.5, 3.75) with normal +z, on a 3-bit grid: the
+// extent is 3 (x), so the step is 3/7 and the offset the low corner (1, 2, 3). By hand:
+// x: 0, 7, 0; y: 0, 0, 1.5 * 7/3 = 3.5 -> 4; z: 0, 0, 0.75 * 7/3 = 1.75 -> 2. The normal in
+// normalized bytes is (0, 0, 127). The node takes translation (1, 2, 3) and scale 3/7.
+TEST(GltfQuantize, StoresTheGridWorkedOutByHand) {
+  TempDir dir;
+  Mesh m;
+  m.positions = {{1, 2, 3}, {4, 2, 3}, {1, 3.5f, 3.75f}};
+  m.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+  m.indices = {0, 1, 2};
+  write_scene(scene_from_mesh(m), dir / "q.glb", {.quantize = true, .position_bits = 3});
+  const test::Glb glb = test::read_glb(dir / "q.glb");
+  EXPECT_TRUE(contains(glb.doc["extensionsUsed"], "KHR_mesh_quantization"));
+  EXPECT_TRUE(contains(glb.doc["extensionsRequired"], "KHR_mesh_quantization"));
+  const Json& prim = glb.doc["meshes"][0]["primitives"][0];
+  const Json& position = glb.doc["accessors"][prim["attributes"]["POSITION"].get<size_t>()];
+  EXPECT_EQ(position["componentType"], 5123);  // unsigned short
+  EXPECT_FALSE(position.value("normalized", false));
+  EXPECT_EQ(position["min"], Json::array({0, 0, 0}));
+  EXPECT_EQ(position["max"], Json::array({7, 4, 2}));
+  EXPECT_EQ(stored<uint16_t>(glb, prim["attributes"]["POSITION"], 3), (std::vector<double>{0, 0, 0, 7, 0, 0, 0, 4, 2}));
+  const Json& normal = glb.doc["accessors"][prim["attributes"]["NORMAL"].get<size_t>()];
+  EXPECT_EQ(normal["componentType"], 5120);  // byte
+  EXPECT_TRUE(normal["normalized"].get<bool>());
+  EXPECT_EQ(stored<int8_t>(glb, prim["attributes"]["NORMAL"], 3), (std::vector<double>{0, 0, 127, 0, 0, 127, 0, 0, 127}));
+  const Json& node = glb.doc["nodes"][0];
+  EXPECT_EQ(node["translation"], Json::array({1.0, 2.0, 3.0}));
+  for (const Json& s : node["scale"]) EXPECT_DOUBLE_EQ(s.get<double>(), 3.0 / 7.0);
+  // Read back and placed: the grid points, (1, 2 + 4 * 3/7, 3 + 2 * 3/7) for the third corner.
+  const Mesh back = flatten(read_scene(dir / "q.glb"));
+  ASSERT_EQ(back.vertex_count(), 3u);
+  EXPECT_LT(distance(back.positions[0], {1, 2, 3}), 1e-6);
+  EXPECT_LT(distance(back.positions[1], {4, 2, 3}), 1e-6);
+  EXPECT_LT(distance(back.positions[2], {1, 2 + 12.0f / 7, 3 + 6.0f / 7}), 1e-6);
+  test::expect_valid_gltf({dir / "q.glb"});
+}
+
+// A torus with normals, UVs and colours: every stream back within half its step, in world space.
+TEST(GltfQuantize, StreamsComeBackWithinHalfAStep) {
+  TempDir dir;
+  Mesh m = shapes::torus(1.0f, 0.3f, 48, 24);
+  for (size_t v = 0; v < m.vertex_count(); ++v)
+    m.colors.push_back({m.uvs[0][v].x, m.uvs[0][v].y, 0.25f, 1.0f});
+  const Scene scene = scene_from_mesh(m);
+  for (const bool compress : {false, true}) {
+    const std::filesystem::path path = dir / (compress ? "qc.glb" : "q.glb");
+    write_scene(scene, path, {.meshopt_compression = compress, .quantize = true});
+    const Mesh back = flatten(read_scene(path));
+    ASSERT_EQ(back.vertex_count(), m.vertex_count());
+    // The extent is 2.6 (x and y), on 14 bits.
+    const double step = 2.6 / 16383;
+    double worst = 0, worst_normal = 0, worst_uv = 0, worst_color = 0;
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+      const float3 &p = m.positions[v], &q = back.positions[v];
+      worst = std::max({worst, std::fabs(double(p.x) - q.x), std::fabs(double(p.y) - q.y), std::fabs(double(p.z) - q.z)});
+      const float3 &n = m.normals[v], &k = back.normals[v];
+      worst_normal = std::max(worst_normal, distance(n, k));
+      worst_uv = std::max({worst_uv, std::fabs(double(m.uvs[0][v].x) - back.uvs[0][v].x), std::fabs(double(m.uvs[0][v].y) - back.uvs[0][v].y)});
+      worst_color = std::max({worst_color, std::fabs(double(m.colors[v].x) - back.colors[v].x), std::fabs(double(m.colors[v].z) - back.colors[v].z)});
+    }
+    EXPECT_LE(worst, step / 2 * 1.001 + 1e-6) << path;
+    EXPECT_GT(worst, step / 8) << path;  // it did quantize
+    // Within sqrt(3)/254 of the unit normal in bytes, then renormalized by the reader: twice that.
+    EXPECT_LE(worst_normal, 2 * std::sqrt(3.0) / 254) << path;
+    EXPECT_LE(worst_uv, 0.5 / 65535 + 1e-7) << path;
+    EXPECT_LE(worst_color, 0.5 / 255 + 1e-6) << path;
+    EXPECT_EQ(back.indices, m.indices);
+  }
+  // Compressed and quantized: much smaller than either alone, and the same values as quantized.
+  write_scene(scene, dir / "plain.glb");
+  write_scene(scene, dir / "c.glb", {.meshopt_compression = true});
+  EXPECT_LT(std::filesystem::file_size(dir / "qc.glb"), std::filesystem::file_size(dir / "c.glb") * 3 / 4);
+  EXPECT_LT(std::filesystem::file_size(dir / "q.glb"), std::filesystem::file_size(dir / "plain.glb") * 3 / 4);
+  test::expect_valid_gltf({dir / "q.glb", dir / "qc.glb"});
+}
+
+// Four nodes draw one mesh each: a matrix node, a rotated and non-uniformly scaled node, a node with
+// a child (which must not take the grid: the mesh moves to a new child), and a node whose
+// translation is animated (likewise). World positions match the float file's within the step
+// times each node's largest scale; the animated one at a time of its clip too.
+TEST(GltfQuantize, NodesPlaceTheGridInWorldSpace) {
+  TempDir dir;
+  Scene scene;
+  const Mesh shapes_[4] = {shapes::torus(1.0f, 0.3f, 24, 12), shapes::cube(), shapes::icosphere(2), shapes::torus(2.0f, 0.5f, 16, 8)};
+  for (uint32_t k = 0; k < 4; ++k) {
+    Primitive p;
+    p.mesh = shapes_[k];
+    p.gltf_mesh = k;
+    scene.primitives.push_back(std::move(p));
+  }
+  scene.nodes.resize(5);
+  scene.nodes[0].mesh = 0;
+  scene.nodes[0].has_matrix = true;
+  scene.nodes[0].matrix = {0, 2, 0, 0, -2, 0, 0, 0, 0, 0, 2, 0, 5, 1, -3, 1};  // rotate 90 about z, scale 2, move
+  scene.nodes[1].mesh = 1;
+  scene.nodes[1].translation = {-4, 0, 1};
+  scene.nodes[1].rotation = {0.0f, 0.38268343f, 0.0f, 0.92387953f};  // 45 degrees about y
+  scene.nodes[1].scale = {1, 3, 0.5f};
+  scene.nodes[2].mesh = 2;
+  scene.nodes[2].translation = {0, 6, 0};
+  scene.nodes[2].children = {3};
+  scene.nodes[3].parent = 2;
+  scene.nodes[3].mesh = 3;
+  scene.nodes[3].scale = {0.5f, 0.5f, 0.5f};
+  scene.nodes[4].mesh = 0;  // the same mesh as node 0, animated
+  scene.nodes[4].translation = {0, -6, 0};
+  scene.roots = {0, 1, 2, 4};
+  Animation clip;
+  AnimationChannel slide;
+  slide.node = 4;
+  slide.times = {0.0f, 1.0f};
+  slide.values = {0, -6, 0, 3, -6, 0};
+  clip.channels.push_back(slide);
+  scene.animations.push_back(clip);
+
+  write_scene(scene, dir / "plain.glb");
+  write_scene(scene, dir / "q.glb", {.quantize = true});
+  const Scene plain = read_scene(dir / "plain.glb"), quantized = read_scene(dir / "q.glb");
+  const Json doc = test::glb_json(dir / "q.glb");
+  EXPECT_FALSE(doc["nodes"][2].contains("mesh"));  // moved to a new child
+  EXPECT_FALSE(doc["nodes"][4].contains("mesh"));
+  EXPECT_TRUE(doc["nodes"][0].contains("mesh"));
+  EXPECT_TRUE(doc["nodes"][1].contains("mesh"));
+  EXPECT_TRUE(doc["nodes"][3].contains("mesh"));
+  ASSERT_EQ(doc["nodes"].size(), 7u);
+  const auto mesh_of = [](const Scene& s, int32_t gltf_mesh) -> const Mesh& {
+    for (const Primitive& p : s.primitives)
+      if (p.gltf_mesh == uint32_t(gltf_mesh)) return p.mesh;
+    throw std::runtime_error("no such mesh");
+  };
+  // The grid spans every mesh: the largest extent is torus 3's 5.0, on 14 bits; node scales up to 3.
+  const double step = 5.0 / 16383;
+  // Each node's mesh in world space, at rest and (the animated node) at t = 0.5 of its clip; the
+  // quantized file draws it from the node itself or from the node's new child.
+  for (const float time : {-1.0f, 0.5f}) {
+    Pose pa = rest_pose(plain), pb = rest_pose(quantized);
+    if (time >= 0) sample_animation(plain, 0, time, pa), sample_animation(quantized, 0, time, pb);
+    const std::vector<mat4> wa = world_matrices(plain, pa), wb = world_matrices(quantized, pb);
+    for (size_t n = 0; n < 5; ++n) {
+      const size_t drawn = doc["nodes"][n].contains("mesh") ? n : doc["nodes"][n]["children"].back().get<size_t>();
+      ASSERT_EQ(quantized.nodes[drawn].mesh, plain.nodes[n].mesh) << n;
+      const Mesh &ma = mesh_of(plain, plain.nodes[n].mesh), &mb = mesh_of(quantized, quantized.nodes[drawn].mesh);
+      ASSERT_EQ(ma.vertex_count(), mb.vertex_count());
+      double worst = 0;
+      for (size_t v = 0; v < ma.vertex_count(); ++v)
+        worst = std::max(worst, distance(transform_point(wa[n], ma.positions[v]), transform_point(wb[drawn], mb.positions[v])));
+      const double largest_scale = n == 0 ? 2 : n == 1 ? 3 : n == 3 ? 0.5 : 1;
+      EXPECT_LE(worst, largest_scale * step * std::sqrt(3.0) / 2 + 1e-5) << "node " << n << " t = " << time;
+      EXPECT_GT(worst, largest_scale * step / 16) << "node " << n;  // it is on the grid
+    }
+  }
+  test::expect_valid_gltf({dir / "q.glb"});
+}
+
+// A skinned character: the grid goes into the inverse bind matrices. Posed by a clip, each vertex
+// lands where the float file's lands when skinned with the same (quantized) weights, within the
+// step; the weights sum to exactly 255 and unused joints are 0.
+TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
+  TempDir dir;
+  const Scene humanoid = fixtures::humanoid_scene();
+  write_scene(humanoid, dir / "plain.glb");
+  write_scene(humanoid, dir / "q.glb", {.quantize = true});
+  const Scene plain = read_scene(dir / "plain.glb"), quantized = read_scene(dir / "q.glb");
+  const std::vector<SkinnedPrimitive> sa = skinned_primitives(plain), sb = skinned_primitives(quantized);
+  ASSERT_EQ(sa.size(), 1u);
+  ASSERT_EQ(sb.size(), 1u);
+  Mesh a = plain.primitives[sa[0].primitive].mesh;
+  const Mesh& b = quantized.primitives[sb[0].primitive].mesh;
+  ASSERT_EQ(a.vertex_count(), b.vertex_count());
+  for (size_t v = 0; v < b.vertex_count(); ++v) {
+    const float sum = b.weights[v].x + b.weights[v].y + b.weights[v].z + b.weights[v].w;
+    EXPECT_NEAR(sum, 1.0f, 1e-5f) << v;
+    const float w[4] = {b.weights[v].x, b.weights[v].y, b.weights[v].z, b.weights[v].w};
+    for (size_t k = 0; k < 4; ++k) {
+      if (w[k] == 0) EXPECT_EQ(b.joints[v][k], 0) << v;
+      else EXPECT_EQ(b.joints[v][k], a.joints[v][k]) << v;
+      EXPECT_NEAR(w[k], (&a.weights[v].x)[k], 2.0 / 255) << v;
+    }
+  }
+  a.joints = b.joints, a.weights = b.weights;  // the same influences: what is left is the grid
+  float3 lo, hi;
+  bounding_box(a, lo, hi);
+  const double step = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) / 16383;
+  for (const float time : {0.0f, 0.4f}) {
+    Pose pa = rest_pose(plain), pb = rest_pose(quantized);
+    sample_animation(plain, 0, time, pa);
+    sample_animation(quantized, 0, time, pb);
+    SkinnedVertices xa, xb;
+    skin_vertices(a, joint_matrices(plain, sa[0].skin, world_matrices(plain, pa)), xa);
+    skin_vertices(b, joint_matrices(quantized, sb[0].skin, world_matrices(quantized, pb)), xb);
+    double worst = 0;
+    for (size_t v = 0; v < a.vertex_count(); ++v) worst = std::max(worst, distance(xa.positions[v], xb.positions[v]));
+    EXPECT_LE(worst, step * std::sqrt(3.0) / 2 + 1e-5) << "t = " << time;
+  }
+  test::expect_valid_gltf({dir / "q.glb"});
+}
+
+// Morph targets: displacements in grid steps (shorts), so base plus displacement lands within a
+// step of the float file's, in world space.
+TEST(GltfQuantize, MorphTargetsMoveOnTheGrid) {
+  TempDir dir;
+  Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 32, 16));
+  MorphTarget target;
+  for (const float3& p : scene.primitives[0].mesh.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
+  scene.primitives[0].targets.push_back(target);
+  write_scene(scene, dir / "q.glb", {.quantize = true});
+  const test::Glb glb = test::read_glb(dir / "q.glb");
+  const size_t moved = glb.doc["meshes"][0]["primitives"][0]["targets"][0]["POSITION"];
+  EXPECT_EQ(glb.doc["accessors"][moved]["componentType"], 5122);  // short
+  const Scene back = read_scene(dir / "q.glb");
+  const std::vector<MorphTarget> targets = source_morph_targets(back, 0);
+  ASSERT_EQ(targets.size(), 1u);
+  const Mesh placed = flatten(back);  // base positions in world space
+  const Mesh& grid = back.primitives[0].mesh;
+  // World = grid * scale + offset, so a displacement in steps times the scale is the world one.
+  const double scale = glb.doc["nodes"][0]["scale"][0].get<double>(), step = 2.6 / 16383;
+  EXPECT_NEAR(scale, step, step * 1e-6);
+  double worst = 0;
+  for (size_t v = 0; v < grid.vertex_count(); ++v) {
+    const float3& d = targets[0].positions[v];
+    const float3 morphed{float(placed.positions[v].x + d.x * scale), float(placed.positions[v].y + d.y * scale),
+                         float(placed.positions[v].z + d.z * scale)};
+    const float3& p = scene.primitives[0].mesh.positions[v];
+    const float3 expected{p.x + target.positions[v].x, p.y + target.positions[v].y, p.z + target.positions[v].z};
+    worst = std::max(worst, distance(morphed, expected));
+  }
+  EXPECT_LE(worst, step * std::sqrt(3.0) + 1e-5);  // half a step from the base, half from the displacement
+  test::expect_valid_gltf({dir / "q.glb"});
+}
+
+}  // namespace
+}  // namespace lod
