@@ -6,7 +6,8 @@
 // primitives (minus those without a triangle, which the writer drops), positions bit for bit; so
 // must the same scene with every primitive's vertices renumbered (Primitive::source_vertices),
 // written with EXT_meshopt_compression (triangles up to the codec's rotations), and both must give
-// the same vertex classes (source_vertex_classes) and morph targets (source_morph_targets).
+// the same vertex classes (source_vertex_classes) and morph targets (source_morph_targets). Written
+// quantized (KHR_mesh_quantization), it must read back with the same vertices and triangles.
 // The shared oracle lives in fuzz_common.h.
 #include <unistd.h>
 
@@ -111,11 +112,13 @@ Mesh canonical_rotations(Mesh mesh) {
   return mesh;
 }
 
-void check_round_trip(const Scene& scene, const std::string& stage, bool compress) {
+// `quantize` (WriteOptions::quantize): positions may move to the grid, so only the topology must
+// come back (vertex count, triangles), with valid streams.
+void check_round_trip(const Scene& scene, const std::string& stage, bool compress, bool quantize = false) {
   static const ScratchFolder folder;
   const std::filesystem::path file = folder.path() / "round-trip.glb";
   run_step(stage + ": write", false, [&] {
-    write_gltf(scene, file, {.meshopt_compression = compress});
+    write_gltf(scene, file, {.meshopt_compression = compress, .quantize = quantize});
     return true;
   });
   const std::optional<std::vector<uint8_t>> bytes = run_step(stage + ": load", false, [&] {
@@ -140,6 +143,11 @@ void check_round_trip(const Scene& scene, const std::string& stage, bool compres
     check_mesh(after.mesh, where + " read back");
     if (after.material != before.material)
       fail(where, "material changed from " + std::to_string(before.material) + " to " + std::to_string(after.material));
+    if (quantize) {
+      if (after.mesh.vertex_count() != before.mesh.vertex_count() || after.mesh.indices != before.mesh.indices)
+        fail(where, "quantized, the vertex count or the triangles changed");
+      continue;
+    }
     if (compress) require_same_geometry(canonical_rotations(before.mesh), canonical_rotations(after.mesh), Exactness::bits, where);
     else require_same_geometry(before.mesh, after.mesh, Exactness::bits, where);
   }
@@ -219,6 +227,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   check_round_trip(*scene, "gltf round trip", false);
   const Scene backwards = reversed(*scene);
   check_round_trip(backwards, "gltf round trip, vertices reversed, meshopt-compressed", true);
+  check_round_trip(*scene, "gltf round trip, quantized", false, true);
   check_vertex_classes(*scene, backwards);
   check_morph_targets(*scene, backwards);
   return 0;

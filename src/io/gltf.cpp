@@ -1566,25 +1566,49 @@ void place_position_grid(tg::Model& model, std::vector<uint8_t>& bin, BinWriter&
     node.translation = t;
     node.scale = {scale[0] * s, scale[1] * s, scale[2] * s};
   }
-  // Inverse bind matrices B become B D: a skinned vertex B p is B D q.
+  // Inverse bind matrices B become B D: a skinned vertex B p is B D q. In place where every skin
+  // sharing the accessor takes the grid (once per accessor); else in a new accessor.
+  const auto to_grid = [&](float* m) {
+    for (int r = 0; r < 4; ++r) m[12 + r] = float(m[12 + r] + m[r] * o[0] + m[4 + r] * o[1] + m[8 + r] * o[2]);
+    for (int c = 0; c < 12; ++c) m[c] = float(m[c] * s);
+  };
+  std::map<int, bool> shared_on;  // IBM accessor -> whether every skin using it takes the grid
+  for (size_t k = 0; k < model.skins.size(); ++k)
+    if (const int a = model.skins[k].inverseBindMatrices; a >= 0) {
+      auto [it, inserted] = shared_on.try_emplace(a, true);
+      it->second = it->second && skin_on[k];
+    }
+  std::vector<int> done;
   for (size_t k = 0; k < model.skins.size(); ++k) {
     if (!skin_on[k]) continue;
     tg::Skin& skin = model.skins[k];
     const size_t joints = skin.joints.size();
-    std::vector<float> matrices(16 * joints, 0.0f);
-    for (size_t j = 0; j < joints; ++j)
-      for (int d = 0; d < 4; ++d) matrices[16 * j + 5 * size_t(d)] = 1.0f;  // no accessor: identities
-    if (skin.inverseBindMatrices >= 0) {
-      const tg::Accessor& acc = model.accessors[size_t(skin.inverseBindMatrices)];
+    if (const int a = skin.inverseBindMatrices; a >= 0) {
+      const tg::Accessor& acc = model.accessors[size_t(a)];
       const tg::BufferView& view = model.bufferViews[size_t(acc.bufferView)];
       const size_t stride = view.byteStride ? view.byteStride : 64;
-      for (size_t j = 0; j < std::min<size_t>(joints, acc.count); ++j)
-        std::memcpy(&matrices[16 * j], bin.data() + view.byteOffset + acc.byteOffset + j * stride, 64);
+      uint8_t* first = bin.data() + view.byteOffset + acc.byteOffset;
+      if (shared_on[a]) {
+        if (std::find(done.begin(), done.end(), a) != done.end()) continue;
+        done.push_back(a);
+        for (size_t j = 0; j < acc.count; ++j) {
+          float m[16];
+          std::memcpy(m, first + j * stride, sizeof m);
+          to_grid(m);
+          std::memcpy(first + j * stride, m, sizeof m);
+        }
+        continue;
+      }
+      std::vector<float> matrices(16 * acc.count);
+      for (size_t j = 0; j < acc.count; ++j) std::memcpy(&matrices[16 * j], first + j * stride, 64), to_grid(&matrices[16 * j]);
+      skin.inverseBindMatrices = writer.add_accessor(matrices, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_MAT4, 0);
+      model.accessors.back().count = acc.count;
+      continue;
     }
+    std::vector<float> matrices(16 * joints, 0.0f);  // no accessor: identities
     for (size_t j = 0; j < joints; ++j) {
-      float* m = &matrices[16 * j];
-      for (int r = 0; r < 4; ++r) m[12 + r] = float(m[12 + r] + m[r] * o[0] + m[4 + r] * o[1] + m[8 + r] * o[2]);
-      for (int c = 0; c < 12; ++c) m[c] = float(m[c] * s);
+      for (int d = 0; d < 4; ++d) matrices[16 * j + 5 * size_t(d)] = 1.0f;
+      to_grid(&matrices[16 * j]);
     }
     skin.inverseBindMatrices = writer.add_accessor(matrices, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_MAT4, 0);
     model.accessors.back().count = joints;

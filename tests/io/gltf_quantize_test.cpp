@@ -240,6 +240,9 @@ TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
     for (size_t v = 0; v < a.vertex_count(); ++v) worst = std::max(worst, distance(xa.positions[v], xb.positions[v]));
     EXPECT_LE(worst, step * std::sqrt(3.0) / 2 + 1e-5) << "t = " << time;
   }
+  // The matrices were changed in place: no stale copy is left in the file.
+  const Json doc = test::glb_json(dir / "q.glb");
+  EXPECT_EQ(std::count_if(doc["accessors"].begin(), doc["accessors"].end(), [](const Json& a) { return a["type"] == "MAT4"; }), 1);
   test::expect_valid_gltf({dir / "q.glb"});
 }
 
@@ -274,6 +277,45 @@ TEST(GltfQuantize, MorphTargetsMoveOnTheGrid) {
   }
   EXPECT_LE(worst, step * std::sqrt(3.0) + 1e-5);  // half a step from the base, half from the displacement
   test::expect_valid_gltf({dir / "q.glb"});
+}
+
+// The CLI's -q (and --position-bits, and with -c): each command's output reads back within the
+// step of its float twin, placed; a non-glTF output is refused rather than silently left as it is.
+TEST(GltfQuantize, CommandsQuantizeWithDashQ) {
+  TempDir dir;
+  write_scene(scene_from_mesh(shapes::torus(1.0f, 0.25f, 48, 24)), dir / "in.glb");
+  for (const std::vector<std::string>& command : std::vector<std::vector<std::string>>{
+           {"lod", "--levels", "3"}, {"simplify", "--ratio", "0.3"}, {"optimize"}, {"convert"}}) {
+    for (const std::vector<std::string>& flags : std::vector<std::vector<std::string>>{{"-q"}, {"-q", "-c", "--position-bits", "10"}}) {
+      SCOPED_TRACE(command[0] + " " + flags.back());
+      std::vector<std::string> plain = command, packed = command;
+      for (auto* args : {&plain, &packed}) args->insert(args->begin() + 1, (dir / "in.glb").string());
+      plain.insert(plain.end(), {"-o", (dir / "plain.glb").string()});
+      if (flags.size() > 1) plain.push_back("-c");  // (lod -c orders its levels for the codec)
+      packed.insert(packed.end(), {"-o", (dir / "q.glb").string()});
+      packed.insert(packed.end(), flags.begin(), flags.end());
+      ASSERT_EQ(test::run_cli(plain).exit_code, 0);
+      const test::RunResult r = test::run_cli(packed);
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      EXPECT_TRUE(contains(test::glb_json(dir / "q.glb")["extensionsRequired"], "KHR_mesh_quantization"));
+      const Scene a = read_scene(dir / "plain.glb");
+      const Mesh pa = flatten(a), pb = flatten(read_scene(dir / "q.glb"));
+      ASSERT_EQ(pa.vertex_count(), pb.vertex_count());
+      float3 lo, hi;
+      bounding_box(pa, lo, hi);
+      const double bits = flags.size() > 1 ? 10 : 14;
+      const double step = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) / (std::exp2(bits) - 1);
+      double worst = 0;
+      for (size_t v = 0; v < pa.vertex_count(); ++v) worst = std::max(worst, distance(pa.positions[v], pb.positions[v]));
+      EXPECT_LE(worst, step * std::sqrt(3.0) / 2 * 1.001 + 1e-6);
+      EXPECT_GT(worst, step / 8);
+      test::expect_valid_gltf({dir / "q.glb"});
+    }
+  }
+  const test::RunResult r = test::run_cli({"convert", (dir / "in.glb").string(), (dir / "out.obj").string(), "-q"});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("glTF output"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.obj"));
 }
 
 }  // namespace

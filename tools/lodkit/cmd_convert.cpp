@@ -59,6 +59,11 @@ void GeometryFile::write(const std::string& output, const WriteOptions& options)
   else write_mesh(mesh_, output, options);
 }
 
+void check_gltf_output_flags(const WriteOptions& options, const std::string& output) {
+  if ((options.meshopt_compression || options.quantize) && !is_gltf(output))
+    throw_usage(output + ": -c and -q apply to glTF output (.gltf, .glb) only");
+}
+
 void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
   app->add_flag("-c,--compress", options.meshopt_compression,
                 "glTF output: compress geometry and animation with EXT_meshopt_compression (lossless; "
@@ -195,6 +200,7 @@ Command register_convert(CLI::App& root) {
             format_from_path(o.input);
             format_from_path(o.output);
             check_not_input(o.input, o.output, o.force);
+            check_gltf_output_flags(o.gltf, o.output);
             // glTF to glTF goes through the scene, so everything lodkit does not change is kept; any
             // other pair converts the (flattened) mesh, keeping its vertex order and material ids.
             const auto is_gltf = [](const std::string& f) {

@@ -387,6 +387,7 @@ Command register_lod(CLI::App& root) {
             if (!(o->error_px > 0) || !(o->screen_height > 0) || !(o->fov_degrees > 0 && o->fov_degrees < 180))
               throw_usage("--error-px and --screen-height must be > 0 and --fov in (0, 180)");
             check_not_input(o->input, o->output, o->force);
+            check_gltf_output_flags(o->gltf, o->output);
             if (!o->lpm.empty()) check_not_input(o->input, o->lpm, o->force);
             LodOptions options;
             if (!o->ratios.empty()) options.ratios = parse_list(o->ratios, "--ratios");

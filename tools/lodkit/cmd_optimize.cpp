@@ -80,6 +80,7 @@ Command register_optimize(CLI::App& root) {
             if (!(o->attribute_tolerance >= 0)) throw_usage("--attribute-tolerance must be >= 0");
             if ((o->weld_positions || o->attribute_tolerance > 0) && o->weld < 0) o->weld = 0;
             check_not_input(o->input, o->output, o->force);
+            check_gltf_output_flags(o->gltf, o->output);
             const float t = o->attribute_tolerance;
             OptimizeOptions options{
                 .weld = o->weld >= 0,

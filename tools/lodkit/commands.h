@@ -84,6 +84,8 @@ std::vector<uint32_t> weld_duplicates(Mesh& mesh, std::span<const uint32_t> clas
 
 // -c/--compress, -q/--quantize and --position-bits on a command that writes glTF.
 void add_gltf_output_flags(CLI::App* app, WriteOptions& options);
+// Refuses those flags for an output that is not glTF (they would do nothing).
+void check_gltf_output_flags(const WriteOptions& options, const std::string& output);
 
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);
