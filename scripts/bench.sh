@@ -48,7 +48,7 @@
 # draw, write) RUNS times, each under /usr/bin/time -v; prints the medians and peak memory (target:
 # under 5 s) and writes bench/results/render.json.
 #
-# compress: glTF output with -c (EXT_meshopt_compression, no quantization) against gltfpack 0.18 on
+# compress: glTF output with -c (EXT_meshopt_compression) and -c -q (KHR_mesh_quantization) against gltfpack 0.18 on
 # the same optimized files (-noq, -c -noq and its quantized -c): sizes raw and gzipped, and lodkit's
 # load time and peak memory, plain against compressed (bench/compress/run.py); writes
 # bench/results/compress.json.

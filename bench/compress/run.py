@@ -1,16 +1,20 @@
 #!/usr/bin/env python3
-"""glTF compression (`-c`, EXT_meshopt_compression without quantization) against gltfpack.
+"""glTF compression (`-c`, EXT_meshopt_compression) and quantization (`-q`, KHR_mesh_quantization)
+against gltfpack.
 
 usage: run.py LODKIT FIXTURES OUT.json [--runs N]
 
 For each input (corpus meshes of at least 20,000 triangles, the two skinned test characters with
 their clips, and bunny00's LOD chain as `lodkit lod` writes it):
-  - lodkit: `lodkit optimize IN --lru` (vertex cache and fetch order) written plain and with -c;
+  - lodkit: `lodkit optimize IN --lru` (vertex cache and fetch order) written plain, with -c, and
+    with -c -q (gltfpack's default bit depths: 14-bit positions, 8-bit normals);
   - gltfpack (Debian, 0.18) on the same plain file: -noq (its reordering, no quantization), -c -noq
     (the same compression lodkit writes), and -c (its defaults: quantized, lossy).
-Sizes raw and after gzip -9 (what a web server sends), the ratio lodkit -c / gltfpack -c -noq, and
-lodkit's load time (median of N `lodkit info --json` load_seconds) and peak RSS, plain against -c.
-Every lodkit -c file must read back with the plain file's triangle and vertex counts.
+Sizes raw and after gzip -9 (what a web server sends), the ratios lodkit -c / gltfpack -c -noq and
+lodkit -c -q / gltfpack -c, the quantized files' symmetric Hausdorff distance from the plain file
+(`lodkit compare`, relative to the bounding-box diagonal), and lodkit's load time (median of N
+`lodkit info --json` load_seconds) and peak RSS, plain against -c and -c -q. Every lodkit -c and
+-c -q file must read back with the plain file's triangle and vertex counts.
 """
 import gzip
 import json
@@ -47,6 +51,12 @@ def load(lodkit, path, runs):
     return statistics.median(times), rss / 1024
 
 
+def hausdorff(lodkit, a, b):
+    """Symmetric Hausdorff distance between two files' scenes (flattened), over the diagonal."""
+    report = json.loads(run([lodkit, "compare", a, b, "--json"]))
+    return max(report["a_to_b"]["relative_hausdorff"], report["b_to_a"]["relative_hausdorff"])
+
+
 def main():
     lodkit, fixtures, out = sys.argv[1:4]
     runs = int(sys.argv[sys.argv.index("--runs") + 1]) if "--runs" in sys.argv else 5
@@ -76,6 +86,7 @@ def main():
         files = {
             "lodkit": stem + "-opt.glb",
             "lodkit -c": stem + "-opt-c.glb",
+            "lodkit -c -q": stem + "-opt-cq.glb",
             "gltfpack -noq": stem + "-gp.glb",
             "gltfpack -c -noq": stem + "-gp-c-noq.glb",
             "gltfpack -c": stem + "-gp-c.glb",
@@ -84,36 +95,50 @@ def main():
         # the default FIFO order costs -c about 5% (bunny00: 438 against 415 KiB).
         run([lodkit, "optimize", src, "-o", files["lodkit"], "--lru"])
         run([lodkit, "optimize", src, "-o", files["lodkit -c"], "--lru", "-c"])
+        run([lodkit, "optimize", src, "-o", files["lodkit -c -q"], "--lru", "-c", "-q"])
         run(["gltfpack", "-i", files["lodkit"], "-o", files["gltfpack -noq"], "-noq"])
         run(["gltfpack", "-i", files["lodkit"], "-o", files["gltfpack -c -noq"], "-c", "-noq"])
         run(["gltfpack", "-i", files["lodkit"], "-o", files["gltfpack -c"], "-c"])
-        plain, packed = info(lodkit, files["lodkit"])["stats"], info(lodkit, files["lodkit -c"])["stats"]
-        if (plain["triangles"], plain["vertices"]) != (packed["triangles"], packed["vertices"]):
-            raise RuntimeError(f"{name}: -c read back {packed['triangles']} triangles, {packed['vertices']} vertices")
+        plain = info(lodkit, files["lodkit"])["stats"]
+        for flags in ["-c", "-c -q"]:
+            packed = info(lodkit, files["lodkit " + flags])["stats"]
+            if (plain["triangles"], plain["vertices"]) != (packed["triangles"], packed["vertices"]):
+                raise RuntimeError(f"{name}: {flags} read back {packed['triangles']} triangles, {packed['vertices']} vertices")
         row = {"input": name, "triangles": plain["triangles"], "bytes": {}, "gzip": {}}
         for tool, path in files.items():
             row["bytes"][tool] = os.path.getsize(path)
             row["gzip"][tool] = gz(path)
         row["load_plain_s"], row["rss_plain_mib"] = load(lodkit, files["lodkit"], runs)
         row["load_c_s"], row["rss_c_mib"] = load(lodkit, files["lodkit -c"], runs)
+        row["load_cq_s"], row["rss_cq_mib"] = load(lodkit, files["lodkit -c -q"], runs)
+        row["hausdorff"] = {tool: hausdorff(lodkit, files["lodkit"], files[tool]) for tool in ["lodkit -c -q", "gltfpack -c"]}
         rows.append(row)
         print(f"  {name}: done", file=sys.stderr)
 
-    tools = ["lodkit", "lodkit -c", "gltfpack -noq", "gltfpack -c -noq", "gltfpack -c"]
+    tools = ["lodkit", "lodkit -c", "lodkit -c -q", "gltfpack -noq", "gltfpack -c -noq", "gltfpack -c"]
     print("| input | triangles | " + " | ".join(f"{t} KiB (gzip)" for t in tools) +
-          " | lodkit -c ÷ gltfpack -c -noq (gzip) | load plain / -c | peak RSS plain / -c |")
-    print("|---|---|" + "---|" * len(tools) + "---|---|---|")
-    ratios = []
+          " | lodkit -c ÷ gltfpack -c -noq (gzip) | lodkit -c -q ÷ gltfpack -c (gzip) | Hausdorff / diagonal, lodkit -c -q / gltfpack -c |"
+          " load plain / -c / -c -q | peak RSS plain / -c / -c -q |")
+    print("|---|---|" + "---|" * len(tools) + "---|---|---|---|---|")
+    ratios, qratios = [], []
     for r in rows:
         ratio = r["bytes"]["lodkit -c"] / r["bytes"]["gltfpack -c -noq"]
         gratio = r["gzip"]["lodkit -c"] / r["gzip"]["gltfpack -c -noq"]
+        qratio = r["bytes"]["lodkit -c -q"] / r["bytes"]["gltfpack -c"]
+        qgratio = r["gzip"]["lodkit -c -q"] / r["gzip"]["gltfpack -c"]
         ratios.append(ratio)
+        qratios.append(qratio)
         cells = " | ".join(f"{r['bytes'][t] / 1024:.0f} ({r['gzip'][t] / 1024:.0f})" for t in tools)
-        print(f"| {r['input']} | {r['triangles']:,} | {cells} | {ratio:.3f} ({gratio:.3f}) | "
-              f"{r['load_plain_s'] * 1000:.1f} / {r['load_c_s'] * 1000:.1f} ms | {r['rss_plain_mib']:.0f} / {r['rss_c_mib']:.0f} MiB |")
+        h = r["hausdorff"]
+        print(f"| {r['input']} | {r['triangles']:,} | {cells} | {ratio:.3f} ({gratio:.3f}) | {qratio:.3f} ({qgratio:.3f}) | "
+              f"{h['lodkit -c -q']:.2e} / {h['gltfpack -c']:.2e} | "
+              f"{r['load_plain_s'] * 1000:.1f} / {r['load_c_s'] * 1000:.1f} / {r['load_cq_s'] * 1000:.1f} ms | "
+              f"{r['rss_plain_mib']:.0f} / {r['rss_c_mib']:.0f} / {r['rss_cq_mib']:.0f} MiB |")
     print()
     print(f"lodkit -c ÷ gltfpack -c -noq, raw size: median {statistics.median(ratios):.3f}, "
           f"min {min(ratios):.3f}, max {max(ratios):.3f} over {len(ratios)} inputs (runs per load time: {runs})")
+    print(f"lodkit -c -q ÷ gltfpack -c, raw size: median {statistics.median(qratios):.3f}, "
+          f"min {min(qratios):.3f}, max {max(qratios):.3f}")
     with open(out, "w") as f:
         json.dump({"runs": runs, "rows": rows}, f, indent=1)
 
