@@ -1513,9 +1513,10 @@ PositionGrid position_grid(const std::vector<const Mesh*>& meshes, int bits) {
 }
 
 // Puts the grid's dequantization where each grid mesh enters its space: every node drawing one
-// (in its transform; in a new child node that draws the mesh instead when the node has children,
-// which must not take the grid, or animated translation, rotation or scale, which would overwrite
-// it) and every skin of one (its inverse bind matrices, read from `bin`).
+// (in its transform; in a new child node that draws the mesh instead when the node has children, a
+// camera or an extension's object such as a light, which must not take the grid, or animated
+// translation, rotation or scale, which would overwrite it) and every skin of one (its inverse bind
+// matrices, in `bin`).
 void place_position_grid(tg::Model& model, std::vector<uint8_t>& bin, BinWriter& writer, const PositionGrid& grid,
                          const std::vector<bool>& on_grid) {
   const double s = grid.scale, *o = grid.offset;
@@ -1531,7 +1532,11 @@ void place_position_grid(tg::Model& model, std::vector<uint8_t>& bin, BinWriter&
       skin_on[size_t(model.nodes[n].skin)] = true;
       continue;
     }
-    if (!model.nodes[n].children.empty() || animated[n]) {
+    // A camera, a light or another extension's object at the node must not take the grid either.
+    const tg::Node& at = model.nodes[n];
+    const bool holds_more = at.camera >= 0 || std::any_of(at.extensions.begin(), at.extensions.end(),
+                                                          [](const auto& e) { return e.first != "MSFT_lod"; });
+    if (!at.children.empty() || animated[n] || holds_more) {
       tg::Node child;
       child.mesh = std::exchange(model.nodes[n].mesh, -1);
       child.weights = std::move(model.nodes[n].weights);

@@ -200,6 +200,32 @@ TEST(GltfQuantize, NodesPlaceTheGridInWorldSpace) {
   test::expect_valid_gltf({dir / "q.glb"});
 }
 
+// A node that also holds a camera keeps its transform (the camera must not move): a new child draws
+// its mesh on the grid. A node with only its mesh takes the grid itself.
+TEST(GltfQuantize, ACameraNodeKeepsItsTransform) {
+  TempDir dir;
+  write_scene(scene_from_mesh(shapes::torus(1.0f, 0.3f, 24, 12)), dir / "plain.glb");
+  test::Glb glb = test::read_glb(dir / "plain.glb");
+  glb.doc["cameras"] = Json::array({{{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"znear", 0.1}}}}});
+  glb.doc["nodes"][0]["camera"] = 0;
+  glb.doc["nodes"][0]["translation"] = {0.0, 0.0, 5.0};
+  test::write_bytes(dir / "camera.glb", test::glb_bytes(glb));
+  write_scene(read_scene(dir / "camera.glb"), dir / "q.glb", {.quantize = true});
+  const Json doc = test::glb_json(dir / "q.glb");
+  ASSERT_EQ(doc["nodes"].size(), 2u);
+  EXPECT_EQ(doc["nodes"][0]["camera"], 0);
+  EXPECT_EQ(doc["nodes"][0]["translation"], Json::array({0.0, 0.0, 5.0}));
+  EXPECT_FALSE(doc["nodes"][0].contains("scale"));
+  EXPECT_FALSE(doc["nodes"][0].contains("mesh"));
+  EXPECT_EQ(doc["nodes"][1]["mesh"], 0);
+  const Mesh a = flatten(read_scene(dir / "camera.glb")), b = flatten(read_scene(dir / "q.glb"));
+  ASSERT_EQ(a.vertex_count(), b.vertex_count());
+  double worst = 0;
+  for (size_t v = 0; v < a.vertex_count(); ++v) worst = std::max(worst, distance(a.positions[v], b.positions[v]));
+  EXPECT_LE(worst, 2.6 / 16383 * std::sqrt(3.0) / 2 + 1e-6);
+  test::expect_valid_gltf({dir / "q.glb"});
+}
+
 // A skinned character: the grid goes into the inverse bind matrices. Posed by a clip, each vertex
 // lands where the float file's lands when skinned with the same (quantized) weights, within the
 // step; the weights sum to exactly 255 and unused joints are 0.
