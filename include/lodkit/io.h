@@ -41,8 +41,8 @@ struct WriteOptions {
   // offset and scale (a child node carries them where the node has children or animated transforms),
   // each skin in its inverse bind matrices. Morph target positions go on the same step, in shorts.
   // Normals and tangents in normalized bytes; UVs in [0, 1] in normalized unsigned shorts; colours in
-  // [0, 1] and skin weights (summing to exactly 255) in normalized unsigned bytes; other streams stay
-  // as they are. Positions stay floats in a mesh that a point or line primitive, GPU instancing or a
+  // [0, 1] and skin weights (summing to exactly 255) in normalized unsigned bytes; rotation keyframes
+  // in normalized shorts; other streams stay as they are. Positions stay floats in a mesh that a point or line primitive, GPU instancing or a
   // skin shared with such a mesh ties to its own space.
   bool quantize = false;
   int position_bits = 14;

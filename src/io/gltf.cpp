@@ -1168,15 +1168,17 @@ std::vector<uint8_t> pack_components(const std::vector<T>& values, Code&& code) 
 }
 
 template <class T>
-bool all_in_unit_range(const std::vector<T>& values) {
+bool all_in_range(const std::vector<T>& values, float low, float high) {
   const auto* f = reinterpret_cast<const float*>(values.data());
-  return std::all_of(f, f + values.size() * (sizeof(T) / sizeof(float)), [](float x) { return x >= 0.0f && x <= 1.0f; });
+  return std::all_of(f, f + values.size() * (sizeof(T) / sizeof(float)), [=](float x) { return x >= low && x <= high; });
 }
 
-// Signed normalized bytes (normals, tangents): round(x * 127).
-template <class T>
-std::vector<uint8_t> snorm8(const std::vector<T>& values) {
-  return pack_components<int8_t>(values, [](float x, size_t) { return std::lround(std::clamp(x, -1.0f, 1.0f) * 127.0f); });
+// Signed normalized integers of type I (normals and tangents in bytes, rotations in shorts):
+// round(x * max).
+template <class I, class T>
+std::vector<uint8_t> snorm(const std::vector<T>& values) {
+  const float top = float(std::numeric_limits<I>::max());
+  return pack_components<I>(values, [top](float x, size_t) { return std::lround(std::clamp(x, -1.0f, 1.0f) * top); });
 }
 // Unsigned normalized integers of type I (UVs, colours): round(x * max).
 template <class I, class T>
@@ -1289,10 +1291,10 @@ class BinWriter {
       const std::string_view name = semantic;
       // (Core glTF allows integer UVs and colours; integer normals and tangents need the extension.)
       if (name == "NORMAL" || name == "TANGENT")
-        return used_quantization_ = true, add_packed(snorm8(values), TINYGLTF_COMPONENT_TYPE_BYTE, type, true);
-      if (name.starts_with("TEXCOORD") && all_in_unit_range(values))
+        return used_quantization_ = true, add_packed(snorm<int8_t>(values), TINYGLTF_COMPONENT_TYPE_BYTE, type, true);
+      if (name.starts_with("TEXCOORD") && all_in_range(values, 0.0f, 1.0f))
         return add_packed(unorm<uint16_t>(values), TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, type, true);
-      if (name == "COLOR_0" && all_in_unit_range(values))
+      if (name == "COLOR_0" && all_in_range(values, 0.0f, 1.0f))
         return add_packed(unorm<uint8_t>(values), TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, type, true);
     }
     return add_accessor(values, TINYGLTF_COMPONENT_TYPE_FLOAT, type, array);
@@ -1811,6 +1813,35 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     for (Pending& p : pending) p.mesh = size_t(mesh_remap[p.mesh]);
   }
 
+  // Quantized: rotation keyframes in normalized shorts, as core glTF allows (half the bytes, within
+  // 1/65534 per component), read now and written with the geometry; the float accessors go. Only
+  // where every channel of the sampler animates a rotation, and (cubic splines) the tangents fit.
+  struct ShortRotations {
+    size_t animation, sampler;
+    std::vector<std::array<int16_t, 4>> values;
+  };
+  std::vector<ShortRotations> short_rotations;
+  if (options.quantize)
+    for (size_t a = 0; a < model.animations.size(); ++a) {
+      tg::Animation& anim = model.animations[a];
+      for (size_t k = 0; k < anim.samplers.size(); ++k) {
+        tg::AnimationSampler& sampler = anim.samplers[k];
+        const bool rotations_only = std::all_of(anim.channels.begin(), anim.channels.end(), [&](const tg::AnimationChannel& ch) {
+          return ch.sampler != int(k) || ch.target_path == "rotation";
+        });
+        if (!rotations_only || sampler.output < 0 || size_t(sampler.output) >= model.accessors.size()) continue;
+        const tg::Accessor& acc = model.accessors[size_t(sampler.output)];
+        if (acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT || acc.type != TINYGLTF_TYPE_VEC4) continue;
+        const std::vector<float4> values = source.decode_floats<float4>(sampler.output);
+        if (!all_in_range(values, -1.0f, 1.0f)) continue;
+        ShortRotations& out = short_rotations.emplace_back(ShortRotations{a, k, {}});
+        const std::vector<uint8_t> packed = snorm<int16_t>(values);
+        out.values.resize(values.size());
+        std::memcpy(out.values.data(), packed.data(), packed.size());
+        sampler.output = -1;  // (its float accessor is pruned below)
+      }
+    }
+
   // Keep the accessors something still references, then the bufferViews those and the images use.
   std::vector<int> accessor_remap(model.accessors.size(), -1);
   auto mark_accessor = [&](int index) {
@@ -1950,6 +1981,9 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     written[p.scene_primitive] = &out;
     written_mesh[p.scene_primitive] = p.mesh;
   }
+  for (const ShortRotations& r : short_rotations)
+    model.animations[r.animation].samplers[r.sampler].output =
+        writer.add_accessor(r.values, TINYGLTF_COMPONENT_TYPE_SHORT, TINYGLTF_TYPE_VEC4, 0, true);
   if (std::find(on_grid.begin(), on_grid.end(), true) != on_grid.end()) place_position_grid(model, bin, writer, grid, on_grid);
   if (writer.used_quantization()) {
     const std::string ext = "KHR_mesh_quantization";

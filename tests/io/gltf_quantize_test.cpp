@@ -228,7 +228,7 @@ TEST(GltfQuantize, ACameraNodeKeepsItsTransform) {
 
 // A skinned character: the grid goes into the inverse bind matrices. Posed by a clip, each vertex
 // lands where the float file's lands when skinned with the same (quantized) weights, within the
-// step; the weights sum to exactly 255 and unused joints are 0.
+// step; the weights sum to exactly 255 and unused joints are 0; rotation keys are shorts.
 TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
   TempDir dir;
   const Scene humanoid = fixtures::humanoid_scene();
@@ -269,6 +269,25 @@ TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
   // The matrices were changed in place: no stale copy is left in the file.
   const Json doc = test::glb_json(dir / "q.glb");
   EXPECT_EQ(std::count_if(doc["accessors"].begin(), doc["accessors"].end(), [](const Json& a) { return a["type"] == "MAT4"; }), 1);
+  // Rotation keys in normalized shorts, within half their step; translations stay floats.
+  ASSERT_EQ(plain.animations.size(), quantized.animations.size());
+  size_t rotations = 0;
+  for (size_t k = 0; k < plain.animations.size(); ++k) {
+    ASSERT_EQ(plain.animations[k].channels.size(), quantized.animations[k].channels.size());
+    for (size_t c = 0; c < plain.animations[k].channels.size(); ++c) {
+      const AnimationChannel &x = plain.animations[k].channels[c], &y = quantized.animations[k].channels[c];
+      ASSERT_EQ(x.values.size(), y.values.size());
+      const double tolerance = x.path == AnimationPath::rotation ? 0.5 / 32767 + 1e-7 : 0.0;
+      for (size_t i = 0; i < x.values.size(); ++i) EXPECT_LE(std::fabs(double(x.values[i]) - y.values[i]), tolerance) << k << " " << c;
+      rotations += x.path == AnimationPath::rotation;
+    }
+  }
+  EXPECT_GT(rotations, 0u);
+  for (const Json& anim : doc["animations"])
+    for (const Json& channel : anim["channels"]) {
+      const Json& output = doc["accessors"][anim["samplers"][channel["sampler"].get<size_t>()]["output"].get<size_t>()];
+      EXPECT_EQ(output["componentType"], channel["target"]["path"] == "rotation" ? 5122 : 5126);
+    }
   test::expect_valid_gltf({dir / "q.glb"});
 }
 
