@@ -1160,7 +1160,7 @@ std::vector<uint8_t> pack_components(const std::vector<T>& values, Code&& code) 
     float f[n];
     std::memcpy(f, &values[i], sizeof f);
     for (size_t c = 0; c < n; ++c) {
-      const I q = I(code(f[c], c));
+      const I q = std::isnan(f[c]) ? I(0) : I(code(f[c], c));  // (a NaN has no integer)
       std::memcpy(out.data() + (i * n + c) * sizeof(I), &q, sizeof q);
     }
   }
