@@ -177,7 +177,10 @@ void write_mesh(const Mesh& mesh, const std::filesystem::path& path, const Write
 void write_scene(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options = {});
 
 // Every primitive instance of the default scene, in world space, merged into one mesh.
-// Material ids are glTF material indices (+1, so 0 means "no material"); names follow.
+// Material ids are glTF material indices (+1, so 0 means "no material"); names follow. A skinned
+// mesh is in its bind pose, in its own space, unless every joint carries the same matrix at rest
+// (world times inverse bind matrix: the skeleton moved after binding, or a quantized file's grid,
+// -q or gltfpack's): that matrix then places it, where a viewer draws it.
 Mesh flatten(const Scene& scene);
 
 // The morph targets of flatten(scene), per vertex of it, when one node draws every morphing

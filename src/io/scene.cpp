@@ -96,6 +96,75 @@ struct Placement {
   float3 apply_to_tangent(const float3& t) const { return core::unit_float3(linear(t), t); }
 };
 
+// Every node's world matrix in the nodes' own transforms (the pose the file was saved in), through
+// Node::parent; a node on a malformed parent cycle counts as a root.
+std::vector<Matrix> rest_world_matrices(const Scene& scene) {
+  const size_t n = scene.nodes.size();
+  std::vector<Matrix> world(n);
+  std::vector<uint8_t> state(n, 0);  // 0 to do, 1 on the current path, 2 done
+  std::vector<size_t> path;
+  for (size_t start = 0; start < n; ++start) {
+    for (size_t at = start; state[at] == 0;) {  // walk up to a done node or a root
+      state[at] = 1, path.push_back(at);
+      const int32_t parent = scene.nodes[at].parent;
+      if (parent < 0 || size_t(parent) >= n || state[size_t(parent)] == 1) break;
+      at = size_t(parent);
+    }
+    for (auto it = path.rbegin(); it != path.rend(); ++it) {  // then down, root first
+      const int32_t parent = scene.nodes[*it].parent;
+      const bool above = parent >= 0 && size_t(parent) < n && state[size_t(parent)] == 2;
+      world[*it] = above ? multiply(world[size_t(parent)], local_matrix(scene.nodes[*it])) : local_matrix(scene.nodes[*it]);
+      state[*it] = 2;
+    }
+    path.clear();
+  }
+  return world;
+}
+
+// Where a skinned mesh drawn by `node` is placed. glTF ignores the node's transform: the joints
+// place it. Flattening gives the bind pose, in the mesh's own space, except where every joint
+// carries the same matrix at rest (world times inverse bind matrix): the whole skeleton moved or
+// scaled after binding, or a quantized file's grid (lodkit -q, gltfpack), whose dequantization
+// lives in the inverse bind matrices. That matrix then places it, where a viewer draws it.
+// "The same" within 1e-4 of the mesh's size, at the corners of its bounding box; identity then
+// stays exactly the identity.
+Matrix skinned_placement(const Scene& scene, const Node& node, const std::vector<Matrix>& rest_world,
+                         const std::vector<size_t>& primitives) {
+  if (node.skin < 0 || size_t(node.skin) >= scene.skins.size()) return identity_matrix;
+  const Skin& skin = scene.skins[size_t(node.skin)];
+  if (skin.joints.empty()) return identity_matrix;
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (const size_t p : primitives)
+    for (const float3& q : scene.primitives[p].mesh.positions) {
+      const double c[3] = {q.x, q.y, q.z};
+      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], c[k]), hi[k] = std::max(hi[k], c[k]);
+    }
+  if (!(lo[0] <= hi[0])) return identity_matrix;
+  const auto corner = [&](const Matrix& m, int i) {
+    const double x = i & 1 ? hi[0] : lo[0], y = i & 2 ? hi[1] : lo[1], z = i & 4 ? hi[2] : lo[2];
+    return core::vec3d{m[0] * x + m[4] * y + m[8] * z + m[12], m[1] * x + m[5] * y + m[9] * z + m[13],
+                       m[2] * x + m[6] * y + m[10] * z + m[14]};
+  };
+  std::vector<Matrix> joint(skin.joints.size());
+  for (size_t j = 0; j < joint.size(); ++j) {
+    const int32_t at = skin.joints[j];
+    if (at < 0 || size_t(at) >= rest_world.size()) return identity_matrix;
+    Matrix inverse_bind = identity_matrix;
+    if (j < skin.inverse_bind_matrices.size()) std::copy(skin.inverse_bind_matrices[j].begin(), skin.inverse_bind_matrices[j].end(), inverse_bind.begin());
+    joint[j] = multiply(rest_world[size_t(at)], inverse_bind);
+  }
+  const double size = core::length(corner(joint[0], 7) - corner(joint[0], 0));
+  const auto same = [&](const Matrix& a, const Matrix& b) {
+    for (int i = 0; i < 8; ++i)
+      if (!(core::length(corner(a, i) - corner(b, i)) <= 1e-4 * size)) return false;
+    return true;
+  };
+  if (!(size > 0) || !std::isfinite(size)) return identity_matrix;
+  for (const Matrix& m : joint)
+    if (!same(m, joint[0])) return identity_matrix;
+  return same(joint[0], identity_matrix) ? identity_matrix : joint[0];
+}
+
 // Every (primitive, world matrix) pair of the default scene, in depth-first node order.
 std::vector<Instance> collect_instances(const Scene& scene) {
   std::vector<Instance> instances;
@@ -110,6 +179,7 @@ std::vector<Instance> collect_instances(const Scene& scene) {
 
   // Iterative walk; a node is visited once even if a malformed hierarchy reaches it twice.
   std::vector<bool> visited(scene.nodes.size(), false);
+  std::vector<Matrix> rest_world;  // every node's, once a skinned mesh needs them
   std::vector<std::pair<int32_t, Matrix>> stack;
   for (auto it = scene.roots.rbegin(); it != scene.roots.rend(); ++it) stack.push_back({*it, identity_matrix});
   while (!stack.empty()) {
@@ -121,10 +191,9 @@ std::vector<Instance> collect_instances(const Scene& scene) {
     const Matrix world = multiply(parent_world, local_matrix(node));
     if (node.mesh >= 0) {
       auto found = primitives_of_mesh.find(node.mesh);
-      // glTF ignores the transform of a node with a skinned mesh: joints place it. Flattening
-      // gives the bind pose, in the mesh's own space.
-      const Matrix& placement = node.skin >= 0 ? identity_matrix : world;
       if (found != primitives_of_mesh.end()) {
+        if (node.skin >= 0 && rest_world.empty()) rest_world = rest_world_matrices(scene);
+        const Matrix placement = node.skin >= 0 ? skinned_placement(scene, node, rest_world, found->second) : world;
         if (node.gpu_instances.empty()) {
           for (size_t p : found->second) instances.push_back({p, placement, index});
         } else {

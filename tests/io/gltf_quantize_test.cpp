@@ -291,6 +291,28 @@ TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
   test::expect_valid_gltf({dir / "q.glb"});
 }
 
+// flatten (and so info, compare, render) places a quantized skinned mesh where a viewer draws it
+// at rest: every joint carries the grid's dequantization. The float file's mesh is not moved.
+TEST(GltfQuantize, FlattenPlacesAQuantizedSkinnedMesh) {
+  TempDir dir;
+  const Scene humanoid = fixtures::humanoid_scene();
+  write_scene(humanoid, dir / "plain.glb");
+  write_scene(humanoid, dir / "q.glb", {.quantize = true});
+  const Scene plain = read_scene(dir / "plain.glb");
+  const Mesh a = flatten(plain), b = flatten(read_scene(dir / "q.glb"));
+  EXPECT_TRUE(a.positions == plain.primitives[0].mesh.positions);  // bind pose, as before
+  ASSERT_EQ(a.vertex_count(), b.vertex_count());
+  float3 lo, hi;
+  bounding_box(a, lo, hi);
+  const double step = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) / 16383;
+  double worst = 0;
+  for (size_t v = 0; v < a.vertex_count(); ++v) worst = std::max(worst, distance(a.positions[v], b.positions[v]));
+  EXPECT_LE(worst, step * std::sqrt(3.0) / 2 + 1e-5);
+  const test::RunResult r = test::run_cli({"compare", (dir / "plain.glb").string(), (dir / "q.glb").string(), "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_LE(nlohmann::json::parse(r.out)["a_to_b"]["hausdorff"].get<double>(), step * std::sqrt(3.0) / 2 + 1e-5);
+}
+
 // Morph targets: displacements in grid steps (shorts), so base plus displacement lands within a
 // step of the float file's, in world space.
 TEST(GltfQuantize, MorphTargetsMoveOnTheGrid) {
