@@ -291,6 +291,30 @@ TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
   test::expect_valid_gltf({dir / "q.glb"});
 }
 
+// A mesh with a lines primitive beside its triangles keeps float positions (its node would take the
+// grid for both, and lodkit does not rewrite lines); the triangles' normals are still quantized.
+TEST(GltfQuantize, AMeshWithLinesKeepsFloatPositions) {
+  TempDir dir;
+  write_scene(scene_from_mesh(shapes::torus(1.0f, 0.3f, 24, 12)), dir / "plain.glb");
+  test::Glb glb = test::read_glb(dir / "plain.glb");
+  Json lines = glb.doc["meshes"][0]["primitives"][0];
+  lines.erase("indices");
+  lines["attributes"] = {{"POSITION", lines["attributes"]["POSITION"]}};
+  lines["mode"] = 1;
+  glb.doc["meshes"][0]["primitives"].push_back(lines);
+  test::write_bytes(dir / "lines.glb", test::glb_bytes(glb));
+  write_scene(read_scene(dir / "lines.glb"), dir / "q.glb", {.quantize = true});
+  const Json doc = test::glb_json(dir / "q.glb");
+  ASSERT_EQ(doc["meshes"][0]["primitives"].size(), 2u);
+  for (const Json& prim : doc["meshes"][0]["primitives"])
+    EXPECT_EQ(doc["accessors"][prim["attributes"]["POSITION"].get<size_t>()]["componentType"], 5126) << prim.dump();
+  const Json& triangles = doc["meshes"][0]["primitives"][0];
+  EXPECT_EQ(doc["accessors"][triangles["attributes"]["NORMAL"].get<size_t>()]["componentType"], 5120);
+  EXPECT_FALSE(doc["nodes"][0].contains("scale"));
+  EXPECT_TRUE(contains(doc["extensionsRequired"], "KHR_mesh_quantization"));
+  test::expect_valid_gltf({dir / "q.glb"});
+}
+
 // flatten (and so info, compare, render) places a quantized skinned mesh where a viewer draws it
 // at rest: every joint carries the grid's dequantization. The float file's mesh is not moved.
 TEST(GltfQuantize, FlattenPlacesAQuantizedSkinnedMesh) {
