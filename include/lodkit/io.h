@@ -39,7 +39,8 @@ struct WriteOptions {
   // default. Positions go on one grid for the whole document, `position_bits` per axis (1 to 16) in
   // unsigned shorts, the same step on every axis; each node drawing such a mesh takes the grid's
   // offset and scale (a child node carries them where the node has children or animated transforms),
-  // each skin in its inverse bind matrices. Morph target positions go on the same step, in shorts.
+  // each skin in its inverse bind matrices. Morph target positions go on the same step, in shorts,
+  // and their normal and tangent displacements (within [-1, 1]) in normalized bytes.
   // Normals and tangents in normalized bytes; UVs in [0, 1] in normalized unsigned shorts; colours in
   // [0, 1] and skin weights (summing to exactly 255) in normalized unsigned bytes; rotation keyframes
   // in normalized shorts; other streams stay as they are. Positions stay floats in a mesh that a point or line primitive, GPU instancing or a

@@ -1381,11 +1381,15 @@ class BinWriter {
         std::map<std::string, int> attributes;
         attributes["POSITION"] = add_displacements(target.positions, coding.grid);
         // A displacement of a stream the mesh does not have would be invalid: it has none to move.
-        // (Normal and tangent displacements stay floats: they may exceed a normalized range.)
-        if (!target.normals.empty() && !mesh.normals.empty())
-          attributes["NORMAL"] = add_accessor(target.normals, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
-        if (!target.tangents.empty() && !mesh.tangents.empty())
-          attributes["TANGENT"] = add_accessor(target.tangents, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
+        // Quantized, normal and tangent displacements go in normalized bytes like the normals
+        // themselves, where they fit the range (a flipped normal moves by up to 2).
+        const auto add_direction_offsets = [&](const std::vector<float3>& d) {
+          if (coding.quantize && all_in_range(d, -1.0f, 1.0f))
+            return used_quantization_ = true, add_packed(snorm<int8_t>(d), TINYGLTF_COMPONENT_TYPE_BYTE, TINYGLTF_TYPE_VEC3, true);
+          return add_accessor(d, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
+        };
+        if (!target.normals.empty() && !mesh.normals.empty()) attributes["NORMAL"] = add_direction_offsets(target.normals);
+        if (!target.tangents.empty() && !mesh.tangents.empty()) attributes["TANGENT"] = add_direction_offsets(target.tangents);
         prim.targets.push_back(std::move(attributes));
       }
     add_indices(mesh, prim);

@@ -338,17 +338,20 @@ TEST(GltfQuantize, FlattenPlacesAQuantizedSkinnedMesh) {
 }
 
 // Morph targets: displacements in grid steps (shorts), so base plus displacement lands within a
-// step of the float file's, in world space.
+// step of the float file's, in world space; normal displacements in normalized bytes.
 TEST(GltfQuantize, MorphTargetsMoveOnTheGrid) {
   TempDir dir;
   Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 32, 16));
   MorphTarget target;
   for (const float3& p : scene.primitives[0].mesh.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
+  for (const float3& n : scene.primitives[0].mesh.normals) target.normals.push_back({0.1f * n.x, -0.2f * n.z, 0.3f * n.y});
   scene.primitives[0].targets.push_back(target);
   write_scene(scene, dir / "q.glb", {.quantize = true});
   const test::Glb glb = test::read_glb(dir / "q.glb");
   const size_t moved = glb.doc["meshes"][0]["primitives"][0]["targets"][0]["POSITION"];
   EXPECT_EQ(glb.doc["accessors"][moved]["componentType"], 5122);  // short
+  const size_t turned = glb.doc["meshes"][0]["primitives"][0]["targets"][0]["NORMAL"];
+  EXPECT_EQ(glb.doc["accessors"][turned]["componentType"], 5120);  // byte, normalized
   const Scene back = read_scene(dir / "q.glb");
   const std::vector<MorphTarget> targets = source_morph_targets(back, 0);
   ASSERT_EQ(targets.size(), 1u);
@@ -367,6 +370,10 @@ TEST(GltfQuantize, MorphTargetsMoveOnTheGrid) {
     worst = std::max(worst, distance(morphed, expected));
   }
   EXPECT_LE(worst, step * std::sqrt(3.0) + 1e-5);  // half a step from the base, half from the displacement
+  double worst_normal = 0;
+  for (size_t v = 0; v < grid.vertex_count(); ++v) worst_normal = std::max(worst_normal, distance(targets[0].normals[v], target.normals[v]));
+  EXPECT_LE(worst_normal, std::sqrt(3.0) * 0.5 / 127 + 1e-6);
+  EXPECT_GT(worst_normal, 0.1 / 127);
   test::expect_valid_gltf({dir / "q.glb"});
 }
 
