@@ -1332,6 +1332,14 @@ class BinWriter {
     return add_displacements(steps, nullptr);
   }
 
+  // A morph target's normal or tangent displacements. Quantized, in normalized bytes like the
+  // normals themselves, where they fit the range (a flipped normal moves by up to 2).
+  int add_direction_offsets(const std::vector<float3>& d, const StreamCoding& coding) {
+    if (coding.quantize && all_in_range(d, -1.0f, 1.0f))
+      return used_quantization_ = true, add_packed(snorm<int8_t>(d), TINYGLTF_COMPONENT_TYPE_BYTE, TINYGLTF_TYPE_VEC3, true);
+    return add_accessor(d, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, TINYGLTF_TARGET_ARRAY_BUFFER);
+  }
+
   // Appends the Mesh's streams and indices; returns nothing, fills the primitive's references.
   void add_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim, const StreamCoding& coding) {
     const int array = TINYGLTF_TARGET_ARRAY_BUFFER;
@@ -1381,15 +1389,8 @@ class BinWriter {
         std::map<std::string, int> attributes;
         attributes["POSITION"] = add_displacements(target.positions, coding.grid);
         // A displacement of a stream the mesh does not have would be invalid: it has none to move.
-        // Quantized, normal and tangent displacements go in normalized bytes like the normals
-        // themselves, where they fit the range (a flipped normal moves by up to 2).
-        const auto add_direction_offsets = [&](const std::vector<float3>& d) {
-          if (coding.quantize && all_in_range(d, -1.0f, 1.0f))
-            return used_quantization_ = true, add_packed(snorm<int8_t>(d), TINYGLTF_COMPONENT_TYPE_BYTE, TINYGLTF_TYPE_VEC3, true);
-          return add_accessor(d, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, array);
-        };
-        if (!target.normals.empty() && !mesh.normals.empty()) attributes["NORMAL"] = add_direction_offsets(target.normals);
-        if (!target.tangents.empty() && !mesh.tangents.empty()) attributes["TANGENT"] = add_direction_offsets(target.tangents);
+        if (!target.normals.empty() && !mesh.normals.empty()) attributes["NORMAL"] = add_direction_offsets(target.normals, coding);
+        if (!target.tangents.empty() && !mesh.tangents.empty()) attributes["TANGENT"] = add_direction_offsets(target.tangents, coding);
         prim.targets.push_back(std::move(attributes));
       }
     add_indices(mesh, prim);
@@ -1967,7 +1968,9 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     for (const Gathered& g : extra) {
       if (g.target >= int(out.targets.size())) continue;  // the mesh lost its morph targets (another primitive)
       int index;
-      if (g.target >= 0 && g.semantic == "POSITION" && coding.grid) {  // displacements in grid steps
+      // Quantized, a source's own target displacements are stored as lodkit's own are.
+      const bool position = g.semantic == "POSITION" && coding.grid, direction = g.semantic == "NORMAL" || g.semantic == "TANGENT";
+      if (g.target >= 0 && g.like.type == TINYGLTF_TYPE_VEC3 && (position || (direction && coding.quantize))) {
         const size_t element = element_bytes(g.like.componentType, g.like.type), size = component_bytes(g.like.componentType);
         std::vector<float3> d(element ? g.bytes.size() / element : 0);
         for (size_t v = 0; v < d.size(); ++v) {
@@ -1975,7 +1978,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
           d[v] = {component_float(e, g.like.componentType, g.like.normalized), component_float(e + size, g.like.componentType, g.like.normalized),
                   component_float(e + 2 * size, g.like.componentType, g.like.normalized)};
         }
-        index = writer.add_displacements(d, coding.grid);
+        index = position ? writer.add_displacements(d, coding.grid) : writer.add_direction_offsets(d, coding);
       } else {
         index = writer.add_vertex_stream(g.bytes, g.like, !g.like.minValues.empty() && !g.like.maxValues.empty());
       }

@@ -346,35 +346,40 @@ TEST(GltfQuantize, MorphTargetsMoveOnTheGrid) {
   for (const float3& p : scene.primitives[0].mesh.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
   for (const float3& n : scene.primitives[0].mesh.normals) target.normals.push_back({0.1f * n.x, -0.2f * n.z, 0.3f * n.y});
   scene.primitives[0].targets.push_back(target);
-  write_scene(scene, dir / "q.glb", {.quantize = true});
-  const test::Glb glb = test::read_glb(dir / "q.glb");
-  const size_t moved = glb.doc["meshes"][0]["primitives"][0]["targets"][0]["POSITION"];
-  EXPECT_EQ(glb.doc["accessors"][moved]["componentType"], 5122);  // short
-  const size_t turned = glb.doc["meshes"][0]["primitives"][0]["targets"][0]["NORMAL"];
-  EXPECT_EQ(glb.doc["accessors"][turned]["componentType"], 5120);  // byte, normalized
-  const Scene back = read_scene(dir / "q.glb");
-  const std::vector<MorphTarget> targets = source_morph_targets(back, 0);
-  ASSERT_EQ(targets.size(), 1u);
-  const Mesh placed = flatten(back);  // base positions in world space
-  const Mesh& grid = back.primitives[0].mesh;
-  // World = grid * scale + offset, so a displacement in steps times the scale is the world one.
-  const double scale = glb.doc["nodes"][0]["scale"][0].get<double>(), step = 2.6 / 16383;
-  EXPECT_NEAR(scale, step, step * 1e-6);
-  double worst = 0;
-  for (size_t v = 0; v < grid.vertex_count(); ++v) {
-    const float3& d = targets[0].positions[v];
-    const float3 morphed{float(placed.positions[v].x + d.x * scale), float(placed.positions[v].y + d.y * scale),
-                         float(placed.positions[v].z + d.z * scale)};
-    const float3& p = scene.primitives[0].mesh.positions[v];
-    const float3 expected{p.x + target.positions[v].x, p.y + target.positions[v].y, p.z + target.positions[v].z};
-    worst = std::max(worst, distance(morphed, expected));
+  // Written from the scene's targets, and from a float file's own (gathered from its accessors).
+  write_scene(scene, dir / "plain.glb");
+  for (const bool from_file : {false, true}) {
+    SCOPED_TRACE(from_file ? "from a float file" : "from the scene");
+    write_scene(from_file ? read_scene(dir / "plain.glb") : scene, dir / "q.glb", {.quantize = true});
+    const test::Glb glb = test::read_glb(dir / "q.glb");
+    const size_t moved = glb.doc["meshes"][0]["primitives"][0]["targets"][0]["POSITION"];
+    EXPECT_EQ(glb.doc["accessors"][moved]["componentType"], 5122);  // short
+    const size_t turned = glb.doc["meshes"][0]["primitives"][0]["targets"][0]["NORMAL"];
+    EXPECT_EQ(glb.doc["accessors"][turned]["componentType"], 5120);  // byte, normalized
+    const Scene back = read_scene(dir / "q.glb");
+    const std::vector<MorphTarget> targets = source_morph_targets(back, 0);
+    ASSERT_EQ(targets.size(), 1u);
+    const Mesh placed = flatten(back);  // base positions in world space
+    const Mesh& grid = back.primitives[0].mesh;
+    // World = grid * scale + offset, so a displacement in steps times the scale is the world one.
+    const double scale = glb.doc["nodes"][0]["scale"][0].get<double>(), step = 2.6 / 16383;
+    EXPECT_NEAR(scale, step, step * 1e-6);
+    double worst = 0;
+    for (size_t v = 0; v < grid.vertex_count(); ++v) {
+      const float3& d = targets[0].positions[v];
+      const float3 morphed{float(placed.positions[v].x + d.x * scale), float(placed.positions[v].y + d.y * scale),
+                           float(placed.positions[v].z + d.z * scale)};
+      const float3& p = scene.primitives[0].mesh.positions[v];
+      const float3 expected{p.x + target.positions[v].x, p.y + target.positions[v].y, p.z + target.positions[v].z};
+      worst = std::max(worst, distance(morphed, expected));
+    }
+    EXPECT_LE(worst, step * std::sqrt(3.0) + 1e-5);  // half a step from the base, half from the displacement
+    double worst_normal = 0;
+    for (size_t v = 0; v < grid.vertex_count(); ++v) worst_normal = std::max(worst_normal, distance(targets[0].normals[v], target.normals[v]));
+    EXPECT_LE(worst_normal, std::sqrt(3.0) * 0.5 / 127 + 1e-6);
+    EXPECT_GT(worst_normal, 0.1 / 127);
+    test::expect_valid_gltf({dir / "q.glb"});
   }
-  EXPECT_LE(worst, step * std::sqrt(3.0) + 1e-5);  // half a step from the base, half from the displacement
-  double worst_normal = 0;
-  for (size_t v = 0; v < grid.vertex_count(); ++v) worst_normal = std::max(worst_normal, distance(targets[0].normals[v], target.normals[v]));
-  EXPECT_LE(worst_normal, std::sqrt(3.0) * 0.5 / 127 + 1e-6);
-  EXPECT_GT(worst_normal, 0.1 / 127);
-  test::expect_valid_gltf({dir / "q.glb"});
 }
 
 // The CLI's -q (and --position-bits, and with -c): each command's output reads back within the
