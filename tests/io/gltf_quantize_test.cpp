@@ -28,6 +28,20 @@ bool contains(const Json& list, const std::string& name) {
 
 double distance(const float3& a, const float3& b) { return std::hypot(double(a.x) - b.x, double(a.y) - b.y, double(a.z) - b.z); }
 
+// The largest distance between corresponding points (the lists have the same length).
+double largest_distance(const std::vector<float3>& a, const std::vector<float3>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  double worst = 0;
+  for (size_t v = 0; v < std::min(a.size(), b.size()); ++v) worst = std::max(worst, distance(a[v], b[v]));
+  return worst;
+}
+
+// The scene written as floats (plain.glb) and quantized (q.glb) into `dir`.
+void write_plain_and_quantized(const Scene& scene, const std::filesystem::path& dir) {
+  write_scene(scene, dir / "plain.glb");
+  write_scene(scene, dir / "q.glb", {.quantize = true});
+}
+
 // The accessor's stored components, read from the GLB's BIN chunk without lodkit (bufferView stride
 // honoured), as doubles.
 template <class T>
@@ -220,8 +234,7 @@ TEST(GltfQuantize, ACameraNodeKeepsItsTransform) {
   EXPECT_EQ(doc["nodes"][1]["mesh"], 0);
   const Mesh a = flatten(read_scene(dir / "camera.glb")), b = flatten(read_scene(dir / "q.glb"));
   ASSERT_EQ(a.vertex_count(), b.vertex_count());
-  double worst = 0;
-  for (size_t v = 0; v < a.vertex_count(); ++v) worst = std::max(worst, distance(a.positions[v], b.positions[v]));
+  const double worst = largest_distance(a.positions, b.positions);
   EXPECT_LE(worst, 2.6 / 16383 * std::sqrt(3.0) / 2 + 1e-6);
   test::expect_valid_gltf({dir / "q.glb"});
 }
@@ -231,9 +244,7 @@ TEST(GltfQuantize, ACameraNodeKeepsItsTransform) {
 // step; the weights sum to exactly 255 and unused joints are 0; rotation keys are shorts.
 TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
   TempDir dir;
-  const Scene humanoid = fixtures::humanoid_scene();
-  write_scene(humanoid, dir / "plain.glb");
-  write_scene(humanoid, dir / "q.glb", {.quantize = true});
+  write_plain_and_quantized(fixtures::humanoid_scene(), dir.path);
   const Scene plain = read_scene(dir / "plain.glb"), quantized = read_scene(dir / "q.glb");
   const std::vector<SkinnedPrimitive> sa = skinned_primitives(plain), sb = skinned_primitives(quantized);
   ASSERT_EQ(sa.size(), 1u);
@@ -262,8 +273,7 @@ TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
     SkinnedVertices xa, xb;
     skin_vertices(a, joint_matrices(plain, sa[0].skin, world_matrices(plain, pa)), xa);
     skin_vertices(b, joint_matrices(quantized, sb[0].skin, world_matrices(quantized, pb)), xb);
-    double worst = 0;
-    for (size_t v = 0; v < a.vertex_count(); ++v) worst = std::max(worst, distance(xa.positions[v], xb.positions[v]));
+    const double worst = largest_distance(xa.positions, xb.positions);
     EXPECT_LE(worst, step * std::sqrt(3.0) / 2 + 1e-5) << "t = " << time;
   }
   // The matrices were changed in place: no stale copy is left in the file.
@@ -319,9 +329,7 @@ TEST(GltfQuantize, AMeshWithLinesKeepsFloatPositions) {
 // at rest: every joint carries the grid's dequantization. The float file's mesh is not moved.
 TEST(GltfQuantize, FlattenPlacesAQuantizedSkinnedMesh) {
   TempDir dir;
-  const Scene humanoid = fixtures::humanoid_scene();
-  write_scene(humanoid, dir / "plain.glb");
-  write_scene(humanoid, dir / "q.glb", {.quantize = true});
+  write_plain_and_quantized(fixtures::humanoid_scene(), dir.path);
   const Scene plain = read_scene(dir / "plain.glb");
   const Mesh a = flatten(plain), b = flatten(read_scene(dir / "q.glb"));
   EXPECT_TRUE(a.positions == plain.primitives[0].mesh.positions);  // bind pose, as before
@@ -329,8 +337,7 @@ TEST(GltfQuantize, FlattenPlacesAQuantizedSkinnedMesh) {
   float3 lo, hi;
   bounding_box(a, lo, hi);
   const double step = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) / 16383;
-  double worst = 0;
-  for (size_t v = 0; v < a.vertex_count(); ++v) worst = std::max(worst, distance(a.positions[v], b.positions[v]));
+  const double worst = largest_distance(a.positions, b.positions);
   EXPECT_LE(worst, step * std::sqrt(3.0) / 2 + 1e-5);
   const test::RunResult r = test::run_cli({"compare", (dir / "plain.glb").string(), (dir / "q.glb").string(), "--json"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -374,8 +381,7 @@ TEST(GltfQuantize, MorphTargetsMoveOnTheGrid) {
       worst = std::max(worst, distance(morphed, expected));
     }
     EXPECT_LE(worst, step * std::sqrt(3.0) + 1e-5);  // half a step from the base, half from the displacement
-    double worst_normal = 0;
-    for (size_t v = 0; v < grid.vertex_count(); ++v) worst_normal = std::max(worst_normal, distance(targets[0].normals[v], target.normals[v]));
+    const double worst_normal = largest_distance(targets[0].normals, target.normals);
     EXPECT_LE(worst_normal, std::sqrt(3.0) * 0.5 / 127 + 1e-6);
     EXPECT_GT(worst_normal, 0.1 / 127);
     test::expect_valid_gltf({dir / "q.glb"});
@@ -408,8 +414,7 @@ TEST(GltfQuantize, CommandsQuantizeWithDashQ) {
       bounding_box(pa, lo, hi);
       const double bits = flags.size() > 1 ? 10 : 14;
       const double step = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) / (std::exp2(bits) - 1);
-      double worst = 0;
-      for (size_t v = 0; v < pa.vertex_count(); ++v) worst = std::max(worst, distance(pa.positions[v], pb.positions[v]));
+      const double worst = largest_distance(pa.positions, pb.positions);
       EXPECT_LE(worst, step * std::sqrt(3.0) / 2 * 1.001 + 1e-6);
       EXPECT_GT(worst, step / 8);
       test::expect_valid_gltf({dir / "q.glb"});
