@@ -1472,9 +1472,6 @@ void for_each_instancing_accessor(tg::Node& node, size_t accessor_count, F&& f) 
   found->second = tg::Value(std::move(ext));
 }
 
-// Replaces the geometry of the triangle primitives listed in `slots` by scene.primitives[i].mesh,
-// drops what nothing references any more, and packs the surviving bufferViews and the new geometry
-// into one buffer (returned; buffer 0 of the model, whose `buffers` list is left empty).
 // Which meshes of the rebuilt document take positions on the grid, and the grid: meshes whose
 // every primitive lodkit writes (`regenerated[m]`: a point or line primitive kept as it was stays
 // in mesh space), that no node instances on the GPU (the instances' transforms would have to move
@@ -1627,6 +1624,10 @@ void place_position_grid(tg::Model& model, std::vector<uint8_t>& bin, BinWriter&
   }
 }
 
+// Replaces the geometry of the triangle primitives listed in `slots` by scene.primitives[i].mesh,
+// drops what nothing references any more, and packs the surviving bufferViews and the new geometry
+// into one buffer (returned; buffer 0 of the model, whose `buffers` list is left empty), quantized as
+// `options` asks.
 std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, const std::vector<Slot>& slots,
                                       const WriteOptions& options) {
   const size_t mesh_count = model.meshes.size();
