@@ -37,14 +37,15 @@ struct WriteOptions {
   bool meshopt_compression = false;
   // glTF: vertex streams in fewer bits (KHR_mesh_quantization, then required), as gltfpack does by
   // default. Positions go on one grid for the whole document, `position_bits` per axis (1 to 16) in
-  // unsigned shorts, the same step on every axis; each node drawing such a mesh takes the grid's
-  // offset and scale (a child node carries them where the node has children or animated transforms),
-  // each skin in its inverse bind matrices. Morph target positions go on the same step, in shorts,
-  // and their normal and tangent displacements (within [-1, 1]) in normalized bytes.
-  // Normals and tangents in normalized bytes; UVs in [0, 1] in normalized unsigned shorts; colours in
-  // [0, 1] and skin weights (summing to exactly 255) in normalized unsigned bytes; rotation keyframes
-  // in normalized shorts; other streams stay as they are. Positions stay floats in a mesh that a point or line primitive, GPU instancing or a
-  // skin shared with such a mesh ties to its own space.
+  // unsigned shorts, the same step on every axis. Each node drawing such a mesh takes the grid's
+  // offset and scale (a new child node carries them where the node has children, a camera, a light
+  // or animated transforms), each skin in its inverse bind matrices, each GPU instance in its
+  // transform. Morph target positions go on the same step in shorts, their normal and tangent
+  // displacements (within [-1, 1]) in normalized bytes. Normals and tangents in normalized bytes;
+  // UVs in [0, 1] in normalized unsigned shorts; colours in [0, 1] and skin weights (summing to
+  // exactly 255) in normalized unsigned bytes; rotation keyframes in normalized shorts; other
+  // streams stay as they are. Positions stay floats in a mesh that a point or line primitive,
+  // skinned GPU instancing or a skin shared with such a mesh ties to its own space.
   bool quantize = false;
   int position_bits = 14;
   // Text formats print floats with the shortest representation that reads back bit-exact.

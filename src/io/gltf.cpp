@@ -32,6 +32,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "core/vec3d.h"
 #include "io/gltf_compression.h"
 #include "io/gltf_types.h"
 #include "io/text_reader.h"
@@ -1472,15 +1473,20 @@ void for_each_instancing_accessor(tg::Node& node, size_t accessor_count, F&& f) 
   found->second = tg::Value(std::move(ext));
 }
 
-// Which meshes of the rebuilt document take positions on the grid, and the grid: meshes whose
-// every primitive lodkit writes (`regenerated[m]`: a point or line primitive kept as it was stays
-// in mesh space), that no node instances on the GPU (the instances' transforms would have to move
-// the grid), and whose skins serve only such meshes (a skin takes the grid in its inverse bind
-// matrices, which must be plain floats). The grid spans those meshes' positions.
-std::vector<bool> grid_meshes(const tg::Model& model, const std::vector<bool>& regenerated) {
+// Which meshes of the rebuilt document take positions on the grid: meshes whose every primitive
+// lodkit writes (`regenerated[m]`: a point or line primitive kept as it was stays in mesh space),
+// whose GPU instances the reader decoded (Scene::nodes, to take the grid in their transforms) and
+// are not skinned, and whose skins serve only such meshes (a skin takes the grid in its inverse
+// bind matrices, which must be plain floats).
+std::vector<bool> grid_meshes(const tg::Model& model, const Scene& scene, const std::vector<bool>& regenerated) {
   std::vector<bool> on = regenerated;
-  for (const tg::Node& node : model.nodes)
-    if (node.mesh >= 0 && node.extensions.count(gpu_instancing)) on[size_t(node.mesh)] = false;
+  for (size_t n = 0; n < model.nodes.size(); ++n) {
+    const tg::Node& node = model.nodes[n];
+    if (node.mesh < 0 || !node.extensions.count(gpu_instancing)) continue;
+    const bool read = n < scene.nodes.size() && !scene.nodes[n].gpu_instances.empty() && node.extensions.at(gpu_instancing).IsObject() &&
+                      node.extensions.at(gpu_instancing).Has("attributes") && node.extensions.at(gpu_instancing).Get("attributes").IsObject();
+    if (!read || node.skin >= 0) on[size_t(node.mesh)] = false;
+  }
   std::vector<bool> skin_ok(model.skins.size(), true);
   for (size_t s = 0; s < model.skins.size(); ++s) {
     const int ibm = model.skins[s].inverseBindMatrices;
@@ -1516,6 +1522,16 @@ PositionGrid position_grid(const std::vector<const Mesh*>& meshes, int bits) {
   return grid;
 }
 
+// The translation of T R S D, for D the grid's dequantization: T + R (S o), o the grid's offset
+// (the scale becomes S s).
+core::vec3d place_grid_offset(const core::vec3d& t, const double (&r)[4], const core::vec3d& scale, const PositionGrid& grid) {
+  const double* o = grid.offset;
+  const core::vec3d v{scale.x * o[0], scale.y * o[1], scale.z * o[2]}, q{r[0], r[1], r[2]};
+  // v + 2 w (q x v) + 2 q x (q x v), q = (x, y, z) and w its real part.
+  const core::vec3d c1 = core::cross(q, v), c2 = core::cross(q, c1);
+  return {t.x + v.x + 2 * r[3] * c1.x + 2 * c2.x, t.y + v.y + 2 * r[3] * c1.y + 2 * c2.y, t.z + v.z + 2 * r[3] * c1.z + 2 * c2.z};
+}
+
 // Puts the grid's dequantization where each grid mesh enters its space: every node drawing one
 // (in its transform; in a new child node that draws the mesh instead when the node has children, a
 // camera or an extension's object such as a light, which must not take the grid, or animated
@@ -1536,6 +1552,7 @@ void place_position_grid(tg::Model& model, std::vector<uint8_t>& bin, BinWriter&
       skin_on[size_t(model.nodes[n].skin)] = true;
       continue;
     }
+    if (model.nodes[n].extensions.count(gpu_instancing)) continue;  // its instances took the grid
     // A camera, a light or another extension's object at the node must not take the grid either.
     const tg::Node& at = model.nodes[n];
     const bool holds_more = at.camera >= 0 || std::any_of(at.extensions.begin(), at.extensions.end(),
@@ -1564,15 +1581,11 @@ void place_position_grid(tg::Model& model, std::vector<uint8_t>& bin, BinWriter&
     }
     // T R S D = T' R S' with S' = S s and T' = T + R (S o).
     const std::vector<double> scale = node.scale.size() == 3 ? node.scale : std::vector<double>{1, 1, 1};
+    const std::vector<double> t = node.translation.size() == 3 ? node.translation : std::vector<double>{0, 0, 0};
     const double q[4] = {node.rotation.size() == 4 ? node.rotation[0] : 0, node.rotation.size() == 4 ? node.rotation[1] : 0,
                          node.rotation.size() == 4 ? node.rotation[2] : 0, node.rotation.size() == 4 ? node.rotation[3] : 1};
-    const double v[3] = {scale[0] * o[0], scale[1] * o[1], scale[2] * o[2]};
-    // v + 2 w (q x v) + 2 q x (q x v), q = (x, y, z) and w its real part.
-    const double c1[3] = {q[1] * v[2] - q[2] * v[1], q[2] * v[0] - q[0] * v[2], q[0] * v[1] - q[1] * v[0]};
-    const double c2[3] = {q[1] * c1[2] - q[2] * c1[1], q[2] * c1[0] - q[0] * c1[2], q[0] * c1[1] - q[1] * c1[0]};
-    std::vector<double> t = node.translation.size() == 3 ? node.translation : std::vector<double>{0, 0, 0};
-    for (int k = 0; k < 3; ++k) t[size_t(k)] += v[k] + 2 * q[3] * c1[k] + 2 * c2[k];
-    node.translation = t;
+    const core::vec3d moved = place_grid_offset({t[0], t[1], t[2]}, q, {scale[0], scale[1], scale[2]}, grid);
+    node.translation = {moved.x, moved.y, moved.z};
     node.scale = {scale[0] * s, scale[1] * s, scale[2] * s};
   }
   // Inverse bind matrices B become B D: a skinned vertex B p is B D q. In place where every skin
@@ -1819,6 +1832,49 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     for (Pending& p : pending) p.mesh = size_t(mesh_remap[p.mesh]);
   }
 
+  // Quantized: the meshes whose positions go on the grid, and the grid.
+  PositionGrid grid;
+  std::vector<bool> on_grid(model.meshes.size(), false);
+  if (options.quantize) {
+    if (options.position_bits < 1 || options.position_bits > 16)
+      throw_usage("cannot write glTF: position_bits is " + std::to_string(options.position_bits) + ", not 1 to 16");
+    std::vector<size_t> regenerated(model.meshes.size(), 0);
+    for (const Pending& p : pending) ++regenerated[p.mesh];
+    for (size_t m = 0; m < on_grid.size(); ++m) on_grid[m] = regenerated[m] == model.meshes[m].primitives.size();
+    on_grid = grid_meshes(model, scene, on_grid);
+    std::vector<const Mesh*> meshes;
+    for (const Pending& p : pending)
+      if (on_grid[p.mesh]) meshes.push_back(&scene.primitives[p.scene_primitive].mesh);
+    grid = position_grid(meshes, options.position_bits);
+    if (grid.top == 0) on_grid.assign(on_grid.size(), false);
+  }
+
+  // GPU instances of a grid mesh take the grid in their own transforms (below the node's, which
+  // children and cameras share): instance T R S becomes T R S D, that is the translation
+  // T + R (S o) and the scale S s. Computed now, so that the old accessors are pruned; written with
+  // the geometry.
+  struct GridInstances {
+    size_t node;
+    std::vector<float3> translation, scale;
+  };
+  std::vector<GridInstances> grid_instances;
+  for (size_t n = 0; n < model.nodes.size(); ++n) {
+    tg::Node& node = model.nodes[n];
+    if (node.mesh < 0 || !on_grid[size_t(node.mesh)] || !node.extensions.count(gpu_instancing)) continue;
+    GridInstances& out = grid_instances.emplace_back(GridInstances{n, {}, {}});
+    for (const Node::GpuInstance& g : scene.nodes[n].gpu_instances) {  // (grid_meshes checked they are there)
+      const double q[4] = {g.rotation.x, g.rotation.y, g.rotation.z, g.rotation.w};
+      const core::vec3d t = place_grid_offset(core::to_double(g.translation), q, core::to_double(g.scale), grid);
+      out.translation.push_back({float(t.x), float(t.y), float(t.z)});
+      out.scale.push_back({float(g.scale.x * grid.scale), float(g.scale.y * grid.scale), float(g.scale.z * grid.scale)});
+    }
+    tg::Value::Object ext = node.extensions[gpu_instancing].Get<tg::Value::Object>();
+    tg::Value::Object attributes = ext["attributes"].Get<tg::Value::Object>();
+    attributes.erase("TRANSLATION"), attributes.erase("SCALE");
+    ext["attributes"] = tg::Value(std::move(attributes));
+    node.extensions[gpu_instancing] = tg::Value(std::move(ext));
+  }
+
   // Quantized: rotation keyframes in normalized shorts, as core glTF allows (half the bytes, within
   // 1/65534 per component), read now and written with the geometry; the float accessors go. Only
   // where every channel of the sampler animates a rotation, and (cubic splines) the tangents fit.
@@ -1933,23 +1989,6 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
   model.bufferViews = std::move(views);
   model.buffers.clear();
 
-  // Quantized: the meshes whose positions go on the grid, and the grid.
-  PositionGrid grid;
-  std::vector<bool> on_grid(model.meshes.size(), false);
-  if (options.quantize) {
-    if (options.position_bits < 1 || options.position_bits > 16)
-      throw_usage("cannot write glTF: position_bits is " + std::to_string(options.position_bits) + ", not 1 to 16");
-    std::vector<size_t> regenerated(model.meshes.size(), 0);
-    for (const Pending& p : pending) ++regenerated[p.mesh];
-    for (size_t m = 0; m < on_grid.size(); ++m) on_grid[m] = regenerated[m] == model.meshes[m].primitives.size();
-    on_grid = grid_meshes(model, on_grid);
-    std::vector<const Mesh*> meshes;
-    for (const Pending& p : pending)
-      if (on_grid[p.mesh]) meshes.push_back(&scene.primitives[p.scene_primitive].mesh);
-    grid = position_grid(meshes, options.position_bits);
-    if (grid.top == 0) on_grid.assign(on_grid.size(), false);
-  }
-
   BinWriter writer(model, bin);
   std::vector<const tg::Primitive*> written(scene.primitives.size(), nullptr);
   std::vector<size_t> written_mesh(scene.primitives.size(), 0);
@@ -1988,6 +2027,14 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     }
     written[p.scene_primitive] = &out;
     written_mesh[p.scene_primitive] = p.mesh;
+  }
+  for (const GridInstances& g : grid_instances) {
+    tg::Value::Object ext = model.nodes[g.node].extensions[gpu_instancing].Get<tg::Value::Object>();
+    tg::Value::Object attributes = ext["attributes"].Get<tg::Value::Object>();
+    attributes["TRANSLATION"] = tg::Value(writer.add_accessor(g.translation, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, 0));
+    attributes["SCALE"] = tg::Value(writer.add_accessor(g.scale, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, 0));
+    ext["attributes"] = tg::Value(std::move(attributes));
+    model.nodes[g.node].extensions[gpu_instancing] = tg::Value(std::move(ext));
   }
   for (const ShortRotations& r : short_rotations)
     model.animations[r.animation].samplers[r.sampler].output =

@@ -637,6 +637,32 @@ TEST(GltfInstancing, EveryInstanceIsReadPlacedAndKept) {
   EXPECT_EQ(back.primitives[0].mesh.positions[2].y, 2.0f);
 }
 
+// Quantized (-q), the instanced mesh goes on the grid and each instance takes the grid in its own
+// transform (T + R (S o), S s): every instance lands within the step (times its scale, 2) of the
+// float file's, the node keeps its transform, and the old instance accessors are gone.
+TEST(GltfInstancing, QuantizedInstancesTakeTheGrid) {
+  TempDir dir;
+  test::write_bytes(dir / "in.glb", instanced_triangle().glb());
+  Scene scene = read_scene(dir / "in.glb");
+  for (float3& p : scene.primitives[0].mesh.positions) p = {p.x + 3, p.y + 4, p.z + 1};  // the grid's offset: (3, 4, 1)
+  write_scene(scene, dir / "q.glb", {.quantize = true});
+  test::expect_valid_gltf({dir / "q.glb"});
+  const Json doc = test::glb_json(dir / "q.glb");
+  const Json& position = doc["accessors"][doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<size_t>()];
+  EXPECT_EQ(position["componentType"], 5123);
+  EXPECT_EQ(doc["nodes"][0]["translation"], Json::array({0.0, 0.0, 5.0}));
+  EXPECT_FALSE(doc["nodes"][0].contains("scale"));
+  EXPECT_EQ(doc["accessors"].size(), 5u);  // positions, indices, and the instances' T, R, S
+  const Mesh a = flatten(scene), b = flatten(read_scene(dir / "q.glb"));
+  ASSERT_EQ(a.vertex_count(), b.vertex_count());
+  const double step = 1.0 / 16383;
+  for (size_t v = 0; v < a.vertex_count(); ++v) {
+    const double d = std::hypot(double(a.positions[v].x) - b.positions[v].x, double(a.positions[v].y) - b.positions[v].y,
+                                double(a.positions[v].z) - b.positions[v].z);
+    EXPECT_LE(d, 2 * step * std::sqrt(3.0) / 2 + 1e-5) << v;
+  }
+}
+
 TEST(GltfInstancing, InfoCountsTheInstances) {
   TempDir dir;
   test::write_bytes(dir / "in.glb", instanced_triangle().glb());
