@@ -1522,6 +1522,46 @@ PositionGrid position_grid(const std::vector<const Mesh*>& meshes, int bits) {
   return grid;
 }
 
+// Per mesh, whether every transform that would take `grid` stays well inside the float range
+// (1e37), bounded without applying it: a node's (or instance's, or inverse bind matrix's)
+// translation grows by at most sqrt(3) times its largest linear entry times the largest offset
+// coordinate, its linear part by the grid's scale. Fuzzing found instances pushed past it.
+std::vector<bool> grid_transforms_fit(const tg::Model& model, const Scene& scene, const Document& source,
+                                      const std::vector<bool>& on_grid, const PositionGrid& grid) {
+  constexpr double limit = 1e37;
+  const double o = std::max({std::fabs(grid.offset[0]), std::fabs(grid.offset[1]), std::fabs(grid.offset[2])});
+  std::vector<bool> fits(on_grid.size(), grid.scale <= limit);
+  // A transform of largest translation coordinate t and largest linear entry l.
+  const auto fit = [&](double t, double l) { return t + 2 * l * o <= limit && l * grid.scale <= limit; };
+  const auto largest = [](auto begin, auto end) {
+    double x = 0;
+    for (auto it = begin; it != end; ++it) x = std::max(x, std::fabs(double(*it)));
+    return x;
+  };
+  for (size_t n = 0; n < model.nodes.size(); ++n) {
+    const tg::Node& node = model.nodes[n];
+    if (node.mesh < 0 || !on_grid[size_t(node.mesh)]) continue;
+    bool ok = true;
+    if (node.skin >= 0 && size_t(node.skin) < model.skins.size()) {
+      if (const int ibm = model.skins[size_t(node.skin)].inverseBindMatrices; ibm >= 0)
+        for (const auto& m : source.decode_floats<std::array<float, 16>>(ibm))
+          ok = ok && fit(largest(m.begin() + 12, m.begin() + 15), largest(m.begin(), m.begin() + 12));
+    } else if (node.extensions.count(gpu_instancing) && n < scene.nodes.size()) {
+      for (const Node::GpuInstance& g : scene.nodes[n].gpu_instances) {
+        const float t[3] = {g.translation.x, g.translation.y, g.translation.z}, l[3] = {g.scale.x, g.scale.y, g.scale.z};
+        ok = ok && fit(largest(t, t + 3), largest(l, l + 3));
+      }
+    } else if (node.matrix.size() == 16) {
+      ok = fit(largest(node.matrix.begin() + 12, node.matrix.begin() + 15), largest(node.matrix.begin(), node.matrix.begin() + 12));
+    } else {
+      ok = fit(largest(node.translation.begin(), node.translation.end()),
+               node.scale.empty() ? 1.0 : largest(node.scale.begin(), node.scale.end()));
+    }
+    if (!ok) fits[size_t(node.mesh)] = false;
+  }
+  return fits;
+}
+
 // The translation of T R S D, for D the grid's dequantization: T + R (S o), o the grid's offset
 // (the scale becomes S s).
 core::vec3d place_grid_offset(const core::vec3d& t, const double (&r)[4], const core::vec3d& scale, const PositionGrid& grid) {
@@ -1842,10 +1882,18 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     for (const Pending& p : pending) ++regenerated[p.mesh];
     for (size_t m = 0; m < on_grid.size(); ++m) on_grid[m] = regenerated[m] == model.meshes[m].primitives.size();
     on_grid = grid_meshes(model, scene, on_grid);
-    std::vector<const Mesh*> meshes;
-    for (const Pending& p : pending)
-      if (on_grid[p.mesh]) meshes.push_back(&scene.primitives[p.scene_primitive].mesh);
-    grid = position_grid(meshes, options.position_bits);
+    const auto grid_of = [&] {
+      std::vector<const Mesh*> meshes;
+      for (const Pending& p : pending)
+        if (on_grid[p.mesh]) meshes.push_back(&scene.primitives[p.scene_primitive].mesh);
+      return position_grid(meshes, options.position_bits);
+    };
+    // The transforms that take the grid must stay within the float range: a mesh where one would
+    // not keeps float positions (fewer meshes give a grid no larger, so one pass holds).
+    const std::vector<bool> fits = grid_transforms_fit(model, scene, source, on_grid, grid_of());
+    for (size_t m = 0; m < on_grid.size(); ++m) on_grid[m] = on_grid[m] && fits[m];
+    on_grid = grid_meshes(model, scene, on_grid);
+    grid = grid_of();
     if (grid.top == 0) on_grid.assign(on_grid.size(), false);
   }
 

@@ -663,6 +663,31 @@ TEST(GltfInstancing, QuantizedInstancesTakeTheGrid) {
   }
 }
 
+// An instance so large that taking the grid would push its translation past the float range
+// (fuzzing found one that read back as infinite): its mesh keeps float positions instead.
+TEST(GltfInstancing, InstancesBeyondTheFloatRangeKeepFloatPositions) {
+  TempDir dir;
+  test::write_bytes(dir / "in.glb", instanced_triangle().glb());
+  Scene scene = read_scene(dir / "in.glb");
+  for (float3& p : scene.primitives[0].mesh.positions) p = {p.x + 3, p.y + 4, p.z + 1};
+  write_scene(scene, dir / "moved.glb");
+  test::Glb glb = test::read_glb(dir / "moved.glb");
+  const size_t scale = glb.doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["SCALE"];
+  const Json& accessor = glb.doc["accessors"][scale];
+  const size_t at = glb.doc["bufferViews"][accessor["bufferView"].get<size_t>()].value("byteOffset", size_t(0)) +
+                    accessor.value("byteOffset", size_t(0));
+  const float huge[3] = {1e37f, 1e37f, 1e37f};
+  std::memcpy(glb.bin.data() + at + 12, huge, sizeof huge);  // instance 1's scale
+  test::write_bytes(dir / "huge.glb", test::glb_bytes(glb));
+  const Scene big = read_scene(dir / "huge.glb");
+  ASSERT_EQ(big.nodes[0].gpu_instances[1].scale.x, 1e37f);
+  write_scene(big, dir / "q.glb", {.quantize = true});
+  const Json doc = test::glb_json(dir / "q.glb");
+  EXPECT_EQ(doc["accessors"][doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<size_t>()]["componentType"], 5126);
+  const Mesh a = flatten(big), b = flatten(read_scene(dir / "q.glb"));
+  EXPECT_TRUE(a.positions == b.positions);
+}
+
 TEST(GltfInstancing, InfoCountsTheInstances) {
   TempDir dir;
   test::write_bytes(dir / "in.glb", instanced_triangle().glb());
