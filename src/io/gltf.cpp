@@ -1754,10 +1754,11 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
       auto position = prim.attributes.find("POSITION");
       const std::vector<std::array<float, 3>>& weights = scene.primitives[size_t(owner)].source_weights;
       const size_t source_count = position != prim.attributes.end() ? model.accessors[size_t(position->second)].count : 0;
-      // Quantized, the streams kept as they are get rewritten too (a target's positions go on the
-      // grid): through the identity map.
+      // Quantized, a source's own morph targets, kept as they are otherwise, get rewritten (their
+      // positions go on the grid): through the identity map.
       std::vector<uint32_t> identity;
-      if (options.quantize && scene.primitives[size_t(owner)].source_vertices.empty() && source_count == geometry.vertex_count()) {
+      if (options.quantize && !prim.targets.empty() && scene.primitives[size_t(owner)].source_vertices.empty() &&
+          source_count == geometry.vertex_count()) {
         identity.resize(source_count);
         std::iota(identity.begin(), identity.end(), 0u);
       }
