@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -238,16 +239,27 @@ std::vector<uint8_t> glb_bytes(const Glb& glb) {
 
 nlohmann::json glb_json(const std::filesystem::path& path) { return read_glb(path).doc; }
 
+namespace {
+std::vector<float> accessor_floats(const Glb& glb, size_t index) {
+  const nlohmann::json& accessor = glb.doc["accessors"][index];
+  const auto& view = glb.doc["bufferViews"][accessor["bufferView"].get<size_t>()];
+  const uint8_t* data = glb.bin.data() + view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0));
+  const std::map<std::string, size_t> components = {{"SCALAR", 1}, {"VEC2", 2}, {"VEC3", 3}, {"VEC4", 4}};
+  std::vector<float> out(accessor["count"].get<size_t>() * components.at(accessor["type"].get<std::string>()));
+  std::memcpy(out.data(), data, out.size() * sizeof(float));
+  return out;
+}
+}  // namespace
+
+std::vector<float> glb_floats(const std::filesystem::path& path, size_t accessor) { return accessor_floats(read_glb(path), accessor); }
+
 std::vector<float3> glb_morph_positions(const std::filesystem::path& path, size_t mesh, size_t primitive, size_t target) {
   const Glb glb = read_glb(path);
-  const nlohmann::json& doc = glb.doc;
-  const auto& prim = doc["meshes"][mesh]["primitives"][primitive];
+  const auto& prim = glb.doc["meshes"][mesh]["primitives"][primitive];
   if (!prim.contains("targets") || prim["targets"].size() <= target) return {};
-  const auto& accessor = doc["accessors"][prim["targets"][target]["POSITION"].get<size_t>()];
-  const auto& view = doc["bufferViews"][accessor["bufferView"].get<size_t>()];
-  const uint8_t* data = glb.bin.data() + view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0));
-  std::vector<float3> out(accessor["count"].get<size_t>());
-  std::memcpy(out.data(), data, out.size() * sizeof(float3));
+  const std::vector<float> floats = accessor_floats(glb, prim["targets"][target]["POSITION"].get<size_t>());
+  std::vector<float3> out;
+  for (size_t i = 0; i + 2 < floats.size(); i += 3) out.push_back({floats[i], floats[i + 1], floats[i + 2]});
   return out;
 }
 

@@ -80,6 +80,8 @@ Glb read_glb(const std::filesystem::path& path);
 std::vector<uint8_t> glb_bytes(const Glb& glb);
 // The JSON chunk of a .glb.
 nlohmann::json glb_json(const std::filesystem::path& path);
+// A float accessor's components (tightly packed), read straight from a .glb's JSON and BIN chunk.
+std::vector<float> glb_floats(const std::filesystem::path& path, size_t accessor);
 // Morph target `target`'s POSITION offsets of a .glb's mesh `mesh`, primitive `primitive`, read
 // straight from the file's JSON and BIN chunk (lodkit's reader does not model targets). Empty when
 // that primitive has no such target.

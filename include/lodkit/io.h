@@ -62,6 +62,7 @@ struct MorphTarget {
   std::vector<float3> positions;  // one per vertex
   std::vector<float3> normals;    // empty, or one per vertex
   std::vector<float3> tangents;   // empty, or one per vertex (of the tangent's xyz)
+  friend bool operator==(const MorphTarget&, const MorphTarget&) = default;
 };
 // A target's streams, for code that treats them alike (positions first; the others may be empty).
 inline constexpr std::array<std::vector<float3> MorphTarget::*, 3> morph_streams = {

@@ -97,6 +97,9 @@ struct LodLevel {
 // uses only the first `prefix[i]` vertices.
 struct SharedVertices {
   Mesh vertices;  // streams only (no indices)
+  // Per buffer vertex: the input vertex it is (for streams the Mesh does not hold, such as a glTF
+  // primitive's morph targets, which subset placement leaves exact).
+  std::vector<uint32_t> vertex_origin;
   std::vector<std::vector<uint32_t>> indices;
   std::vector<uint32_t> prefix;
 };

@@ -1677,6 +1677,61 @@ void place_position_grid(tg::Model& model, std::vector<uint8_t>& bin, BinWriter&
   }
 }
 
+// Morph weights for the targets each mesh is written with (`targets[m]`): a node whose mesh has
+// more than its weights and clips give (lodkit lod --morph puts a level's geomorph after the
+// source's blend shapes) takes 0 for the others, in its weights and in a copy of each sampler that
+// drives them. The copies' outputs go into a new buffer of the model, repacked with the rest.
+void pad_morph_weights(tg::Model& model, const Document& source, const std::vector<size_t>& targets) {
+  const auto wanted = [&](int node) -> size_t {
+    if (node < 0 || size_t(node) >= model.nodes.size()) return 0;
+    const int mesh = model.nodes[size_t(node)].mesh;
+    return mesh >= 0 && size_t(mesh) < targets.size() ? targets[size_t(mesh)] : 0;
+  };
+  for (size_t n = 0; n < model.nodes.size(); ++n)
+    if (std::vector<double>& w = model.nodes[n].weights; !w.empty() && w.size() < wanted(int(n))) w.resize(wanted(int(n)), 0.0);
+  tg::Buffer padded;
+  for (tg::Animation& anim : model.animations) {
+    std::map<std::pair<int, size_t>, int> copies;  // (sampler, targets) -> its padded copy
+    for (tg::AnimationChannel& ch : anim.channels) {
+      const size_t want = wanted(ch.target_node);
+      if (ch.target_path != "weights" || want == 0 || ch.sampler < 0 || size_t(ch.sampler) >= anim.samplers.size()) continue;
+      const tg::AnimationSampler sampler = anim.samplers[size_t(ch.sampler)];  // (a copy: samplers grow below)
+      if (sampler.input < 0 || sampler.output < 0) continue;
+      const tg::Accessor& out = source.accessor(sampler.output);
+      const size_t keys = source.accessor(sampler.input).count * (sampler.interpolation == "CUBICSPLINE" ? 3 : 1);
+      if (out.type != TINYGLTF_TYPE_SCALAR || keys == 0 || out.count % keys != 0 || out.count / keys >= want) continue;
+      const auto [copy, fresh] = copies.try_emplace({ch.sampler, want}, int(anim.samplers.size()));
+      if (fresh) {
+        // Each key's group (its values, or a cubic spline's tangents) followed by zeros.
+        const std::vector<float> values = source.decode_floats<float>(sampler.output);
+        const size_t given = out.count / keys;
+        std::vector<float> grown(keys * want, 0.0f);
+        for (size_t k = 0; k < keys; ++k)
+          std::copy_n(values.begin() + ptrdiff_t(k * given), given, grown.begin() + ptrdiff_t(k * want));
+        padded.data.resize((padded.data.size() + 3) & ~size_t(3), 0);
+        tg::BufferView view;
+        view.buffer = int(model.buffers.size());
+        view.byteOffset = padded.data.size();
+        view.byteLength = grown.size() * sizeof(float);
+        const auto* bytes = reinterpret_cast<const unsigned char*>(grown.data());
+        padded.data.insert(padded.data.end(), bytes, bytes + view.byteLength);
+        tg::Accessor acc;
+        acc.bufferView = int(model.bufferViews.size());
+        acc.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+        acc.type = TINYGLTF_TYPE_SCALAR;
+        acc.count = grown.size();
+        model.bufferViews.push_back(std::move(view));
+        model.accessors.push_back(std::move(acc));
+        tg::AnimationSampler grown_sampler = sampler;
+        grown_sampler.output = int(model.accessors.size() - 1);
+        anim.samplers.push_back(std::move(grown_sampler));
+      }
+      ch.sampler = copy->second;
+    }
+  }
+  if (!padded.data.empty()) model.buffers.push_back(std::move(padded));
+}
+
 // Replaces the geometry of the triangle primitives listed in `slots` by scene.primitives[i].mesh,
 // drops what nothing references any more, and packs the surviving bufferViews and the new geometry
 // into one buffer (returned; buffer 0 of the model, whose `buffers` list is left empty), quantized as
@@ -1823,6 +1878,16 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     }
     mesh_removed[m] = kept.empty();
     mesh.primitives = std::move(kept);
+  }
+
+  {
+    std::vector<size_t> targets(mesh_count, 0);  // per glTF mesh, as written
+    for (size_t m = 0; m < mesh_count; ++m)
+      for (const tg::Primitive& prim : model.meshes[m].primitives) targets[m] = std::max(targets[m], prim.targets.size());
+    for (const Pending& p : pending)
+      if (model.meshes[p.mesh].primitives[p.primitive].targets.empty())
+        targets[p.mesh] = std::max(targets[p.mesh], scene.primitives[p.scene_primitive].targets.size());
+    pad_morph_weights(model, source, targets);
   }
 
   // Nodes instancing a removed mesh, or one that lost its morph targets, lose their weights and the
@@ -2047,9 +2112,11 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     const int32_t shared = in.shares_vertices_with;
     const std::vector<Gathered>& extra = gathered[p.scene_primitive];
     const StreamCoding coding{options.quantize, on_grid[p.mesh] ? &grid : nullptr};
-    if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && in.targets.empty() && extra.empty() &&
-        on_grid[written_mesh[size_t(shared)]] == on_grid[p.mesh]) {
-      out.attributes = written[size_t(shared)]->attributes;  // one vertex buffer, several index buffers
+    if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && out.targets.empty() && extra.empty() &&
+        in.targets == scene.primitives[size_t(shared)].targets && on_grid[written_mesh[size_t(shared)]] == on_grid[p.mesh]) {
+      // One vertex buffer (and its morph targets), several index buffers.
+      out.attributes = written[size_t(shared)]->attributes;
+      out.targets = written[size_t(shared)]->targets;
       writer.add_indices(in.mesh, out);
     } else {
       writer.add_geometry(in.mesh, in.targets, out, coding);

@@ -47,12 +47,14 @@ SharedVertices share_vertices(const Mesh& input, const std::vector<LodLevel>& le
     slot[order[i]] = i;
     append_vertex(shared.vertices, input, order[i]);
   }
+  shared.vertex_origin = std::move(order);
   for (size_t i = 0; i < levels.size(); ++i) {
     std::vector<uint32_t> indices;
     indices.reserve(levels[i].mesh.indices.size());
     for (const uint32_t v : levels[i].mesh.indices) indices.push_back(slot[origin[i][v]]);
     shared.indices.push_back(std::move(indices));
-    shared.prefix.push_back(uint32_t(std::count_if(order.begin(), order.end(), [&](uint32_t v) { return coarsest[v] >= int(i); })));
+    shared.prefix.push_back(uint32_t(std::count_if(shared.vertex_origin.begin(), shared.vertex_origin.end(),
+                                                   [&](uint32_t v) { return coarsest[v] >= int(i); })));
   }
   return shared;
 }

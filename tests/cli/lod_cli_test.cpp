@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <set>
 #include <tuple>
 #include <nlohmann/json.hpp>
 
@@ -463,15 +464,24 @@ TEST(CliLod, SkinnedLevelsKeepTheirMorphTargets) {
 // chain keeps the morph target, in world space (the levels are flattened), interpolated where the
 // vertices moved, and the clip that drives the node's weight drives each level's. With geomorphs, or
 // drawn by two nodes (one mesh cannot follow both nodes' weights), it is dropped, and said so.
-TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
-  test::TempDir dir;
+// The morphing torus drawn by one node that scales it by 2 and moves it by `move`, its weight driven
+// by one clip.
+constexpr float3 torus_move = {1, 2, 3};
+Scene one_morphing_node() {
   Scene input = test::morphing_torus();
-  ASSERT_EQ(input.nodes.size(), 1u);
-  const float3 move = {1, 2, 3};
-  input.nodes[0].translation = move, input.nodes[0].scale = {2, 2, 2};
+  input.nodes[0].translation = torus_move, input.nodes[0].scale = {2, 2, 2};
   Animation clip;
   clip.channels.push_back({.node = 0, .path = AnimationPath::weights, .times = {0, 1}, .values = {0, 1}, .components = 1});
   input.animations.push_back(clip);
+  return input;
+}
+
+TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
+  test::TempDir dir;
+  Scene input = one_morphing_node();
+  ASSERT_EQ(input.nodes.size(), 1u);
+  const Animation clip = input.animations[0];
+  const float3 move = torus_move;
   write_scene(input, dir / "one.glb");
 
   const test::RunResult r = test::run_cli({"lod", (dir / "one.glb").string(), "-o", (dir / "lod.glb").string(),
@@ -511,12 +521,57 @@ TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
   }
   EXPECT_EQ(levels, 3u);
   test::expect_valid_gltf({dir / "lod.glb"});
-  // With geomorphs, which are the levels' morph targets, they are dropped and the report says so.
+  // With geomorphs: level 0 has the input's target, then its geomorph (target 1), which moves each
+  // vertex onto one of level 1's; the clip drives target 0 and holds the geomorph at 0.
   const test::RunResult geomorphs = test::run_cli({"lod", (dir / "one.glb").string(), "-o", (dir / "geomorph.glb").string(),
                                                    "--ratios", "1,0.5", "--morph", "--json"});
   ASSERT_EQ(geomorphs.exit_code, 0) << geomorphs.err;
-  EXPECT_TRUE(nlohmann::json::parse(geomorphs.out)["morph_targets_dropped"].get<bool>());
+  EXPECT_FALSE(nlohmann::json::parse(geomorphs.out)["morph_targets_dropped"].get<bool>());
   test::expect_valid_gltf({dir / "geomorph.glb"});
+  {
+    const Scene morphed = read_scene(dir / "geomorph.glb");
+    const nlohmann::json gdoc = glb_json(dir / "geomorph.glb");
+    std::vector<size_t> level_nodes;
+    for (size_t n = 0; n < gdoc["nodes"].size(); ++n)
+      if (gdoc["nodes"][n].contains("extras") && gdoc["nodes"][n]["extras"].contains("lodkit")) level_nodes.push_back(n);
+    ASSERT_EQ(level_nodes.size(), 2u);
+    const nlohmann::json& fine = gdoc["nodes"][level_nodes[0]];
+    ASSERT_EQ(fine["extras"]["LODKIT_geomorph"]["target"], 1);
+    const size_t fine_mesh = fine["mesh"], coarse_mesh = gdoc["nodes"][level_nodes[1]]["mesh"];
+    ASSERT_EQ(gdoc["meshes"][fine_mesh]["primitives"][0]["targets"].size(), 2u);
+    ASSERT_EQ(gdoc["meshes"][coarse_mesh]["primitives"][0]["targets"].size(), 1u);
+    const Mesh *fine_level = nullptr, *coarse_level = nullptr;
+    for (const Primitive& p : morphed.primitives) {
+      if (p.gltf_mesh == fine_mesh) fine_level = &p.mesh;
+      if (p.gltf_mesh == coarse_mesh) coarse_level = &p.mesh;
+    }
+    ASSERT_TRUE(fine_level && coarse_level);
+    Mesh local = *fine_level;
+    for (float3& p : local.positions) p = {(p.x - move.x) / 2, (p.y - move.y) / 2, (p.z - move.z) / 2};
+    std::vector<float3> blend = test::glb_morph_positions(dir / "geomorph.glb", fine_mesh, 0, 0);
+    for (float3& d : blend) d = {d.x / 2, d.y / 2, d.z / 2};
+    test::expect_points_on_torus(local, blend, "geomorph level 0, target 0");
+    const std::vector<float3> geomorph = test::glb_morph_positions(dir / "geomorph.glb", fine_mesh, 0, 1);
+    ASSERT_EQ(geomorph.size(), fine_level->vertex_count());
+    for (size_t v = 0; v < geomorph.size(); ++v) {
+      const float3& p = fine_level->positions[v];
+      const float3 to = {p.x + geomorph[v].x, p.y + geomorph[v].y, p.z + geomorph[v].z};
+      double nearest = 1e30;
+      for (const float3& q : coarse_level->positions)
+        nearest = std::min(nearest, std::hypot(double(q.x) - to.x, double(q.y) - to.y, double(q.z) - to.z));
+      ASSERT_LT(nearest, 1e-5) << "vertex " << v;
+    }
+    // Level 0's weights channel: two weights per key, the clip's then 0.
+    size_t channels = 0;
+    for (const auto& channel : gdoc["animations"][0]["channels"]) {
+      if (channel["target"]["path"] != "weights" || channel["target"]["node"] != level_nodes[0]) continue;
+      ++channels;
+      const nlohmann::json& sampler = gdoc["animations"][0]["samplers"][channel["sampler"].get<size_t>()];
+      const std::vector<float> weights = test::glb_floats(dir / "geomorph.glb", sampler["output"]);
+      EXPECT_EQ(weights, (std::vector<float>{0, 0, 1, 0}));
+    }
+    EXPECT_EQ(channels, 1u);
+  }
 
   // The same mesh drawn by a second node.
   Node second = input.nodes[0];
@@ -543,6 +598,63 @@ TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
   EXPECT_EQ(doc2["animations"][0]["channels"][0]["sampler"], 0);
   EXPECT_EQ(doc2["animations"][0]["samplers"].size(), 1u);
   test::expect_valid_gltf({dir / "lod2.glb"});
+}
+
+// With one vertex buffer (subset placement), every level takes the buffer's morph target, which is
+// the input's own at each of its vertices: exact, one accessor for all levels, and the clip drives
+// every level's weight.
+TEST(CliLod, SharedVerticesKeepOneNodesMorphTargets) {
+  test::TempDir dir;
+  write_scene(one_morphing_node(), dir / "one.glb");
+  const test::RunResult r = test::run_cli({"lod", (dir / "one.glb").string(), "-o", (dir / "lod.glb").string(),
+                                           "--ratios", "1,0.5,0.2", "--shared-vertices", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["morph_targets"], 1);
+  EXPECT_FALSE(report["morph_targets_dropped"].get<bool>());
+  test::expect_valid_gltf({dir / "lod.glb"});
+  const Scene out = read_scene(dir / "lod.glb");
+  const nlohmann::json doc = glb_json(dir / "lod.glb");
+  std::set<size_t> positions, targets;
+  size_t levels = 0;
+  for (size_t n = 0; n < doc["nodes"].size(); ++n) {
+    const nlohmann::json& node = doc["nodes"][n];
+    if (!node.contains("extras") || !node["extras"].contains("lodkit")) continue;
+    ++levels;
+    const size_t mesh = node["mesh"];
+    const nlohmann::json& prim = doc["meshes"][mesh]["primitives"][0];
+    ASSERT_EQ(prim["targets"].size(), 1u) << "node " << n;
+    positions.insert(prim["attributes"]["POSITION"].get<size_t>());
+    targets.insert(prim["targets"][0]["POSITION"].get<size_t>());
+    const Mesh* level = nullptr;
+    for (const Primitive& p : out.primitives)
+      if (p.gltf_mesh == mesh) level = &p.mesh;
+    ASSERT_NE(level, nullptr);
+    Mesh local = *level;
+    for (float3& p : local.positions) p = {(p.x - torus_move.x) / 2, (p.y - torus_move.y) / 2, (p.z - torus_move.z) / 2};
+    std::vector<float3> offsets = test::glb_morph_positions(dir / "lod.glb", mesh);
+    for (float3& d : offsets) d = {d.x / 2, d.y / 2, d.z / 2};
+    // Every offset names its own vertex: none moved off the input.
+    EXPECT_EQ(test::expect_points_on_torus(local, offsets, "level node " + std::to_string(n)), 0u) << "node " << n;
+    size_t copies = 0;
+    for (const auto& channel : doc["animations"][0]["channels"])
+      copies += channel["target"]["path"] == "weights" && channel["target"]["node"] == n;
+    EXPECT_EQ(copies, 1u) << "node " << n;
+  }
+  EXPECT_EQ(levels, 3u);
+  EXPECT_EQ(positions.size(), 1u);
+  EXPECT_EQ(targets.size(), 1u);
+  // Compressed and quantized, likewise: one target accessor (in grid steps) for all levels.
+  ASSERT_EQ(test::run_cli({"lod", (dir / "one.glb").string(), "-o", (dir / "packed.glb").string(), "--ratios", "1,0.5,0.2",
+                           "--shared-vertices", "-c", "-q"}).exit_code, 0);
+  test::expect_valid_gltf({dir / "packed.glb"});
+  const nlohmann::json packed = glb_json(dir / "packed.glb");
+  targets.clear();
+  for (const nlohmann::json& mesh : packed["meshes"])
+    for (const nlohmann::json& prim : mesh["primitives"])
+      if (prim.contains("targets")) targets.insert(prim["targets"][0]["POSITION"].get<size_t>());
+  ASSERT_EQ(targets.size(), 1u);
+  EXPECT_EQ(packed["accessors"][*targets.begin()]["componentType"], 5122);  // shorts
 }
 
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {

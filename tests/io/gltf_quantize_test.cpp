@@ -278,7 +278,7 @@ TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
   }
   // The matrices were changed in place: no stale copy is left in the file.
   const Json doc = test::glb_json(dir / "q.glb");
-  EXPECT_EQ(std::count_if(doc["accessors"].begin(), doc["accessors"].end(), [](const Json& a) { return a["type"] == "MAT4"; }), 1);
+  EXPECT_EQ(std::count_if(doc["accessors"].begin(), doc["accessors"].end(), [](const Json& accessor) { return accessor["type"] == "MAT4"; }), 1);
   // Rotation keys in normalized shorts, within half their step; translations stay floats.
   ASSERT_EQ(plain.animations.size(), quantized.animations.size());
   size_t rotations = 0;

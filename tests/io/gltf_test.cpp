@@ -1281,5 +1281,48 @@ TEST(GltfValidator, WrittenFilesHaveNoErrors) {
   for (const auto& f : files) EXPECT_NE(run.output.find(f.string() + ": 0 errors"), std::string::npos) << run.output;
 }
 
+// A node lodkit adds with more morph targets than the source node whose weights it takes (a level
+// with a geomorph after the blend shape): its weights and its copy of the cubic-spline clip get a 0
+// after each group (in-tangent, value, out-tangent), and the source node's channel is unchanged.
+TEST(GltfMorphWeights, ExtraTargetsTakeZeroInWeightsAndClips) {
+  test::TempDir dir;
+  Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 12, 6));
+  MorphTarget blend;
+  for (const float3& p : scene.primitives[0].mesh.positions) blend.positions.push_back({0, 0, 0.1f * p.x});
+  scene.primitives[0].targets.push_back(blend);
+  scene.nodes[0].name = "source";
+  scene.animations.push_back({"clip", {{.node = 0, .path = AnimationPath::weights, .interpolation = Interpolation::cubic_spline,
+                                        .times = {0, 1}, .values = {0.1f, 0.2f, 0.3f, 0.4f, 0.5f, 0.6f}, .components = 1}}});
+  write_scene(scene, dir / "one.glb");
+
+  Scene grown = read_scene(dir / "one.glb");
+  Primitive level = grown.primitives[0];
+  level.gltf_mesh = grown.gltf_mesh_count, level.gltf_primitive = 0;
+  level.source_vertices.clear();
+  level.targets = {blend, blend};
+  grown.primitives.push_back(level);
+  Node node;
+  node.name = "level";
+  node.mesh = int32_t(grown.gltf_mesh_count);
+  node.morph_weights_of = 0;
+  grown.nodes.push_back(node);
+  grown.roots.push_back(int32_t(grown.nodes.size() - 1));
+  write_scene(grown, dir / "grown.glb");
+  test::expect_valid_gltf({dir / "grown.glb"});
+
+  const nlohmann::json doc = test::glb_json(dir / "grown.glb");
+  const nlohmann::json& anim = doc["animations"][0];
+  ASSERT_EQ(anim["channels"].size(), 2u);
+  for (const nlohmann::json& channel : anim["channels"]) {
+    const nlohmann::json& sampler = anim["samplers"][channel["sampler"].get<size_t>()];
+    EXPECT_EQ(sampler["interpolation"], "CUBICSPLINE");
+    const std::vector<float> out = test::glb_floats(dir / "grown.glb", sampler["output"]);
+    if (doc["nodes"][channel["target"]["node"].get<size_t>()]["name"] == "source")
+      EXPECT_EQ(out, (std::vector<float>{0.1f, 0.2f, 0.3f, 0.4f, 0.5f, 0.6f}));
+    else
+      EXPECT_EQ(out, (std::vector<float>{0.1f, 0, 0.2f, 0, 0.3f, 0, 0.4f, 0, 0.5f, 0, 0.6f, 0}));
+  }
+}
+
 }  // namespace
 }  // namespace lod

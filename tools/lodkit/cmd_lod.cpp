@@ -100,10 +100,15 @@ MorphTarget renumbered(const MorphTarget& t, const std::vector<uint32_t>& from) 
 }
 
 // A static chain's morph targets: per level, the flattened input's at the level's vertices, driven
-// by one source node's weights.
+// by one source node's weights. With one vertex buffer (LodChain::shared), one set at its vertices,
+// which every level takes.
 struct LevelTargets {
   std::vector<std::vector<MorphTarget>> levels;
   int32_t node = -1;
+  const std::vector<MorphTarget>& at(size_t level) const {
+    static const std::vector<MorphTarget> none;
+    return levels.size() == 1 ? levels[0] : level < levels.size() ? levels[level] : none;
+  }
 };
 
 // The glTF: one mesh and one node per level, the first node listing the others (MSFT_lod); each
@@ -153,6 +158,7 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
         prim.mesh = chain.shared.vertices;
         prim.mesh.materials.clear(), prim.mesh.material_names.clear(), prim.mesh.groups.clear(), prim.mesh.group_names.clear();
         prim.mesh.indices.clear();
+        prim.targets = targets.at(i);  // on the buffer: exact, as subset placement moves no vertex
         for (size_t t = 0; t < level.triangle_count(); ++t)
           if (level.material(t) == part.material)
             prim.mesh.indices.insert(prim.mesh.indices.end(), indices.begin() + ptrdiff_t(3 * t), indices.begin() + ptrdiff_t(3 * t + 3));
@@ -164,11 +170,11 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
     for (MaterialPart& part : split_by_material(level)) {
       Primitive prim;
       prim.mesh = std::move(part.mesh);
-      if (i < targets.levels.size() && !targets.levels[i].empty()) {
-        for (const MorphTarget& t : targets.levels[i]) prim.targets.push_back(renumbered(t, part.vertices));
-      } else if (i < chain.morphs.size()) {
-        // The geomorph as a glTF morph target: weight t gives (1 - t) P + t P_target, positions and
-        // normals, in any viewer; LODKIT_geomorph in the extras says where it leads.
+      for (const MorphTarget& t : targets.at(i)) prim.targets.push_back(renumbered(t, part.vertices));
+      if (i < chain.morphs.size()) {
+        // The geomorph as a glTF morph target, after the input's: weight t gives (1 - t) P + t P_target,
+        // positions and normals, in any viewer; LODKIT_geomorph in the extras says which and where it
+        // leads. (The writer gives it weight 0 in the input's weights and clips.)
         const Mesh& coarse = chain.levels[i + 1].mesh;
         MorphTarget target;
         for (const uint32_t v : part.vertices) {
@@ -196,8 +202,9 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
                                          {"error_bound", level.error_bound},
                                          {"relative_error", level.relative_error},
                                          {"switch_distance", distances[i]}}}};
-    if (i < chain.morphs.size()) extras["LODKIT_geomorph"] = {{"target", 0}, {"to_node", node_base + int32_t(i) + 1}};
-    if (i < targets.levels.size() && !targets.levels[i].empty()) node.morph_weights_of = targets.node;
+    if (i < chain.morphs.size())
+      extras["LODKIT_geomorph"] = {{"target", targets.at(i).size()}, {"to_node", node_base + int32_t(i) + 1}};
+    if (!targets.at(i).empty()) node.morph_weights_of = targets.node;
     if (!chain.shared.prefix.empty()) extras["lodkit"]["vertex_prefix"] = chain.shared.prefix[i];
     if (i == 0) {
       for (size_t k = 1; k < chain.levels.size(); ++k) node.lod_ids.push_back(node_base + int32_t(k));
@@ -367,7 +374,7 @@ Command register_lod(CLI::App& root) {
   app->add_option("--screen-height", o->screen_height, "Screen height in pixels (default 1080)");
   app->add_option("--fov", o->fov_degrees, "Vertical field of view in degrees (default 60)");
   app->add_flag("--from-input", o->from_input, "Simplify every level from the input, not from the previous level");
-  app->add_flag("--morph", o->morph, "Write geomorphs: each level's morph target 0 moves it onto the next level");
+  app->add_flag("--morph", o->morph, "Write geomorphs: each level's last morph target (after the input's) moves it onto the next level");
   app->add_flag("--shared-vertices", o->shared,
                 "Subset placement and one vertex buffer for all levels (coarser levels use a prefix of it)");
   app->add_option("--metric", o->metric, "edge, qem, cqem (default), memoryless or cmemoryless");
@@ -434,12 +441,10 @@ Command register_lod(CLI::App& root) {
             } else {
               validate(mesh, o->input);
               // Morph targets of one node go to every level, interpolated where the vertices moved
-              // (not with geomorphs, which are the levels' morph targets, or one vertex buffer).
+              // (with geomorphs, before each level's geomorph target).
               FlatMorphTargets morph;
               if (scene.source) morph = flatten_morph_targets(scene);
               if (morph.nodes > 1) targets_dropped = fmt::format("{} nodes draw morphing meshes, and the levels are one mesh", morph.nodes);
-              else if (morph.nodes == 1 && o->morph) targets_dropped = "--morph: the geomorphs are the levels' morph targets";
-              else if (morph.nodes == 1 && o->shared) targets_dropped = "--shared-vertices does not carry them yet";
               if (!targets_dropped.empty()) morph.targets.clear();
               // The chain replaces the input's geometry: only the morph targets to carry, so vertices
               // whose displacements differ stay apart.
@@ -454,10 +459,15 @@ Command register_lod(CLI::App& root) {
               ProgressBar bar("building LODs");
               options.progress = [&](double f) { bar.update(f); };
               reports.push_back({"", build_lod_chain(built_on, options), {}, {}});
+              const LodChain& chain = reports[0].chain;
               for (LodLevel& level : reports[0].chain.levels) {
                 if (form.changed()) level.vertex_origin.clear(), restore_form(form, level.mesh, level.vertex_successor);
-                if (!morph.targets.empty())
+                if (!morph.targets.empty() && chain.shared.indices.empty())
                   level_targets.levels.push_back(blended_targets(morph.targets, vertex_blends(mesh, level.vertex_successor, level.mesh)));
+              }
+              if (!morph.targets.empty() && !chain.shared.indices.empty()) {
+                level_targets.levels.emplace_back();
+                for (const MorphTarget& t : morph.targets) level_targets.levels[0].push_back(renumbered(t, chain.shared.vertex_origin));
               }
               level_targets.node = morph.node;
               if (form.changed()) mesh = std::move(form.mesh);  // the progressive mesh's input
@@ -511,7 +521,8 @@ Command register_lod(CLI::App& root) {
               if (form.flat_shaded) fmt::print("flat-shaded: each level built without the normals, faceted again\n");
               if (form.double_sided) fmt::print("double-sided: each level built on the fronts, backs made again\n");
               if (!level_targets.levels.empty() && !level_targets.levels[0].empty())
-                fmt::print("morph targets: {} on every level, interpolated where the vertices moved\n", level_targets.levels[0].size());
+                fmt::print("morph targets: {} on every level, {}\n", level_targets.levels[0].size(),
+                           o->shared ? "exact (one vertex buffer)" : "interpolated where the vertices moved");
               if (!targets_dropped.empty()) fmt::print("morph targets dropped: {}\n", targets_dropped);
               fmt::print("loaded in {:.3f}s, built in {:.3f}s, wrote {} in {:.3f}s\n", load_seconds, build_seconds,
                          o->output, write_seconds);
