@@ -1385,16 +1385,20 @@ class BinWriter {
       if (!mesh.weights1.empty())
         prim.attributes["WEIGHTS_1"] = add_accessor(mesh.weights1, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
     }
-    if (prim.targets.empty())
-      for (const MorphTarget& target : targets) {
-        std::map<std::string, int> attributes;
-        attributes["POSITION"] = add_displacements(target.positions, coding.grid);
-        // A displacement of a stream the mesh does not have would be invalid: it has none to move.
-        if (!target.normals.empty() && !mesh.normals.empty()) attributes["NORMAL"] = add_direction_offsets(target.normals, coding);
-        if (!target.tangents.empty() && !mesh.tangents.empty()) attributes["TANGENT"] = add_direction_offsets(target.tangents, coding);
-        prim.targets.push_back(std::move(attributes));
-      }
+    if (prim.targets.empty()) add_targets(mesh, targets, prim, coding);
     add_indices(mesh, prim);
+  }
+
+  // Morph targets of `mesh`'s vertices.
+  void add_targets(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim, const StreamCoding& coding) {
+    for (const MorphTarget& target : targets) {
+      std::map<std::string, int> attributes;
+      attributes["POSITION"] = add_displacements(target.positions, coding.grid);
+      // A displacement of a stream the mesh does not have would be invalid: it has none to move.
+      if (!target.normals.empty() && !mesh.normals.empty()) attributes["NORMAL"] = add_direction_offsets(target.normals, coding);
+      if (!target.tangents.empty() && !mesh.tangents.empty()) attributes["TANGENT"] = add_direction_offsets(target.tangents, coding);
+      prim.targets.push_back(std::move(attributes));
+    }
   }
 
   // The index buffer only (a primitive reusing another's vertex accessors).
@@ -2113,10 +2117,15 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     const std::vector<Gathered>& extra = gathered[p.scene_primitive];
     const StreamCoding coding{options.quantize, on_grid[p.mesh] ? &grid : nullptr};
     if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && out.targets.empty() && extra.empty() &&
-        in.targets == scene.primitives[size_t(shared)].targets && on_grid[written_mesh[size_t(shared)]] == on_grid[p.mesh]) {
-      // One vertex buffer (and its morph targets), several index buffers.
+        on_grid[written_mesh[size_t(shared)]] == on_grid[p.mesh]) {
+      // One vertex buffer, several index buffers; each morph target too where it is the same
+      // (--shared-vertices' blend shapes), else the primitive's own (each level's geomorph).
       out.attributes = written[size_t(shared)]->attributes;
-      out.targets = written[size_t(shared)]->targets;
+      const std::vector<MorphTarget>& theirs = scene.primitives[size_t(shared)].targets;
+      for (size_t k = 0; k < in.targets.size(); ++k)
+        if (k < theirs.size() && k < written[size_t(shared)]->targets.size() && in.targets[k] == theirs[k])
+          out.targets.push_back(written[size_t(shared)]->targets[k]);
+        else writer.add_targets(in.mesh, {in.targets[k]}, out, coding);
       writer.add_indices(in.mesh, out);
     } else {
       writer.add_geometry(in.mesh, in.targets, out, coding);

@@ -222,7 +222,8 @@ TEST(CliLod, LevelsKeepTheInputMaterials) {
 }
 
 // --morph: level i's morph target 0 at weight 1 lands exactly on level i + 1 (its proper triangles),
-// also after lodkit optimize has renumbered the vertices.
+// also after lodkit optimize has renumbered the vertices, and on one vertex buffer (each level's
+// geomorph over all of it, level i's indices drawing only its share).
 TEST(CliLod, GeomorphsAreMorphTargets) {
   test::TempDir dir;
   write_mesh(shapes::torus(1.0f, 0.3f, 32, 16), dir / "torus.ply");
@@ -234,7 +235,15 @@ TEST(CliLod, GeomorphsAreMorphTargets) {
   const test::RunResult o = test::run_cli(
       {"optimize", (dir / "m.glb").string(), "-o", (dir / "opt.glb").string(), "--lru", "--cache", "8"});
   ASSERT_EQ(o.exit_code, 0) << o.err;
-  for (const char* name : {"m.glb", "opt.glb"}) {
+  const test::RunResult shared = test::run_cli({"lod", (dir / "torus.ply").string(), "-o", (dir / "ms.glb").string(),
+                                                "--ratios", "1,0.4,0.1", "--morph", "--shared-vertices"});
+  ASSERT_EQ(shared.exit_code, 0) << shared.err;
+  {
+    const nlohmann::json doc = glb_json(dir / "ms.glb");
+    for (size_t i = 0; i < 3; ++i)
+      EXPECT_EQ(doc["meshes"][i]["primitives"][0]["attributes"]["POSITION"], doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"]);
+  }
+  for (const char* name : {"m.glb", "opt.glb", "ms.glb"}) {
     SCOPED_TRACE(name);
     const nlohmann::json doc = glb_json(dir / name);
     const Scene scene = read_scene(dir / name);
@@ -289,7 +298,7 @@ TEST(CliLod, GeomorphsAreMorphTargets) {
       }
     }
   }
-  test::expect_valid_gltf({dir / "m.glb", dir / "opt.glb"});
+  test::expect_valid_gltf({dir / "m.glb", dir / "opt.glb", dir / "ms.glb"});
 }
 
 // --shared-vertices: every level's primitive reads the same vertex accessors, and level i's indices
@@ -655,6 +664,26 @@ TEST(CliLod, SharedVerticesKeepOneNodesMorphTargets) {
       if (prim.contains("targets")) targets.insert(prim["targets"][0]["POSITION"].get<size_t>());
   ASSERT_EQ(targets.size(), 1u);
   EXPECT_EQ(packed["accessors"][*targets.begin()]["componentType"], 5122);  // shorts
+  // With geomorphs as well: the blend shape once for all levels, then each level's own geomorph.
+  ASSERT_EQ(test::run_cli({"lod", (dir / "one.glb").string(), "-o", (dir / "morph.glb").string(), "--ratios", "1,0.5,0.2",
+                           "--shared-vertices", "--morph"}).exit_code, 0);
+  test::expect_valid_gltf({dir / "morph.glb"});
+  const nlohmann::json morph = glb_json(dir / "morph.glb");
+  std::set<size_t> blends, geomorphs;
+  std::vector<size_t> counts;
+  for (const nlohmann::json& node : morph["nodes"]) {
+    if (!node.contains("extras") || !node["extras"].contains("lodkit")) continue;
+    const nlohmann::json& prim = morph["meshes"][node["mesh"].get<size_t>()]["primitives"][0];
+    counts.push_back(prim["targets"].size());
+    blends.insert(prim["targets"][0]["POSITION"].get<size_t>());
+    if (prim["targets"].size() == 2) {
+      EXPECT_EQ(node["extras"]["LODKIT_geomorph"]["target"], 1);
+      geomorphs.insert(prim["targets"][1]["POSITION"].get<size_t>());
+    }
+  }
+  EXPECT_EQ(counts, (std::vector<size_t>{2, 2, 1}));
+  EXPECT_EQ(blends.size(), 1u);
+  EXPECT_EQ(geomorphs.size(), 2u);
 }
 
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {

@@ -111,6 +111,43 @@ struct LevelTargets {
   }
 };
 
+// The geomorph as a glTF morph target: the offset taking `fine`'s vertex v onto `coarse`'s vertex w,
+// into entry `at` of `t` (positions, and normals where `t` has them).
+void set_geomorph_offset(MorphTarget& t, size_t at, const Mesh& fine, uint32_t v, const Mesh& coarse, uint32_t w) {
+  const float3 &a = fine.positions[v], &b = coarse.positions[w];
+  t.positions[at] = {b.x - a.x, b.y - a.y, b.z - a.z};
+  if (!t.normals.empty()) {
+    const float3 &n = fine.normals[v], &m = coarse.normals[w];
+    t.normals[at] = {m.x - n.x, m.y - n.y, m.z - n.z};
+  }
+}
+
+MorphTarget zero_target(size_t vertices, bool normals) {
+  MorphTarget t;
+  t.positions.assign(vertices, float3{});
+  if (normals) t.normals.assign(vertices, float3{});
+  return t;
+}
+
+// Level i's geomorph over the one vertex buffer (subset placement: every level's vertex is one of
+// the buffer's): each vertex of level i moves onto the buffer vertex of its target in level i + 1;
+// the others, which level i does not draw, stay.
+MorphTarget shared_geomorph(const LodChain& chain, size_t i) {
+  const SharedVertices& buffer = chain.shared;
+  const LodLevel &fine = chain.levels[i], &coarse = chain.levels[i + 1];
+  std::vector<uint32_t> slot;  // input vertex -> buffer vertex
+  for (uint32_t k = 0; k < buffer.vertex_origin.size(); ++k) {
+    if (buffer.vertex_origin[k] >= slot.size()) slot.resize(size_t(buffer.vertex_origin[k]) + 1, ~0u);
+    slot[buffer.vertex_origin[k]] = k;
+  }
+  MorphTarget t = zero_target(buffer.vertices.vertex_count(), !buffer.vertices.normals.empty());
+  for (uint32_t v = 0; v < fine.mesh.vertex_count(); ++v) {
+    const uint32_t a = slot[fine.vertex_origin[v]], b = slot[coarse.vertex_origin[chain.morphs[i].target[v]]];
+    set_geomorph_offset(t, a, buffer.vertices, a, buffer.vertices, b);
+  }
+  return t;
+}
+
 // The glTF: one mesh and one node per level, the first node listing the others (MSFT_lod); each
 // mesh has a primitive per material. From a static glTF (`source`, flattened into the chain's input,
 // so material id k + 1 is its material k): the source document with its triangles replaced by the
@@ -153,12 +190,14 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
       // One vertex buffer for the chain; level i's indices use only its first prefix[i] vertices.
       // Level i's triangles are its mesh's, in order, so they keep its material ids.
       const std::vector<uint32_t>& indices = chain.shared.indices[i];
+      std::vector<MorphTarget> level_targets = targets.at(i);  // on the buffer: exact, as subset placement moves no vertex
+      if (i < chain.morphs.size()) level_targets.push_back(shared_geomorph(chain, i));
       for (const MaterialPart& part : split_by_material(level)) {
         Primitive prim;
         prim.mesh = chain.shared.vertices;
         prim.mesh.materials.clear(), prim.mesh.material_names.clear(), prim.mesh.groups.clear(), prim.mesh.group_names.clear();
         prim.mesh.indices.clear();
-        prim.targets = targets.at(i);  // on the buffer: exact, as subset placement moves no vertex
+        prim.targets = level_targets;
         for (size_t t = 0; t < level.triangle_count(); ++t)
           if (level.material(t) == part.material)
             prim.mesh.indices.insert(prim.mesh.indices.end(), indices.begin() + ptrdiff_t(3 * t), indices.begin() + ptrdiff_t(3 * t + 3));
@@ -176,16 +215,9 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
         // positions and normals, in any viewer; LODKIT_geomorph in the extras says which and where it
         // leads. (The writer gives it weight 0 in the input's weights and clips.)
         const Mesh& coarse = chain.levels[i + 1].mesh;
-        MorphTarget target;
-        for (const uint32_t v : part.vertices) {
-          const uint32_t to = chain.morphs[i].target[v];
-          const float3 &a = level.positions[v], &b = coarse.positions[to];
-          target.positions.push_back({b.x - a.x, b.y - a.y, b.z - a.z});
-          if (!level.normals.empty() && !coarse.normals.empty()) {
-            const float3 &n = level.normals[v], &m = coarse.normals[to];
-            target.normals.push_back({m.x - n.x, m.y - n.y, m.z - n.z});
-          }
-        }
+        MorphTarget target = zero_target(part.vertices.size(), !level.normals.empty() && !coarse.normals.empty());
+        for (size_t k = 0; k < part.vertices.size(); ++k)
+          set_geomorph_offset(target, k, level, part.vertices[k], coarse, chain.morphs[i].target[part.vertices[k]]);
         prim.targets.push_back(std::move(target));
       }
       add(std::move(prim), part.material);
@@ -403,7 +435,6 @@ Command register_lod(CLI::App& root) {
             options.from_previous = !o->from_input;
             if (o->morph && o->from_input) throw_usage("--morph needs each level simplified from the previous one (drop --from-input)");
             options.morph = o->morph;
-            if (o->morph && o->shared) throw_usage("--morph and --shared-vertices cannot be combined yet");
             options.shared_vertices = o->shared;
             options.simplify.metric = parse_metric(o->metric);
             options.simplify.threads = o->threads;
