@@ -400,20 +400,27 @@ TEST(CliLod, SkinnedCharacterKeepsItsSkeletonAndClips) {
 // the vertex cache, and the morph target follows them exactly. The coarser levels, and level 0 when
 // it is simplified too, get it interpolated on the input: inverted, each offset names a point of the
 // input's surface next to the vertex. Each level's node takes the clip that drives the weight.
-TEST(CliLod, SkinnedLevelsKeepTheirMorphTargets) {
-  test::TempDir dir;
+// The humanoid with that blend shape on its body and a clip driving it.
+Scene humanoid_with_blend_shape() {
   Scene input = fixtures::humanoid_scene();
   const std::vector<SkinnedPrimitive> skinned = skinned_primitives(input);
-  ASSERT_EQ(skinned.size(), 1u);
-  Primitive& body = input.primitives[skinned[0].primitive];
+  Primitive& body = input.primitives[skinned.at(0).primitive];
   MorphTarget blend;
   for (const float3& p : body.mesh.positions) blend.positions.push_back(test::morph_offset(p));
   body.targets.push_back(blend);
   AnimationChannel smile{.node = int32_t(skinned[0].node), .path = AnimationPath::weights, .times = {0, 1, 2},
                          .values = {0, 1, 0}, .components = 1};
   input.animations[0].channels.push_back(smile);
+  return input;
+}
+
+TEST(CliLod, SkinnedLevelsKeepTheirMorphTargets) {
+  test::TempDir dir;
+  const Scene input = humanoid_with_blend_shape();
+  const std::vector<SkinnedPrimitive> skinned = skinned_primitives(input);
+  ASSERT_EQ(skinned.size(), 1u);
   write_scene(input, dir / "humanoid.glb");
-  const Mesh& rest = body.mesh;
+  const Mesh& rest = input.primitives[skinned[0].primitive].mesh;
   float3 lo, hi;
   bounding_box(rest, lo, hi);
   const double diagonal = std::hypot(double(hi.x) - lo.x, double(hi.y) - lo.y, double(hi.z) - lo.z);
@@ -686,10 +693,53 @@ TEST(CliLod, SharedVerticesKeepOneNodesMorphTargets) {
   EXPECT_EQ(geomorphs.size(), 2u);
 }
 
+// --shared-vertices on a skinned character, in each skin mode: the skinned node and its levels draw
+// one vertex buffer (positions, joints, weights) and one blend-shape accessor, whose offsets are
+// exact at every vertex (subset placement moves none); each level's indices stay within its prefix.
+TEST(CliLod, SkinnedSharedVerticesWriteOneBufferWithItsBlendShapes) {
+  test::TempDir dir;
+  const Scene input = humanoid_with_blend_shape();
+  const std::vector<SkinnedPrimitive> skinned = skinned_primitives(input);
+  write_scene(input, dir / "humanoid.glb");
+  for (const char* mode : {"houle", "subset", "multipose"}) {
+    SCOPED_TRACE(mode);
+    const test::RunResult r = test::run_cli({"lod", (dir / "humanoid.glb").string(), "-o", (dir / "lod.glb").string(),
+                                             "--ratios", "0.5,0.2", "--poses", "4", "--skin-mode", mode, "--shared-vertices"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    test::expect_valid_gltf({dir / "lod.glb"});
+    const Scene out = read_scene(dir / "lod.glb");
+    const nlohmann::json doc = glb_json(dir / "lod.glb");
+    const uint32_t node = skinned[0].node;
+    ASSERT_EQ(out.nodes[node].lod_ids.size(), 1u);
+    std::set<std::string> accessors;  // attribute name and accessor, over both levels
+    uint64_t previous = ~uint64_t(0);
+    for (const uint32_t n : {node, uint32_t(out.nodes[node].lod_ids[0])}) {
+      const size_t mesh = size_t(out.nodes[n].mesh);
+      const nlohmann::json& prim = doc["meshes"][mesh]["primitives"][0];
+      for (const char* name : {"POSITION", "JOINTS_0", "WEIGHTS_0"})
+        accessors.insert(std::string(name) + std::to_string(prim["attributes"][name].get<int>()));
+      ASSERT_EQ(prim["targets"].size(), 1u);
+      accessors.insert("target" + std::to_string(prim["targets"][0]["POSITION"].get<int>()));
+      const Mesh* level = nullptr;
+      for (const Primitive& p : out.primitives)
+        if (p.gltf_mesh == mesh) level = &p.mesh;
+      ASSERT_NE(level, nullptr);
+      EXPECT_LT(level->triangle_count(), previous);
+      previous = level->triangle_count();
+      const uint32_t prefix = doc["nodes"][n]["extras"]["lodkit"]["vertex_prefix"];
+      for (const uint32_t v : level->indices) ASSERT_LT(v, prefix);
+      const std::vector<float3> offsets = test::glb_morph_positions(dir / "lod.glb", mesh);
+      ASSERT_EQ(offsets.size(), level->vertex_count());
+      for (size_t v = 0; v < offsets.size(); ++v) ASSERT_EQ(offsets[v], test::morph_offset(level->positions[v])) << "vertex " << v;
+    }
+    EXPECT_EQ(accessors.size(), 4u);  // each of the four once
+  }
+}
+
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {
   test::TempDir dir;
   write_scene(fixtures::humanoid_scene(), dir / "humanoid.glb");
-  for (const char* flag : {"--morph", "--shared-vertices"}) {
+  for (const char* flag : {"--morph"}) {
     const test::RunResult r = test::run_cli({"lod", (dir / "humanoid.glb").string(), "-o", (dir / "x.glb").string(), flag});
     EXPECT_EQ(r.exit_code, 1) << flag << ": " << r.err;
   }

@@ -342,15 +342,31 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
     // (lod::vertex_blends), and each level's node takes the skinned node's morph weights and clips.
     const std::vector<MorphTarget> targets = source_morph_targets(scene, sp.primitive);
     const auto blends = [&](const LodLevel& level) { return vertex_blends(source.mesh, level.vertex_successor, level.mesh); };
+    // With one vertex buffer (subset placement), every level draws the source's vertices the buffer
+    // holds: the source's streams and morph targets at them, exact, written once.
+    const SharedVertices& buffer = r.chain.shared;
+    const bool shared = !buffer.indices.empty();
+    const auto level_mesh = [&](size_t i) {
+      if (!shared) return r.chain.levels[i].mesh;
+      Mesh m = buffer.vertices;
+      m.indices = buffer.indices[i];
+      return m;
+    };
+    std::vector<MorphTarget> buffer_targets;
+    if (shared)
+      for (const MorphTarget& t : targets) buffer_targets.push_back(renumbered(t, buffer.vertex_origin));
     // Level 0 is the source's vertices reordered for the vertex cache, unless it was simplified: its
     // morph targets and other streams follow a reordering, and are interpolated where it moved them.
     Primitive& first = scene.primitives[sp.primitive];
-    if (r.chain.levels[0].mesh.vertex_count() == source.mesh.vertex_count()) {
+    if (shared) {
+      first.source_vertices = buffer.vertex_origin, first.source_weights.clear();
+      first.targets = buffer_targets;  // (the source's own are gathered; the levels' match them)
+    } else if (r.chain.levels[0].mesh.vertex_count() == source.mesh.vertex_count()) {
       first.source_vertices = r.chain.levels[0].vertex_origin;
     } else {
       blend_sources(first, blends(r.chain.levels[0]));
     }
-    first.mesh = r.chain.levels[0].mesh;
+    first.mesh = level_mesh(0);
     const std::string owner = scene.nodes[sp.node].name;  // a copy: scene.nodes grows below
     // The source node's own extras are kept; its MSFT_lod (an earlier chain's) gives way to this one.
     const std::string& old_extras = scene.nodes[sp.node].extras_json;
@@ -361,20 +377,22 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
     for (size_t i = 0; i < r.chain.levels.size(); ++i) {
       // Each level's node says what it is, as in a static chain (lodkit render --sheet reads it).
       const LodLevel& level = r.chain.levels[i];
-      const nlohmann::json about = {{"level", i},
-                                    {"triangles", level.mesh.triangle_count()},
-                                    {"error", level.error},
-                                    {"error_bound", level.error_bound},
-                                    {"relative_error", level.relative_error},
-                                    {"switch_distance", r.distances[i]}};
+      nlohmann::json about = {{"level", i},
+                              {"triangles", level.mesh.triangle_count()},
+                              {"error", level.error},
+                              {"error_bound", level.error_bound},
+                              {"relative_error", level.relative_error},
+                              {"switch_distance", r.distances[i]}};
+      if (shared) about["vertex_prefix"] = buffer.prefix[i];
       if (i == 0) {
         extras["lodkit"] = about;
         continue;
       }
       Primitive prim;
-      prim.mesh = level.mesh;
+      prim.mesh = level_mesh(i);
       prim.material = source.material;
-      if (!targets.empty()) prim.targets = blended_targets(targets, blends(level));
+      if (shared) prim.shares_vertices_with = int32_t(sp.primitive), prim.targets = buffer_targets;
+      else if (!targets.empty()) prim.targets = blended_targets(targets, blends(level));
       prim.gltf_mesh = next_mesh++;
       prim.gltf_primitive = 0;
       scene.primitives.push_back(std::move(prim));
@@ -464,7 +482,6 @@ Command register_lod(CLI::App& root) {
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
               if (o->morph) throw_usage("--morph: skinned input morphs at run time (lod::SkinnedGeomorph), not as glTF morph targets");
-              if (o->shared) throw_usage("--shared-vertices is not available for skinned input yet");
               if (!o->lpm.empty()) throw_usage("--lpm is not available for skinned input yet");
               ProgressBar bar("building skinned LODs");
               reports = build_skinned(scene, skinned, parse_skin_mode(o->skin_mode), o->poses, options,
