@@ -92,9 +92,12 @@ void check_flatten(const Scene& scene) {
   // flatten may refuse a scene whose node transforms overflow float, but only as bad input.
   const std::optional<Mesh> flat = run_step("gltf flatten", true, [&] { return flatten(scene); });
   if (flat) check_mesh(*flat, "gltf flatten");
-  // Its morph targets (one node's): one displacement per flattened vertex, or none.
+  // Its morph targets (the morphing nodes' in turn): one displacement per flattened vertex, each
+  // node's first target in order.
   const FlatMorphTargets morph = *run_step("gltf flatten_morph_targets", false, [&] { return flatten_morph_targets(scene); });
-  if (morph.nodes > 1 && !morph.targets.empty()) fail("flatten_morph_targets", "targets for several nodes' weights");
+  if (morph.first.size() != morph.nodes.size() || !std::is_sorted(morph.first.begin(), morph.first.end()) ||
+      (!morph.first.empty() && morph.first.back() >= morph.targets.size()))
+    fail("flatten_morph_targets", "the nodes' first targets are not in order within the targets");
   for (const MorphTarget& t : morph.targets)
     if (flat && (t.positions.size() != flat->vertex_count() || (!t.normals.empty() && t.normals.size() != flat->vertex_count())))
       fail("flatten_morph_targets", "a target's displacements are not one per flattened vertex");

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -118,9 +119,11 @@ struct Node {
     float3 scale = {1, 1, 1};
   };
   std::vector<GpuInstance> gpu_instances;
-  // A node lodkit adds (a LOD level of a morphing mesh): it takes the morph weights of this source
-  // node, and the animation channels that drive them are copied to it. -1: none.
-  int32_t morph_weights_of = -1;
+  // A node lodkit adds (a LOD level of morphing meshes): its mesh's morph targets are these source
+  // nodes' in turn, and take their weights and weight clips. One node's channels are copied (the
+  // same samplers); several nodes' become one channel per clip (lod::concatenate_weights). Targets
+  // past theirs (a geomorph) take weight 0. Empty (or negative ids): none.
+  std::vector<int32_t> morph_weights_of;
 };
 
 struct Skin {
@@ -141,6 +144,24 @@ struct AnimationChannel {
   std::vector<float> values;  // flattened; per key: components (x3 for cubic_spline: in-tangent, value, out-tangent)
   uint32_t components = 3;    // 3 for translation/scale, 4 for rotation, morph-target count for weights
 };
+
+// A channel's components at `time`, clamped to its keys (NaN: the first key), each interpolated on
+// its own (step, linear or glTF's cubic Hermite spline; rotations want a slerp instead). With `slope`,
+// also their derivatives per second on the interval after `time` (or before it, `after` false): 0
+// outside the keys and for step. The channel must be well formed (values for every key).
+void sample_components(const AnimationChannel& ch, float time, float* out, float* slope = nullptr, bool after = true);
+
+// One weights channel for a mesh whose morph targets are several nodes' in turn: per node, its
+// weights channel in the clip, or none (then its `rest` weights hold). Keys at the union of the
+// channels' times, and exact: step channels stay step; linear and cubic-spline ones become the kind
+// that represents both (a cubic spline split at a new key keeps its shape: the value and slope there
+// are the key's value and tangents). nullopt without any channel, when step mixes with the others,
+// or when a channel's weight count is not its node's `rest` count.
+struct WeightsSource {
+  const AnimationChannel* channel = nullptr;
+  std::vector<float> rest;  // the node's weights at rest, one per morph target
+};
+std::optional<AnimationChannel> concatenate_weights(const std::vector<WeightsSource>& sources);
 
 struct Animation {
   std::string name;
@@ -186,17 +207,16 @@ void write_scene(const Scene& scene, const std::filesystem::path& path, const Wr
 // -q or gltfpack's): that matrix then places it, where a viewer draws it.
 Mesh flatten(const Scene& scene);
 
-// The morph targets of flatten(scene), per vertex of it, when one node draws every morphing
-// primitive: its glTF mesh's targets (source_morph_targets' displacements), taken to world space
+// The morph targets of flatten(scene), per vertex of it: each node drawing morphing primitives
+// contributes its glTF mesh's targets (source_morph_targets' displacements), taken to world space
 // with the vertices (a normal's or tangent's displacement to where the displaced one goes; none
-// unless flatten keeps those streams), and zero on every other instance's vertices. `node` is that node,
-// whose weights and weight clips drive them (Node::morph_weights_of; -1 for a scene without nodes).
-// `nodes` counts the nodes drawing morphing primitives: with more than one, `targets` is empty (one
-// merged mesh cannot follow several nodes' weights).
+// unless flatten keeps those streams) and zero on every other instance's vertices; the nodes'
+// targets follow one another, so a node taking all their weights in turn (Node::morph_weights_of)
+// drives them.
 struct FlatMorphTargets {
   std::vector<MorphTarget> targets;
-  int32_t node = -1;
-  size_t nodes = 0;
+  std::vector<int32_t> nodes;  // the morphing nodes, in flatten's order (-1: a scene without nodes)
+  std::vector<size_t> first;   // per node, its first target in `targets`
 };
 FlatMorphTargets flatten_morph_targets(const Scene& scene);
 // A one-primitive scene around a mesh (no source document); materials become primitives.

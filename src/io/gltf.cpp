@@ -1681,6 +1681,35 @@ void place_position_grid(tg::Model& model, std::vector<uint8_t>& bin, BinWriter&
   }
 }
 
+// Appends `values` to `data`, which becomes the model's buffer `buffer` (pushed by the caller once
+// done), as a new float accessor of `type`; with its bounds when `bounds` (sampler inputs need them).
+int append_float_accessor(tg::Model& model, tg::Buffer& data, int buffer, const std::vector<float>& values, int type, bool bounds) {
+  data.data.resize((data.data.size() + 3) & ~size_t(3), 0);
+  tg::BufferView view;
+  view.buffer = buffer;
+  view.byteOffset = data.data.size();
+  view.byteLength = values.size() * sizeof(float);
+  const auto* bytes = reinterpret_cast<const unsigned char*>(values.data());
+  data.data.insert(data.data.end(), bytes, bytes + view.byteLength);
+  tg::Accessor acc;
+  acc.bufferView = int(model.bufferViews.size());
+  acc.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+  acc.type = type;
+  const size_t components = size_t(tg::GetNumComponentsInType(uint32_t(type)));
+  acc.count = values.size() / components;
+  if (bounds && acc.count) {
+    acc.minValues.assign(components, std::numeric_limits<double>::infinity());
+    acc.maxValues.assign(components, -std::numeric_limits<double>::infinity());
+    for (size_t i = 0; i < values.size(); ++i) {
+      acc.minValues[i % components] = std::min(acc.minValues[i % components], double(values[i]));
+      acc.maxValues[i % components] = std::max(acc.maxValues[i % components], double(values[i]));
+    }
+  }
+  model.bufferViews.push_back(std::move(view));
+  model.accessors.push_back(std::move(acc));
+  return int(model.accessors.size() - 1);
+}
+
 // Morph weights for the targets each mesh is written with (`targets[m]`): a node whose mesh has
 // more than its weights and clips give (lodkit lod --morph puts a level's geomorph after the
 // source's blend shapes) takes 0 for the others, in its weights and in a copy of each sampler that
@@ -1712,22 +1741,8 @@ void pad_morph_weights(tg::Model& model, const Document& source, const std::vect
         std::vector<float> grown(keys * want, 0.0f);
         for (size_t k = 0; k < keys; ++k)
           std::copy_n(values.begin() + ptrdiff_t(k * given), given, grown.begin() + ptrdiff_t(k * want));
-        padded.data.resize((padded.data.size() + 3) & ~size_t(3), 0);
-        tg::BufferView view;
-        view.buffer = int(model.buffers.size());
-        view.byteOffset = padded.data.size();
-        view.byteLength = grown.size() * sizeof(float);
-        const auto* bytes = reinterpret_cast<const unsigned char*>(grown.data());
-        padded.data.insert(padded.data.end(), bytes, bytes + view.byteLength);
-        tg::Accessor acc;
-        acc.bufferView = int(model.bufferViews.size());
-        acc.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
-        acc.type = TINYGLTF_TYPE_SCALAR;
-        acc.count = grown.size();
-        model.bufferViews.push_back(std::move(view));
-        model.accessors.push_back(std::move(acc));
         tg::AnimationSampler grown_sampler = sampler;
-        grown_sampler.output = int(model.accessors.size() - 1);
+        grown_sampler.output = append_float_accessor(model, padded, int(model.buffers.size()), grown, TINYGLTF_TYPE_SCALAR, false);
         anim.samplers.push_back(std::move(grown_sampler));
       }
       ch.sampler = copy->second;
@@ -2388,6 +2403,72 @@ void set_transform(const Node& in, tg::Node& node) {
   }
 }
 
+// New node `i`'s morph weights, from the source nodes whose targets its mesh has in turn
+// (Node::morph_weights_of). One node's weights and weight channels are copied (the same samplers).
+// Several nodes' are concatenated: their rest weights (a node's own, else its mesh's, else 0), and
+// per clip one channel (lod::concatenate_weights over the decoded clips of `scene`, which lists the
+// source's animations in order) whose keys go into `data`, the model's next buffer.
+void take_morph_weights(tg::Model& model, const Scene& scene, const std::vector<int32_t>& of, size_t i, size_t source_nodes,
+                        tg::Node& node, tg::Buffer& data) {
+  if (of.empty() || (of.size() == 1 && of[0] < 0)) return;
+  for (const int32_t s : of)
+    if (s < 0 || size_t(s) >= source_nodes)
+      throw_usage("cannot write glTF: nodes[" + str(i) + "] takes the morph weights of a node the source does not have");
+  if (of.size() == 1) {
+    const tg::Node& other = model.nodes[size_t(of[0])];
+    node.weights = !other.weights.empty() || other.mesh < 0 ? other.weights : model.meshes[size_t(other.mesh)].weights;
+    // The clips that drive the other node's weights drive this one's too (the same samplers).
+    for (tg::Animation& anim : model.animations) {
+      const size_t channels = anim.channels.size();
+      for (size_t c = 0; c < channels; ++c)
+        if (anim.channels[c].target_path == "weights" && anim.channels[c].target_node == of[0]) {
+          tg::AnimationChannel copy = anim.channels[c];
+          copy.target_node = int(i);
+          anim.channels.push_back(std::move(copy));
+        }
+    }
+    return;
+  }
+  std::vector<WeightsSource> sources(of.size());
+  bool weighted = false;  // a source node or mesh has weights: the new node lists them all
+  for (size_t k = 0; k < of.size(); ++k) {
+    const tg::Node& other = model.nodes[size_t(of[k])];
+    size_t count = 0;
+    std::vector<double> rest = other.weights;
+    if (other.mesh >= 0 && size_t(other.mesh) < model.meshes.size()) {
+      const tg::Mesh& mesh = model.meshes[size_t(other.mesh)];
+      for (const tg::Primitive& prim : mesh.primitives) count = std::max(count, prim.targets.size());
+      if (rest.empty()) rest = mesh.weights;
+    }
+    weighted = weighted || !rest.empty();
+    rest.resize(count, 0.0);
+    sources[k].rest.assign(rest.begin(), rest.end());
+  }
+  if (weighted)
+    for (const WeightsSource& s : sources) node.weights.insert(node.weights.end(), s.rest.begin(), s.rest.end());
+  for (size_t a = 0; a < model.animations.size() && a < scene.animations.size(); ++a) {
+    for (size_t k = 0; k < of.size(); ++k) {
+      sources[k].channel = nullptr;
+      for (const AnimationChannel& ch : scene.animations[a].channels)
+        if (ch.path == AnimationPath::weights && ch.node == of[k] && !sources[k].channel) sources[k].channel = &ch;
+    }
+    const std::optional<AnimationChannel> merged = concatenate_weights(sources);
+    if (!merged) continue;  // no clip of theirs, or one the merge cannot follow exactly (lodkit lod says so)
+    tg::AnimationSampler sampler;
+    sampler.input = append_float_accessor(model, data, int(model.buffers.size()), merged->times, TINYGLTF_TYPE_SCALAR, true);
+    sampler.output = append_float_accessor(model, data, int(model.buffers.size()), merged->values, TINYGLTF_TYPE_SCALAR, false);
+    sampler.interpolation = merged->interpolation == Interpolation::step ? "STEP"
+                            : merged->interpolation == Interpolation::linear ? "LINEAR" : "CUBICSPLINE";
+    tg::Animation& anim = model.animations[a];
+    tg::AnimationChannel channel;
+    channel.sampler = int(anim.samplers.size());
+    channel.target_node = int(i);
+    channel.target_path = "weights";
+    anim.samplers.push_back(std::move(sampler));
+    anim.channels.push_back(std::move(channel));
+  }
+}
+
 // A scene read from glTF may grow (lodkit lod on a skinned character adds a mesh and a node per
 // level): primitives past the source's meshes become new meshes (with the source's materials),
 // nodes past the source's nodes are appended (name, transform, mesh, skin, MSFT_lod and extras; a
@@ -2414,6 +2495,7 @@ void add_to_source(tg::Model& model, const Scene& scene) {
 
   const size_t source_nodes = model.nodes.size();
   if (scene.nodes.size() < source_nodes) return;  // a scene that lost nodes adds none
+  tg::Buffer weights_data;  // the keys of merged weight clips
   for (size_t i = 0; i < scene.nodes.size(); ++i) {
     const Node& in = scene.nodes[i];
     if (i < source_nodes) {
@@ -2430,27 +2512,13 @@ void add_to_source(tg::Model& model, const Scene& scene) {
         node.skin = in.skin;
       }
     }
-    if (in.morph_weights_of >= 0) {
-      const size_t of = size_t(in.morph_weights_of);
-      if (of >= source_nodes) throw_usage("cannot write glTF: nodes[" + str(i) + "] takes the morph weights of a node the source does not have");
-      const tg::Node& other = model.nodes[of];
-      node.weights = !other.weights.empty() || other.mesh < 0 ? other.weights : model.meshes[size_t(other.mesh)].weights;
-      // The clips that drive the other node's weights drive this one's too (the same samplers).
-      for (tg::Animation& anim : model.animations) {
-        const size_t channels = anim.channels.size();
-        for (size_t c = 0; c < channels; ++c)
-          if (anim.channels[c].target_path == "weights" && anim.channels[c].target_node == int(of)) {
-            tg::AnimationChannel copy = anim.channels[c];
-            copy.target_node = int(i);
-            anim.channels.push_back(std::move(copy));
-          }
-      }
-    }
+    take_morph_weights(model, scene, in.morph_weights_of, i, source_nodes, node, weights_data);
     set_lod_and_extras(model, in, node);
     set_transform(in, node);
     model.nodes.push_back(std::move(node));
     if (in.parent >= 0 && size_t(in.parent) < i) model.nodes[size_t(in.parent)].children.push_back(int(i));
   }
+  if (!weights_data.data.empty()) model.buffers.push_back(std::move(weights_data));
   const auto is_new_root = [&](int32_t root) {
     return root >= 0 && size_t(root) >= source_nodes && size_t(root) < model.nodes.size() && scene.nodes[size_t(root)].parent < 0;
   };

@@ -5,6 +5,7 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <vector>
 
 #include "core/heap.h"
@@ -334,24 +335,28 @@ FlatMorphTargets flatten_morph_targets(const Scene& scene) {
   const std::vector<Instance> instances = collect_instances(scene);
   std::vector<std::vector<MorphTarget>> source(scene.primitives.size());  // decoded once per primitive
   std::vector<bool> decoded(scene.primitives.size(), false);
-  std::vector<int32_t> nodes;
-  size_t vertices = 0, count = 0;
+  std::vector<size_t> counts;  // per morphing node: its targets (glTF gives every primitive of a mesh as many)
+  size_t vertices = 0;
   // flatten keeps normals and tangents when every instance has them; their displacements then.
   bool normals = !instances.empty(), tangents = !instances.empty(), target_normals = false, target_tangents = false;
+  const auto node_index = [&](int32_t node) { return size_t(std::find(out.nodes.begin(), out.nodes.end(), node) - out.nodes.begin()); };
   for (const Instance& inst : instances) {
     const Mesh& mesh = scene.primitives[inst.primitive].mesh;
     if (!decoded[inst.primitive]) source[inst.primitive] = source_morph_targets(scene, inst.primitive), decoded[inst.primitive] = true;
     const std::vector<MorphTarget>& targets = source[inst.primitive];
-    if (!targets.empty() && std::find(nodes.begin(), nodes.end(), inst.node) == nodes.end()) nodes.push_back(inst.node);
-    count = std::max(count, targets.size());
+    if (!targets.empty()) {
+      const size_t j = node_index(inst.node);
+      if (j == out.nodes.size()) out.nodes.push_back(inst.node), counts.push_back(0);
+      counts[j] = std::max(counts[j], targets.size());
+    }
     for (const MorphTarget& t : targets)
       target_normals = target_normals || !t.normals.empty(), target_tangents = target_tangents || !t.tangents.empty();
     normals = normals && !mesh.normals.empty(), tangents = tangents && !mesh.tangents.empty();
     vertices += mesh.vertex_count();
   }
-  out.nodes = nodes.size();
-  if (nodes.size() != 1) return out;
-  out.node = nodes[0];
+  size_t count = 0;
+  for (const size_t c : counts) out.first.push_back(count), count += c;
+  if (count == 0) return out;
   target_normals = target_normals && normals, target_tangents = target_tangents && tangents;
   out.targets.resize(count);
   for (MorphTarget& t : out.targets) {
@@ -363,6 +368,7 @@ FlatMorphTargets flatten_morph_targets(const Scene& scene) {
   for (const Instance& inst : instances) {
     const Mesh& mesh = scene.primitives[inst.primitive].mesh;
     const std::vector<MorphTarget>& targets = source[inst.primitive];
+    const size_t first = targets.empty() ? 0 : out.first[node_index(inst.node)];
     const Placement place(inst.world);
     // A normal's or tangent's displacement: where the displaced one goes, less where it goes
     // (flatten's own). `apply` is the placement's map for that stream.
@@ -374,21 +380,117 @@ FlatMorphTargets flatten_morph_targets(const Scene& scene) {
       }
     };
     for (size_t k = 0; k < targets.size(); ++k) {
+      MorphTarget& flat = out.targets[first + k];
       for (size_t v = 0; v < mesh.vertex_count(); ++v) {
         const float3& d = targets[k].positions[v];
         const core::vec3d moved = place.linear(d);
-        out.targets[k].positions[base + v] = place.identity ? d : float3{float(moved.x), float(moved.y), float(moved.z)};
+        flat.positions[base + v] = place.identity ? d : float3{float(moved.x), float(moved.y), float(moved.z)};
       }
       if (target_normals && !targets[k].normals.empty())
-        unit_displacements(targets[k].normals, out.targets[k].normals, [&](size_t v) { return mesh.normals[v]; },
+        unit_displacements(targets[k].normals, flat.normals, [&](size_t v) { return mesh.normals[v]; },
                            [&](const float3& n) { return place.apply_to_normal(n); });
       if (target_tangents && !targets[k].tangents.empty())
         unit_displacements(
-            targets[k].tangents, out.targets[k].tangents,
+            targets[k].tangents, flat.tangents,
             [&](size_t v) { return float3{mesh.tangents[v].x, mesh.tangents[v].y, mesh.tangents[v].z}; },
             [&](const float3& t) { return place.apply_to_tangent(t); });
     }
     base += mesh.vertex_count();
+  }
+  return out;
+}
+
+void sample_components(const AnimationChannel& ch, float time, float* out, float* slope, bool after) {
+  const size_t n = ch.components, keys = ch.times.size();
+  const bool cubic = ch.interpolation == Interpolation::cubic_spline;
+  // Key k's value, in-tangent and out-tangent (cubic keys store in-tangent, value, out-tangent).
+  const auto value = [&](size_t k) { return ch.values.data() + (cubic ? (3 * k + 1) * n : k * n); };
+  const auto at_key = [&](size_t k) {
+    std::copy_n(value(k), n, out);
+    if (slope) std::fill_n(slope, n, 0.0f);
+  };
+  // Outside the keys the channel holds still. NaN compares false and lands on the first key.
+  if (!(time > ch.times.front()) && !(after && time == ch.times.front() && keys > 1)) return at_key(0);
+  if (time > ch.times.back() || (after && time == ch.times.back())) return at_key(keys - 1);
+  // The interval [t_k, t_k+1] holding `time`: after it starts there, before it ends there.
+  const auto it = after ? std::upper_bound(ch.times.begin(), ch.times.end(), time) : std::lower_bound(ch.times.begin(), ch.times.end(), time);
+  const size_t k = size_t(it - ch.times.begin()) - 1;
+  const float t0 = ch.times[k], t1 = ch.times[k + 1], interval = t1 - t0;
+  const float t = interval > 0 ? std::clamp((time - t0) / interval, 0.0f, 1.0f) : 0.0f;
+  const float* a = value(k);
+  const float* b = value(k + 1);
+  switch (ch.interpolation) {
+    case Interpolation::step:
+      return at_key(t < 1 ? k : k + 1);
+    case Interpolation::linear:
+      for (size_t c = 0; c < n; ++c) {
+        out[c] = a[c] + (b[c] - a[c]) * t;
+        if (slope) slope[c] = interval > 0 ? (b[c] - a[c]) / interval : 0.0f;
+      }
+      return;
+    case Interpolation::cubic_spline: {
+      // glTF's Hermite spline: tangents are per second, so they scale by the key interval.
+      const float* out_tangent = a + n;
+      const float* in_tangent = b - n;
+      const float t2 = t * t, t3 = t2 * t;
+      const float h00 = 2 * t3 - 3 * t2 + 1, h10 = t3 - 2 * t2 + t, h01 = -2 * t3 + 3 * t2, h11 = t3 - t2;
+      const float d00 = 6 * t2 - 6 * t, d10 = 3 * t2 - 4 * t + 1, d01 = -6 * t2 + 6 * t, d11 = 3 * t2 - 2 * t;
+      for (size_t c = 0; c < n; ++c) {
+        out[c] = h00 * a[c] + h10 * interval * out_tangent[c] + h01 * b[c] + h11 * interval * in_tangent[c];
+        if (slope)
+          slope[c] = interval > 0 ? (d00 * a[c] + d01 * b[c]) / interval + d10 * out_tangent[c] + d11 * in_tangent[c] : 0.0f;
+      }
+      return;
+    }
+  }
+}
+
+std::optional<AnimationChannel> concatenate_weights(const std::vector<WeightsSource>& sources) {
+  bool any = false, step = false, smooth = false, cubic = false;
+  size_t total = 0;
+  std::vector<float> times;
+  for (const WeightsSource& s : sources) {
+    total += s.rest.size();
+    if (!s.channel) continue;
+    const AnimationChannel& ch = *s.channel;
+    const size_t per_key = ch.interpolation == Interpolation::cubic_spline ? 3 : 1;
+    if (ch.path != AnimationPath::weights || ch.components != s.rest.size() || ch.times.empty() ||
+        ch.values.size() != ch.times.size() * per_key * ch.components)
+      return std::nullopt;
+    any = true;
+    step = step || ch.interpolation == Interpolation::step;
+    smooth = smooth || ch.interpolation != Interpolation::step;
+    cubic = cubic || ch.interpolation == Interpolation::cubic_spline;
+    times.insert(times.end(), ch.times.begin(), ch.times.end());
+  }
+  if (!any || (step && smooth)) return std::nullopt;
+  std::sort(times.begin(), times.end());
+  times.erase(std::unique(times.begin(), times.end()), times.end());
+  AnimationChannel out;
+  out.path = AnimationPath::weights;
+  out.interpolation = step ? Interpolation::step : cubic ? Interpolation::cubic_spline : Interpolation::linear;
+  out.components = uint32_t(total);
+  out.times = times;
+  const size_t groups = cubic ? 3 : 1;  // per key: (in-tangents,) values(, out-tangents)
+  out.values.assign(times.size() * groups * total, 0.0f);
+  std::vector<float> value(total), in(total), slope_after(total);
+  for (size_t k = 0; k < times.size(); ++k) {
+    float* key = out.values.data() + k * groups * total;
+    size_t offset = 0;
+    for (const WeightsSource& s : sources) {
+      const size_t n = s.rest.size();
+      if (!s.channel) {
+        std::copy_n(s.rest.data(), n, key + (cubic ? total : 0) + offset);  // held: tangents stay 0
+      } else if (!cubic) {
+        sample_components(*s.channel, times[k], key + offset);
+      } else {
+        sample_components(*s.channel, times[k], key + total + offset, in.data(), false);
+        sample_components(*s.channel, times[k], value.data(), slope_after.data(), true);
+        std::copy_n(in.data(), n, key + offset);
+        std::copy_n(slope_after.data(), n, key + 2 * total + offset);
+      }
+      offset += n;
+    }
   }
   return out;
 }

@@ -71,49 +71,22 @@ void check_channel(const Scene& scene, size_t animation, size_t c, const Animati
   }
 }
 
-// Interpolates one channel at `time` into out[0 .. components).
+// Interpolates one channel at `time` into out[0 .. components): linear rotations by slerp, the rest
+// component by component.
 void sample_channel(const AnimationChannel& ch, float time, float* out) {
-  const size_t n = ch.components;
-  const size_t keys = ch.times.size();
-  const bool cubic = ch.interpolation == Interpolation::cubic_spline;
-  // The value of key k (cubic keys store in-tangent, value, out-tangent).
-  auto value = [&](size_t k) { return ch.values.data() + (cubic ? (3 * k + 1) * n : k * n); };
-  auto copy_key = [&](size_t k) { std::copy_n(value(k), n, out); };
-  // NaN compares false and lands on the first key.
-  if (!(time > ch.times.front())) return copy_key(0);
-  if (time >= ch.times.back()) return copy_key(keys - 1);
+  if (ch.path != AnimationPath::rotation || ch.interpolation != Interpolation::linear || !(time > ch.times.front()) ||
+      time >= ch.times.back())
+    return sample_components(ch, time, out);
   // The last key at or before `time`; k + 1 < keys because time < times.back().
   const size_t k = size_t(std::upper_bound(ch.times.begin(), ch.times.end(), time) - ch.times.begin()) - 1;
   const float t0 = ch.times[k], t1 = ch.times[k + 1];
   const float interval = t1 - t0;
   const float t = interval > 0 ? std::clamp((time - t0) / interval, 0.0f, 1.0f) : 0.0f;
-  switch (ch.interpolation) {
-    case Interpolation::step: return copy_key(k);
-    case Interpolation::linear: {
-      const float* a = value(k);
-      const float* b = value(k + 1);
-      if (ch.path == AnimationPath::rotation) {
-        // Keys a little off unit length (quantised files) would bend the arc: normalise them first.
-        const float4 q = slerp(normalized({a[0], a[1], a[2], a[3]}), normalized({b[0], b[1], b[2], b[3]}), t);
-        out[0] = q.x, out[1] = q.y, out[2] = q.z, out[3] = q.w;
-      } else {
-        for (size_t c = 0; c < n; ++c) out[c] = a[c] + (b[c] - a[c]) * t;
-      }
-      return;
-    }
-    case Interpolation::cubic_spline: {
-      // glTF's Hermite spline: tangents are per second, so they scale by the key interval.
-      const float* v0 = value(k);
-      const float* out_tangent0 = v0 + n;
-      const float* v1 = value(k + 1);
-      const float* in_tangent1 = v1 - n;
-      const float t2 = t * t, t3 = t2 * t;
-      const float h00 = 2 * t3 - 3 * t2 + 1, h10 = t3 - 2 * t2 + t, h01 = -2 * t3 + 3 * t2, h11 = t3 - t2;
-      for (size_t c = 0; c < n; ++c)
-        out[c] = h00 * v0[c] + h10 * interval * out_tangent0[c] + h01 * v1[c] + h11 * interval * in_tangent1[c];
-      return;
-    }
-  }
+  const float* a = ch.values.data() + 4 * k;
+  const float* b = a + 4;
+  // Keys a little off unit length (quantised files) would bend the arc: normalise them first.
+  const float4 q = slerp(normalized({a[0], a[1], a[2], a[3]}), normalized({b[0], b[1], b[2], b[3]}), t);
+  out[0] = q.x, out[1] = q.y, out[2] = q.z, out[3] = q.w;
 }
 
 void check_pose(const Scene& scene, const Pose& pose) {

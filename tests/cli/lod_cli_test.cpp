@@ -476,10 +476,6 @@ TEST(CliLod, SkinnedLevelsKeepTheirMorphTargets) {
   }
 }
 
-// A static glTF whose one node draws a morphing torus (scaled by 2 and moved): every level of the
-// chain keeps the morph target, in world space (the levels are flattened), interpolated where the
-// vertices moved, and the clip that drives the node's weight drives each level's. With geomorphs, or
-// drawn by two nodes (one mesh cannot follow both nodes' weights), it is dropped, and said so.
 // The morphing torus drawn by one node that scales it by 2 and moves it by `move`, its weight driven
 // by one clip.
 constexpr float3 torus_move = {1, 2, 3};
@@ -492,11 +488,13 @@ Scene one_morphing_node() {
   return input;
 }
 
+// A static glTF whose one node draws a morphing torus (scaled by 2 and moved): every level of the
+// chain keeps the morph target, in world space (the levels are flattened), interpolated where the
+// vertices moved, and the clip that drives the node's weight drives each level's; with geomorphs too.
 TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
   test::TempDir dir;
   Scene input = one_morphing_node();
   ASSERT_EQ(input.nodes.size(), 1u);
-  const Animation clip = input.animations[0];
   const float3 move = torus_move;
   write_scene(input, dir / "one.glb");
 
@@ -588,32 +586,105 @@ TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
     }
     EXPECT_EQ(channels, 1u);
   }
+}
 
-  // The same mesh drawn by a second node.
+// The morphing torus drawn by two nodes (the second moved to x = 5): every level has both nodes'
+// targets in turn, each zero on the other's vertices and on the torus where it moves, and one
+// weights channel per clip, keyed at the union of the two nodes' keys: node 0's curve (0 at 0 s, 1
+// at 1 s), node 1's (1 at 0.5 s, 0 at 2 s), both linear and held outside their keys. With a step
+// curve against a linear one no channel holds both exactly: the targets are dropped and said so,
+// the weights' channels go, a clip left empty goes, and the translation's channel stays.
+TEST(CliLod, StaticLevelsMergeSeveralNodesMorphTargets) {
+  test::TempDir dir;
+  Scene input = one_morphing_node();
   Node second = input.nodes[0];
   second.translation = {5, 0, 0};
   input.nodes.push_back(second);
   input.roots.push_back(1);
-  // A channel that moves it, after the weights' one in the first clip: kept, on its own sampler. A
-  // second clip drives the weights only: nothing of it is left.
+  const Animation weights_only = input.animations[0];
   input.animations[0].channels.push_back(
       {.node = 1, .path = AnimationPath::translation, .times = {0, 1}, .values = {5, 0, 0, 6, 0, 0}, .components = 3});
-  input.animations.push_back(clip);
+  input.animations[0].channels.push_back({.node = 1, .path = AnimationPath::weights, .times = {0.5f, 2}, .values = {1, 0}, .components = 1});
+  input.animations.push_back(weights_only);
   write_scene(input, dir / "two.glb");
   const test::RunResult two = test::run_cli({"lod", (dir / "two.glb").string(), "-o", (dir / "lod2.glb").string(),
-                                             "--ratios", "1,0.5"});
+                                             "--ratios", "1,0.5", "--json"});
   ASSERT_EQ(two.exit_code, 0) << two.err;
-  EXPECT_NE(two.out.find("morph targets dropped: 2 nodes"), std::string::npos) << two.out;
-  EXPECT_EQ(nlohmann::json::parse(test::run_cli({"info", "--json", (dir / "lod2.glb").string()}).out)["gltf"]["morph_targets"], 0);
+  EXPECT_EQ(nlohmann::json::parse(two.out)["morph_targets"], 2);
+  test::expect_valid_gltf({dir / "lod2.glb"});
+  const Scene out = read_scene(dir / "lod2.glb");
+  const nlohmann::json doc = glb_json(dir / "lod2.glb");
+  const std::array<float3, 2> centres = {torus_move, float3{5, 0, 0}};
+  size_t levels = 0;
+  for (size_t n = 0; n < doc["nodes"].size(); ++n) {
+    const nlohmann::json& node = doc["nodes"][n];
+    if (!node.contains("extras") || !node["extras"].contains("lodkit")) continue;
+    ++levels;
+    const size_t mesh = node["mesh"];
+    ASSERT_EQ(doc["meshes"][mesh]["primitives"][0]["targets"].size(), 2u) << "node " << n;
+    const Mesh* level = nullptr;
+    for (const Primitive& p : out.primitives)
+      if (p.gltf_mesh == mesh) level = &p.mesh;
+    ASSERT_NE(level, nullptr);
+    for (size_t k = 0; k < 2; ++k) {
+      const std::vector<float3> offsets = test::glb_morph_positions(dir / "lod2.glb", mesh, 0, k);
+      ASSERT_EQ(offsets.size(), level->vertex_count());
+      // Node k's instance in its torus's own space; the other instance does not move.
+      Mesh local;
+      std::vector<float3> local_offsets;
+      for (size_t v = 0; v < level->vertex_count(); ++v) {
+        const float3& p = level->positions[v];
+        const auto distance = [&](const float3& c) { return std::hypot(p.x - c.x, p.y - c.y, p.z - c.z); };
+        const size_t instance = distance(centres[0]) < distance(centres[1]) ? 0 : 1;
+        if (instance != k) {
+          ASSERT_EQ(offsets[v], (float3{0, 0, 0})) << "node " << n << " target " << k << " vertex " << v;
+          continue;
+        }
+        local.positions.push_back({(p.x - centres[k].x) / 2, (p.y - centres[k].y) / 2, (p.z - centres[k].z) / 2});
+        local_offsets.push_back({offsets[v].x / 2, offsets[v].y / 2, offsets[v].z / 2});
+      }
+      ASSERT_GT(local.positions.size(), 0u);
+      test::expect_points_on_torus(local, local_offsets, "node " + std::to_string(n) + " target " + std::to_string(k));
+    }
+    // One weights channel per clip: times {0, 0.5, 1, 2}; node 0's weight 0, 0.5, 1, 1 and node
+    // 1's 1, 1, 1 - 0.5 / 1.5, 0 (first clip); node 0's curve and node 1 at rest, 0 (second).
+    const std::array<std::vector<float>, 2> expected_times = {std::vector<float>{0, 0.5f, 1, 2}, std::vector<float>{0, 1}};
+    const std::array<std::vector<float>, 2> expected_weights = {std::vector<float>{0, 1, 0.5f, 1, 1, 1 - 0.5f / 1.5f, 1, 0},
+                                                                std::vector<float>{0, 0, 1, 0}};
+    for (size_t a = 0; a < 2; ++a) {
+      size_t channels = 0;
+      for (const auto& channel : doc["animations"][a]["channels"]) {
+        if (channel["target"]["path"] != "weights" || channel["target"]["node"] != n) continue;
+        ++channels;
+        const nlohmann::json& sampler = doc["animations"][a]["samplers"][channel["sampler"].get<size_t>()];
+        EXPECT_EQ(sampler.value("interpolation", "LINEAR"), "LINEAR");
+        EXPECT_EQ(test::glb_floats(dir / "lod2.glb", sampler["input"]), expected_times[a]) << "clip " << a;
+        const std::vector<float> weights = test::glb_floats(dir / "lod2.glb", sampler["output"]);
+        ASSERT_EQ(weights.size(), expected_weights[a].size()) << "clip " << a;
+        for (size_t i = 0; i < weights.size(); ++i) EXPECT_NEAR(weights[i], expected_weights[a][i], 1e-6) << "clip " << a << " " << i;
+      }
+      EXPECT_EQ(channels, 1u) << "node " << n << " clip " << a;
+    }
+  }
+  EXPECT_EQ(levels, 2u);
+
+  // Node 1's curve as a step: no one channel can follow both.
+  input.animations[0].channels.back().interpolation = Interpolation::step;
+  write_scene(input, dir / "mixed.glb");
+  const test::RunResult mixed = test::run_cli({"lod", (dir / "mixed.glb").string(), "-o", (dir / "lod3.glb").string(),
+                                               "--ratios", "1,0.5"});
+  ASSERT_EQ(mixed.exit_code, 0) << mixed.err;
+  EXPECT_NE(mixed.out.find("morph targets dropped: clip"), std::string::npos) << mixed.out;
+  EXPECT_EQ(nlohmann::json::parse(test::run_cli({"info", "--json", (dir / "lod3.glb").string()}).out)["gltf"]["morph_targets"], 0);
   // The weights' channels go with their samplers, and the clip left empty (invalid glTF); the
   // translation's stays, its sampler renumbered.
-  const nlohmann::json doc2 = glb_json(dir / "lod2.glb");
-  ASSERT_EQ(doc2["animations"].size(), 1u);
-  ASSERT_EQ(doc2["animations"][0]["channels"].size(), 1u);
-  EXPECT_EQ(doc2["animations"][0]["channels"][0]["target"]["path"], "translation");
-  EXPECT_EQ(doc2["animations"][0]["channels"][0]["sampler"], 0);
-  EXPECT_EQ(doc2["animations"][0]["samplers"].size(), 1u);
-  test::expect_valid_gltf({dir / "lod2.glb"});
+  const nlohmann::json doc3 = glb_json(dir / "lod3.glb");
+  ASSERT_EQ(doc3["animations"].size(), 1u);
+  ASSERT_EQ(doc3["animations"][0]["channels"].size(), 1u);
+  EXPECT_EQ(doc3["animations"][0]["channels"][0]["target"]["path"], "translation");
+  EXPECT_EQ(doc3["animations"][0]["channels"][0]["sampler"], 0);
+  EXPECT_EQ(doc3["animations"][0]["samplers"].size(), 1u);
+  test::expect_valid_gltf({dir / "lod3.glb"});
 }
 
 // With one vertex buffer (subset placement), every level takes the buffer's morph target, which is

@@ -1304,7 +1304,7 @@ TEST(GltfMorphWeights, ExtraTargetsTakeZeroInWeightsAndClips) {
   Node node;
   node.name = "level";
   node.mesh = int32_t(grown.gltf_mesh_count);
-  node.morph_weights_of = 0;
+  node.morph_weights_of = {0};
   grown.nodes.push_back(node);
   grown.roots.push_back(int32_t(grown.nodes.size() - 1));
   write_scene(grown, dir / "grown.glb");

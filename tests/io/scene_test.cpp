@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -187,8 +188,8 @@ TEST(SceneFlatten, MorphTargetsGoToWorldSpaceWithTheirNode) {
   const Scene read = read_scene(dir / "morph.glb");
   const Mesh flat = flatten(read);
   const FlatMorphTargets morph = flatten_morph_targets(read);
-  EXPECT_EQ(morph.nodes, 1u);
-  EXPECT_EQ(morph.node, 1);
+  EXPECT_EQ(morph.nodes, (std::vector<int32_t>{1}));
+  EXPECT_EQ(morph.first, (std::vector<size_t>{0}));
   ASSERT_EQ(morph.targets.size(), 1u);
   ASSERT_EQ(morph.targets[0].positions.size(), flat.vertex_count());
   ASSERT_EQ(morph.targets[0].normals.size(), flat.vertex_count());
@@ -207,9 +208,18 @@ TEST(SceneFlatten, MorphTargetsGoToWorldSpaceWithTheirNode) {
   scene.nodes.push_back(turned);
   scene.roots.push_back(2);
   write_scene(scene, dir / "twice.glb");
+  // Drawn by a second node too: each node's target in turn, zero on the other's vertices.
   const FlatMorphTargets twice = flatten_morph_targets(read_scene(dir / "twice.glb"));
-  EXPECT_EQ(twice.nodes, 2u);
-  EXPECT_TRUE(twice.targets.empty());
+  EXPECT_EQ(twice.nodes, (std::vector<int32_t>{1, 2}));
+  EXPECT_EQ(twice.first, (std::vector<size_t>{0, 1}));
+  ASSERT_EQ(twice.targets.size(), 2u);
+  for (size_t k = 0; k < 2; ++k) {
+    ASSERT_EQ(twice.targets[k].positions.size(), 9u);
+    for (size_t v = 0; v < 9; ++v) {
+      if (v / 3 == k + 1) expect_near(twice.targets[k].positions[v], {0, 2, 0});
+      else EXPECT_EQ(twice.targets[k].positions[v], (float3{0, 0, 0})) << k << " " << v;
+    }
+  }
 }
 
 TEST(SceneFlatten, NoNodesUsesEachMeshOnceUntransformed) {
@@ -296,6 +306,68 @@ TEST(SceneFromMesh, OnePrimitivePerMaterialWithItsOwnVertices) {
   EXPECT_TRUE(second.mesh.materials.empty());
   // Names cover every material index used.
   EXPECT_EQ(scene.material_names, (std::vector<std::string>{"a", "", ""}));
+}
+
+// glTF's Hermite spline from 0 (flat) at 0 s to 1 (flat) at 1 s is 3 s^2 - 2 s^3: 0.15625 at 0.25 s
+// and 0.5 at 0.5 s, with slope 6 s - 6 s^2 = 1.5 there; outside the keys it holds, slope 0. A linear
+// channel's slope is its segment's, before or after a key.
+TEST(AnimationSampling, ComponentsAndSlopesByHand) {
+  const AnimationChannel cubic{.path = AnimationPath::weights, .interpolation = Interpolation::cubic_spline,
+                               .times = {0, 1}, .values = {0, 0, 0, 0, 1, 0}, .components = 1};
+  float value = 0, slope = 0;
+  sample_components(cubic, 0.25f, &value, &slope);
+  EXPECT_NEAR(value, 0.15625, 1e-6);
+  sample_components(cubic, 0.5f, &value, &slope);
+  EXPECT_NEAR(value, 0.5, 1e-6);
+  EXPECT_NEAR(slope, 1.5, 1e-6);
+  sample_components(cubic, 2.0f, &value, &slope);
+  EXPECT_EQ(value, 1.0f);
+  EXPECT_EQ(slope, 0.0f);
+  const AnimationChannel linear{.path = AnimationPath::weights, .interpolation = Interpolation::linear,
+                                .times = {0, 1, 3}, .values = {0, 2, 3}, .components = 1};
+  sample_components(linear, 1.0f, &value, &slope, false);
+  EXPECT_EQ(value, 2.0f);
+  EXPECT_EQ(slope, 2.0f);  // the segment before
+  sample_components(linear, 1.0f, &value, &slope, true);
+  EXPECT_EQ(slope, 0.5f);  // the segment after
+  sample_components(linear, 0.0f, &value, &slope, false);
+  EXPECT_EQ(slope, 0.0f);  // held before the first key
+}
+
+// Merged channels reproduce each node's curve: a cubic spline (split at the other's keys), a linear
+// channel (made a cubic spline) and a node at rest (its weights, held), sampled everywhere, against
+// the channels themselves.
+TEST(AnimationSampling, ConcatenatedWeightsFollowEveryCurve) {
+  const AnimationChannel a{.path = AnimationPath::weights, .interpolation = Interpolation::cubic_spline, .times = {0, 2},
+                           .values = {0, 0, 1, 5, 0.5f, 2, -1, 1, 0, 0, 3, 0}, .components = 2};
+  const AnimationChannel b{.path = AnimationPath::weights, .interpolation = Interpolation::linear, .times = {1, 1.5f, 3},
+                           .values = {2, 4, 1}, .components = 1};
+  const std::optional<AnimationChannel> merged = concatenate_weights({{&a, {0, 0}}, {nullptr, {0.25f}}, {&b, {0}}});
+  ASSERT_TRUE(merged);
+  EXPECT_EQ(merged->interpolation, Interpolation::cubic_spline);
+  EXPECT_EQ(merged->components, 4u);
+  EXPECT_EQ(merged->times, (std::vector<float>{0, 1, 1.5f, 2, 3}));
+  for (float t = -0.5f; t <= 3.5f; t += 0.0625f) {
+    float all[4], one[2];
+    sample_components(*merged, t, all);
+    sample_components(a, t, one);
+    EXPECT_NEAR(all[0], one[0], 1e-5) << t;
+    EXPECT_NEAR(all[1], one[1], 1e-5) << t;
+    EXPECT_EQ(all[2], 0.25f) << t;
+    sample_components(b, t, one);
+    EXPECT_NEAR(all[3], one[0], 1e-5) << t;
+  }
+  // Step curves merge as steps; a step with a smooth curve, no channel, or a weight count other
+  // than the node's do not merge.
+  AnimationChannel step = b;
+  step.interpolation = Interpolation::step;
+  const std::optional<AnimationChannel> steps = concatenate_weights({{&step, {0}}, {&step, {0}}});
+  ASSERT_TRUE(steps);
+  EXPECT_EQ(steps->interpolation, Interpolation::step);
+  EXPECT_EQ(steps->values, (std::vector<float>{2, 2, 4, 4, 1, 1}));
+  EXPECT_FALSE(concatenate_weights({{&step, {0}}, {&b, {0}}}));
+  EXPECT_FALSE(concatenate_weights({{nullptr, {0}}, {nullptr, {1}}}));
+  EXPECT_FALSE(concatenate_weights({{&b, {0, 0}}}));
 }
 
 }  // namespace

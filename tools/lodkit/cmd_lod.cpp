@@ -100,11 +100,11 @@ MorphTarget renumbered(const MorphTarget& t, const std::vector<uint32_t>& from) 
 }
 
 // A static chain's morph targets: per level, the flattened input's at the level's vertices, driven
-// by one source node's weights. With one vertex buffer (LodChain::shared), one set at its vertices,
+// by the source nodes' weights in turn. With one vertex buffer (LodChain::shared), one set at its vertices,
 // which every level takes.
 struct LevelTargets {
   std::vector<std::vector<MorphTarget>> levels;
-  int32_t node = -1;
+  std::vector<int32_t> nodes;
   const std::vector<MorphTarget>& at(size_t level) const {
     static const std::vector<MorphTarget> none;
     return levels.size() == 1 ? levels[0] : level < levels.size() ? levels[level] : none;
@@ -236,7 +236,7 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
                                          {"switch_distance", distances[i]}}}};
     if (i < chain.morphs.size())
       extras["LODKIT_geomorph"] = {{"target", targets.at(i).size()}, {"to_node", node_base + int32_t(i) + 1}};
-    if (!targets.at(i).empty()) node.morph_weights_of = targets.node;
+    if (!targets.at(i).empty()) node.morph_weights_of = targets.nodes;
     if (!chain.shared.prefix.empty()) extras["lodkit"]["vertex_prefix"] = chain.shared.prefix[i];
     if (i == 0) {
       for (size_t k = 1; k < chain.levels.size(); ++k) node.lod_ids.push_back(node_base + int32_t(k));
@@ -247,6 +247,27 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
   }
   scene.roots.push_back(node_base);
   return scene;
+}
+
+// Several morphing nodes: the levels take their weights in turn, one channel per clip
+// (lod::concatenate_weights, which the writer applies). Why a clip cannot be merged exactly, or "".
+std::string unmergeable_weights(const Scene& scene, const FlatMorphTargets& morph) {
+  std::vector<WeightsSource> sources(morph.nodes.size());
+  for (size_t k = 0; k < sources.size(); ++k)
+    sources[k].rest.assign((k + 1 < morph.first.size() ? morph.first[k + 1] : morph.targets.size()) - morph.first[k], 0.0f);
+  for (const Animation& clip : scene.animations) {
+    bool any = false;
+    for (size_t k = 0; k < sources.size(); ++k) {
+      sources[k].channel = nullptr;
+      for (const AnimationChannel& ch : clip.channels)
+        if (ch.path == AnimationPath::weights && ch.node == morph.nodes[k] && !sources[k].channel) sources[k].channel = &ch;
+      any = any || sources[k].channel;
+    }
+    if (any && !concatenate_weights(sources))
+      return fmt::format("clip '{}' drives the {} morphing nodes' weights with curves one channel cannot hold exactly "
+                         "(step with smooth ones)", clip.name, morph.nodes.size());
+  }
+  return "";
 }
 
 struct ChainReport {
@@ -400,7 +421,7 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
       node.name = fmt::format("{}_LOD{}", owner, i);
       node.mesh = int32_t(scene.primitives.back().gltf_mesh);
       node.skin = int32_t(sp.skin);
-      if (!targets.empty()) node.morph_weights_of = int32_t(sp.node);
+      if (!targets.empty()) node.morph_weights_of = {int32_t(sp.node)};
       node.extras_json = nlohmann::json{{"lodkit", about}}.dump();
       scene.nodes.push_back(std::move(node));
       scene.nodes[sp.node].lod_ids.push_back(int32_t(scene.nodes.size() - 1));
@@ -477,7 +498,7 @@ Command register_lod(CLI::App& root) {
 
             std::vector<ChainReport> reports;
             SurfaceForm form;  // static input: built on the fronts, or without face normals (reported)
-            LevelTargets level_targets;  // static glTF input with one morphing node: its blend shapes
+            LevelTargets level_targets;  // static glTF input: its morphing nodes' blend shapes
             std::string targets_dropped;  // why the input's morph targets are not on the levels, if they are not
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
@@ -492,7 +513,7 @@ Command register_lod(CLI::App& root) {
               // (with geomorphs, before each level's geomorph target).
               FlatMorphTargets morph;
               if (scene.source) morph = flatten_morph_targets(scene);
-              if (morph.nodes > 1) targets_dropped = fmt::format("{} nodes draw morphing meshes, and the levels are one mesh", morph.nodes);
+              if (morph.nodes.size() > 1) targets_dropped = unmergeable_weights(scene, morph);
               if (!targets_dropped.empty()) morph.targets.clear();
               // The chain replaces the input's geometry: only the morph targets to carry, so vertices
               // whose displacements differ stay apart.
@@ -517,7 +538,7 @@ Command register_lod(CLI::App& root) {
                 level_targets.levels.emplace_back();
                 for (const MorphTarget& t : morph.targets) level_targets.levels[0].push_back(renumbered(t, chain.shared.vertex_origin));
               }
-              level_targets.node = morph.node;
+              level_targets.nodes = morph.nodes;
               if (form.changed()) mesh = std::move(form.mesh);  // the progressive mesh's input
             }
             const double build_seconds = seconds_since(start);
@@ -569,7 +590,8 @@ Command register_lod(CLI::App& root) {
               if (form.flat_shaded) fmt::print("flat-shaded: each level built without the normals, faceted again\n");
               if (form.double_sided) fmt::print("double-sided: each level built on the fronts, backs made again\n");
               if (!level_targets.levels.empty() && !level_targets.levels[0].empty())
-                fmt::print("morph targets: {} on every level, {}\n", level_targets.levels[0].size(),
+                fmt::print("morph targets: {} on every level{}, {}\n", level_targets.levels[0].size(),
+                           level_targets.nodes.size() > 1 ? fmt::format(" (of {} nodes, their clips merged)", level_targets.nodes.size()) : "",
                            o->shared ? "exact (one vertex buffer)" : "interpolated where the vertices moved");
               if (!targets_dropped.empty()) fmt::print("morph targets dropped: {}\n", targets_dropped);
               fmt::print("loaded in {:.3f}s, built in {:.3f}s, wrote {} in {:.3f}s\n", load_seconds, build_seconds,
