@@ -2403,6 +2403,29 @@ void set_transform(const Node& in, tg::Node& node) {
   }
 }
 
+// A new node drawn once per instance (lodkit lod's levels of an instanced mesh, or a scene built in
+// memory): EXT_mesh_gpu_instancing with its own TRANSLATION, ROTATION and SCALE accessors, whose
+// data goes into `data`, the model's next buffer.
+void add_gpu_instances(tg::Model& model, tg::Buffer& data, const Node& in, tg::Node& node) {
+  if (in.gpu_instances.empty() || node.mesh < 0) return;
+  std::vector<float> translation, rotation, scale;
+  for (const Node::GpuInstance& g : in.gpu_instances) {
+    translation.insert(translation.end(), {g.translation.x, g.translation.y, g.translation.z});
+    rotation.insert(rotation.end(), {g.rotation.x, g.rotation.y, g.rotation.z, g.rotation.w});
+    scale.insert(scale.end(), {g.scale.x, g.scale.y, g.scale.z});
+  }
+  const int buffer = int(model.buffers.size());
+  tg::Value::Object attributes;
+  attributes["TRANSLATION"] = tg::Value(append_float_accessor(model, data, buffer, translation, TINYGLTF_TYPE_VEC3, false));
+  attributes["ROTATION"] = tg::Value(append_float_accessor(model, data, buffer, rotation, TINYGLTF_TYPE_VEC4, false));
+  attributes["SCALE"] = tg::Value(append_float_accessor(model, data, buffer, scale, TINYGLTF_TYPE_VEC3, false));
+  tg::Value::Object ext;
+  ext["attributes"] = tg::Value(std::move(attributes));
+  node.extensions[gpu_instancing] = tg::Value(std::move(ext));
+  if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), gpu_instancing) == model.extensionsUsed.end())
+    model.extensionsUsed.push_back(gpu_instancing);
+}
+
 // New node `i`'s morph weights, from the source nodes whose targets its mesh has in turn
 // (Node::morph_weights_of). One node's weights and weight channels are copied (the same samplers).
 // Several nodes' are concatenated: their rest weights (a node's own, else its mesh's, else 0), and
@@ -2471,7 +2494,7 @@ void take_morph_weights(tg::Model& model, const Scene& scene, const std::vector<
 
 // A scene read from glTF may grow (lodkit lod on a skinned character adds a mesh and a node per
 // level): primitives past the source's meshes become new meshes (with the source's materials),
-// nodes past the source's nodes are appended (name, transform, mesh, skin, MSFT_lod and extras; a
+// nodes past the source's nodes are appended (name, transform, mesh, skin, GPU instances, MSFT_lod and extras; a
 // child of its parent, in the default scene if Scene::roots lists it), and MSFT_lod ids and extras
 // set on the source's own nodes are applied. Everything else of the source stays as it was.
 void add_to_source(tg::Model& model, const Scene& scene) {
@@ -2495,7 +2518,7 @@ void add_to_source(tg::Model& model, const Scene& scene) {
 
   const size_t source_nodes = model.nodes.size();
   if (scene.nodes.size() < source_nodes) return;  // a scene that lost nodes adds none
-  tg::Buffer weights_data;  // the keys of merged weight clips
+  tg::Buffer new_data;  // new nodes' instances and merged weight clips
   for (size_t i = 0; i < scene.nodes.size(); ++i) {
     const Node& in = scene.nodes[i];
     if (i < source_nodes) {
@@ -2512,13 +2535,14 @@ void add_to_source(tg::Model& model, const Scene& scene) {
         node.skin = in.skin;
       }
     }
-    take_morph_weights(model, scene, in.morph_weights_of, i, source_nodes, node, weights_data);
+    take_morph_weights(model, scene, in.morph_weights_of, i, source_nodes, node, new_data);
+    add_gpu_instances(model, new_data, in, node);
     set_lod_and_extras(model, in, node);
     set_transform(in, node);
     model.nodes.push_back(std::move(node));
     if (in.parent >= 0 && size_t(in.parent) < i) model.nodes[size_t(in.parent)].children.push_back(int(i));
   }
-  if (!weights_data.data.empty()) model.buffers.push_back(std::move(weights_data));
+  if (!new_data.data.empty()) model.buffers.push_back(std::move(new_data));
   const auto is_new_root = [&](int32_t root) {
     return root >= 0 && size_t(root) >= source_nodes && size_t(root) < model.nodes.size() && scene.nodes[size_t(root)].parent < 0;
   };
@@ -2601,6 +2625,9 @@ tg::Model model_from_scene(const Scene& scene, std::vector<Slot>& slots) {
       writer.add_skins(scene);
       writer.add_animations(scene);
     }
+    tg::Buffer instances;
+    for (size_t n = 0; n < scene.nodes.size(); ++n) add_gpu_instances(model, instances, scene.nodes[n], model.nodes[n]);
+    if (!instances.data.empty()) model.buffers.push_back(std::move(instances));
   } else {
     for (size_t m = 0; m < model.meshes.size(); ++m) {
       tg::Node node;

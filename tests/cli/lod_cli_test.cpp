@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <set>
 #include <tuple>
 #include <nlohmann/json.hpp>
@@ -804,6 +805,99 @@ TEST(CliLod, SkinnedSharedVerticesWriteOneBufferWithItsBlendShapes) {
       for (size_t v = 0; v < offsets.size(); ++v) ASSERT_EQ(offsets[v], test::morph_offset(level->positions[v])) << "vertex " << v;
     }
     EXPECT_EQ(accessors.size(), 4u);  // each of the four once
+  }
+}
+
+// A forest: a morphing torus drawn 30 times by one instanced node (EXT_mesh_gpu_instancing, its
+// weight driven by a clip), beside a sphere drawn by a plain node. The torus gets a chain of its
+// own, in its own space (one torus's triangles per level, not 30), whose level nodes draw the 30
+// instances under the old node and keep the morph target and clip; the sphere gets the static
+// chain. Level 0 of both draws the input in place. Compressed and quantized too.
+TEST(CliLod, InstancedMeshesGetTheirOwnChain) {
+  test::TempDir dir;
+  Scene input = one_morphing_node();
+  const Mesh sphere = shapes::icosphere(3);
+  Primitive ball;
+  ball.mesh = sphere, ball.gltf_mesh = 1;
+  input.primitives.push_back(ball);
+  Node plain;
+  plain.name = "ball", plain.mesh = 1, plain.translation = {0, 0, -10};
+  input.nodes.push_back(plain);
+  input.roots.push_back(1);
+  input.nodes[0].name = "trees";
+  for (int k = 0; k < 30; ++k)
+    input.nodes[0].gpu_instances.push_back({.translation = {float(k % 6) * 8, float(k / 6) * 8, 0},
+                                            .rotation = {0, 0, std::sin(0.05f * k), std::cos(0.05f * k)},
+                                            .scale = {1, 1, 1 + 0.01f * k}});
+  write_scene(input, dir / "forest.glb");
+  const Scene read = read_scene(dir / "forest.glb");
+  ASSERT_EQ(read.nodes[0].gpu_instances.size(), 30u);
+  const size_t torus_triangles = input.primitives[0].mesh.triangle_count();
+
+  for (const bool packed : {false, true}) {
+    SCOPED_TRACE(packed ? "-c -q" : "plain");
+    std::vector<std::string> args = {"lod", (dir / "forest.glb").string(), "-o", (dir / "lod.glb").string(), "--ratios", "1,0.3", "--json"};
+    if (packed) args.insert(args.end(), {"-c", "-q"});
+    const test::RunResult r = test::run_cli(args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    test::expect_valid_gltf({dir / "lod.glb"});
+    const nlohmann::json report = nlohmann::json::parse(r.out);
+    EXPECT_EQ(report["levels"][0]["triangles"], sphere.triangle_count());  // the static chain: the sphere alone
+    ASSERT_EQ(report["instanced"].size(), 1u);
+    EXPECT_EQ(report["instanced"][0]["node"], "trees");
+    EXPECT_EQ(report["instanced"][0]["instances"], 30);
+    EXPECT_EQ(report["instanced"][0]["levels"][0]["triangles"], torus_triangles);
+    EXPECT_LT(report["instanced"][0]["levels"][1]["triangles"].get<size_t>(), torus_triangles);
+
+    const Scene out = read_scene(dir / "lod.glb");
+    const nlohmann::json doc = glb_json(dir / "lod.glb");
+    EXPECT_FALSE(doc["nodes"][0].contains("mesh"));
+    ASSERT_EQ(doc["nodes"][0]["children"].size(), 1u);
+    const size_t lod0 = doc["nodes"][0]["children"][0];
+    ASSERT_EQ(out.nodes[lod0].lod_ids.size(), 1u);
+    for (const size_t n : {lod0, size_t(out.nodes[lod0].lod_ids[0])}) {
+      ASSERT_EQ(out.nodes[n].gpu_instances.size(), 30u) << n;
+      for (size_t k = 0; k < 30 && !packed; ++k) {  // (quantized, they take the grid: see flatten below)
+        EXPECT_NEAR(out.nodes[n].gpu_instances[k].translation.x, read.nodes[0].gpu_instances[k].translation.x, 1e-3) << k;
+        EXPECT_NEAR(out.nodes[n].gpu_instances[k].scale.z, read.nodes[0].gpu_instances[k].scale.z, 1e-3) << k;
+      }
+      const nlohmann::json& prim = doc["meshes"][doc["nodes"][n]["mesh"].get<size_t>()]["primitives"][0];
+      EXPECT_EQ(prim["targets"].size(), 1u) << n;
+      size_t copies = 0;
+      for (const auto& channel : doc["animations"][0]["channels"])
+        copies += channel["target"]["path"] == "weights" && channel["target"]["node"] == n;
+      EXPECT_EQ(copies, 1u) << n;
+    }
+    // Level 0 everywhere draws the input: the same points, in world space (within the grid's step when quantized).
+    const Mesh before = flatten(read);
+    Scene first = out;
+    for (Node& node : first.nodes) node.lod_ids.clear();
+    const Mesh after = flatten(first);
+    EXPECT_EQ(after.triangle_count(), before.triangle_count());
+    float3 lo, hi;
+    bounding_box(before, lo, hi);
+    const double tolerance = packed ? 1e-3 * std::hypot(hi.x - lo.x, hi.y - lo.y, hi.z - lo.z) : 1e-4;
+    // Every output point has an input point within the tolerance (cells of that size, and their neighbours).
+    const auto cell = [&](const float3& p) {
+      return std::array<int64_t, 3>{int64_t(std::floor(p.x / tolerance)), int64_t(std::floor(p.y / tolerance)),
+                                    int64_t(std::floor(p.z / tolerance))};
+    };
+    std::map<std::array<int64_t, 3>, std::vector<float3>> cells;
+    for (const float3& p : before.positions) cells[cell(p)].push_back(p);
+    size_t far = 0;
+    for (const float3& p : after.positions) {
+      const std::array<int64_t, 3> c = cell(p);
+      bool near = false;
+      for (int64_t dx = -1; dx <= 1 && !near; ++dx)
+        for (int64_t dy = -1; dy <= 1 && !near; ++dy)
+          for (int64_t dz = -1; dz <= 1 && !near; ++dz) {
+            const auto it = cells.find({c[0] + dx, c[1] + dy, c[2] + dz});
+            if (it == cells.end()) continue;
+            for (const float3& q : it->second) near = near || std::hypot(p.x - q.x, p.y - q.y, p.z - q.z) <= tolerance;
+          }
+      far += !near;
+    }
+    EXPECT_EQ(far, 0u);
   }
 }
 

@@ -2,6 +2,8 @@
 // (checked against the values put into hand-built files), malformed input, and the Khronos validator.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -701,18 +703,33 @@ TEST(GltfInstancing, InfoCountsTheInstances) {
   EXPECT_NE(test::run_cli({"info", (dir / "in.glb").string()}).out.find("2 on 1 node\n"), std::string::npos);
 }
 
-TEST(GltfInstancing, LodChainBakesTheInstancesAndTheOldNodeDropsThem) {
+// lodkit lod gives an instanced mesh a chain in its own space: each level's node draws both
+// instances (its own EXT_mesh_gpu_instancing accessors), the first under the old node, which keeps
+// its transform and loses its mesh. Level 0 draws the input, in place.
+TEST(GltfInstancing, LodChainKeepsTheInstances) {
   TempDir dir;
   test::write_bytes(dir / "in.glb", instanced_triangle().glb());
   const test::RunResult r = test::run_cli({"lod", (dir / "in.glb").string(), "-o", (dir / "chain.glb").string(), "--levels", "1"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const Json doc = test::glb_json(dir / "chain.glb");
-  EXPECT_FALSE(doc["nodes"][0].contains("extensions")) << doc["nodes"][0].dump();
-  for (const Json& ext : doc.value("extensionsUsed", Json::array())) EXPECT_NE(ext, "EXT_mesh_gpu_instancing");
-  // Level 0 is both instances, in world space.
-  const Scene chain = read_scene(dir / "chain.glb");
-  EXPECT_EQ(flatten(chain).triangle_count(), 2u);
   test::expect_valid_gltf({dir / "chain.glb"});
+  const Json doc = test::glb_json(dir / "chain.glb");
+  ASSERT_EQ(doc["nodes"].size(), 2u);
+  EXPECT_FALSE(doc["nodes"][0].contains("mesh"));
+  EXPECT_FALSE(doc["nodes"][0].contains("extensions")) << doc["nodes"][0].dump();
+  EXPECT_EQ(doc["nodes"][0]["translation"], Json::array({0, 0, 5}));
+  EXPECT_EQ(doc["nodes"][0]["children"], Json::array({1}));
+  EXPECT_TRUE(doc["nodes"][1]["extensions"].contains("EXT_mesh_gpu_instancing"));
+  const Scene chain = read_scene(dir / "chain.glb");
+  ASSERT_EQ(chain.nodes[1].gpu_instances.size(), 2u);
+  const Mesh before = flatten(read_scene(dir / "in.glb")), after = flatten(chain);
+  ASSERT_EQ(after.triangle_count(), 2u);
+  std::vector<std::array<float, 3>> a, b;
+  for (const float3& p : before.positions) a.push_back({p.x, p.y, p.z});
+  for (const float3& p : after.positions) b.push_back({p.x, p.y, p.z});
+  std::sort(a.begin(), a.end()), std::sort(b.begin(), b.end());
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t v = 0; v < a.size(); ++v)
+    for (size_t c = 0; c < 3; ++c) EXPECT_NEAR(a[v][c], b[v][c], 1e-5) << v;
 }
 
 TEST(GltfInstancing, MalformedInstancingIsRefused) {

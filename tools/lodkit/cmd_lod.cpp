@@ -4,8 +4,10 @@
 // themselves; every level's error and switch distance are in its node's extras.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -148,34 +150,54 @@ MorphTarget shared_geomorph(const LodChain& chain, size_t i) {
   return t;
 }
 
-// The glTF: one mesh and one node per level, the first node listing the others (MSFT_lod); each
-// mesh has a primitive per material. From a static glTF (`source`, flattened into the chain's input,
-// so material id k + 1 is its material k): the source document with its triangles replaced by the
-// levels, so materials, textures and everything else stay; its nodes remain, without those meshes.
-// Otherwise a new document, with the input's material names.
-Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, const std::vector<double>& coverage,
-                  const Scene* source, const LevelTargets& targets) {
+struct ChainReport {
+  std::string node;  // the skinned or instanced node's name; empty for a static mesh
+  size_t instances = 0;  // the instanced node's (EXT_mesh_gpu_instancing); 0 otherwise
+  LodChain chain;
+  std::vector<double> distances, coverage;
+};
+
+// The document static chains go into: the glTF `source` (flattened into the chains' inputs, so
+// material id k + 1 is its material k) without its triangles, so that materials, textures and
+// everything else stay and its nodes remain, without those meshes; or a new document with the
+// input's material names.
+Scene chain_document(const Scene* source, const std::vector<std::string>& material_names) {
   Scene scene;
-  uint32_t mesh_base = 0;
-  int32_t node_base = 0;
-  if (source) {
-    scene = *source;
-    scene.primitives.clear();
-    mesh_base = source->gltf_mesh_count;
-    node_base = int32_t(source->nodes.size());
-    // Its nodes no longer draw their triangles (an earlier chain's levels among them): what lodkit
-    // said about them, and an earlier chain's MSFT_lod, would describe what is gone.
-    for (Node& node : scene.nodes)
-      if (node.mesh >= 0) {
-        node.lod_ids.clear();
-        erase_extras(node, {"lodkit", "LODKIT_geomorph", "MSFT_screencoverage"});
-      }
-  } else {
-    scene.material_names = chain.levels.front().mesh.material_names;
+  if (!source) {
+    scene.material_names = material_names;
+    return scene;
   }
+  scene = *source;
+  scene.primitives.clear();
+  // Its nodes no longer draw their triangles (an earlier chain's levels among them): what lodkit
+  // said about them, and an earlier chain's MSFT_lod, would describe what is gone.
+  for (Node& node : scene.nodes)
+    if (node.mesh >= 0) {
+      node.lod_ids.clear();
+      erase_extras(node, {"lodkit", "LODKIT_geomorph", "MSFT_screencoverage"});
+    }
+  return scene;
+}
+
+// Where a chain's nodes go: named `prefix`LODi, the first under `parent` (a new root when -1), each
+// drawn once per instance of `instances` (an instanced node's chain, in its mesh's own space).
+struct ChainPlace {
+  std::string prefix;
+  int32_t parent = -1;
+  std::vector<Node::GpuInstance> instances;
+};
+
+// Appends a chain to a chain_document: one new glTF mesh per level with a primitive per material,
+// and one node per level, the first listing the others (MSFT_lod).
+void add_chain(Scene& scene, const ChainReport& r, const LevelTargets& targets, const ChainPlace& place) {
+  const LodChain& chain = r.chain;
+  uint32_t mesh_base = scene.source ? scene.gltf_mesh_count : 0;
+  for (const Primitive& p : scene.primitives) mesh_base = std::max(mesh_base, p.gltf_mesh + 1);
+  const int32_t node_base = int32_t(scene.nodes.size());
+  const size_t first_primitive = scene.primitives.size();
   const auto material = [&](const Mesh& level, uint32_t id) {
-    if (level.materials.empty()) return source || level.material_names.empty() ? -1 : 0;
-    return source ? int32_t(id) - 1 : int32_t(id);
+    if (level.materials.empty()) return scene.source || level.material_names.empty() ? -1 : 0;
+    return scene.source ? int32_t(id) - 1 : int32_t(id);
   };
   for (size_t i = 0; i < chain.levels.size(); ++i) {
     const Mesh& level = chain.levels[i].mesh;
@@ -201,7 +223,7 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
         for (size_t t = 0; t < level.triangle_count(); ++t)
           if (level.material(t) == part.material)
             prim.mesh.indices.insert(prim.mesh.indices.end(), indices.begin() + ptrdiff_t(3 * t), indices.begin() + ptrdiff_t(3 * t + 3));
-        if (!scene.primitives.empty()) prim.shares_vertices_with = 0;  // the chain's first primitive
+        if (scene.primitives.size() > first_primitive) prim.shares_vertices_with = int32_t(first_primitive);
         add(std::move(prim), part.material);
       }
       continue;
@@ -226,27 +248,28 @@ Scene chain_scene(const LodChain& chain, const std::vector<double>& distances, c
   for (size_t i = 0; i < chain.levels.size(); ++i) {
     const LodLevel& level = chain.levels[i];
     Node node;
-    node.name = fmt::format("LOD{}", i);
+    node.name = fmt::format("{}LOD{}", place.prefix, i);
     node.mesh = int32_t(mesh_base + i);
+    node.gpu_instances = place.instances;
     nlohmann::json extras = {{"lodkit", {{"level", i},
                                          {"triangles", level.mesh.triangle_count()},
                                          {"error", level.error},
                                          {"error_bound", level.error_bound},
                                          {"relative_error", level.relative_error},
-                                         {"switch_distance", distances[i]}}}};
+                                         {"switch_distance", r.distances[i]}}}};
     if (i < chain.morphs.size())
       extras["LODKIT_geomorph"] = {{"target", targets.at(i).size()}, {"to_node", node_base + int32_t(i) + 1}};
     if (!targets.at(i).empty()) node.morph_weights_of = targets.nodes;
     if (!chain.shared.prefix.empty()) extras["lodkit"]["vertex_prefix"] = chain.shared.prefix[i];
     if (i == 0) {
       for (size_t k = 1; k < chain.levels.size(); ++k) node.lod_ids.push_back(node_base + int32_t(k));
-      extras["MSFT_screencoverage"] = coverage;
+      extras["MSFT_screencoverage"] = r.coverage;
+      node.parent = place.parent;
     }
     node.extras_json = extras.dump();
     scene.nodes.push_back(std::move(node));
   }
-  scene.roots.push_back(node_base);
-  return scene;
+  if (place.parent < 0) scene.roots.push_back(node_base);
 }
 
 // Several morphing nodes: the levels take their weights in turn, one channel per clip
@@ -270,11 +293,6 @@ std::string unmergeable_weights(const Scene& scene, const FlatMorphTargets& morp
   return "";
 }
 
-struct ChainReport {
-  std::string node;  // the skinned node's name; empty for a static mesh
-  LodChain chain;
-  std::vector<double> distances, coverage;
-};
 
 // Switch distances: where a level's error bound shrinks to error_px on screen. Screen coverage
 // (MSFT_screencoverage): the bounding sphere's projected height over the screen height at the
@@ -431,6 +449,80 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
   return scene;
 }
 
+// A static chain: a mesh (a flattened glTF scene, `scene`, or another file's) simplified level by
+// level in its surface form, with the morph targets the scene's nodes drive at each level's vertices.
+struct StaticChain {
+  ChainReport report;
+  LevelTargets targets;
+  SurfaceForm form;             // built on the fronts, or without face normals (reported)
+  std::string targets_dropped;  // why the input's morph targets are not on the levels, if they are not
+  Mesh input;                   // as simplified: the progressive mesh's input
+};
+
+StaticChain build_static(Mesh mesh, const Scene* scene, LodOptions options, const LodCommand& o, const std::string& label) {
+  StaticChain out;
+  // Morph targets go to every level, interpolated where the vertices moved (with geomorphs, before
+  // each level's geomorph target).
+  FlatMorphTargets morph;
+  if (scene) morph = flatten_morph_targets(*scene);
+  if (morph.nodes.size() > 1) out.targets_dropped = unmergeable_weights(*scene, morph);
+  if (!out.targets_dropped.empty()) morph.targets.clear();
+  // The chain replaces the input's geometry: only the morph targets to carry, so vertices whose
+  // displacements differ stay apart.
+  const std::vector<uint32_t> first = weld_duplicates(mesh, displacement_classes(morph.targets));
+  if (!first.empty())
+    for (MorphTarget& t : morph.targets) t = renumbered(t, first);
+  // Flat-shaded: the chain is built without the normals, then each level faceted again (not with
+  // geomorphs or one vertex buffer, whose tables follow the vertices). Double-sided likewise: the
+  // chain is built on the fronts, and each level gets its backs.
+  if (!o.morph && !o.shared) out.form = surface_form(mesh);
+  const Mesh& built_on = out.form.to_simplify(mesh);
+  ProgressBar bar(label);
+  options.progress = [&](double f) { bar.update(f); };
+  out.report.chain = build_lod_chain(built_on, options);
+  const LodChain& chain = out.report.chain;
+  for (LodLevel& level : out.report.chain.levels) {
+    if (out.form.changed()) level.vertex_origin.clear(), restore_form(out.form, level.mesh, level.vertex_successor);
+    if (!morph.targets.empty() && chain.shared.indices.empty())
+      out.targets.levels.push_back(blended_targets(morph.targets, vertex_blends(mesh, level.vertex_successor, level.mesh)));
+  }
+  if (!morph.targets.empty() && !chain.shared.indices.empty()) {
+    out.targets.levels.emplace_back();
+    for (const MorphTarget& t : morph.targets) out.targets.levels[0].push_back(renumbered(t, chain.shared.vertex_origin));
+  }
+  out.targets.nodes = morph.nodes;
+  out.input = out.form.changed() ? std::move(out.form.mesh) : std::move(mesh);
+  return out;
+}
+
+// The nodes whose mesh gets a chain of its own: drawn once per GPU instance (EXT_mesh_gpu_instancing),
+// without a skin, reachable from the scene's roots, and the only node drawing that mesh. Baking their
+// instances into the static chain would multiply its triangles by the instance count.
+std::vector<int32_t> instanced_nodes(const Scene& scene) {
+  std::map<int32_t, size_t> drawn_by;  // glTF mesh -> nodes drawing it
+  for (const Node& node : scene.nodes)
+    if (node.mesh >= 0) ++drawn_by[node.mesh];
+  std::vector<bool> reached(scene.nodes.size(), false);
+  std::vector<int32_t> stack = scene.roots;
+  while (!stack.empty()) {
+    const int32_t n = stack.back();
+    stack.pop_back();
+    if (n < 0 || size_t(n) >= scene.nodes.size() || reached[size_t(n)]) continue;
+    reached[size_t(n)] = true;
+    for (const int32_t c : scene.nodes[size_t(n)].children) stack.push_back(c);
+  }
+  std::vector<int32_t> out;
+  for (size_t n = 0; n < scene.nodes.size(); ++n) {
+    const Node& node = scene.nodes[n];
+    const bool has_triangles = std::any_of(scene.primitives.begin(), scene.primitives.end(), [&](const Primitive& p) {
+      return int32_t(p.gltf_mesh) == node.mesh && p.mesh.triangle_count() > 0;
+    });
+    if (reached[n] && node.mesh >= 0 && !node.gpu_instances.empty() && node.skin < 0 && drawn_by[node.mesh] == 1 && has_triangles)
+      out.push_back(int32_t(n));
+  }
+  return out;
+}
+
 }  // namespace
 
 Command register_lod(CLI::App& root) {
@@ -483,7 +575,8 @@ Command register_lod(CLI::App& root) {
             if (!o->attributes.empty()) parse_attributes(o->attributes, options.simplify);
 
             auto start = std::chrono::steady_clock::now();
-            // glTF input is read as a scene: a skinned character keeps its skeleton and clips.
+            // glTF input is read as a scene: a skinned character keeps its skeleton and clips, and
+            // an instanced mesh (EXT_mesh_gpu_instancing) its instances.
             const FileFormat in_format = format_from_path(o->input);
             Scene scene;
             Mesh mesh;
@@ -493,13 +586,17 @@ Command register_lod(CLI::App& root) {
               else mesh = read_mesh(o->input, bar.read_options());
             }
             const std::vector<SkinnedPrimitive> skinned = scene.source ? skinned_primitives(scene) : std::vector<SkinnedPrimitive>{};
-            if (scene.source && skinned.empty()) mesh = flatten(scene);
+            const std::vector<int32_t> instanced = scene.source && skinned.empty() ? instanced_nodes(scene) : std::vector<int32_t>{};
+            Scene rest;  // the static scene without the instanced meshes, for flattening
+            if (scene.source && skinned.empty()) {
+              rest = scene;
+              for (const int32_t n : instanced) rest.nodes[size_t(n)].mesh = -1;
+              mesh = flatten(rest);
+            }
             const double load_seconds = seconds_since(start);
 
             std::vector<ChainReport> reports;
-            SurfaceForm form;  // static input: built on the fronts, or without face normals (reported)
-            LevelTargets level_targets;  // static glTF input: its morphing nodes' blend shapes
-            std::string targets_dropped;  // why the input's morph targets are not on the levels, if they are not
+            std::vector<StaticChain> chains;  // the static chain (if any geometry is not instanced), then one per instanced node
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
               if (o->morph) throw_usage("--morph: skinned input morphs at run time (lod::SkinnedGeomorph), not as glTF morph targets");
@@ -508,38 +605,26 @@ Command register_lod(CLI::App& root) {
               reports = build_skinned(scene, skinned, parse_skin_mode(o->skin_mode), o->poses, options,
                                       [&](double f) { bar.update(f); });
             } else {
-              validate(mesh, o->input);
-              // Morph targets of one node go to every level, interpolated where the vertices moved
-              // (with geomorphs, before each level's geomorph target).
-              FlatMorphTargets morph;
-              if (scene.source) morph = flatten_morph_targets(scene);
-              if (morph.nodes.size() > 1) targets_dropped = unmergeable_weights(scene, morph);
-              if (!targets_dropped.empty()) morph.targets.clear();
-              // The chain replaces the input's geometry: only the morph targets to carry, so vertices
-              // whose displacements differ stay apart.
-              const std::vector<uint32_t> first = weld_duplicates(mesh, displacement_classes(morph.targets));
-              if (!first.empty())
-                for (MorphTarget& t : morph.targets) t = renumbered(t, first);
-              // Flat-shaded: the chain is built without the normals, then each level faceted again
-              // (not with geomorphs or one vertex buffer, whose tables follow the vertices).
-              // Double-sided likewise: the chain is built on the fronts, and each level gets its backs.
-              if (!o->morph && !o->shared) form = surface_form(mesh);
-              const Mesh& built_on = form.to_simplify(mesh);
-              ProgressBar bar("building LODs");
-              options.progress = [&](double f) { bar.update(f); };
-              reports.push_back({"", build_lod_chain(built_on, options), {}, {}});
-              const LodChain& chain = reports[0].chain;
-              for (LodLevel& level : reports[0].chain.levels) {
-                if (form.changed()) level.vertex_origin.clear(), restore_form(form, level.mesh, level.vertex_successor);
-                if (!morph.targets.empty() && chain.shared.indices.empty())
-                  level_targets.levels.push_back(blended_targets(morph.targets, vertex_blends(mesh, level.vertex_successor, level.mesh)));
+              if (instanced.empty() || mesh.triangle_count() > 0) {
+                validate(mesh, o->input);
+                chains.push_back(build_static(std::move(mesh), scene.source ? &rest : nullptr, options, *o, "building LODs"));
               }
-              if (!morph.targets.empty() && !chain.shared.indices.empty()) {
-                level_targets.levels.emplace_back();
-                for (const MorphTarget& t : morph.targets) level_targets.levels[0].push_back(renumbered(t, chain.shared.vertex_origin));
+              // Each instanced mesh: its own chain in its own space (its node alone, untransformed).
+              Scene solo = rest;
+              for (const int32_t n : instanced) {
+                Node& node = solo.nodes[size_t(n)];
+                node.mesh = scene.nodes[size_t(n)].mesh, node.gpu_instances.clear();
+                node.has_matrix = false, node.translation = {}, node.rotation = {0, 0, 0, 1}, node.scale = {1, 1, 1};
+                solo.roots = {n};
+                const std::string name = scene.nodes[size_t(n)].name.empty() ? fmt::format("node {}", n) : scene.nodes[size_t(n)].name;
+                chains.push_back(build_static(flatten(solo), &solo, options, *o, fmt::format("building LODs of '{}'", name)));
+                chains.back().report.node = name;
+                chains.back().report.instances = scene.nodes[size_t(n)].gpu_instances.size();
+                node.mesh = -1;
               }
-              level_targets.nodes = morph.nodes;
-              if (form.changed()) mesh = std::move(form.mesh);  // the progressive mesh's input
+              if (!o->lpm.empty() && (chains.empty() || chains[0].report.instances))
+                throw_usage("--lpm: all of the input's geometry is instanced (EXT_mesh_gpu_instancing)");
+              for (StaticChain& c : chains) reports.push_back(std::move(c.report));
             }
             const double build_seconds = seconds_since(start);
             for (ChainReport& r : reports) set_switching(r, *o);
@@ -548,34 +633,50 @@ Command register_lod(CLI::App& root) {
             if (!skinned.empty()) {
               write_scene(skinned_scene(std::move(scene), skinned, reports), o->output, o->gltf);
             } else {
-              write_scene(chain_scene(reports[0].chain, reports[0].distances, reports[0].coverage, scene.source ? &scene : nullptr,
-                                      level_targets),
-                          o->output, o->gltf);
+              Scene out = chain_document(scene.source ? &scene : nullptr, reports[0].chain.levels.front().mesh.material_names);
+              for (size_t c = 0; c < chains.size(); ++c) {
+                ChainPlace place;
+                if (reports[c].instances) {
+                  const int32_t n = instanced[c - (chains.size() - instanced.size())];
+                  place = {reports[c].node + "_", n, scene.nodes[size_t(n)].gpu_instances};
+                }
+                add_chain(out, reports[c], chains[c].targets, place);
+              }
+              write_scene(out, o->output, o->gltf);
               if (!o->lpm.empty()) {
                 // The progressive mesh spans the input down to the coarsest level's size.
                 SimplifyOptions so = options.simplify;
                 so.target_triangles = std::max<uint64_t>(1, reports[0].chain.levels.back().mesh.triangle_count());
-                SimplifyResult r = simplify(mesh, so);
-                write_progressive_mesh(ProgressiveMesh(mesh, std::move(r.record)), o->lpm);
+                SimplifyResult r = simplify(chains[0].input, so);
+                write_progressive_mesh(ProgressiveMesh(chains[0].input, std::move(r.record)), o->lpm);
               }
             }
             const double write_seconds = seconds_since(start);
 
+            // The first chain's facts head the report (the static chain's, when there is one).
+            const StaticChain none;
+            const StaticChain& head = chains.empty() ? none : chains[0];
+            const size_t morph_targets = head.targets.levels.empty() ? 0 : head.targets.levels[0].size();
             if (o->json) {
-              nlohmann::json chains = nlohmann::json::array();
-              for (const ChainReport& r : reports) chains.push_back({{"node", r.node}, {"diagonal", r.chain.diagonal}, {"levels", levels_json(r)}});
+              nlohmann::json listed = nlohmann::json::array();
+              for (const ChainReport& r : reports) {
+                nlohmann::json c = {{"node", r.node}, {"diagonal", r.chain.diagonal}, {"levels", levels_json(r)}};
+                if (r.instances) c["instances"] = r.instances;
+                if (!skinned.empty() || r.instances) listed.push_back(std::move(c));
+              }
               nlohmann::json j = {{"input", o->input}, {"output", o->output}, {"diagonal", reports[0].chain.diagonal},
                                   {"levels", levels_json(reports[0])}, {"load_seconds", load_seconds},
                                   {"build_seconds", build_seconds}, {"write_seconds", write_seconds},
-                                  {"flat_shaded", form.flat_shaded}, {"double_sided", form.double_sided},
-                                  {"morph_targets", level_targets.levels.empty() ? 0 : level_targets.levels[0].size()},
-                                  {"morph_targets_dropped", !targets_dropped.empty()}};
-              if (!skinned.empty())
-                j["skinned"] = {{"mode", o->skin_mode}, {"poses", o->poses}, {"chains", chains}};
+                                  {"flat_shaded", head.form.flat_shaded}, {"double_sided", head.form.double_sided},
+                                  {"morph_targets", morph_targets}, {"morph_targets_dropped", !head.targets_dropped.empty()}};
+              if (!skinned.empty()) j["skinned"] = {{"mode", o->skin_mode}, {"poses", o->poses}, {"chains", listed}};
+              if (!instanced.empty()) j["instanced"] = listed;
               fmt::print("{}\n", j.dump(2));
             } else {
               for (const ChainReport& r : reports) {
-                if (!r.node.empty()) fmt::print("skinned node '{}' ({} mode, {} poses)\n", r.node, o->skin_mode, o->poses);
+                if (r.instances) fmt::print("instanced node '{}' ({} instances)\n", r.node, r.instances);
+                else if (!r.node.empty()) fmt::print("skinned node '{}' ({} mode, {} poses)\n", r.node, o->skin_mode, o->poses);
+                else if (reports.size() > 1) fmt::print("the rest of the scene\n");
                 fmt::print("{:<6}{:>12}{:>12}{:>14}{:>11}{:>14}{:>14}\n", "level", "triangles", "vertices", "error", "% diag",
                            "bound", "switch at");
                 for (size_t i = 0; i < r.chain.levels.size(); ++i) {
@@ -587,13 +688,13 @@ Command register_lod(CLI::App& root) {
               fmt::print("error: Hausdorff distance to the input (measured{}); bound: certified upper bound; switch at: the "
                          "distance where the bound is {} px ({} px screen, {} deg fov)\n",
                          skinned.empty() ? "" : ", bind pose", o->error_px, o->screen_height, o->fov_degrees);
-              if (form.flat_shaded) fmt::print("flat-shaded: each level built without the normals, faceted again\n");
-              if (form.double_sided) fmt::print("double-sided: each level built on the fronts, backs made again\n");
-              if (!level_targets.levels.empty() && !level_targets.levels[0].empty())
-                fmt::print("morph targets: {} on every level{}, {}\n", level_targets.levels[0].size(),
-                           level_targets.nodes.size() > 1 ? fmt::format(" (of {} nodes, their clips merged)", level_targets.nodes.size()) : "",
+              if (head.form.flat_shaded) fmt::print("flat-shaded: each level built without the normals, faceted again\n");
+              if (head.form.double_sided) fmt::print("double-sided: each level built on the fronts, backs made again\n");
+              if (morph_targets)
+                fmt::print("morph targets: {} on every level{}, {}\n", morph_targets,
+                           head.targets.nodes.size() > 1 ? fmt::format(" (of {} nodes, their clips merged)", head.targets.nodes.size()) : "",
                            o->shared ? "exact (one vertex buffer)" : "interpolated where the vertices moved");
-              if (!targets_dropped.empty()) fmt::print("morph targets dropped: {}\n", targets_dropped);
+              if (!head.targets_dropped.empty()) fmt::print("morph targets dropped: {}\n", head.targets_dropped);
               fmt::print("loaded in {:.3f}s, built in {:.3f}s, wrote {} in {:.3f}s\n", load_seconds, build_seconds,
                          o->output, write_seconds);
             }
