@@ -26,6 +26,29 @@ namespace {
 
 using test::glb_json;
 
+// The mesh of glTF mesh `mesh` in a scene read back (a level's), or null.
+const Mesh* gltf_mesh(const Scene& scene, size_t mesh) {
+  for (const Primitive& p : scene.primitives)
+    if (p.gltf_mesh == mesh) return &p.mesh;
+  return nullptr;
+}
+
+// The weights channels of clip `animation` that drive node `n`.
+size_t weight_channels(const nlohmann::json& doc, size_t animation, size_t n) {
+  size_t count = 0;
+  for (const auto& channel : doc["animations"][animation]["channels"])
+    count += channel["target"]["path"] == "weights" && channel["target"]["node"] == n;
+  return count;
+}
+
+// The nodes of a lodkit lod file that draw a level (extras "lodkit"), in order.
+std::vector<size_t> level_nodes(const nlohmann::json& doc) {
+  std::vector<size_t> out;
+  for (size_t n = 0; n < doc["nodes"].size(); ++n)
+    if (doc["nodes"][n].contains("extras") && doc["nodes"][n]["extras"].contains("lodkit")) out.push_back(n);
+  return out;
+}
+
 TEST(CliLod, WritesAValidMsftLodChain) {
   test::TempDir dir;
   const Mesh torus = shapes::torus(1.0f, 0.3f, 48, 24);
@@ -446,9 +469,7 @@ TEST(CliLod, SkinnedLevelsKeepTheirMorphTargets) {
     for (const uint32_t n : {node, lod_node}) {
       const size_t mesh = size_t(out.nodes[n].mesh);
       ASSERT_EQ(doc["meshes"][mesh]["primitives"][0]["targets"].size(), 1u) << ratios << " node " << n;
-      const Mesh* level = nullptr;
-      for (const Primitive& p : out.primitives)
-        if (p.gltf_mesh == mesh) level = &p.mesh;
+      const Mesh* level = gltf_mesh(out, mesh);
       ASSERT_NE(level, nullptr);
       const std::vector<float3> offsets = test::glb_morph_positions(dir / "lod.glb", mesh);
       ASSERT_EQ(offsets.size(), level->vertex_count());
@@ -477,7 +498,7 @@ TEST(CliLod, SkinnedLevelsKeepTheirMorphTargets) {
   }
 }
 
-// The morphing torus drawn by one node that scales it by 2 and moves it by `move`, its weight driven
+// The morphing torus drawn by one node that scales it by 2 and moves it by `torus_move`, its weight driven
 // by one clip.
 constexpr float3 torus_move = {1, 2, 3};
 Scene one_morphing_node() {
@@ -492,11 +513,22 @@ Scene one_morphing_node() {
 // A static glTF whose one node draws a morphing torus (scaled by 2 and moved): every level of the
 // chain keeps the morph target, in world space (the levels are flattened), interpolated where the
 // vertices moved, and the clip that drives the node's weight drives each level's; with geomorphs too.
+// A level of the morphing torus (scaled by 2, centred on `centre`) and its morph target `target`
+// in a .glb, taken back to the torus's own space and checked by expect_points_on_torus: how many
+// vertices moved off the input.
+size_t torus_offsets_moved(const std::filesystem::path& file, size_t mesh, const Mesh& level, size_t target = 0,
+                           const float3& centre = torus_move) {
+  Mesh local = level;
+  for (float3& p : local.positions) p = {(p.x - centre.x) / 2, (p.y - centre.y) / 2, (p.z - centre.z) / 2};
+  std::vector<float3> offsets = test::glb_morph_positions(file, mesh, 0, target);
+  for (float3& d : offsets) d = {d.x / 2, d.y / 2, d.z / 2};
+  return test::expect_points_on_torus(local, offsets, file.filename().string() + " mesh " + std::to_string(mesh));
+}
+
 TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
   test::TempDir dir;
   Scene input = one_morphing_node();
   ASSERT_EQ(input.nodes.size(), 1u);
-  const float3 move = torus_move;
   write_scene(input, dir / "one.glb");
 
   const test::RunResult r = test::run_cli({"lod", (dir / "one.glb").string(), "-o", (dir / "lod.glb").string(),
@@ -507,34 +539,21 @@ TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
   EXPECT_FALSE(report["morph_targets_dropped"].get<bool>());
   const Scene out = read_scene(dir / "lod.glb");
   const nlohmann::json doc = glb_json(dir / "lod.glb");
-  size_t levels = 0;
-  for (size_t n = 0; n < doc["nodes"].size(); ++n) {
+  const std::vector<size_t> levels = level_nodes(doc);
+  for (const size_t n : levels) {
     const nlohmann::json& node = doc["nodes"][n];
-    if (!node.contains("extras") || !node["extras"].contains("lodkit")) continue;
-    ++levels;
     const size_t mesh = node["mesh"];
     ASSERT_EQ(doc["meshes"][mesh]["primitives"].size(), 1u);
     ASSERT_EQ(doc["meshes"][mesh]["primitives"][0]["targets"].size(), 1u) << "node " << n;
-    const Mesh* level = nullptr;
-    for (const Primitive& p : out.primitives)
-      if (p.gltf_mesh == mesh) level = &p.mesh;
+    const Mesh* level = gltf_mesh(out, mesh);
     ASSERT_NE(level, nullptr);
-    // Back in the torus's own space: positions less the move, over 2, and offsets over 2.
-    Mesh local = *level;
-    for (float3& p : local.positions) p = {(p.x - move.x) / 2, (p.y - move.y) / 2, (p.z - move.z) / 2};
-    std::vector<float3> offsets = test::glb_morph_positions(dir / "lod.glb", mesh);
-    for (float3& d : offsets) d = {d.x / 2, d.y / 2, d.z / 2};
-    const size_t moved = test::expect_points_on_torus(local, offsets, "level node " + std::to_string(n));
+    const size_t moved = torus_offsets_moved(dir / "lod.glb", mesh, *level);
     if (level->triangle_count() < 1600) {
-      EXPECT_GT(moved, local.vertex_count() / 10) << "node " << n;
+      EXPECT_GT(moved, level->vertex_count() / 10) << "node " << n;
     }
-    // The clip drives the level's weight too.
-    size_t copies = 0;
-    for (const auto& channel : doc["animations"][0]["channels"])
-      copies += channel["target"]["path"] == "weights" && channel["target"]["node"] == n;
-    EXPECT_EQ(copies, 1u) << "node " << n;
+    EXPECT_EQ(weight_channels(doc, 0, n), 1u) << "node " << n;  // the clip drives the level's weight too
   }
-  EXPECT_EQ(levels, 3u);
+  EXPECT_EQ(levels.size(), 3u);
   test::expect_valid_gltf({dir / "lod.glb"});
   // With geomorphs: level 0 has the input's target, then its geomorph (target 1), which moves each
   // vertex onto one of level 1's; the clip drives target 0 and holds the geomorph at 0.
@@ -546,26 +565,16 @@ TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
   {
     const Scene morphed = read_scene(dir / "geomorph.glb");
     const nlohmann::json gdoc = glb_json(dir / "geomorph.glb");
-    std::vector<size_t> level_nodes;
-    for (size_t n = 0; n < gdoc["nodes"].size(); ++n)
-      if (gdoc["nodes"][n].contains("extras") && gdoc["nodes"][n]["extras"].contains("lodkit")) level_nodes.push_back(n);
-    ASSERT_EQ(level_nodes.size(), 2u);
-    const nlohmann::json& fine = gdoc["nodes"][level_nodes[0]];
+    const std::vector<size_t> morph_levels = level_nodes(gdoc);
+    ASSERT_EQ(morph_levels.size(), 2u);
+    const nlohmann::json& fine = gdoc["nodes"][morph_levels[0]];
     ASSERT_EQ(fine["extras"]["LODKIT_geomorph"]["target"], 1);
-    const size_t fine_mesh = fine["mesh"], coarse_mesh = gdoc["nodes"][level_nodes[1]]["mesh"];
+    const size_t fine_mesh = fine["mesh"], coarse_mesh = gdoc["nodes"][morph_levels[1]]["mesh"];
     ASSERT_EQ(gdoc["meshes"][fine_mesh]["primitives"][0]["targets"].size(), 2u);
     ASSERT_EQ(gdoc["meshes"][coarse_mesh]["primitives"][0]["targets"].size(), 1u);
-    const Mesh *fine_level = nullptr, *coarse_level = nullptr;
-    for (const Primitive& p : morphed.primitives) {
-      if (p.gltf_mesh == fine_mesh) fine_level = &p.mesh;
-      if (p.gltf_mesh == coarse_mesh) coarse_level = &p.mesh;
-    }
+    const Mesh *fine_level = gltf_mesh(morphed, fine_mesh), *coarse_level = gltf_mesh(morphed, coarse_mesh);
     ASSERT_TRUE(fine_level && coarse_level);
-    Mesh local = *fine_level;
-    for (float3& p : local.positions) p = {(p.x - move.x) / 2, (p.y - move.y) / 2, (p.z - move.z) / 2};
-    std::vector<float3> blend = test::glb_morph_positions(dir / "geomorph.glb", fine_mesh, 0, 0);
-    for (float3& d : blend) d = {d.x / 2, d.y / 2, d.z / 2};
-    test::expect_points_on_torus(local, blend, "geomorph level 0, target 0");
+    torus_offsets_moved(dir / "geomorph.glb", fine_mesh, *fine_level);
     const std::vector<float3> geomorph = test::glb_morph_positions(dir / "geomorph.glb", fine_mesh, 0, 1);
     ASSERT_EQ(geomorph.size(), fine_level->vertex_count());
     for (size_t v = 0; v < geomorph.size(); ++v) {
@@ -579,7 +588,7 @@ TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
     // Level 0's weights channel: two weights per key, the clip's then 0.
     size_t channels = 0;
     for (const auto& channel : gdoc["animations"][0]["channels"]) {
-      if (channel["target"]["path"] != "weights" || channel["target"]["node"] != level_nodes[0]) continue;
+      if (channel["target"]["path"] != "weights" || channel["target"]["node"] != morph_levels[0]) continue;
       ++channels;
       const nlohmann::json& sampler = gdoc["animations"][0]["samplers"][channel["sampler"].get<size_t>()];
       const std::vector<float> weights = test::glb_floats(dir / "geomorph.glb", sampler["output"]);
@@ -616,16 +625,12 @@ TEST(CliLod, StaticLevelsMergeSeveralNodesMorphTargets) {
   const Scene out = read_scene(dir / "lod2.glb");
   const nlohmann::json doc = glb_json(dir / "lod2.glb");
   const std::array<float3, 2> centres = {torus_move, float3{5, 0, 0}};
-  size_t levels = 0;
-  for (size_t n = 0; n < doc["nodes"].size(); ++n) {
+  const std::vector<size_t> levels = level_nodes(doc);
+  for (const size_t n : levels) {
     const nlohmann::json& node = doc["nodes"][n];
-    if (!node.contains("extras") || !node["extras"].contains("lodkit")) continue;
-    ++levels;
     const size_t mesh = node["mesh"];
     ASSERT_EQ(doc["meshes"][mesh]["primitives"][0]["targets"].size(), 2u) << "node " << n;
-    const Mesh* level = nullptr;
-    for (const Primitive& p : out.primitives)
-      if (p.gltf_mesh == mesh) level = &p.mesh;
+    const Mesh* level = gltf_mesh(out, mesh);
     ASSERT_NE(level, nullptr);
     for (size_t k = 0; k < 2; ++k) {
       const std::vector<float3> offsets = test::glb_morph_positions(dir / "lod2.glb", mesh, 0, k);
@@ -667,7 +672,7 @@ TEST(CliLod, StaticLevelsMergeSeveralNodesMorphTargets) {
       EXPECT_EQ(channels, 1u) << "node " << n << " clip " << a;
     }
   }
-  EXPECT_EQ(levels, 2u);
+  EXPECT_EQ(levels.size(), 2u);
 
   // Node 1's curve as a step: no one channel can follow both.
   input.animations[0].channels.back().interpolation = Interpolation::step;
@@ -704,32 +709,21 @@ TEST(CliLod, SharedVerticesKeepOneNodesMorphTargets) {
   const Scene out = read_scene(dir / "lod.glb");
   const nlohmann::json doc = glb_json(dir / "lod.glb");
   std::set<size_t> positions, targets;
-  size_t levels = 0;
-  for (size_t n = 0; n < doc["nodes"].size(); ++n) {
+  const std::vector<size_t> levels = level_nodes(doc);
+  for (const size_t n : levels) {
     const nlohmann::json& node = doc["nodes"][n];
-    if (!node.contains("extras") || !node["extras"].contains("lodkit")) continue;
-    ++levels;
     const size_t mesh = node["mesh"];
     const nlohmann::json& prim = doc["meshes"][mesh]["primitives"][0];
     ASSERT_EQ(prim["targets"].size(), 1u) << "node " << n;
     positions.insert(prim["attributes"]["POSITION"].get<size_t>());
     targets.insert(prim["targets"][0]["POSITION"].get<size_t>());
-    const Mesh* level = nullptr;
-    for (const Primitive& p : out.primitives)
-      if (p.gltf_mesh == mesh) level = &p.mesh;
+    const Mesh* level = gltf_mesh(out, mesh);
     ASSERT_NE(level, nullptr);
-    Mesh local = *level;
-    for (float3& p : local.positions) p = {(p.x - torus_move.x) / 2, (p.y - torus_move.y) / 2, (p.z - torus_move.z) / 2};
-    std::vector<float3> offsets = test::glb_morph_positions(dir / "lod.glb", mesh);
-    for (float3& d : offsets) d = {d.x / 2, d.y / 2, d.z / 2};
     // Every offset names its own vertex: none moved off the input.
-    EXPECT_EQ(test::expect_points_on_torus(local, offsets, "level node " + std::to_string(n)), 0u) << "node " << n;
-    size_t copies = 0;
-    for (const auto& channel : doc["animations"][0]["channels"])
-      copies += channel["target"]["path"] == "weights" && channel["target"]["node"] == n;
-    EXPECT_EQ(copies, 1u) << "node " << n;
+    EXPECT_EQ(torus_offsets_moved(dir / "lod.glb", mesh, *level), 0u) << "node " << n;
+    EXPECT_EQ(weight_channels(doc, 0, n), 1u) << "node " << n;
   }
-  EXPECT_EQ(levels, 3u);
+  EXPECT_EQ(levels.size(), 3u);
   EXPECT_EQ(positions.size(), 1u);
   EXPECT_EQ(targets.size(), 1u);
   // Compressed and quantized, likewise: one target accessor (in grid steps) for all levels.
@@ -750,8 +744,8 @@ TEST(CliLod, SharedVerticesKeepOneNodesMorphTargets) {
   const nlohmann::json morph = glb_json(dir / "morph.glb");
   std::set<size_t> blends, geomorphs;
   std::vector<size_t> counts;
-  for (const nlohmann::json& node : morph["nodes"]) {
-    if (!node.contains("extras") || !node["extras"].contains("lodkit")) continue;
+  for (const size_t n : level_nodes(morph)) {
+    const nlohmann::json& node = morph["nodes"][n];
     const nlohmann::json& prim = morph["meshes"][node["mesh"].get<size_t>()]["primitives"][0];
     counts.push_back(prim["targets"].size());
     blends.insert(prim["targets"][0]["POSITION"].get<size_t>());
@@ -792,9 +786,7 @@ TEST(CliLod, SkinnedSharedVerticesWriteOneBufferWithItsBlendShapes) {
         accessors.insert(std::string(name) + std::to_string(prim["attributes"][name].get<int>()));
       ASSERT_EQ(prim["targets"].size(), 1u);
       accessors.insert("target" + std::to_string(prim["targets"][0]["POSITION"].get<int>()));
-      const Mesh* level = nullptr;
-      for (const Primitive& p : out.primitives)
-        if (p.gltf_mesh == mesh) level = &p.mesh;
+      const Mesh* level = gltf_mesh(out, mesh);
       ASSERT_NE(level, nullptr);
       EXPECT_LT(level->triangle_count(), previous);
       previous = level->triangle_count();
@@ -863,10 +855,7 @@ TEST(CliLod, InstancedMeshesGetTheirOwnChain) {
       }
       const nlohmann::json& prim = doc["meshes"][doc["nodes"][n]["mesh"].get<size_t>()]["primitives"][0];
       EXPECT_EQ(prim["targets"].size(), 1u) << n;
-      size_t copies = 0;
-      for (const auto& channel : doc["animations"][0]["channels"])
-        copies += channel["target"]["path"] == "weights" && channel["target"]["node"] == n;
-      EXPECT_EQ(copies, 1u) << n;
+      EXPECT_EQ(weight_channels(doc, 0, n), 1u) << n;
     }
     // Level 0 everywhere draws the input: the same points, in world space (within the grid's step when quantized).
     const Mesh before = flatten(read);
