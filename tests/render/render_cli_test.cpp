@@ -1,6 +1,7 @@
 // lodkit render end to end: single images, heat maps from lodkit compare, contact sheets of a
 // lodkit lod chain, turntables, determinism across processes, and the missing-driver path.
 #include <gtest/gtest.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -132,6 +133,51 @@ TEST(RenderCli, ContactSheetOfALodChain) {
   r = run_cli({"render", (dir / "cube.glb").string(), "--sheet", "-o", (dir / "x.png").string()});
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("MSFT_lod"), std::string::npos) << r.err;
+}
+
+// A file with two chains: a sphere's, and a cube's (then an icosahedron's) drawn by 5 instances
+// under a node named "crates". --chain picks by index or by name (the instanced node's, or its LOD0's); an instanced
+// level is drawn once, its instance count in the label; an unknown chain is a usage error that
+// lists them.
+TEST(RenderCli, SheetPicksOneOfSeveralChains) {
+  test::TempDir dir;
+  Scene scene = test::lod_chain_scene({shapes::icosphere(2), shapes::icosphere(1)}, {"", ""});
+  Node crates;
+  crates.name = "crates";
+  crates.translation = {10, 0, 0};
+  scene.nodes.push_back(crates);
+  scene.roots.push_back(2);
+  for (uint32_t i = 0; i < 2; ++i) {
+    Primitive prim;
+    prim.mesh = i == 0 ? shapes::cube() : shapes::icosphere(0);
+    prim.gltf_mesh = 2 + i;
+    scene.primitives.push_back(prim);
+    Node level;
+    level.name = fmt::format("crates_LOD{}", i);
+    level.mesh = int32_t(2 + i);
+    for (int k = 0; k < 5; ++k) level.gpu_instances.push_back({.translation = {float(3 * k), 0, 0}});
+    if (i == 0) level.parent = 2, level.lod_ids = {4};
+    scene.nodes.push_back(level);
+  }
+  scene.nodes[2].children = {3};
+  write_scene(scene, dir / "two.glb");
+  const auto panels = [&](const std::string& chain) {
+    const test::RunResult r = run_cli({"render", (dir / "two.glb").string(), "--sheet", "-o", (dir / "s.png").string(),
+                                       "--size", "200x100", "--json", "--chain", chain});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return nlohmann::json::parse(r.out.empty() ? "{}" : r.out)["panels"];
+  };
+  EXPECT_EQ(panels("0")[1]["triangles"], shapes::icosphere(1).triangle_count());
+  for (const char* name : {"1", "crates", "crates_LOD0"}) {
+    const nlohmann::json p = panels(name);
+    ASSERT_EQ(p.size(), 2u) << name;
+    EXPECT_EQ(p[0]["triangles"], shapes::cube().triangle_count()) << name;  // one instance
+    EXPECT_EQ(p[1]["label"], "LOD1: 20 triangles x 5 instances") << name;
+  }
+  const test::RunResult bad = run_cli({"render", (dir / "two.glb").string(), "--sheet", "-o", (dir / "s.png").string(), "--chain", "barrels"});
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("2 chains: 0 (''"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("1 ('crates_LOD0', 'crates')"), std::string::npos) << bad.err;
 }
 
 // A skinned chain posed mid-animation: both panels draw the same skinned mesh (LOD1 is a copy of

@@ -25,6 +25,7 @@ struct RenderCommand {
   double fov_degrees = 40, elevation_degrees = 20;
   uint32_t samples = 4, turntable = 0, columns = 0;
   std::string clip;  // skinned levels: the animation (name or index) to pose them in
+  std::string chain;  // --sheet: which chain (index or name)
   float time = 0;    // seconds into it
 };
 
@@ -65,22 +66,48 @@ struct ChainLevel {
 };
 
 // The levels of a lodkit LOD chain: the node carrying MSFT_lod, then the nodes it lists, each with
-// the triangles and error its extras state (lodkit lod writes them).
+// the triangles and error its extras state (lodkit lod writes them), and an instanced level drawn
+// once, its instance count in the label.
 // With `clip`, skinned levels are posed at `time` seconds into it (skinned by the CPU; a skinned
 // mesh ignores its node's transform, as glTF says).
-std::vector<ChainLevel> read_chain(const std::string& path, const std::string& clip, float time) {
+// `chain` picks one of several (a skinned character's, an instanced mesh's, the rest of the scene):
+// its index in file order, or a name, the LOD0 node's or the node it stands for (a skinned node, or
+// an instanced chain's LOD0's parent); empty: the first.
+std::vector<ChainLevel> read_chain(const std::string& path, const std::string& chain, const std::string& clip, float time) {
   const FileFormat format = format_from_path(path);
   if (format != FileFormat::glb && format != FileFormat::gltf)
     throw_usage("--sheet reads a LOD chain written by lodkit lod (.glb or .gltf)");
   const Scene scene = read_scene(path);
-  // The first node with MSFT_lod ids (the reader checked they name nodes), then the nodes it lists.
-  std::vector<int64_t> order;
-  for (size_t n = 0; n < scene.nodes.size() && order.empty(); ++n) {
-    if (scene.nodes[n].lod_ids.empty()) continue;
-    order.push_back(int64_t(n));
-    order.insert(order.end(), scene.nodes[n].lod_ids.begin(), scene.nodes[n].lod_ids.end());
+  // The chosen node with MSFT_lod ids (the reader checked they name nodes), then the nodes it lists.
+  std::vector<size_t> firsts;
+  for (size_t n = 0; n < scene.nodes.size(); ++n)
+    if (!scene.nodes[n].lod_ids.empty()) firsts.push_back(n);
+  if (firsts.empty()) throw_bad_input(path, "no LOD chain: no node has the MSFT_lod extension (make one with lodkit lod)");
+  const auto names = [&](size_t n) {
+    std::vector<std::string> out = {scene.nodes[n].name};
+    if (const int32_t parent = scene.nodes[n].parent; parent >= 0 && size_t(parent) < scene.nodes.size())
+      out.push_back(scene.nodes[size_t(parent)].name);
+    return out;
+  };
+  size_t first = firsts[0];
+  if (!chain.empty()) {
+    const bool index = std::all_of(chain.begin(), chain.end(), [](char c) { return c >= '0' && c <= '9'; }) && chain.size() < 9;
+    const auto found = std::find_if(firsts.begin(), firsts.end(), [&](size_t n) {
+      const std::vector<std::string> known = names(n);
+      return std::find(known.begin(), known.end(), chain) != known.end();
+    });
+    if (index && std::stoul(chain) < firsts.size()) {
+      first = firsts[std::stoul(chain)];
+    } else if (found != firsts.end()) {
+      first = *found;
+    } else {
+      std::string listed;
+      for (size_t k = 0; k < firsts.size(); ++k) listed += fmt::format("{}{} ('{}')", k ? ", " : "", k, fmt::join(names(firsts[k]), "', '"));
+      throw_usage(fmt::format("--chain {}: {} has {} chain{}: {}", chain, path, firsts.size(), firsts.size() == 1 ? "" : "s", listed));
+    }
   }
-  if (order.empty()) throw_bad_input(path, "no LOD chain: no node has the MSFT_lod extension (make one with lodkit lod)");
+  std::vector<int64_t> order = {int64_t(first)};
+  order.insert(order.end(), scene.nodes[first].lod_ids.begin(), scene.nodes[first].lod_ids.end());
 
   std::vector<ChainLevel> levels;
   for (size_t i = 0; i < order.size(); ++i) {
@@ -91,6 +118,7 @@ std::vector<ChainLevel> read_chain(const std::string& path, const std::string& c
     level.nodes.push_back(node);
     level.nodes[0].children.clear();
     level.nodes[0].parent = -1;
+    level.nodes[0].gpu_instances.clear();  // an instanced level: one instance, which shows the level best
     level.roots = {0};
     for (const Primitive& prim : scene.primitives)
       if (int32_t(prim.gltf_mesh) == node.mesh) level.primitives.push_back(prim);
@@ -107,6 +135,7 @@ std::vector<ChainLevel> read_chain(const std::string& path, const std::string& c
     const nlohmann::json extras = nlohmann::json::parse(node.extras_json.empty() ? "{}" : node.extras_json);
     const nlohmann::json lodkit = extras.is_object() ? extras.value("lodkit", nlohmann::json::object()) : nlohmann::json();
     out.label = fmt::format("LOD{}: {} triangles", i, thousands(out.mesh.triangle_count()));
+    if (!node.gpu_instances.empty()) out.label += fmt::format(" x {} instances", thousands(node.gpu_instances.size()));
     if (lodkit.is_object() && lodkit.contains("error") && lodkit["error"].is_number()) {
       out.label += fmt::format(", error {:.3g}", lodkit["error"].get<double>());
       if (lodkit.contains("relative_error") && lodkit["relative_error"].is_number())
@@ -154,6 +183,9 @@ Command register_render(CLI::App& root) {
   app->add_option("--columns", o->columns, "With --sheet: panels per row (default: the most square grid)");
   app->add_option("--turntable", o->turntable, "Write N frames around the model into the output folder (frame-000.png ...)");
   app->add_option("--elevation", o->elevation_degrees, "With --turntable: camera height above the horizon, degrees (default 20)");
+  app->add_option("--chain", o->chain,
+                  "With --sheet: which chain of a file with several (its index, or the name of its skinned or instanced "
+                  "node or LOD0 node; default the first)");
   app->add_option("--clip", o->clip, "With --sheet: pose skinned levels in this animation (name or index)");
   app->add_option("--time", o->time, "With --clip: seconds into the animation (default 0)");
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
@@ -163,6 +195,7 @@ Command register_render(CLI::App& root) {
             parse_size(o->size, width, height);
             if (o->sheet && o->turntable) throw_usage("--sheet and --turntable do not go together");
             if (!o->clip.empty() && !o->sheet) throw_usage("--clip poses the skinned levels of a --sheet");
+            if (!o->chain.empty() && !o->sheet) throw_usage("--chain picks the chain of a --sheet");
             if (!(o->fov_degrees > 0 && o->fov_degrees < 180)) throw_usage("--fov must be in (0, 180) degrees");
             if (!(std::abs(o->elevation_degrees) < 90)) throw_usage("--elevation must be within (-90, 90) degrees");
             if (o->samples == 0) throw_usage("--samples must be at least 1");
@@ -182,7 +215,7 @@ Command register_render(CLI::App& root) {
             {
               ProgressBar bar("loading");
               if (o->sheet) {
-                levels = read_chain(o->input, o->clip, o->time);
+                levels = read_chain(o->input, o->chain, o->clip, o->time);
               } else {
                 levels.push_back({read_mesh(o->input, bar.read_options()), ""});
               }
