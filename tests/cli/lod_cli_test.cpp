@@ -800,6 +800,31 @@ TEST(CliLod, SkinnedSharedVerticesWriteOneBufferWithItsBlendShapes) {
   }
 }
 
+// How many of `mesh`'s positions have no position of `reference` within `tolerance` (a grid of
+// cells that size, each point checked against its own and the neighbouring cells).
+size_t points_off(const Mesh& mesh, const Mesh& reference, double tolerance) {
+  const auto cell = [&](const float3& p) {
+    return std::array<int64_t, 3>{int64_t(std::floor(p.x / tolerance)), int64_t(std::floor(p.y / tolerance)),
+                                  int64_t(std::floor(p.z / tolerance))};
+  };
+  std::map<std::array<int64_t, 3>, std::vector<float3>> cells;
+  for (const float3& p : reference.positions) cells[cell(p)].push_back(p);
+  size_t off = 0;
+  for (const float3& p : mesh.positions) {
+    const std::array<int64_t, 3> c = cell(p);
+    bool near = false;
+    for (int64_t dx = -1; dx <= 1 && !near; ++dx)
+      for (int64_t dy = -1; dy <= 1 && !near; ++dy)
+        for (int64_t dz = -1; dz <= 1 && !near; ++dz) {
+          const auto it = cells.find({c[0] + dx, c[1] + dy, c[2] + dz});
+          if (it == cells.end()) continue;
+          for (const float3& q : it->second) near = near || std::hypot(p.x - q.x, p.y - q.y, p.z - q.z) <= tolerance;
+        }
+    off += !near;
+  }
+  return off;
+}
+
 // A forest: a morphing torus drawn 30 times by one instanced node (EXT_mesh_gpu_instancing, its
 // weight driven by a clip), beside a sphere drawn by a plain node. The torus gets a chain of its
 // own, in its own space (one torus's triangles per level, not 30), whose level nodes draw the 30
@@ -866,28 +891,54 @@ TEST(CliLod, InstancedMeshesGetTheirOwnChain) {
     float3 lo, hi;
     bounding_box(before, lo, hi);
     const double tolerance = packed ? 1e-3 * std::hypot(hi.x - lo.x, hi.y - lo.y, hi.z - lo.z) : 1e-4;
-    // Every output point has an input point within the tolerance (cells of that size, and their neighbours).
-    const auto cell = [&](const float3& p) {
-      return std::array<int64_t, 3>{int64_t(std::floor(p.x / tolerance)), int64_t(std::floor(p.y / tolerance)),
-                                    int64_t(std::floor(p.z / tolerance))};
-    };
-    std::map<std::array<int64_t, 3>, std::vector<float3>> cells;
-    for (const float3& p : before.positions) cells[cell(p)].push_back(p);
-    size_t far = 0;
-    for (const float3& p : after.positions) {
-      const std::array<int64_t, 3> c = cell(p);
-      bool near = false;
-      for (int64_t dx = -1; dx <= 1 && !near; ++dx)
-        for (int64_t dy = -1; dy <= 1 && !near; ++dy)
-          for (int64_t dz = -1; dz <= 1 && !near; ++dz) {
-            const auto it = cells.find({c[0] + dx, c[1] + dy, c[2] + dz});
-            if (it == cells.end()) continue;
-            for (const float3& q : it->second) near = near || std::hypot(p.x - q.x, p.y - q.y, p.z - q.z) <= tolerance;
-          }
-      far += !near;
-    }
-    EXPECT_EQ(far, 0u);
+    EXPECT_EQ(points_off(after, before, tolerance), 0u);
   }
+}
+
+// One torus drawn by two instanced nodes (3 and 2 instances) and a plain node, beside a sphere: the
+// torus gets one chain, whose levels (the same glTF meshes) each of the three nodes draws under
+// it, with its own instances (none for the plain one); the sphere gets the static chain. Level 0
+// draws the input in place.
+TEST(CliLod, AMeshDrawnByManyNodesGetsOneChain) {
+  test::TempDir dir;
+  Scene input = one_morphing_node();
+  input.animations.clear();
+  Primitive ball;
+  ball.mesh = shapes::icosphere(2), ball.gltf_mesh = 1;
+  input.primitives.push_back(ball);
+  input.nodes[0].name = "a";
+  for (int k = 0; k < 3; ++k) input.nodes[0].gpu_instances.push_back({.translation = {float(6 * k), 0, 0}});
+  Node b = input.nodes[0], c = input.nodes[0], d;
+  b.name = "b", b.translation = {0, 10, 0}, b.gpu_instances.resize(2);
+  c.name = "c", c.translation = {0, -10, 0}, c.gpu_instances.clear();
+  d.name = "ball", d.mesh = 1, d.translation = {0, 0, -10};
+  input.nodes.insert(input.nodes.end(), {b, c, d});
+  input.roots = {0, 1, 2, 3};
+  write_scene(input, dir / "many.glb");
+  const test::RunResult r = test::run_cli({"lod", (dir / "many.glb").string(), "-o", (dir / "lod.glb").string(), "--ratios", "1,0.25", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  test::expect_valid_gltf({dir / "lod.glb"});
+  const nlohmann::json report = nlohmann::json::parse(r.out);
+  ASSERT_EQ(report["instanced"].size(), 1u);
+  EXPECT_EQ(report["instanced"][0]["node"], "a, b, c");
+  EXPECT_EQ(report["instanced"][0]["instances"], 6);
+  EXPECT_EQ(report["instanced"][0]["levels"][0]["triangles"], input.primitives[0].mesh.triangle_count());
+  EXPECT_EQ(report["levels"][0]["triangles"], ball.mesh.triangle_count());
+  const Scene out = read_scene(dir / "lod.glb");
+  std::set<std::vector<int32_t>> level_meshes;  // per node: its levels' glTF meshes
+  for (size_t n = 0; n < 3; ++n) {
+    ASSERT_EQ(out.nodes[n].children.size(), 1u) << n;
+    EXPECT_EQ(out.nodes[n].mesh, -1) << n;
+    const Node& lod0 = out.nodes[size_t(out.nodes[n].children[0])];
+    ASSERT_EQ(lod0.lod_ids.size(), 1u) << n;
+    EXPECT_EQ(lod0.gpu_instances.size(), input.nodes[n].gpu_instances.size()) << n;
+    EXPECT_EQ(out.nodes[size_t(lod0.lod_ids[0])].gpu_instances.size(), input.nodes[n].gpu_instances.size()) << n;
+    level_meshes.insert({lod0.mesh, out.nodes[size_t(lod0.lod_ids[0])].mesh});
+  }
+  EXPECT_EQ(level_meshes.size(), 1u);
+  const Mesh before = flatten(read_scene(dir / "many.glb")), after = flatten(out);
+  EXPECT_EQ(after.triangle_count(), before.triangle_count());
+  EXPECT_EQ(points_off(after, before, 1e-4), 0u);
 }
 
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {

@@ -3,6 +3,7 @@
 // MSFT_screencoverage in its extras, so three.js / Babylon-style loaders switch levels by
 // themselves; every level's error and switch distance are in its node's extras.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <chrono>
@@ -10,6 +11,8 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <unordered_map>
@@ -180,26 +183,32 @@ Scene chain_document(const Scene* source, const std::vector<std::string>& materi
 }
 
 // Where a chain's nodes go: named `prefix`LODi, the first under `parent` (a new root when -1), each
-// drawn once per instance of `instances` (an instanced node's chain, in its mesh's own space).
+// drawn once per instance of `instances` (a chain in its mesh's own space, for a node drawing that
+// mesh), with the morph weights of node `weights_of` (-1: the chain's own morphing nodes'). With
+// `meshes` set, the levels' glTF meshes are those an earlier add_chain of the chain returned.
 struct ChainPlace {
   std::string prefix;
   int32_t parent = -1;
   std::vector<Node::GpuInstance> instances;
+  int32_t weights_of = -1;
+  std::optional<uint32_t> meshes;
 };
 
-// Appends a chain to a chain_document: one new glTF mesh per level with a primitive per material,
-// and one node per level, the first listing the others (MSFT_lod).
-void add_chain(Scene& scene, const ChainReport& r, const LevelTargets& targets, const ChainPlace& place) {
+// Appends a chain to a chain_document: one new glTF mesh per level with a primitive per material
+// (unless `place.meshes` names them), and one node per level, the first listing the others
+// (MSFT_lod). Returns the first level's glTF mesh.
+uint32_t add_chain(Scene& scene, const ChainReport& r, const LevelTargets& targets, const ChainPlace& place) {
   const LodChain& chain = r.chain;
   uint32_t mesh_base = scene.source ? scene.gltf_mesh_count : 0;
   for (const Primitive& p : scene.primitives) mesh_base = std::max(mesh_base, p.gltf_mesh + 1);
+  if (place.meshes) mesh_base = *place.meshes;
   const int32_t node_base = int32_t(scene.nodes.size());
   const size_t first_primitive = scene.primitives.size();
   const auto material = [&](const Mesh& level, uint32_t id) {
     if (level.materials.empty()) return scene.source || level.material_names.empty() ? -1 : 0;
     return scene.source ? int32_t(id) - 1 : int32_t(id);
   };
-  for (size_t i = 0; i < chain.levels.size(); ++i) {
+  for (size_t i = 0; i < chain.levels.size() && !place.meshes; ++i) {
     const Mesh& level = chain.levels[i].mesh;
     uint32_t next_primitive = 0;  // of level i's glTF mesh
     const auto add = [&](Primitive prim, uint32_t id) {
@@ -259,7 +268,7 @@ void add_chain(Scene& scene, const ChainReport& r, const LevelTargets& targets, 
                                          {"switch_distance", r.distances[i]}}}};
     if (i < chain.morphs.size())
       extras["LODKIT_geomorph"] = {{"target", targets.at(i).size()}, {"to_node", node_base + int32_t(i) + 1}};
-    if (!targets.at(i).empty()) node.morph_weights_of = targets.nodes;
+    if (!targets.at(i).empty()) node.morph_weights_of = place.weights_of >= 0 ? std::vector<int32_t>{place.weights_of} : targets.nodes;
     if (!chain.shared.prefix.empty()) extras["lodkit"]["vertex_prefix"] = chain.shared.prefix[i];
     if (i == 0) {
       for (size_t k = 1; k < chain.levels.size(); ++k) node.lod_ids.push_back(node_base + int32_t(k));
@@ -270,6 +279,7 @@ void add_chain(Scene& scene, const ChainReport& r, const LevelTargets& targets, 
     scene.nodes.push_back(std::move(node));
   }
   if (place.parent < 0) scene.roots.push_back(node_base);
+  return mesh_base;
 }
 
 // Several morphing nodes: the levels take their weights in turn, one channel per clip
@@ -495,13 +505,17 @@ StaticChain build_static(Mesh mesh, const Scene* scene, LodOptions options, cons
   return out;
 }
 
-// The nodes whose mesh gets a chain of its own: drawn once per GPU instance (EXT_mesh_gpu_instancing),
-// without a skin, reachable from the scene's roots, and the only node drawing that mesh. Baking their
-// instances into the static chain would multiply its triangles by the instance count.
-std::vector<int32_t> instanced_nodes(const Scene& scene) {
-  std::map<int32_t, size_t> drawn_by;  // glTF mesh -> nodes drawing it
-  for (const Node& node : scene.nodes)
-    if (node.mesh >= 0) ++drawn_by[node.mesh];
+// A glTF mesh that gets a chain of its own, in its own space: one that an instanced node draws
+// (EXT_mesh_gpu_instancing), with triangles and no skin. Baking its instances into the static
+// chain would multiply its triangles by the instance count. `nodes`: the nodes that draw it (from
+// the scene's roots), instanced or not, each of which gets the chain's levels.
+struct InstancedMesh {
+  int32_t mesh = -1;
+  std::vector<int32_t> nodes;
+  size_t instances = 0;  // drawn, over those nodes
+};
+
+std::vector<InstancedMesh> instanced_meshes(const Scene& scene) {
   std::vector<bool> reached(scene.nodes.size(), false);
   std::vector<int32_t> stack = scene.roots;
   while (!stack.empty()) {
@@ -511,14 +525,24 @@ std::vector<int32_t> instanced_nodes(const Scene& scene) {
     reached[size_t(n)] = true;
     for (const int32_t c : scene.nodes[size_t(n)].children) stack.push_back(c);
   }
-  std::vector<int32_t> out;
+  std::map<int32_t, InstancedMesh> meshes;  // by glTF mesh: deterministic order
+  std::set<int32_t> instanced, skinned;
   for (size_t n = 0; n < scene.nodes.size(); ++n) {
     const Node& node = scene.nodes[n];
-    const bool has_triangles = std::any_of(scene.primitives.begin(), scene.primitives.end(), [&](const Primitive& p) {
-      return int32_t(p.gltf_mesh) == node.mesh && p.mesh.triangle_count() > 0;
+    if (!reached[n] || node.mesh < 0) continue;
+    InstancedMesh& m = meshes[node.mesh];
+    m.mesh = node.mesh;
+    m.nodes.push_back(int32_t(n));
+    m.instances += std::max<size_t>(1, node.gpu_instances.size());
+    if (!node.gpu_instances.empty()) instanced.insert(node.mesh);
+    if (node.skin >= 0) skinned.insert(node.mesh);
+  }
+  std::vector<InstancedMesh> out;
+  for (auto& [mesh, m] : meshes) {
+    const bool has_triangles = std::any_of(scene.primitives.begin(), scene.primitives.end(), [&, mesh = mesh](const Primitive& p) {
+      return int32_t(p.gltf_mesh) == mesh && p.mesh.triangle_count() > 0;
     });
-    if (reached[n] && node.mesh >= 0 && !node.gpu_instances.empty() && node.skin < 0 && drawn_by[node.mesh] == 1 && has_triangles)
-      out.push_back(int32_t(n));
+    if (instanced.count(mesh) && !skinned.count(mesh) && has_triangles) out.push_back(std::move(m));
   }
   return out;
 }
@@ -586,17 +610,19 @@ Command register_lod(CLI::App& root) {
               else mesh = read_mesh(o->input, bar.read_options());
             }
             const std::vector<SkinnedPrimitive> skinned = scene.source ? skinned_primitives(scene) : std::vector<SkinnedPrimitive>{};
-            const std::vector<int32_t> instanced = scene.source && skinned.empty() ? instanced_nodes(scene) : std::vector<int32_t>{};
+            const std::vector<InstancedMesh> instanced =
+                scene.source && skinned.empty() ? instanced_meshes(scene) : std::vector<InstancedMesh>{};
             Scene rest;  // the static scene without the instanced meshes, for flattening
             if (scene.source && skinned.empty()) {
               rest = scene;
-              for (const int32_t n : instanced) rest.nodes[size_t(n)].mesh = -1;
+              for (const InstancedMesh& m : instanced)
+                for (const int32_t n : m.nodes) rest.nodes[size_t(n)].mesh = -1;
               mesh = flatten(rest);
             }
             const double load_seconds = seconds_since(start);
 
             std::vector<ChainReport> reports;
-            std::vector<StaticChain> chains;  // the static chain (if any geometry is not instanced), then one per instanced node
+            std::vector<StaticChain> chains;  // the static chain (if any geometry is not instanced), then one per instanced mesh
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
               if (o->morph) throw_usage("--morph: skinned input morphs at run time (lod::SkinnedGeomorph), not as glTF morph targets");
@@ -609,18 +635,24 @@ Command register_lod(CLI::App& root) {
                 validate(mesh, o->input);
                 chains.push_back(build_static(std::move(mesh), scene.source ? &rest : nullptr, options, *o, "building LODs"));
               }
-              // Each instanced mesh: its own chain in its own space (its node alone, untransformed).
-              Scene solo = rest;
-              for (const int32_t n : instanced) {
+              // Each instanced mesh: its own chain in its own space (drawn once by its first node,
+              // untransformed, and nothing else).
+              Scene solo = scene;
+              for (Node& node : solo.nodes) node.mesh = -1;
+              for (const InstancedMesh& m : instanced) {
+                const int32_t n = m.nodes[0];
                 Node& node = solo.nodes[size_t(n)];
-                node.mesh = scene.nodes[size_t(n)].mesh, node.gpu_instances.clear();
+                node.mesh = m.mesh, node.gpu_instances.clear();
                 node.has_matrix = false, node.translation = {}, node.rotation = {0, 0, 0, 1}, node.scale = {1, 1, 1};
                 solo.roots = {n};
-                const std::string name = scene.nodes[size_t(n)].name.empty() ? fmt::format("node {}", n) : scene.nodes[size_t(n)].name;
+                std::vector<std::string> names;
+                for (const int32_t k : m.nodes)
+                  names.push_back(scene.nodes[size_t(k)].name.empty() ? fmt::format("node {}", k) : scene.nodes[size_t(k)].name);
+                const std::string name = fmt::format("{}", fmt::join(names, ", "));
                 chains.push_back(build_static(flatten(solo), &solo, options, *o, fmt::format("building LODs of '{}'", name)));
                 chains.back().report.node = name;
-                chains.back().report.instances = scene.nodes[size_t(n)].gpu_instances.size();
-                node.mesh = -1;
+                chains.back().report.instances = m.instances;
+                node = scene.nodes[size_t(n)], node.mesh = -1;
               }
               if (!o->lpm.empty() && (chains.empty() || chains[0].report.instances))
                 throw_usage("--lpm: all of the input's geometry is instanced (EXT_mesh_gpu_instancing)");
@@ -634,13 +666,16 @@ Command register_lod(CLI::App& root) {
               write_scene(skinned_scene(std::move(scene), skinned, reports), o->output, o->gltf);
             } else {
               Scene out = chain_document(scene.source ? &scene : nullptr, reports[0].chain.levels.front().mesh.material_names);
-              for (size_t c = 0; c < chains.size(); ++c) {
-                ChainPlace place;
-                if (reports[c].instances) {
-                  const int32_t n = instanced[c - (chains.size() - instanced.size())];
-                  place = {reports[c].node + "_", n, scene.nodes[size_t(n)].gpu_instances};
+              const size_t first_instanced = chains.size() - instanced.size();
+              for (size_t c = 0; c < first_instanced; ++c) add_chain(out, reports[c], chains[c].targets, {});
+              for (size_t c = first_instanced; c < chains.size(); ++c) {
+                // Every node that drew the mesh draws the chain: its own level nodes, under it.
+                std::optional<uint32_t> meshes;
+                for (const int32_t n : instanced[c - first_instanced].nodes) {
+                  const Node& node = scene.nodes[size_t(n)];
+                  const std::string name = node.name.empty() ? fmt::format("node {}", n) : node.name;
+                  meshes = add_chain(out, reports[c], chains[c].targets, {name + "_", n, node.gpu_instances, n, meshes});
                 }
-                add_chain(out, reports[c], chains[c].targets, place);
               }
               write_scene(out, o->output, o->gltf);
               if (!o->lpm.empty()) {
@@ -674,7 +709,7 @@ Command register_lod(CLI::App& root) {
               fmt::print("{}\n", j.dump(2));
             } else {
               for (const ChainReport& r : reports) {
-                if (r.instances) fmt::print("instanced node '{}' ({} instances)\n", r.node, r.instances);
+                if (r.instances) fmt::print("instanced mesh of '{}' ({} instances)\n", r.node, r.instances);
                 else if (!r.node.empty()) fmt::print("skinned node '{}' ({} mode, {} poses)\n", r.node, o->skin_mode, o->poses);
                 else if (reports.size() > 1) fmt::print("the rest of the scene\n");
                 fmt::print("{:<6}{:>12}{:>12}{:>14}{:>11}{:>14}{:>14}\n", "level", "triangles", "vertices", "error", "% diag",
