@@ -612,12 +612,20 @@ Command register_lod(CLI::App& root) {
             const std::vector<SkinnedPrimitive> skinned = scene.source ? skinned_primitives(scene) : std::vector<SkinnedPrimitive>{};
             const std::vector<InstancedMesh> instanced =
                 scene.source && skinned.empty() ? instanced_meshes(scene) : std::vector<InstancedMesh>{};
-            Scene rest;  // the static scene without the instanced meshes, for flattening
+            // The scenes flattened below differ from the input in their nodes and roots only: each
+            // borrows it with those swapped in (a copy of the primitives would double a large
+            // input's memory).
+            const auto with_nodes = [&](std::vector<Node> nodes, std::vector<int32_t> roots, auto&& use) {
+              std::swap(scene.nodes, nodes), std::swap(scene.roots, roots);
+              use(static_cast<const Scene&>(scene));
+              std::swap(scene.nodes, nodes), std::swap(scene.roots, roots);
+            };
+            std::vector<Node> static_nodes;  // the input's, without the instanced meshes
             if (scene.source && skinned.empty()) {
-              rest = scene;
+              static_nodes = scene.nodes;
               for (const InstancedMesh& m : instanced)
-                for (const int32_t n : m.nodes) rest.nodes[size_t(n)].mesh = -1;
-              mesh = flatten(rest);
+                for (const int32_t n : m.nodes) static_nodes[size_t(n)].mesh = -1;
+              with_nodes(static_nodes, scene.roots, [&](const Scene& view) { mesh = flatten(view); });
             }
             const double load_seconds = seconds_since(start);
 
@@ -633,23 +641,29 @@ Command register_lod(CLI::App& root) {
             } else {
               if (instanced.empty() || mesh.triangle_count() > 0) {
                 validate(mesh, o->input);
-                chains.push_back(build_static(std::move(mesh), scene.source ? &rest : nullptr, options, *o, "building LODs"));
+                if (scene.source)
+                  with_nodes(static_nodes, scene.roots, [&](const Scene& view) {
+                    chains.push_back(build_static(std::move(mesh), &view, options, *o, "building LODs"));
+                  });
+                else
+                  chains.push_back(build_static(std::move(mesh), nullptr, options, *o, "building LODs"));
               }
               // Each instanced mesh: its own chain in its own space (drawn once by its first node,
               // untransformed, and nothing else).
-              Scene solo = scene;
-              for (Node& node : solo.nodes) node.mesh = -1;
+              std::vector<Node> solo = scene.nodes;
+              for (Node& node : solo) node.mesh = -1;
               for (const InstancedMesh& m : instanced) {
                 const int32_t n = m.nodes[0];
-                Node& node = solo.nodes[size_t(n)];
+                Node& node = solo[size_t(n)];
                 node.mesh = m.mesh, node.gpu_instances.clear();
                 node.has_matrix = false, node.translation = {}, node.rotation = {0, 0, 0, 1}, node.scale = {1, 1, 1};
-                solo.roots = {n};
                 std::vector<std::string> names;
                 for (const int32_t k : m.nodes)
                   names.push_back(scene.nodes[size_t(k)].name.empty() ? fmt::format("node {}", k) : scene.nodes[size_t(k)].name);
                 const std::string name = fmt::format("{}", fmt::join(names, ", "));
-                chains.push_back(build_static(flatten(solo), &solo, options, *o, fmt::format("building LODs of '{}'", name)));
+                with_nodes(solo, {n}, [&](const Scene& view) {
+                  chains.push_back(build_static(flatten(view), &view, options, *o, fmt::format("building LODs of '{}'", name)));
+                });
                 chains.back().report.node = name;
                 chains.back().report.instances = m.instances;
                 node = scene.nodes[size_t(n)], node.mesh = -1;
