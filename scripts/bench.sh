@@ -10,6 +10,7 @@
 #   scripts/bench.sh optimize [--quick] [--no-big] [RUNS=5]
 #   scripts/bench.sh render [RUNS=5]
 #   scripts/bench.sh compress [RUNS=5]
+#   scripts/bench.sh instanced [RUNS=3]
 #
 # io: loads a binary PLY and an OBJ of >= 3M triangles (bunny00.off subdivided 1->4) with lodkit and
 # with Assimp, each loader in its own process under /usr/bin/time -v; prints a markdown table of
@@ -53,6 +54,11 @@
 # load time and peak memory, plain against compressed (bench/compress/run.py); writes
 # bench/results/compress.json.
 #
+# instanced: lodkit lod on a forest of 100 tori drawn as GPU instances (EXT_mesh_gpu_instancing: one
+# chain in the torus's space) against the same forest as 100 plain nodes (one world-space chain):
+# median time, peak RSS, output size, level triangles, and level 0 against the input
+# (bench/lod/instanced.py); writes bench/results/instanced.json.
+#
 # The build is the release preset (build/release); LODKIT_BENCH_BUILD=DIR uses another configured
 # build directory instead.
 set -euo pipefail
@@ -60,7 +66,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 usage() {
-  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5] | compress [RUNS=5] | morphs [RUNS=3]" >&2
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5] | compress [RUNS=5] | morphs [RUNS=3] | instanced [RUNS=3]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -285,6 +291,22 @@ area_compress() {
   echo "whole run: $((SECONDS - started)) s"
 }
 
+# ---- instanced: lod on a forest, GPU instances against plain nodes ---------------------------------
+area_instanced() {
+  [ $# -le 1 ] || usage
+  local runs=${1:-3} started=$SECONDS
+  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  configure
+  build_targets lodkit_cli
+  echo
+  machine_line
+  echo
+  mkdir -p bench/results
+  python3 bench/lod/instanced.py "$build/lodkit" bench/results/instanced.json --runs "$runs"
+  echo
+  echo "whole run: $((SECONDS - started)) s"
+}
+
 # ---- morphs: a blend shape carried through simplify (lod::vertex_blends), plain and through the forms
 area_morphs() {
   [ $# -le 1 ] || usage
@@ -390,5 +412,6 @@ case $area in
   render) area_render "$@" ;;
   compress) area_compress "$@" ;;
   morphs) area_morphs "$@" ;;
+  instanced) area_instanced "$@" ;;
   *) usage ;;
 esac
