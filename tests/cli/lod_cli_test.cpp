@@ -936,6 +936,19 @@ TEST(CliLod, AMeshDrawnByManyNodesGetsOneChain) {
     level_meshes.insert({lod0.mesh, out.nodes[size_t(lod0.lod_ids[0])].mesh});
   }
   EXPECT_EQ(level_meshes.size(), 1u);
+  // lodkit info lists the four chains: the sphere's, then the torus's under a, b and c.
+  const nlohmann::json info = nlohmann::json::parse(test::run_cli({"info", "--json", (dir / "lod.glb").string()}).out);
+  const nlohmann::json& chains = info["gltf"]["lod_chains"];
+  ASSERT_EQ(chains.size(), 4u);
+  EXPECT_EQ(chains[0]["triangles"][0], ball.mesh.triangle_count());
+  const std::array<const char*, 3> names = {"a_LOD0", "b_LOD0", "c_LOD0"};
+  const std::array<size_t, 3> instances = {3, 2, 1};
+  for (size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(chains[k + 1]["node"], names[k]);
+    EXPECT_EQ(chains[k + 1]["instances"], instances[k]);
+    EXPECT_EQ(chains[k + 1]["triangles"], chains[1]["triangles"]);
+    EXPECT_EQ(chains[k + 1]["triangles"][0], input.primitives[0].mesh.triangle_count());
+  }
   const Mesh before = flatten(read_scene(dir / "many.glb")), after = flatten(out);
   EXPECT_EQ(after.triangle_count(), before.triangle_count());
   EXPECT_EQ(points_off(after, before, 1e-4), 0u);

@@ -83,6 +83,31 @@ std::pair<size_t, size_t> gpu_instance_counts(const Scene& scene) {
   return {instances, nodes};
 }
 
+// MSFT_lod chains (lodkit lod writes them): per node that lists coarser levels, its name, each
+// level's triangles (its mesh drawn once) and the instances each level is drawn with.
+struct LodChainInfo {
+  std::string node;
+  std::vector<uint64_t> triangles;
+  size_t instances = 0;
+};
+
+std::vector<LodChainInfo> lod_chains(const Scene& scene) {
+  const auto triangles = [&](int32_t mesh) {
+    uint64_t t = 0;
+    for (const Primitive& p : scene.primitives)
+      if (int32_t(p.gltf_mesh) == mesh) t += p.mesh.triangle_count();
+    return t;
+  };
+  std::vector<LodChainInfo> out;
+  for (const Node& node : scene.nodes) {
+    if (node.lod_ids.empty()) continue;
+    LodChainInfo& c = out.emplace_back(LodChainInfo{node.name, {triangles(node.mesh)}, std::max<size_t>(1, node.gpu_instances.size())});
+    for (const int32_t id : node.lod_ids)
+      c.triangles.push_back(id >= 0 && size_t(id) < scene.nodes.size() ? triangles(scene.nodes[size_t(id)].mesh) : 0);
+  }
+  return out;
+}
+
 void print_table(const InfoOptions& o, FileFormat format, const Scene& scene, const Mesh& mesh, const MeshStats& s,
                  double load_seconds) {
   auto row = [](const char* key, const std::string& value) { fmt::print("{:<24}{}\n", key, value); };
@@ -101,6 +126,9 @@ void print_table(const InfoOptions& o, FileFormat format, const Scene& scene, co
       row("glTF morph targets", fmt::format("{} on {} primitive{}", targets, primitives, primitives == 1 ? "" : "s"));
     if (const auto [instances, nodes] = gpu_instance_counts(scene); instances != 0)
       row("glTF GPU instances", fmt::format("{} on {} node{}", instances, nodes, nodes == 1 ? "" : "s"));
+    for (const LodChainInfo& c : lod_chains(scene))
+      row("glTF LOD chain", fmt::format("'{}': {} triangles{}", c.node, fmt::join(c.triangles, " > "),
+                                        c.instances > 1 ? fmt::format(" (x {} instances)", c.instances) : ""));
   }
   row("vertices", std::to_string(s.vertices));
   row("triangles", std::to_string(s.triangles));
@@ -175,6 +203,12 @@ Command register_info(CLI::App& root) {
                              {"morphing_primitives", morphing_primitives},
                              {"gpu_instances", instances},
                              {"instanced_nodes", instanced_nodes}};
+              if (scene.source) {
+                nlohmann::json chains = nlohmann::json::array();
+                for (const LodChainInfo& c : lod_chains(scene))
+                  chains.push_back({{"node", c.node}, {"triangles", c.triangles}, {"instances", c.instances}});
+                j["gltf"]["lod_chains"] = chains;
+              }
               fmt::print("{}\n", j.dump(2));
             } else {
               print_table(o, format, scene, mesh, s, load_seconds);
