@@ -168,6 +168,9 @@ struct Animation {
   std::vector<AnimationChannel> channels;
 };
 
+// The weights channel of `clip` that drives `node` (the first, should there be several), or null.
+const AnimationChannel* weights_channel(const Animation& clip, int32_t node);
+
 struct GltfSource;  // opaque: the parsed source document (src/io/gltf.cpp)
 
 struct Scene {

@@ -1681,6 +1681,10 @@ void place_position_grid(tg::Model& model, std::vector<uint8_t>& bin, BinWriter&
   }
 }
 
+const char* interpolation_name(Interpolation i) {
+  return i == Interpolation::step ? "STEP" : i == Interpolation::linear ? "LINEAR" : "CUBICSPLINE";
+}
+
 // Appends `values` to `data`, which becomes the model's buffer `buffer` (pushed by the caller once
 // done), as a new float accessor of `type`; with its bounds when `bounds` (sampler inputs need them).
 int append_float_accessor(tg::Model& model, tg::Buffer& data, int buffer, const std::vector<float>& values, int type, bool bounds) {
@@ -2271,7 +2275,7 @@ class SkinAnimationWriter {
           if (m[3] != 0 || m[7] != 0 || m[11] != 0 || m[15] != 1) throw_usage(where + " has an inverse bind matrix that is not affine");
           flat.insert(flat.end(), m.begin(), m.end());
         }
-        skin.inverseBindMatrices = add_accessor(flat, TINYGLTF_TYPE_MAT4, 16);
+        skin.inverseBindMatrices = add_accessor(flat, TINYGLTF_TYPE_MAT4);
       }
       model_.skins.push_back(std::move(skin));
     }
@@ -2298,9 +2302,7 @@ class SkinAnimationWriter {
         for (const auto& [times, accessor] : inputs)
           if (*times == ch.times) input = accessor;
         if (input < 0) {
-          input = add_accessor(ch.times, TINYGLTF_TYPE_SCALAR, 1);
-          model_.accessors[size_t(input)].minValues = {ch.times.front()};  // required for sampler inputs
-          model_.accessors[size_t(input)].maxValues = {ch.times.back()};
+          input = add_accessor(ch.times, TINYGLTF_TYPE_SCALAR, true);  // (bounds: required for sampler inputs)
           inputs.push_back({&ch.times, input});
         }
         tg::AnimationSampler sampler;
@@ -2308,10 +2310,8 @@ class SkinAnimationWriter {
         const int type = ch.path == AnimationPath::rotation ? TINYGLTF_TYPE_VEC4
                          : ch.path == AnimationPath::weights ? TINYGLTF_TYPE_SCALAR
                                                               : TINYGLTF_TYPE_VEC3;
-        sampler.output = add_accessor(ch.values, type, type_components(type));
-        sampler.interpolation = ch.interpolation == Interpolation::step     ? "STEP"
-                                : ch.interpolation == Interpolation::linear ? "LINEAR"
-                                                                            : "CUBICSPLINE";
+        sampler.output = add_accessor(ch.values, type);
+        sampler.interpolation = interpolation_name(ch.interpolation);
         anim.samplers.push_back(std::move(sampler));
         tg::AnimationChannel channel;
         channel.sampler = int(anim.samplers.size() - 1);
@@ -2346,23 +2346,9 @@ class SkinAnimationWriter {
       if (!std::isfinite(v)) throw_usage(where + " has a non-finite value");
   }
 
-  // A float accessor of values.size() / components elements in its own (4-aligned) bufferView.
-  int add_accessor(const std::vector<float>& values, int type, size_t components) {
-    std::vector<unsigned char>& data = model_.buffers[0].data;
-    tg::BufferView view;
-    view.buffer = 0;
-    view.byteOffset = data.size();
-    view.byteLength = values.size() * sizeof(float);
-    const auto* bytes = reinterpret_cast<const unsigned char*>(values.data());
-    data.insert(data.end(), bytes, bytes + view.byteLength);  // floats keep the buffer 4-aligned
-    model_.bufferViews.push_back(std::move(view));
-    tg::Accessor acc;
-    acc.bufferView = int(model_.bufferViews.size() - 1);
-    acc.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
-    acc.type = type;
-    acc.count = values.size() / components;
-    model_.accessors.push_back(std::move(acc));
-    return int(model_.accessors.size() - 1);
+  // A float accessor in its own bufferView of buffer 0.
+  int add_accessor(const std::vector<float>& values, int type, bool bounds = false) {
+    return append_float_accessor(model_, model_.buffers[0], 0, values, type, bounds);
   }
 
   tg::Model& model_;
@@ -2470,18 +2456,13 @@ void take_morph_weights(tg::Model& model, const Scene& scene, const std::vector<
   if (weighted)
     for (const WeightsSource& s : sources) node.weights.insert(node.weights.end(), s.rest.begin(), s.rest.end());
   for (size_t a = 0; a < model.animations.size() && a < scene.animations.size(); ++a) {
-    for (size_t k = 0; k < of.size(); ++k) {
-      sources[k].channel = nullptr;
-      for (const AnimationChannel& ch : scene.animations[a].channels)
-        if (ch.path == AnimationPath::weights && ch.node == of[k] && !sources[k].channel) sources[k].channel = &ch;
-    }
+    for (size_t k = 0; k < of.size(); ++k) sources[k].channel = weights_channel(scene.animations[a], of[k]);
     const std::optional<AnimationChannel> merged = concatenate_weights(sources);
     if (!merged) continue;  // no clip of theirs, or one the merge cannot follow exactly (lodkit lod says so)
     tg::AnimationSampler sampler;
     sampler.input = append_float_accessor(model, data, int(model.buffers.size()), merged->times, TINYGLTF_TYPE_SCALAR, true);
     sampler.output = append_float_accessor(model, data, int(model.buffers.size()), merged->values, TINYGLTF_TYPE_SCALAR, false);
-    sampler.interpolation = merged->interpolation == Interpolation::step ? "STEP"
-                            : merged->interpolation == Interpolation::linear ? "LINEAR" : "CUBICSPLINE";
+    sampler.interpolation = interpolation_name(merged->interpolation);
     tg::Animation& anim = model.animations[a];
     tg::AnimationChannel channel;
     channel.sampler = int(anim.samplers.size());

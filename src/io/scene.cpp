@@ -445,6 +445,12 @@ void sample_components(const AnimationChannel& ch, float time, float* out, float
   }
 }
 
+const AnimationChannel* weights_channel(const Animation& clip, int32_t node) {
+  for (const AnimationChannel& ch : clip.channels)
+    if (ch.path == AnimationPath::weights && ch.node == node) return &ch;
+  return nullptr;
+}
+
 std::optional<AnimationChannel> concatenate_weights(const std::vector<WeightsSource>& sources) {
   bool any = false, step = false, smooth = false, cubic = false;
   size_t total = 0;

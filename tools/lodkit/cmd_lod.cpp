@@ -160,6 +160,19 @@ struct ChainReport {
   std::vector<double> distances, coverage;
 };
 
+// What a level's node says about it (extras "lodkit"; lodkit render --sheet and lodkit info read it).
+nlohmann::json level_facts(const ChainReport& r, size_t i) {
+  const LodLevel& level = r.chain.levels[i];
+  nlohmann::json facts = {{"level", i},
+                          {"triangles", level.mesh.triangle_count()},
+                          {"error", level.error},
+                          {"error_bound", level.error_bound},
+                          {"relative_error", level.relative_error},
+                          {"switch_distance", r.distances[i]}};
+  if (!r.chain.shared.prefix.empty()) facts["vertex_prefix"] = r.chain.shared.prefix[i];
+  return facts;
+}
+
 // The document static chains go into: the glTF `source` (flattened into the chains' inputs, so
 // material id k + 1 is its material k) without its triangles, so that materials, textures and
 // everything else stay and its nodes remain, without those meshes; or a new document with the
@@ -255,21 +268,14 @@ uint32_t add_chain(Scene& scene, const ChainReport& r, const LevelTargets& targe
     }
   }
   for (size_t i = 0; i < chain.levels.size(); ++i) {
-    const LodLevel& level = chain.levels[i];
     Node node;
     node.name = fmt::format("{}LOD{}", place.prefix, i);
     node.mesh = int32_t(mesh_base + i);
     node.gpu_instances = place.instances;
-    nlohmann::json extras = {{"lodkit", {{"level", i},
-                                         {"triangles", level.mesh.triangle_count()},
-                                         {"error", level.error},
-                                         {"error_bound", level.error_bound},
-                                         {"relative_error", level.relative_error},
-                                         {"switch_distance", r.distances[i]}}}};
+    nlohmann::json extras = {{"lodkit", level_facts(r, i)}};
     if (i < chain.morphs.size())
       extras["LODKIT_geomorph"] = {{"target", targets.at(i).size()}, {"to_node", node_base + int32_t(i) + 1}};
     if (!targets.at(i).empty()) node.morph_weights_of = place.weights_of >= 0 ? std::vector<int32_t>{place.weights_of} : targets.nodes;
-    if (!chain.shared.prefix.empty()) extras["lodkit"]["vertex_prefix"] = chain.shared.prefix[i];
     if (i == 0) {
       for (size_t k = 1; k < chain.levels.size(); ++k) node.lod_ids.push_back(node_base + int32_t(k));
       extras["MSFT_screencoverage"] = r.coverage;
@@ -291,9 +297,7 @@ std::string unmergeable_weights(const Scene& scene, const FlatMorphTargets& morp
   for (const Animation& clip : scene.animations) {
     bool any = false;
     for (size_t k = 0; k < sources.size(); ++k) {
-      sources[k].channel = nullptr;
-      for (const AnimationChannel& ch : clip.channels)
-        if (ch.path == AnimationPath::weights && ch.node == morph.nodes[k] && !sources[k].channel) sources[k].channel = &ch;
+      sources[k].channel = weights_channel(clip, morph.nodes[k]);
       any = any || sources[k].channel;
     }
     if (any && !concatenate_weights(sources))
@@ -426,13 +430,7 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
     for (size_t i = 0; i < r.chain.levels.size(); ++i) {
       // Each level's node says what it is, as in a static chain (lodkit render --sheet reads it).
       const LodLevel& level = r.chain.levels[i];
-      nlohmann::json about = {{"level", i},
-                              {"triangles", level.mesh.triangle_count()},
-                              {"error", level.error},
-                              {"error_bound", level.error_bound},
-                              {"relative_error", level.relative_error},
-                              {"switch_distance", r.distances[i]}};
-      if (shared) about["vertex_prefix"] = buffer.prefix[i];
+      const nlohmann::json about = level_facts(r, i);
       if (i == 0) {
         extras["lodkit"] = about;
         continue;
