@@ -160,8 +160,27 @@ struct FittedPosition {
   float3 old_position, new_position;
 };
 
+// Joints and weights of one position, as lod::simplify_skinned's multi-pose mode chooses them:
+// slots 0-3 are JOINTS_0 / WEIGHTS_0, slots 4-7 JOINTS_1 / WEIGHTS_1 (a mesh with a second set);
+// heaviest first, unused slots weight 0 on joint 0.
+inline constexpr int max_influences = 8;
+struct Influences {
+  uint16_t joint[max_influences] = {};
+  float weight[max_influences] = {};
+  friend bool operator==(const Influences&, const Influences&) = default;
+};
+
+// A collapse's change to the influences of its kept position (every wedge of it takes `new_value`).
+// `old_value` with all weights 0: the wedges still had their own, the input's.
+struct InfluenceChange {
+  Influences old_value, new_value;
+};
+
 struct SimplifyRecord {
   std::vector<Collapse> collapses;  // in the order they were applied
+  // One per collapse when the simplification chose the survivors' joints and weights (multi-pose
+  // skinned simplification), else empty.
+  std::vector<InfluenceChange> influences;
   // Applied after the last collapse (replay of all collapses ends with them; undo starts with them).
   // Progressive meshes play collapses only: their coarsest level is the mesh before the fit.
   std::vector<FittedPosition> fitted;

@@ -149,10 +149,18 @@ struct SkinSimplifyOptions {
 // keeps playing the skeleton's clips. The result is in bind space, and every vertex has at most four
 // influences (eight, in joints1/weights1 too, when the input has a second set) with valid joints and
 // weights summing to 1 within 1e-6 (subset: the input's, untouched).
+// In multipose mode, the input's weights are first normalised (lod::normalize_influences): the
+// collapse record, with its influence changes, replays on that mesh, and a vertex no collapse kept
+// has its weights.
 // SimplifyResult::error is the engine's error: in poses[0] (houle), in the bind pose (subset), or the
 // root mean square over the poses (multipose). Throws lod::Error (usage) for a mesh without joints
 // and weights, joints outside the poses, or a mode without the poses it needs.
 SimplifyResult simplify_skinned(const Mesh& mesh, const SkinSimplifyOptions& options);
+
+// Each vertex's four or eight weights renormalised to sum 1 within 1e-6 (summed in double, the
+// rounding left on the heaviest); a slot of weight 0 points at joint 0, and a vertex without weight
+// gets all of it on slot 0.
+void normalize_influences(Mesh& mesh);
 
 // A LodOptions::simplifier for a skinned chain: simplify_skinned with `options` (mode, poses, pose
 // weights, bone weight), each level's SimplifyOptions in place of options.simplify.

@@ -28,7 +28,7 @@ ProgressiveMesh::ProgressiveMesh() : ProgressiveMesh(Mesh{}, SimplifyRecord{}) {
 
 ProgressiveMesh::ProgressiveMesh(Mesh input, SimplifyRecord record)
     : impl_(std::make_unique<Impl>(std::move(input), std::move(record))) {
-  for (const Collapse& c : impl_->record.collapses) impl_->state.check(impl_->record, c);
+  for (size_t i = 0; i < impl_->record.collapses.size(); ++i) impl_->state.check(impl_->record, i);
   if (impl_->record.collapses.size() > impl_->input_positions)
     throw_usage("progressive mesh: the record has more collapses than the mesh has positions");
 }
@@ -46,8 +46,8 @@ uint32_t ProgressiveMesh::positions() const { return impl_->input_positions - ui
 void ProgressiveMesh::set_collapses(size_t k) {
   Impl& m = *impl_;
   k = std::min(k, m.record.collapses.size());
-  while (m.applied < k) m.state.apply(m.record, m.record.collapses[m.applied++]);    // coarsen
-  while (m.applied > k) m.state.undo(m.record, m.record.collapses[--m.applied]);     // vertex split
+  while (m.applied < k) m.state.apply(m.record, m.applied++);  // coarsen
+  while (m.applied > k) m.state.undo(m.record, --m.applied);   // vertex split
 }
 
 void ProgressiveMesh::refine_to(uint32_t n) {
@@ -66,10 +66,10 @@ const SimplifyRecord& ProgressiveMesh::record() const { return impl_->record; }
 
 // ---- .lpm ----------------------------------------------------------------------------------------
 //
-// header:  "LPM\x1a"  u32 version (2)  u64 payload size  u32 CRC-32 of the payload
+// header:  "LPM\x1a"  u32 version (3)  u64 payload size  u32 CRC-32 of the payload
 // payload: the mesh streams, then the record arrays; each array is a u64 count and its elements.
-// Version 2 added the second influence set (joints1, weights1) after the weights; version 1 files,
-// without it, still read.
+// Version 2 added the second influence set (joints1, weights1) after the weights, version 3 the
+// record's influence changes (skinned, multi-pose) at the end; older files, without them, still read.
 // All little-endian; the element layouts are the structs' fields in declaration order, 4 bytes each
 // (2 for joint indices).
 
@@ -77,14 +77,14 @@ namespace {
 
 static_assert(std::endian::native == std::endian::little, ".lpm is written by copying little-endian memory");
 constexpr char magic[4] = {'L', 'P', 'M', '\x1a'};
-constexpr uint32_t version = 2;
+constexpr uint32_t version = 3;
 constexpr size_t header_size = 4 + 4 + 8 + 4;
 
 // Plain structs of 4-byte fields (or arrays of u16) copy as they are.
 template <class T>
 constexpr bool plain = std::is_trivially_copyable_v<T> && (sizeof(T) % 2 == 0);
 static_assert(sizeof(float3) == 12 && sizeof(float4) == 16 && sizeof(ushort4) == 8 && sizeof(Relink) == 16 &&
-              sizeof(WedgeChange) == 8 && sizeof(Collapse) == 4 * 17);
+              sizeof(WedgeChange) == 8 && sizeof(Collapse) == 4 * 17 && sizeof(InfluenceChange) == 2 * (16 + 32));
 
 struct Writer {
   std::string out;
@@ -172,6 +172,7 @@ std::string encode_progressive_mesh(const ProgressiveMesh& pm) {
   payload.array(rec.collapses), payload.array(rec.removed_faces), payload.array(rec.relinks);
   payload.array(rec.wedges), payload.array(rec.moved_wedges), payload.array(rec.old_values);
   payload.array(rec.new_values);
+  payload.array(rec.influences);
 
   Writer file;
   file.out.append(magic, 4);
@@ -192,7 +193,7 @@ ProgressiveMesh decode_progressive_mesh(std::span<const uint8_t> bytes, const st
   r.at = 4;
   const uint32_t file_version = r.value<uint32_t>("version");
   if (file_version < 1 || file_version > version)
-    r.fail("unsupported .lpm version " + std::to_string(file_version) + " (this build reads versions 1 and 2)");
+    r.fail("unsupported .lpm version " + std::to_string(file_version) + " (this build reads versions 1 to 3)");
   const uint64_t payload_size = r.value<uint64_t>("payload size");
   const uint32_t crc = r.value<uint32_t>("checksum");
   if (payload_size != bytes.size() - header_size)
@@ -217,6 +218,8 @@ ProgressiveMesh decode_progressive_mesh(std::span<const uint8_t> bytes, const st
   r.array(rec.collapses, "collapses"), r.array(rec.removed_faces, "removed faces"), r.array(rec.relinks, "relinks");
   r.array(rec.wedges, "wedge changes"), r.array(rec.moved_wedges, "moved wedges"), r.array(rec.old_values, "old values");
   r.array(rec.new_values, "new values");
+  const size_t influences_at = r.at;
+  if (file_version >= 3) r.array(rec.influences, "influence changes");
   if (r.at != bytes.size()) r.fail("unexpected bytes after the collapse record");
 
   // The record must play on the mesh: every index in range and every collapse starting from the
@@ -224,8 +227,14 @@ ProgressiveMesh decode_progressive_mesh(std::span<const uint8_t> bytes, const st
   collapse::Replay check(mesh);
   if (position_ids(mesh).count < rec.collapses.size())
     throw_bad_input_at_byte(name, collapses_at, "more collapses than the mesh has positions");
+  if (!rec.influences.empty() && rec.influences.size() != rec.collapses.size())
+    throw_bad_input_at_byte(name, influences_at,
+                            std::to_string(rec.influences.size()) + " influence changes for " +
+                                std::to_string(rec.collapses.size()) + " collapses (expected one per collapse, or none)");
+  if (!rec.influences.empty() && mesh.joints.empty())
+    throw_bad_input_at_byte(name, influences_at, "influence changes for a mesh without joints and weights");
   for (size_t i = 0; i < rec.collapses.size(); ++i)
-    if (!check.apply_consistent(rec, rec.collapses[i]))
+    if (!check.apply_consistent(rec, i))
       throw_bad_input_at_byte(name, collapses_at + 8 + i * sizeof(Collapse),
                               "collapse " + std::to_string(i) +
                                   " does not fit the mesh (faces, vertices or values it does not have, or not as "

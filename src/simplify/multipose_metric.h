@@ -23,14 +23,32 @@
 
 namespace lod::collapse {
 
-// Up to eight influences (Mesh::joints/weights, then joints1/weights1), heaviest first; unused slots
-// have weight 0. A mesh with one influence set uses the first four slots only.
-inline constexpr int max_influences = 8;
-struct Influences {
-  uint16_t joint[max_influences] = {};
-  float weight[max_influences] = {};
-  friend bool operator==(const Influences&, const Influences&) = default;
-};
+// Influences (lod::Influences): up to eight, Mesh::joints/weights then joints1/weights1. A mesh with
+// one influence set uses the first four slots only.
+
+// The first n weights (4 or 8) renormalised to sum 1 within 1e-6: summed in double, the rounding left
+// on the heaviest; a slot of weight 0 points at joint 0 (valid whatever the skin). No weight: all on
+// slot 0. lod::simplify_skinned normalises its input and output this way.
+inline void normalize_weights(uint16_t* joints, float* w, int n) {
+  double sum = 0;
+  for (int i = 0; i < n; ++i) sum += std::max(0.0f, w[i]);
+  if (!(sum > 0)) {
+    std::fill(w, w + n, 0.0f);
+    w[0] = 1;
+    return;
+  }
+  int heaviest = 0;
+  for (int i = 0; i < n; ++i) {
+    w[i] = float(std::max(0.0f, w[i]) / sum);
+    if (w[i] > w[heaviest]) heaviest = i;
+  }
+  double rest = 0;
+  for (int i = 0; i < n; ++i)
+    if (i != heaviest) rest += w[i];
+  w[heaviest] = float(1.0 - rest);
+  for (int i = 0; i < n; ++i)
+    if (w[i] == 0) joints[i] = 0;
+}
 
 // Heaviest `slots` (4 or 8) of a sparse set of up to 2 * max_influences entries (ties: lower joint
 // first), renormalised to sum 1.
@@ -47,7 +65,9 @@ inline Influences top_influences(std::span<const std::pair<uint16_t, float>> set
   for (size_t i = 0; i < kept; ++i) sum += sorted[i].second;
   if (!(sum > 0)) return out;
   for (size_t i = 0; i < kept; ++i)
-    if (sorted[i].second > 0) out.joint[i] = sorted[i].first, out.weight[i] = float(sorted[i].second / sum);
+    if (sorted[i].second > 0) out.joint[i] = sorted[i].first, out.weight[i] = sorted[i].second;
+  // Normalised as the output will be, so that the record and the output carry the same values.
+  normalize_weights(out.joint, out.weight, int(slots == 8 ? 8 : 4));
   return out;
 }
 
@@ -102,6 +122,7 @@ class MultiposeMetric {
     const Mesh& mesh = state.mesh;
     slots_ = mesh.influence_slots();
     influences_.assign(state.position_count, {});
+    chosen_.assign(state.position_count, 0);
     std::vector<uint8_t> set(state.position_count, 0);
     // A position's influences are those of its first wedge (wedges of one position normally agree).
     for (size_t v = 0; v < mesh.vertex_count(); ++v) {
@@ -157,6 +178,7 @@ class MultiposeMetric {
     // influences again at that position.
     const Choice c = choose(state, edge, &position);
     influences_[edge.kept] = c.influences;
+    chosen_[edge.kept] = 1;
     const size_t K = pose_count_;
     for (size_t k = 0; k < K; ++k) quadric_[edge.kept * K + k] += quadric_[edge.removed * K + k];
   }
@@ -164,8 +186,10 @@ class MultiposeMetric {
   void attributes_at(const State&, uint32_t, const vec3d&, float*) const {}
   bool reads_neighbourhood() const { return false; }
 
-  // The influences a position ends with (internal position id).
+  // The influences of a position (internal id), and whether a collapse chose them: the wedges of a
+  // position no collapse kept keep their own, the input's.
   const Influences& influences(uint32_t position) const { return influences_[position]; }
+  bool chose(uint32_t position) const { return chosen_[position] != 0; }
 
  private:
   struct Affine {
@@ -279,6 +303,7 @@ class MultiposeMetric {
   size_t slots_ = 4;                    // influence slots per vertex: 4, or 8 with a second set
   std::vector<double> pose_weight_;
   std::vector<Affine> joints_;          // pose-major
+  std::vector<uint8_t> chosen_;         // per position: influences chosen by a collapse
   std::vector<Influences> influences_;  // per position
   std::vector<QuadricD> quadric_;       // position-major, one per pose (weighted by the pose's share)
   float bone_weight_ = 0;

@@ -39,11 +39,24 @@ std::vector<float> gather_attributes(const Mesh& mesh, const AttributeLayout& la
 
 namespace {
 
+bool has_weight(const Influences& w) {
+  return std::any_of(std::begin(w.weight), std::end(w.weight), [](float x) { return x != 0; });
+}
+
 // Appends input vertex v with its current position and attributes.
 void append_current(Mesh& out, const Mesh& input, const Snapshot& s, uint32_t v) {
   append_vertex(out, input, v);
   const uint32_t p = s.position_of[v];
   if (s.moves[p]) out.positions.back() = s.position[p];
+  if (!s.influences.empty() && has_weight(s.influences[p])) {
+    const Influences& w = s.influences[p];
+    out.joints.back() = {w.joint[0], w.joint[1], w.joint[2], w.joint[3]};
+    out.weights.back() = {w.weight[0], w.weight[1], w.weight[2], w.weight[3]};
+    if (!out.joints1.empty()) {
+      out.joints1.back() = {w.joint[4], w.joint[5], w.joint[6], w.joint[7]};
+      out.weights1.back() = {w.weight[4], w.weight[5], w.weight[6], w.weight[7]};
+    }
+  }
   const AttributeLayout& layout = *s.layout;
   if (!layout.stride) return;
   const float* a = s.attributes.data() + size_t(v) * layout.stride;
@@ -112,94 +125,110 @@ Replay::Replay(const Mesh& mesh) {
   alive.assign(mesh.triangle_count(), 1);
   layout = attribute_layout(mesh);
   attributes = gather_attributes(mesh, layout);
+  skinned = !mesh.joints.empty() && !mesh.weights.empty();
 }
 
-void Replay::check(const SimplifyRecord& record, const Collapse& c) const {
-  const auto bad = [] { throw_usage("replay: the collapse record does not belong to this mesh"); };
-  if (!valid(record, c)) bad();
+void Replay::check(const SimplifyRecord& record, size_t i) const {
+  if (!valid(record, i)) throw_usage("replay: the collapse record does not belong to this mesh");
 }
 
-bool Replay::valid(const SimplifyRecord& record, const Collapse& c) const {
+bool Replay::valid(const SimplifyRecord& record, size_t i) const {
+  if (i >= record.collapses.size()) return false;
+  const Collapse& c = record.collapses[i];
   if (c.kept >= position.size() || c.removed >= position.size()) return false;
   if (size_t(c.faces_begin) + c.removed_face_count > record.removed_faces.size()) return false;
   if (size_t(c.relinks_begin) + c.relink_count > record.relinks.size()) return false;
   if (size_t(c.wedges_begin) + c.wedge_count > record.wedges.size()) return false;
   if (record.stride != layout.stride) return false;
-  for (uint32_t i = 0; i < c.removed_face_count; ++i)
-    if (record.removed_faces[c.faces_begin + i] >= alive.size()) return false;
-  for (uint32_t i = 0; i < c.relink_count; ++i) {
-    const Relink& r = record.relinks[c.relinks_begin + i];
+  // Influences: one per collapse, for a mesh that has joints and weights.
+  if (!record.influences.empty() && (record.influences.size() != record.collapses.size() || !skinned)) return false;
+  for (uint32_t k = 0; k < c.removed_face_count; ++k)
+    if (record.removed_faces[c.faces_begin + k] >= alive.size()) return false;
+  for (uint32_t k = 0; k < c.relink_count; ++k) {
+    const Relink& r = record.relinks[c.relinks_begin + k];
     if (r.triangle >= alive.size() || r.corner > 2 || r.from >= position_of.size() || r.to >= position_of.size())
       return false;
   }
-  for (uint32_t i = 0; i < c.wedge_count; ++i) {
-    const WedgeChange& w = record.wedges[c.wedges_begin + i];
+  for (uint32_t k = 0; k < c.wedge_count; ++k) {
+    const WedgeChange& w = record.wedges[c.wedges_begin + k];
     if (w.vertex >= position_of.size() || size_t(w.values_begin) + layout.stride > record.new_values.size() ||
         size_t(w.values_begin) + layout.stride > record.old_values.size())
       return false;
   }
   if (size_t(c.moved_begin) + c.moved_count > record.moved_wedges.size()) return false;
-  for (uint32_t i = 0; i < c.moved_count; ++i)
-    if (record.moved_wedges[c.moved_begin + i] >= position_of.size()) return false;
+  for (uint32_t k = 0; k < c.moved_count; ++k)
+    if (record.moved_wedges[c.moved_begin + k] >= position_of.size()) return false;
   return true;
 }
 
-void Replay::apply(const SimplifyRecord& record, const Collapse& c) {
-  check(record, c);
-  for (uint32_t i = 0; i < c.removed_face_count; ++i) alive[record.removed_faces[c.faces_begin + i]] = 0;
-  for (uint32_t i = 0; i < c.relink_count; ++i) {
-    const Relink& r = record.relinks[c.relinks_begin + i];
+void Replay::apply(const SimplifyRecord& record, size_t i) {
+  check(record, i);
+  const Collapse& c = record.collapses[i];
+  for (uint32_t k = 0; k < c.removed_face_count; ++k) alive[record.removed_faces[c.faces_begin + k]] = 0;
+  for (uint32_t k = 0; k < c.relink_count; ++k) {
+    const Relink& r = record.relinks[c.relinks_begin + k];
     corners[3 * r.triangle + r.corner] = r.to;
   }
-  for (uint32_t i = 0; i < c.moved_count; ++i) position_of[record.moved_wedges[c.moved_begin + i]] = c.kept;
+  for (uint32_t k = 0; k < c.moved_count; ++k) position_of[record.moved_wedges[c.moved_begin + k]] = c.kept;
   // Wedges moved in from a virtual pair sit at kept's position even when it stays put.
   if (!(c.new_position == c.old_position) || c.moved_count) position[c.kept] = c.new_position, ++moves[c.kept];
   set_values(record, c, record.new_values);
+  if (!record.influences.empty()) set_influences(c, record.influences[i].new_value);
 }
 
-bool Replay::apply_consistent(const SimplifyRecord& record, const Collapse& c) {
-  if (!valid(record, c) || c.kept == c.removed) return false;
-  if (!(position[c.kept] == c.old_position)) return false;
-  for (uint32_t i = 0; i < c.removed_face_count; ++i)
-    if (!alive[record.removed_faces[c.faces_begin + i]]) return false;
-  for (uint32_t i = 0; i < c.relink_count; ++i) {
-    const Relink& r = record.relinks[c.relinks_begin + i];
+bool Replay::apply_consistent(const SimplifyRecord& record, size_t i) {
+  if (!valid(record, i)) return false;
+  const Collapse& c = record.collapses[i];
+  if (c.kept == c.removed || !(position[c.kept] == c.old_position)) return false;
+  for (uint32_t k = 0; k < c.removed_face_count; ++k)
+    if (!alive[record.removed_faces[c.faces_begin + k]]) return false;
+  for (uint32_t k = 0; k < c.relink_count; ++k) {
+    const Relink& r = record.relinks[c.relinks_begin + k];
     if (!alive[r.triangle] || corners[3 * r.triangle + r.corner] != r.from) return false;
   }
-  for (uint32_t i = 0; i < c.moved_count; ++i)
-    if (position_of[record.moved_wedges[c.moved_begin + i]] != c.removed) return false;
-  for (uint32_t i = 0; i < c.wedge_count; ++i) {
-    const WedgeChange& w = record.wedges[c.wedges_begin + i];
+  for (uint32_t k = 0; k < c.moved_count; ++k)
+    if (position_of[record.moved_wedges[c.moved_begin + k]] != c.removed) return false;
+  for (uint32_t k = 0; k < c.wedge_count; ++k) {
+    const WedgeChange& w = record.wedges[c.wedges_begin + k];
     if (!std::equal(record.old_values.begin() + w.values_begin, record.old_values.begin() + w.values_begin + layout.stride,
                     attributes.begin() + size_t(w.vertex) * layout.stride))
       return false;
   }
+  if (!record.influences.empty()) {
+    // The old value is the kept position's current one (weightless: never chosen); the new one
+    // has weight.
+    const InfluenceChange& w = record.influences[i];
+    const Influences current = influences.empty() ? Influences{} : influences[c.kept];
+    if (!(w.old_value == current) || !has_weight(w.new_value)) return false;
+  }
   // Relinks and wedge changes listed twice would not undo exactly either.
-  for (uint32_t i = 0; i < c.relink_count; ++i)
-    for (uint32_t j = 0; j < i; ++j) {
-      const Relink &a = record.relinks[c.relinks_begin + i], &b = record.relinks[c.relinks_begin + j];
+  for (uint32_t k = 0; k < c.relink_count; ++k)
+    for (uint32_t j = 0; j < k; ++j) {
+      const Relink &a = record.relinks[c.relinks_begin + k], &b = record.relinks[c.relinks_begin + j];
       if (a.triangle == b.triangle && a.corner == b.corner) return false;
     }
-  for (uint32_t i = 0; i < c.wedge_count; ++i)
-    for (uint32_t j = 0; j < i; ++j)
-      if (record.wedges[c.wedges_begin + i].vertex == record.wedges[c.wedges_begin + j].vertex) return false;
-  for (uint32_t i = 0; i < c.moved_count; ++i)
-    for (uint32_t j = 0; j < i; ++j)
-      if (record.moved_wedges[c.moved_begin + i] == record.moved_wedges[c.moved_begin + j]) return false;
-  apply(record, c);
+  for (uint32_t k = 0; k < c.wedge_count; ++k)
+    for (uint32_t j = 0; j < k; ++j)
+      if (record.wedges[c.wedges_begin + k].vertex == record.wedges[c.wedges_begin + j].vertex) return false;
+  for (uint32_t k = 0; k < c.moved_count; ++k)
+    for (uint32_t j = 0; j < k; ++j)
+      if (record.moved_wedges[c.moved_begin + k] == record.moved_wedges[c.moved_begin + j]) return false;
+  apply(record, i);
   return true;
 }
 
-void Replay::undo(const SimplifyRecord& record, const Collapse& c) {
-  check(record, c);
+void Replay::undo(const SimplifyRecord& record, size_t i) {
+  check(record, i);
+  const Collapse& c = record.collapses[i];
+  if (!record.influences.empty()) set_influences(c, record.influences[i].old_value);
   set_values(record, c, record.old_values);
   if (!(c.new_position == c.old_position) || c.moved_count) position[c.kept] = c.old_position, --moves[c.kept];
-  for (uint32_t i = 0; i < c.moved_count; ++i) position_of[record.moved_wedges[c.moved_begin + i]] = c.removed;
-  for (uint32_t i = c.relink_count; i-- > 0;) {
-    const Relink& r = record.relinks[c.relinks_begin + i];
+  for (uint32_t k = 0; k < c.moved_count; ++k) position_of[record.moved_wedges[c.moved_begin + k]] = c.removed;
+  for (uint32_t k = c.relink_count; k-- > 0;) {
+    const Relink& r = record.relinks[c.relinks_begin + k];
     corners[3 * r.triangle + r.corner] = r.from;
   }
-  for (uint32_t i = 0; i < c.removed_face_count; ++i) alive[record.removed_faces[c.faces_begin + i]] = 1;
+  for (uint32_t k = 0; k < c.removed_face_count; ++k) alive[record.removed_faces[c.faces_begin + k]] = 1;
 }
 
 void Replay::fit(const SimplifyRecord& record, bool forwards) {
@@ -220,10 +249,15 @@ void Replay::fit(const SimplifyRecord& record, bool forwards) {
 }
 
 void Replay::set_values(const SimplifyRecord& record, const Collapse& c, const std::vector<float>& values) {
-  for (uint32_t i = 0; i < c.wedge_count; ++i) {
-    const WedgeChange& w = record.wedges[c.wedges_begin + i];
+  for (uint32_t k = 0; k < c.wedge_count; ++k) {
+    const WedgeChange& w = record.wedges[c.wedges_begin + k];
     std::copy_n(values.begin() + w.values_begin, layout.stride, attributes.begin() + size_t(w.vertex) * layout.stride);
   }
+}
+
+void Replay::set_influences(const Collapse& c, const Influences& value) {
+  if (influences.empty()) influences.resize(position.size());  // weightless: the wedges' own
+  influences[c.kept] = value;
 }
 
 }  // namespace collapse
@@ -231,17 +265,17 @@ void Replay::set_values(const SimplifyRecord& record, const Collapse& c, const s
 Mesh replay(const Mesh& mesh, const SimplifyRecord& record, size_t count) {
   if (count > record.collapses.size()) throw_usage("replay: asked for more collapses than the record holds");
   collapse::Replay state(mesh);
-  for (size_t i = 0; i < count; ++i) state.apply(record, record.collapses[i]);
+  for (size_t i = 0; i < count; ++i) state.apply(record, i);
   if (count == record.collapses.size()) state.fit(record, true);
   return collapse::compact(mesh, state.snapshot(), nullptr, nullptr);
 }
 
 Mesh replay_and_undo(const Mesh& mesh, const SimplifyRecord& record) {
   collapse::Replay state(mesh);
-  for (const Collapse& c : record.collapses) state.apply(record, c);
+  for (size_t i = 0; i < record.collapses.size(); ++i) state.apply(record, i);
   state.fit(record, true);
   state.fit(record, false);
-  for (size_t i = record.collapses.size(); i-- > 0;) state.undo(record, record.collapses[i]);
+  for (size_t i = record.collapses.size(); i-- > 0;) state.undo(record, i);
   return collapse::materialize(mesh, state.snapshot());
 }
 

@@ -22,6 +22,9 @@ struct Snapshot {
   std::span<const uint8_t> alive;         // per input triangle
   const AttributeLayout* layout = nullptr;
   std::span<const float> attributes;      // per input vertex, layout->stride each
+  // Per position id, the influences a record chose (SimplifyRecord::influences); empty, or an entry
+  // without weight: the wedges' own.
+  std::span<const Influences> influences = {};
 };
 
 // Live triangles in input order and the vertices they use, in order of first use.
@@ -35,28 +38,33 @@ Mesh materialize(const Mesh& input, const Snapshot& snapshot);
 class Replay {
  public:
   explicit Replay(const Mesh& mesh);
-  Snapshot snapshot() const { return {position_of, position, moves, corners, alive, &layout, attributes}; }
-  // False if any index of the collapse is out of range for this mesh (a record of another mesh, or
-  // corrupt data): applying or undoing it would write out of bounds.
-  bool valid(const SimplifyRecord& record, const Collapse& c) const;
-  void check(const SimplifyRecord& record, const Collapse& c) const;  // throws usage if not valid
-  void apply(const SimplifyRecord& record, const Collapse& c);
-  // Applies `c` only if it fits the current state exactly (its faces alive, each relink starting
-  // from the corner's current wedge, moved wedges on `removed`, old position and values current),
-  // so that undo restores this state bit for bit; false (state unspecified) otherwise.
-  bool apply_consistent(const SimplifyRecord& record, const Collapse& c);
-  void undo(const SimplifyRecord& record, const Collapse& c);
+  Snapshot snapshot() const { return {position_of, position, moves, corners, alive, &layout, attributes, influences}; }
+  // Collapse i of the record. valid: false if any of its indices is out of range for this mesh (a
+  // record of another mesh, or corrupt data), so that applying or undoing it would write out of
+  // bounds; check throws usage instead.
+  bool valid(const SimplifyRecord& record, size_t i) const;
+  void check(const SimplifyRecord& record, size_t i) const;
+  void apply(const SimplifyRecord& record, size_t i);
+  // Applies collapse i only if it fits the current state exactly (its faces alive, each relink
+  // starting from the corner's current wedge, moved wedges on `removed`, old position, values and
+  // influences current), so that undo restores this state bit for bit; false (state unspecified)
+  // otherwise.
+  bool apply_consistent(const SimplifyRecord& record, size_t i);
+  void undo(const SimplifyRecord& record, size_t i);
   // The final fit's moves (after the last collapse), forwards or taken back.
   void fit(const SimplifyRecord& record, bool forwards);
 
  private:
   void set_values(const SimplifyRecord& record, const Collapse& c, const std::vector<float>& values);
+  void set_influences(const Collapse& c, const Influences& value);
 
   std::vector<uint32_t> position_of, moves, corners;
   std::vector<float3> position;
   std::vector<uint8_t> alive;
   AttributeLayout layout;
   std::vector<float> attributes;
+  std::vector<Influences> influences;  // per position id, once a record with influences played
+  bool skinned = false;                // the mesh has joints and weights
 };
 
 }  // namespace lod::collapse

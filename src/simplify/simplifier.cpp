@@ -1007,7 +1007,16 @@ class Engine {
       wedges_of(d.kept, scratch.kept_wedges);
     }
     const EdgeQuery query{d.kept, d.removed, d.fixed, pairs, scratch.kept_wedges, scratch.removed_faces};
+    // A metric that chooses the survivor's joints and weights (multi-pose) records them per collapse.
+    constexpr bool chooses_influences = requires { metric_.chose(0u); };
+    InfluenceChange influence_change;
+    if constexpr (chooses_influences)
+      if (metric_.chose(d.kept)) influence_change.old_value = metric_.influences(d.kept);
     metric_.collapsed(s_, query, d.placement.position);
+    if constexpr (chooses_influences) {
+      influence_change.new_value = metric_.influences(d.kept);
+      if (s_.options.record) result_.record.influences.push_back(influence_change);
+    }
 
     const vec3d old_kept = s_.normalized(d.kept);
     Collapse c;
@@ -1396,12 +1405,18 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
   result.record.stride = state.layout.stride;
   const auto engine_start = clock::now();
   result.seconds_setup = seconds(start, engine_start);
-  std::vector<Influences> final_influences;  // multipose: per input vertex
+  std::vector<Influences> final_influences;  // multipose: per input vertex, where `chosen`
+  std::vector<uint8_t> chosen;
   if (multipose) {
     MultiposeMetric metric(*multipose);
     run(state, metric, {}, target, cost_limit, result);
+    // A position no collapse kept keeps its wedges' own influences (as a replay of the record does).
     final_influences.resize(mesh.vertex_count());
-    for (size_t v = 0; v < mesh.vertex_count(); ++v) final_influences[v] = metric.influences(state.position_of[v]);
+    chosen.resize(mesh.vertex_count());
+    for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+      const uint32_t p = state.position_of[v];
+      if ((chosen[v] = metric.chose(p))) final_influences[v] = metric.influences(p);
+    }
   } else if (options.metric == Metric::edge_length) {
     EdgeLengthMetric metric;
     run(state, metric, {}, target, cost_limit, result);
@@ -1443,6 +1458,7 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
   for (uint32_t w = 0; w < mesh.vertex_count(); ++w) result.vertex_successor[w] = output_of[core::chain_end(next, w)];
   if (multipose)
     for (size_t v = 0; v < result.mesh.vertex_count(); ++v) {
+      if (!chosen[result.vertex_origin[v]]) continue;
       const Influences& w = final_influences[result.vertex_origin[v]];
       result.mesh.joints[v] = {w.joint[0], w.joint[1], w.joint[2], w.joint[3]};
       result.mesh.weights[v] = {w.weight[0], w.weight[1], w.weight[2], w.weight[3]};

@@ -16,34 +16,17 @@ namespace lod {
 
 namespace {
 
-// Weights summing to 1 within 1e-6 over vertex v's four or eight slots: renormalised in double, the
-// rounding left on the heaviest. Unused slots point at joint 0 (valid whatever the skin).
-void normalize_influences(Mesh& mesh, size_t v) {
-  const int n = int(mesh.influence_slots());
-  const float4 zero{};
-  const float4 &a = mesh.weights[v], &b = n == 8 ? mesh.weights1[v] : zero;
+// Vertex v's four or eight weights renormalised (collapse::normalize_weights).
+void normalize_vertex(Mesh& mesh, size_t v) {
+  const bool eight = mesh.influence_slots() == 8;
+  const float4 &a = mesh.weights[v], &b = eight ? mesh.weights1[v] : float4{};
+  const ushort4 &ja = mesh.joints[v], &jb = eight ? mesh.joints1[v] : ushort4{};
   float w[8] = {a.x, a.y, a.z, a.w, b.x, b.y, b.z, b.w};
-  ushort4* joints[2] = {&mesh.joints[v], n == 8 ? &mesh.joints1[v] : nullptr};
-  double sum = 0;
-  for (int i = 0; i < n; ++i) sum += std::max(0.0f, w[i]);
-  if (!(sum > 0)) {
-    std::fill(w, w + 8, 0.0f);
-    w[0] = 1;
-  } else {
-    int heaviest = 0;
-    for (int i = 0; i < n; ++i) {
-      w[i] = float(std::max(0.0f, w[i]) / sum);
-      if (w[i] > w[heaviest]) heaviest = i;
-    }
-    double rest = 0;
-    for (int i = 0; i < n; ++i)
-      if (i != heaviest) rest += w[i];
-    w[heaviest] = float(1.0 - rest);
-    for (int i = 0; i < n; ++i)
-      if (w[i] == 0) (*joints[i / 4])[size_t(i % 4)] = 0;
-  }
+  uint16_t j[8] = {ja[0], ja[1], ja[2], ja[3], jb[0], jb[1], jb[2], jb[3]};
+  collapse::normalize_weights(j, w, eight ? 8 : 4);
   mesh.weights[v] = {w[0], w[1], w[2], w[3]};
-  if (n == 8) mesh.weights1[v] = {w[4], w[5], w[6], w[7]};
+  mesh.joints[v] = {j[0], j[1], j[2], j[3]};
+  if (eight) mesh.weights1[v] = {w[4], w[5], w[6], w[7]}, mesh.joints1[v] = {j[4], j[5], j[6], j[7]};
 }
 
 // The mesh with positions and normals skinned by `joints`.
@@ -142,25 +125,34 @@ SimplifyResult simplify_skinned(const Mesh& mesh, const SkinSimplifyOptions& opt
   skinning::check_influences(mesh, options.mode == SkinMode::subset && options.poses.empty() ? size_t(65536) : joints,
                              "simplify_skinned");
 
-  SimplifyResult r;
   switch (options.mode) {
     case SkinMode::subset: {
       SimplifyOptions so = options.simplify;
       so.keep_vertices = true;
       return simplify(mesh, so);  // every output vertex is an input vertex: weights untouched
     }
-    case SkinMode::houle: r = simplify_houle(mesh, options); break;
+    case SkinMode::houle: {
+      SimplifyResult r = simplify_houle(mesh, options);
+      for (size_t v = 0; v < r.mesh.vertex_count(); ++v) normalize_vertex(r.mesh, v);
+      return r;
+    }
     case SkinMode::multipose: {
       collapse::MultiposeInput in;
       in.poses = options.poses;
       in.pose_weights = options.pose_weights;
       in.bone_weight = options.bone_weight;
-      r = collapse::simplify_multipose(mesh, options.simplify, in);
-      break;
+      // The engine's chosen influences come normalised, and the others are the input's: normalise
+      // those first, so that the record replays on the normalised input (lod::normalize_influences).
+      Mesh normalized = mesh;
+      normalize_influences(normalized);
+      return collapse::simplify_multipose(normalized, options.simplify, in);
     }
   }
-  for (size_t v = 0; v < r.mesh.vertex_count(); ++v) normalize_influences(r.mesh, v);
-  return r;
+  throw_usage("simplify_skinned: unknown mode");
+}
+
+void normalize_influences(Mesh& mesh) {
+  for (size_t v = 0; v < mesh.vertex_count(); ++v) normalize_vertex(mesh, v);
 }
 
 std::function<SimplifyResult(const Mesh&, const SimplifyOptions&)> skinned_simplifier(SkinSimplifyOptions options) {

@@ -372,29 +372,40 @@ uint32_t crc32_of(const std::string& bytes, size_t from) {
   return ~crc;
 }
 
-// Version 1 .lpm files (before the second set) still read: the version 2 file of a four-influence
-// mesh, without the two empty second-set arrays, is a version 1 file.
-TEST(EightInfluences, LpmVersionOneStillReads) {
+// Older .lpm files still read: the version 3 file of a four-influence mesh simplified without
+// influence changes is, without the empty influence array at its end, a version 2 file, and that,
+// without the two empty second-set arrays, a version 1 file.
+TEST(EightInfluences, LpmVersionsOneAndTwoStillRead) {
   const Mesh m = fixtures::arm(8, 6);
   const SimplifyResult r = simplify(m, {.target_ratio = 0.3f});
-  const std::string v2 = encode_progressive_mesh(ProgressiveMesh(m, r.record));
+  ASSERT_TRUE(r.record.influences.empty());
+  const std::string v3 = encode_progressive_mesh(ProgressiveMesh(m, r.record));
   uint32_t version;
-  std::memcpy(&version, v2.data() + 4, 4);
-  ASSERT_EQ(version, 2u);
+  std::memcpy(&version, v3.data() + 4, 4);
+  ASSERT_EQ(version, 3u);
+  const auto with_header = [](std::string bytes, uint32_t v) {
+    const uint32_t crc = crc32_of(bytes, 20);
+    const uint64_t payload = bytes.size() - 20;
+    std::memcpy(bytes.data() + 4, &v, 4);
+    std::memcpy(bytes.data() + 8, &payload, 8);
+    std::memcpy(bytes.data() + 16, &crc, 4);
+    return bytes;
+  };
+  ASSERT_EQ(v3.substr(v3.size() - 8), std::string(8, '\0'));
+  const std::string v2 = with_header(v3.substr(0, v3.size() - 8), 2);
   // Header 20 bytes; positions, normals, tangents (none), 4 uv sets (none), colours (none), joints,
   // weights; each array is a u64 count and its elements.
   const size_t n = m.vertex_count();
   const size_t at = 20 + (8 + 12 * n) + (8 + 12 * n) + 8 + 4 * 8 + 8 + (8 + 8 * n) + (8 + 16 * n);
   ASSERT_EQ(v2.substr(at, 16), std::string(16, '\0'));
-  std::string v1 = v2.substr(0, at) + v2.substr(at + 16);
-  const uint32_t one = 1, crc = crc32_of(v1, 20);
-  const uint64_t payload = v1.size() - 20;
-  std::memcpy(v1.data() + 4, &one, 4);
-  std::memcpy(v1.data() + 8, &payload, 8);
-  std::memcpy(v1.data() + 16, &crc, 4);
-  const ProgressiveMesh back = decode_progressive_mesh(test::bytes_of(v1), "v1.lpm");
-  EXPECT_EQ(test::mesh_difference(back.input(), m), "");
-  EXPECT_EQ(back.collapse_count(), r.record.collapses.size());
+  const std::string v1 = with_header(v2.substr(0, at) + v2.substr(at + 16), 1);
+  for (const std::string& old : {v2, v1}) {
+    const ProgressiveMesh back = decode_progressive_mesh(test::bytes_of(old), "old.lpm");
+    EXPECT_EQ(test::mesh_difference(back.input(), m), "");
+    EXPECT_EQ(back.collapse_count(), r.record.collapses.size());
+  }
+  // The same bytes under version 3 lack the influence array: truncated.
+  EXPECT_THROW(decode_progressive_mesh(test::bytes_of(with_header(v2.substr(0), 3)), "short.lpm"), Error);
 }
 
 TEST(EightInfluences, WeldComparesTheSecondSet) {

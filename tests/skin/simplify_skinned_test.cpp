@@ -8,10 +8,12 @@
 
 #include "core/shapes.h"
 #include "lodkit/error.h"
+#include "lodkit/lod.h"
 #include "lodkit/measure.h"
 #include "lodkit/skin.h"
 #include "skin/fixtures.h"
 #include "skin/skin_test_support.h"
+#include "test_support.h"
 
 namespace lod {
 namespace {
@@ -170,6 +172,84 @@ TEST(SkinnedGeomorph, EndsAreTheSkinnedLevelsInAnyFrame) {
   for (const float angle : {0.0f, 0.7f, 1.9f}) {
     SCOPED_TRACE(angle);
     skin_test::expect_geomorph_ends(chain, bent(angle), 1e-6f);
+  }
+}
+
+TEST(SimplifySkinned, NormalizeInfluencesByHand) {
+  Mesh m = arm(2, 3);
+  ASSERT_GE(m.vertex_count(), 3u);
+  m.joints[0] = {3, 4, 5, 6}, m.weights[0] = {0.2f, 0.2f, 0.4f, 0};     // sums to 4 x 0.2f: exact quarters
+  m.joints[1] = {1, 1, 0, 0}, m.weights[1] = {0, 0, 0, 0};              // no weight: all on slot 0
+  m.joints[2] = {1, 0, 0, 0}, m.weights[2] = {-1.0f, 0.5f, 0.5f, 0};     // negative weights count as 0
+  normalize_influences(m);
+  EXPECT_EQ(m.weights[0], (float4{0.25f, 0.25f, 0.5f, 0}));
+  EXPECT_EQ(m.joints[0], (ushort4{3, 4, 5, 0}));
+  EXPECT_EQ(m.weights[1], (float4{1, 0, 0, 0}));
+  EXPECT_EQ(m.joints[1], (ushort4{1, 1, 0, 0}));
+  EXPECT_EQ(m.weights[2], (float4{0, 0.5f, 0.5f, 0}));
+  EXPECT_EQ(m.joints[2], (ushort4{0, 0, 0, 0}));
+}
+
+// The multi-pose record carries the joints and weights it chose: replayed on the normalised input
+// it gives the output, influences included, and undone it gives that input back, bit for bit; so
+// does a progressive mesh through its .lpm file. Without the influence changes the replay differs.
+TEST(SimplifySkinned, MultiposeRecordReplaysItsInfluences) {
+  for (const bool eight : {false, true}) {
+    SCOPED_TRACE(eight ? "eight influences (tentacle)" : "four influences (arm)");
+    Mesh m = eight ? fixtures::tentacle_mesh(24, 8) : arm(40, 12);
+    std::vector<std::vector<mat4>> poses;
+    if (eight) {
+      const Scene scene = fixtures::tentacle_scene(24, 8);
+      poses = sample_poses(scene, 0, 6);
+    } else {
+      for (int k = 0; k < 6; ++k) poses.push_back(bent(2.0f * float(k) / 5));
+    }
+    // Inputs as exporters write them: weights that do not quite sum to 1, in no particular order.
+    for (size_t v = 0; v < m.vertex_count(); v += 3) {
+      float4& w = m.weights[v];
+      w = {w.x * 1.25f, w.y * 1.25f, w.z * 1.25f, w.w * 1.25f};
+      std::swap(m.weights[v].x, m.weights[v].y), std::swap(m.joints[v][0], m.joints[v][1]);
+    }
+    SkinSimplifyOptions o;
+    o.poses = poses;
+    o.simplify.target_ratio = 0.1f;
+    const SimplifyResult r = simplify_skinned(m, o);
+    ASSERT_GT(r.record.collapses.size(), 0u);
+    ASSERT_EQ(r.record.influences.size(), r.record.collapses.size());
+
+    Mesh normalized = m;
+    normalize_influences(normalized);
+    EXPECT_EQ(test::mesh_difference(replay(normalized, r.record, r.record.collapses.size()), r.mesh), "");
+    EXPECT_EQ(test::mesh_difference(replay_and_undo(normalized, r.record), normalized), "");
+    for (size_t v = 0; v < r.mesh.vertex_count(); ++v) {
+      const float4& w = r.mesh.weights[v];
+      double sum = double(w.x) + w.y + w.z + w.w;
+      if (eight) sum += double(r.mesh.weights1[v].x) + r.mesh.weights1[v].y + r.mesh.weights1[v].z + r.mesh.weights1[v].w;
+      ASSERT_NEAR(sum, 1.0, 1e-6);
+    }
+
+    SimplifyRecord without = r.record;
+    without.influences.clear();
+    const Mesh plain = replay(normalized, without, without.collapses.size());
+    EXPECT_NE(test::mesh_difference(plain, r.mesh), "");  // some survivors took other influences
+    EXPECT_EQ(plain.positions, r.mesh.positions);
+
+    const ProgressiveMesh pm(normalized, r.record);
+    ProgressiveMesh back = decode_progressive_mesh(test::bytes_of(encode_progressive_mesh(pm)), "arm.lpm");
+    back.set_collapses(back.collapse_count());
+    EXPECT_EQ(test::mesh_difference(back.mesh(), r.mesh), "");
+    back.set_collapses(back.collapse_count() / 2);
+    expect_valid_influences(back.mesh(), eight ? fixtures::tentacle_bones : 2);
+    back.set_collapses(0);
+    EXPECT_EQ(test::mesh_difference(back.mesh(), replay(normalized, r.record, 0)), "");
+
+    // A record whose influence changes do not start from the state before them is rejected.
+    SimplifyRecord wrong = r.record;
+    wrong.influences[0].old_value = wrong.influences[0].new_value;
+    EXPECT_THROW(decode_progressive_mesh(test::bytes_of(encode_progressive_mesh(ProgressiveMesh(normalized, wrong))), "x.lpm"),
+                 Error);
+    wrong.influences.pop_back();
+    EXPECT_THROW(ProgressiveMesh(normalized, wrong), Error);
   }
 }
 
