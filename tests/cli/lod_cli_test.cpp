@@ -15,6 +15,7 @@
 #include "core/shapes.h"
 #include "lodkit/io.h"
 #include "lodkit/lod.h"
+#include "lodkit/measure.h"
 #include "lodkit/skin.h"
 #include "skin/fixtures.h"
 #include "optimize/optimize_test_support.h"
@@ -417,6 +418,91 @@ TEST(CliLod, SkinnedCharacterKeepsItsSkeletonAndClips) {
     }
   }
   test::expect_valid_gltf({dir / "lod.glb"});
+}
+
+// --lpm on a skinned character: the progressive mesh animates with the input's skeleton. Multi-pose:
+// its input is the character with normalised weights and its record carries the chosen influences;
+// at every size the influences are valid, and the coarsest mesh, posed by the clips, stays as near
+// the posed input as the chain's coarsest level. Subset: every vertex is an input vertex with its
+// own influences. Houle's record is in a pose, not in bind space: refused.
+TEST(CliLod, SkinnedProgressiveMesh) {
+  test::TempDir dir;
+  write_scene(fixtures::humanoid_scene(), dir / "humanoid.glb");
+  const Scene input = read_scene(dir / "humanoid.glb");
+  const std::vector<SkinnedPrimitive> skinned = skinned_primitives(input);
+  ASSERT_EQ(skinned.size(), 1u);
+  const Mesh& rest = input.primitives[skinned[0].primitive].mesh;
+  const size_t joints = input.skins[skinned[0].skin].joints.size();
+  const std::vector<std::vector<mat4>> poses = sample_poses(input, skinned[0].skin, 5);
+  const auto posed = [](const Mesh& m, const std::vector<mat4>& pose) {
+    SkinnedVertices v;
+    skin_vertices(m, pose, v);
+    Mesh out = m;
+    out.positions = v.positions;
+    return out;
+  };
+  const auto expect_valid = [&](const Mesh& m) {
+    ASSERT_EQ(m.weights.size(), m.vertex_count());
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+      const float4& w = m.weights[v];
+      ASSERT_NEAR(double(w.x) + w.y + w.z + w.w, 1.0, 1e-6);
+      for (size_t k = 0; k < 4; ++k) ASSERT_LT(m.joints[v][k], joints);
+    }
+  };
+
+  for (const char* mode : {"multipose", "subset"}) {
+    SCOPED_TRACE(mode);
+    const test::RunResult r = test::run_cli({"lod", (dir / "humanoid.glb").string(), "-o", (dir / "lod.glb").string(),
+                                             "--ratios", "1,0.3,0.1", "--skin-mode", mode, "--poses", "8", "--lpm",
+                                             (dir / "h.lpm").string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    ProgressiveMesh pm = read_progressive_mesh(dir / "h.lpm");
+    const bool multipose = std::string(mode) == "multipose";
+    Mesh expected_input = rest;
+    if (multipose) normalize_influences(expected_input);
+    EXPECT_EQ(test::mesh_difference(pm.input(), expected_input), "");
+    EXPECT_EQ(pm.record().influences.size(), multipose ? pm.collapse_count() : 0u);
+    ASSERT_GT(pm.collapse_count(), 0u);
+
+    const Scene out = read_scene(dir / "lod.glb");
+    const std::vector<int32_t>& ids = out.nodes[skinned[0].node].lod_ids;
+    ASSERT_EQ(ids.size(), 2u);
+    const Mesh* coarsest = gltf_mesh(out, size_t(out.nodes[size_t(ids[1])].mesh));
+    ASSERT_NE(coarsest, nullptr);
+
+    // Subset: input vertices by position, with their own influences.
+    std::map<std::tuple<float, float, float>, std::pair<ushort4, float4>> at;
+    for (size_t v = 0; v < rest.vertex_count(); ++v)
+      at[{rest.positions[v].x, rest.positions[v].y, rest.positions[v].z}] = {rest.joints[v], rest.weights[v]};
+    for (const size_t k : {pm.collapse_count() / 2, pm.collapse_count()}) {
+      pm.set_collapses(k);
+      const Mesh m = pm.mesh();
+      expect_valid(m);
+      if (!multipose)
+        for (size_t v = 0; v < m.vertex_count(); ++v) {
+          const auto it = at.find({m.positions[v].x, m.positions[v].y, m.positions[v].z});
+          ASSERT_NE(it, at.end());
+          ASSERT_EQ(it->second.first, m.joints[v]);
+          ASSERT_EQ(it->second.second, m.weights[v]);
+        }
+    }
+    const Mesh last = pm.mesh();
+    EXPECT_LE(last.triangle_count(), coarsest->triangle_count());
+    double pm_worst = 0, level_worst = 0;
+    for (const std::vector<mat4>& pose : poses) {
+      const Mesh reference = posed(rest, pose);
+      pm_worst = std::max(pm_worst, compare(reference, posed(last, pose), {.samples = 20'000}).hausdorff);
+      level_worst = std::max(level_worst, compare(reference, posed(*coarsest, pose), {.samples = 20'000}).hausdorff);
+    }
+    EXPECT_LE(pm_worst, 1.25 * level_worst) << "progressive " << pm_worst << ", chain " << level_worst;
+  }
+
+  const test::RunResult houle = test::run_cli({"lod", (dir / "humanoid.glb").string(), "-o", (dir / "h.glb").string(),
+                                               "--skin-mode", "houle", "--lpm", (dir / "houle.lpm").string()});
+  EXPECT_EQ(houle.exit_code, 1);
+  EXPECT_NE(houle.err.find("houle"), std::string::npos) << houle.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "houle.lpm"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "h.glb"));
 }
 
 // A skinned character's blend shape (each vertex's offset a linear, invertible function of its

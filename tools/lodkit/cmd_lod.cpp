@@ -343,6 +343,33 @@ SkinMode parse_skin_mode(const std::string& name) {
 // One chain per skinned glTF mesh instance: its primitives (all with the node's skin) simplified
 // together level by level, so that level i of every primitive goes into the same new glTF mesh.
 // Each primitive's chain is built separately; the node's errors are the largest of its primitives'.
+// The skinned simplifier's options for one primitive: its skin's poses as the mode needs them.
+SkinSimplifyOptions skin_options(const Scene& scene, const SkinnedPrimitive& sp, SkinMode mode, uint32_t pose_count) {
+  SkinSimplifyOptions so;
+  so.mode = mode;
+  if (mode == SkinMode::houle) {
+    so.poses = {joint_matrices(scene, sp.skin, world_matrices(scene, mid_range_pose(scene)))};
+  } else if (mode == SkinMode::multipose) {
+    so.poses = sample_poses(scene, sp.skin, pose_count);
+  }
+  return so;
+}
+
+// The progressive mesh of a skinned primitive, from its input down to `triangles`. A multi-pose
+// record replays on the input with its weights normalised (lod::simplify_skinned), a subset one on
+// the input itself.
+ProgressiveMesh skinned_progressive_mesh(const Scene& scene, const SkinnedPrimitive& sp, SkinMode mode,
+                                         uint32_t pose_count, SimplifyOptions simplify, uint64_t triangles) {
+  SkinSimplifyOptions so = skin_options(scene, sp, mode, pose_count);
+  so.simplify = std::move(simplify);
+  so.simplify.target_triangles = std::max<uint64_t>(1, triangles);
+  so.simplify.record = true;
+  Mesh input = scene.primitives[sp.primitive].mesh;
+  SimplifyResult r = simplify_skinned(input, so);
+  if (mode == SkinMode::multipose) normalize_influences(input);
+  return ProgressiveMesh(std::move(input), std::move(r.record));
+}
+
 std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<SkinnedPrimitive>& skinned, SkinMode mode,
                                        uint32_t pose_count, const LodOptions& base,
                                        const std::function<void(double)>& progress) {
@@ -358,15 +385,8 @@ std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<Ski
     const SkinnedPrimitive& sp = skinned[k];
     if (done[sp.primitive]) continue;  // a primitive instanced twice gets one chain
     done[sp.primitive] = true;
-    SkinSimplifyOptions so;
-    so.mode = mode;
-    if (mode == SkinMode::houle) {
-      so.poses = {joint_matrices(scene, sp.skin, world_matrices(scene, mid_range_pose(scene)))};
-    } else if (mode == SkinMode::multipose) {
-      so.poses = sample_poses(scene, sp.skin, pose_count);
-    }
     LodOptions options = base;
-    options.simplifier = skinned_simplifier(std::move(so));
+    options.simplifier = skinned_simplifier(skin_options(scene, sp, mode, pose_count));
     options.progress = [&](double f) { progress((double(k) + f) / double(skinned.size())); };
     const Mesh& mesh = scene.primitives[sp.primitive].mesh;
     validate(mesh, scene.name);
@@ -567,7 +587,7 @@ Command register_lod(CLI::App& root) {
   app->add_option("--skin-mode", o->skin_mode,
                  "Skinned glTF input: houle, subset or multipose (default: quadrics over --poses poses of every clip)");
   app->add_option("--poses", o->poses, "Skinned input, multipose mode: poses sampled over the clips (default 16)");
-  app->add_option("--lpm", o->lpm, "Also write a progressive mesh (.lpm) down to the coarsest level");
+  app->add_option("--lpm", o->lpm, "Also write a progressive mesh (.lpm) down to the coarsest level (skinned input: multipose or subset mode, one skinned mesh)");
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
   add_gltf_output_flags(app, o->gltf);
@@ -632,10 +652,16 @@ Command register_lod(CLI::App& root) {
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
               if (o->morph) throw_usage("--morph: skinned input morphs at run time (lod::SkinnedGeomorph), not as glTF morph targets");
-              if (!o->lpm.empty()) throw_usage("--lpm is not available for skinned input yet");
+              const SkinMode mode = parse_skin_mode(o->skin_mode);
+              if (!o->lpm.empty() && mode == SkinMode::houle)
+                throw_usage("--lpm: --skin-mode houle simplifies in one pose, so its collapse record is not in bind "
+                            "space; use multipose or subset");
+              std::set<uint32_t> primitives;
+              for (const SkinnedPrimitive& sp : skinned) primitives.insert(sp.primitive);
+              if (!o->lpm.empty() && primitives.size() > 1)
+                throw_usage(fmt::format("--lpm: the input has {} skinned meshes, and a .lpm file holds one", primitives.size()));
               ProgressBar bar("building skinned LODs");
-              reports = build_skinned(scene, skinned, parse_skin_mode(o->skin_mode), o->poses, options,
-                                      [&](double f) { bar.update(f); });
+              reports = build_skinned(scene, skinned, mode, o->poses, options, [&](double f) { bar.update(f); });
             } else {
               if (instanced.empty() || mesh.triangle_count() > 0) {
                 validate(mesh, o->input);
@@ -675,6 +701,12 @@ Command register_lod(CLI::App& root) {
 
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
+              // The progressive mesh spans the input down to the coarsest level's size.
+              if (!o->lpm.empty())
+                write_progressive_mesh(skinned_progressive_mesh(scene, skinned[0], parse_skin_mode(o->skin_mode), o->poses,
+                                                                options.simplify,
+                                                                reports[0].chain.levels.back().mesh.triangle_count()),
+                                       o->lpm);
               write_scene(skinned_scene(std::move(scene), skinned, reports), o->output, o->gltf);
             } else {
               Scene out = chain_document(scene.source ? &scene : nullptr, reports[0].chain.levels.front().mesh.material_names);
