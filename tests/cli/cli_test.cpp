@@ -4,7 +4,11 @@
 #include <nlohmann/json.hpp>
 
 #include "core/shapes.h"
+#include <fmt/format.h>
+
 #include "lodkit/io.h"
+#include "lodkit/lod.h"
+#include "lodkit/simplify.h"
 #include "test_support.h"
 
 namespace lod {
@@ -53,6 +57,43 @@ TEST(Cli, InfoTablePrintsAlignedRows) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("unique positions        8\n"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("triangles               12\n"), std::string::npos) << r.out;
+}
+
+// info on a progressive mesh: the torus of 20 x 10 (200 positions, 400 triangles) and its record;
+// the base mesh has one position less per collapse. A corrupt file is rejected with its byte offset.
+TEST(Cli, InfoDescribesAProgressiveMesh) {
+  test::TempDir dir;
+  const Mesh torus = shapes::torus(1.0f, 0.3f, 20, 10);
+  const SimplifyResult s = simplify(torus, {.target_triangles = 60});
+  const ProgressiveMesh pm(torus, s.record);
+  write_progressive_mesh(pm, dir / "torus.lpm");
+  test::RunResult r = test::run_cli({"info", "--json", (dir / "torus.lpm").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["format"], "lpm");
+  EXPECT_EQ(j["stats"]["triangles"], 400);
+  const auto& p = j["progressive"];
+  EXPECT_EQ(p["collapses"], s.record.collapses.size());
+  EXPECT_EQ(p["max_positions"], 200);
+  EXPECT_EQ(p["min_positions"], 200 - s.record.collapses.size());
+  EXPECT_EQ(p["max_triangles"], 400);
+  EXPECT_LE(p["min_triangles"].get<int>(), 60);
+  EXPECT_EQ(p["influence_changes"], false);
+
+  r = test::run_cli({"info", (dir / "torus.lpm").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find(fmt::format("progressive mesh        {} collapses: 200 > {} positions, 400 > ",
+                                   s.record.collapses.size(), 200 - s.record.collapses.size())),
+            std::string::npos)
+      << r.out;
+
+  std::string bytes = encode_progressive_mesh(pm);
+  bytes[bytes.size() / 2] ^= 0x5a;
+  test::write_text(dir / "bad.lpm", bytes);
+  r = test::run_cli({"info", (dir / "bad.lpm").string()});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("checksum"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("bad.lpm"), std::string::npos) << r.err;
 }
 
 TEST(Cli, UsageErrorsExitWith1) {

@@ -3,11 +3,14 @@
 #include <fmt/ranges.h>
 
 #include <chrono>
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
 #include "lodkit/io.h"
+#include "lodkit/lod.h"
 #include "progress.h"
 
 namespace lod::cli {
@@ -108,12 +111,35 @@ std::vector<LodChainInfo> lod_chains(const Scene& scene) {
   return out;
 }
 
-void print_table(const InfoOptions& o, FileFormat format, const Scene& scene, const Mesh& mesh, const MeshStats& s,
-                 double load_seconds) {
+// A progressive mesh (.lpm): its record's span, from the input down to its base mesh.
+struct ProgressiveInfo {
+  size_t collapses = 0;
+  uint32_t max_positions = 0, min_positions = 0;
+  uint64_t max_triangles = 0, min_triangles = 0;
+  bool influence_changes = false;  // a skinned multi-pose record: survivors' joints and weights
+};
+
+ProgressiveInfo progressive_info(ProgressiveMesh& pm) {
+  ProgressiveInfo p{pm.collapse_count(), pm.max_positions(), pm.min_positions(), pm.input().triangle_count(), 0,
+                    !pm.record().influences.empty()};
+  pm.set_collapses(pm.collapse_count());
+  p.min_triangles = pm.mesh().triangle_count();
+  pm.set_collapses(0);
+  return p;
+}
+
+void print_table(const InfoOptions& o, const std::string& format, const Scene& scene, const Mesh& mesh,
+                 const MeshStats& s, const ProgressiveInfo* pm, double load_seconds) {
   auto row = [](const char* key, const std::string& value) { fmt::print("{:<24}{}\n", key, value); };
-  row("file", fmt::format("{} ({})", o.input, format_name(format)));
+  row("file", fmt::format("{} ({})", o.input, format));
   row("load time", fmt::format("{:.3f} s", load_seconds));
   row("streams", streams_text(mesh));
+  if (pm) {
+    row("progressive mesh", fmt::format("{} collapses: {} > {} positions, {} > {} triangles", pm->collapses,
+                                        pm->max_positions, pm->min_positions, pm->max_triangles, pm->min_triangles));
+    if (pm->influence_changes) row("influence changes", "yes (skinned, multi-pose: the survivors' joints and weights)");
+    fmt::print("(the statistics below are the input's, the progressive mesh fully refined)\n");
+  }
   if (scene.source) {
     row("glTF primitives", std::to_string(scene.primitives.size()));
     row("glTF nodes", std::to_string(scene.nodes.size()));
@@ -167,18 +193,27 @@ void print_table(const InfoOptions& o, FileFormat format, const Scene& scene, co
 Command register_info(CLI::App& root) {
   auto options = std::make_shared<InfoOptions>();
   CLI::App* app = root.add_subcommand("info", "Print the statistics and topology of a mesh file");
-  app->add_option("input", options->input, "Mesh file (.obj .ply .off .stl .gltf .glb)")->required();
+  app->add_option("input", options->input, "Mesh file (.obj .ply .off .stl .gltf .glb), or a progressive mesh (.lpm)")
+      ->required();
   app->add_flag("--json", options->json, "Print a machine-readable report on stdout");
   return {app, [options] {
             const InfoOptions& o = *options;
-            FileFormat format = format_from_path(o.input);
+            // A progressive mesh is described by its record and its input mesh.
+            const bool lpm = std::filesystem::path(o.input).extension() == ".lpm";
+            const FileFormat format = lpm ? FileFormat::ply : format_from_path(o.input);
+            const std::string format_label = lpm ? "lpm" : format_name(format);
             auto start = std::chrono::steady_clock::now();
             Scene scene;
             Mesh mesh;
+            std::optional<ProgressiveInfo> progressive;
             {
               // glTF keeps its scene for the summary; the statistics are over the flattened mesh.
               ProgressBar bar("loading");
-              if (format == FileFormat::gltf || format == FileFormat::glb) {
+              if (lpm) {
+                ProgressiveMesh pm = read_progressive_mesh(o.input);
+                progressive = progressive_info(pm);
+                mesh = pm.input();
+              } else if (format == FileFormat::gltf || format == FileFormat::glb) {
                 scene = read_scene(o.input, bar.read_options());
                 mesh = flatten(scene);
               } else {
@@ -189,8 +224,15 @@ Command register_info(CLI::App& root) {
             validate(mesh, o.input);
             MeshStats s = compute_stats(mesh);
             if (o.json) {
-              nlohmann::json j = {{"file", o.input}, {"format", format_name(format)}, {"load_seconds", load_seconds},
+              nlohmann::json j = {{"file", o.input}, {"format", format_label}, {"load_seconds", load_seconds},
                                   {"streams", streams_text(mesh)}, {"stats", stats_json(s)}};
+              if (progressive)
+                j["progressive"] = {{"collapses", progressive->collapses},
+                                    {"max_positions", progressive->max_positions},
+                                    {"min_positions", progressive->min_positions},
+                                    {"max_triangles", progressive->max_triangles},
+                                    {"min_triangles", progressive->min_triangles},
+                                    {"influence_changes", progressive->influence_changes}};
               const auto [instances, instanced_nodes] = gpu_instance_counts(scene);
               const auto [morph_targets, morphing_primitives] = morph_target_counts(scene);
               if (scene.source)
@@ -211,7 +253,7 @@ Command register_info(CLI::App& root) {
               }
               fmt::print("{}\n", j.dump(2));
             } else {
-              print_table(o, format, scene, mesh, s, load_seconds);
+              print_table(o, format_label, scene, mesh, s, progressive ? &*progressive : nullptr, load_seconds);
             }
             return 0;
           }};
