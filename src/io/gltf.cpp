@@ -1389,6 +1389,44 @@ class BinWriter {
     add_indices(mesh, prim);
   }
 
+  // KHR_draco_mesh_compression: the vertex streams and indices as one Draco stream
+  // (io::encode_draco), its accessors without a bufferView; morph targets stay plain, in the
+  // vertices' order (kept when `keep_order` or when there are targets).
+  void add_draco_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim, int position_bits,
+                          bool keep_order) {
+    const io::DracoPrimitive d = io::encode_draco(mesh, position_bits, keep_order || !targets.empty() || !prim.targets.empty());
+    const int view = add_view(d.bytes.data(), d.bytes.size(), 0);
+    tg::Value::Object ids;
+    for (const auto& [semantic, id] : d.attributes) {
+      tg::Accessor acc;
+      acc.componentType = d.component_types.at(semantic);
+      acc.type = semantic == "POSITION" || semantic == "NORMAL" ? TINYGLTF_TYPE_VEC3
+                 : semantic.starts_with("TEXCOORD_")            ? TINYGLTF_TYPE_VEC2
+                                                                : TINYGLTF_TYPE_VEC4;
+      acc.count = d.points;
+      if (semantic == "POSITION") {
+        acc.minValues = {d.position_min.x, d.position_min.y, d.position_min.z};
+        acc.maxValues = {d.position_max.x, d.position_max.y, d.position_max.z};
+      }
+      model_.accessors.push_back(std::move(acc));
+      prim.attributes[semantic] = int(model_.accessors.size() - 1);
+      ids[semantic] = tg::Value(int(id));
+    }
+    tg::Accessor indices;
+    indices.componentType = d.points <= 65536 ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+    indices.type = TINYGLTF_TYPE_SCALAR;
+    indices.count = d.triangles * 3;
+    model_.accessors.push_back(std::move(indices));
+    prim.indices = int(model_.accessors.size() - 1);
+    tg::Value::Object ext;
+    ext["bufferView"] = tg::Value(view);
+    ext["attributes"] = tg::Value(std::move(ids));
+    prim.extensions[io::draco_extension] = tg::Value(std::move(ext));
+    used_draco_ = true;
+    if (prim.targets.empty()) add_targets(mesh, targets, prim, {});
+  }
+  bool used_draco() const { return used_draco_; }
+
   // Morph targets of `mesh`'s vertices.
   void add_targets(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim, const StreamCoding& coding) {
     for (const MorphTarget& target : targets) {
@@ -1433,6 +1471,7 @@ class BinWriter {
   tg::Model& model_;
   std::vector<uint8_t>& bin_;
   bool used_quantization_ = false;
+  bool used_draco_ = false;
 };
 
 // A Mesh the writer can turn into valid accessors: streams sized, indices in range, positions finite.
@@ -2135,7 +2174,11 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     const int32_t shared = in.shares_vertices_with;
     const std::vector<Gathered>& extra = gathered[p.scene_primitive];
     const StreamCoding coding{options.quantize, on_grid[p.mesh] ? &grid : nullptr};
-    if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && out.targets.empty() && extra.empty() &&
+    if (options.draco) {
+      // Each primitive its own stream (Draco has no shared vertex buffers); streams outside it
+      // (gathered, or the source's morph targets) need the vertices in place.
+      writer.add_draco_geometry(in.mesh, in.targets, out, options.position_bits, !extra.empty());
+    } else if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && out.targets.empty() && extra.empty() &&
         on_grid[written_mesh[size_t(shared)]] == on_grid[p.mesh]) {
       // One vertex buffer, several index buffers; each morph target too where it is the same
       // (--shared-vertices' blend shapes), else the primitive's own (each level's geomorph).
@@ -2184,6 +2227,9 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     model.animations[r.animation].samplers[r.sampler].output =
         writer.add_accessor(r.values, TINYGLTF_COMPONENT_TYPE_SHORT, TINYGLTF_TYPE_VEC4, 0, true);
   if (std::find(on_grid.begin(), on_grid.end(), true) != on_grid.end()) place_position_grid(model, bin, writer, grid, on_grid);
+  if (writer.used_draco())
+    for (std::vector<std::string>* list : {&model.extensionsUsed, &model.extensionsRequired})
+      if (std::find(list->begin(), list->end(), io::draco_extension) == list->end()) list->push_back(io::draco_extension);
   if (writer.used_quantization()) {
     const std::string ext = "KHR_mesh_quantization";
     if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), ext) == model.extensionsUsed.end())
@@ -2944,6 +2990,10 @@ void write_gltf(const Scene& scene, const std::filesystem::path& path, const Wri
   } else {
     model = model_from_scene(scene, slots);
   }
+  if (options.draco && options.quantize)
+    throw_usage("cannot write glTF: Draco and KHR_mesh_quantization both quantize the vertex streams; choose one");
+  if (options.draco && (options.position_bits < 1 || options.position_bits > 30))
+    throw_usage("cannot write glTF: position_bits is " + std::to_string(options.position_bits) + ", not 1 to 30 (Draco)");
   std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots, options);
   // MSFT_lod and instancing are declared only while a node still uses them.
   for (const std::string ext : {"MSFT_lod", gpu_instancing})

@@ -4,6 +4,7 @@
 #include "io/gltf_compression.h"
 
 #include <draco/compression/decode.h>
+#include <draco/compression/encode.h>
 #include <meshoptimizer.h>
 
 #include <algorithm>
@@ -23,7 +24,7 @@ namespace tg = tinygltf;
 using Json = nlohmann::json;
 
 constexpr std::array<const char*, 2> meshopt_names = {"EXT_meshopt_compression", "KHR_meshopt_compression"};
-constexpr const char* draco_name = "KHR_draco_mesh_compression";
+constexpr const char* draco_name = draco_extension;
 // 3 zero bytes: the smallest data: URI tinygltf accepts for a buffer.
 constexpr const char* stand_in_uri = "data:application/octet-stream;base64,AAAA";
 constexpr uint64_t stand_in_length = 3;
@@ -530,6 +531,110 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin) {
     if (!names.is_array()) names = Json::array();
     if (std::find(names.begin(), names.end(), meshopt_names[0]) == names.end()) names.push_back(meshopt_names[0]);
   }
+}
+
+namespace {
+
+// A Draco attribute of `n` points with identity mapping, filled from `values` (n * components
+// elements of T).
+template <class T>
+int add_draco_attribute(draco::Mesh& mesh, draco::GeometryAttribute::Type type, draco::DataType data_type, int components,
+                        bool normalized, const T* values, size_t n) {
+  draco::GeometryAttribute attribute;
+  attribute.Init(type, nullptr, uint8_t(components), data_type, normalized, int64_t(sizeof(T)) * components, 0);
+  const int id = mesh.AddAttribute(attribute, true, uint32_t(n));
+  if (id < 0) throw_internal("Draco: could not add an attribute");
+  draco::PointAttribute* a = mesh.attribute(id);
+  for (size_t i = 0; i < n; ++i) a->SetAttributeValue(draco::AttributeValueIndex(uint32_t(i)), values + i * size_t(components));
+  return id;
+}
+
+}  // namespace
+
+DracoPrimitive encode_draco(const Mesh& mesh, int position_bits, bool keep_order) {
+  const size_t n = mesh.vertex_count(), faces = mesh.triangle_count();
+  draco::Mesh dm;
+  dm.set_num_points(uint32_t(n));
+  dm.SetNumFaces(faces);
+  for (size_t f = 0; f < faces; ++f) {
+    draco::Mesh::Face face;
+    for (size_t c = 0; c < 3; ++c) face[c] = draco::PointIndex(mesh.indices[3 * f + c]);
+    dm.SetFace(draco::FaceIndex(uint32_t(f)), face);
+  }
+  DracoPrimitive out;
+  std::map<std::string, int> ids;  // semantic -> attribute id in dm
+  using GA = draco::GeometryAttribute;
+  const auto floats = [](const auto& v) { return reinterpret_cast<const float*>(v.data()); };
+  ids["POSITION"] = add_draco_attribute(dm, GA::POSITION, draco::DT_FLOAT32, 3, false, floats(mesh.positions), n);
+  out.component_types["POSITION"] = TINYGLTF_COMPONENT_TYPE_FLOAT;
+  if (!mesh.normals.empty()) ids["NORMAL"] = add_draco_attribute(dm, GA::NORMAL, draco::DT_FLOAT32, 3, false, floats(mesh.normals), n);
+  if (!mesh.tangents.empty()) ids["TANGENT"] = add_draco_attribute(dm, GA::GENERIC, draco::DT_FLOAT32, 4, false, floats(mesh.tangents), n);
+  for (size_t k = 0; k < max_uv_sets; ++k)
+    if (!mesh.uvs[k].empty())
+      ids["TEXCOORD_" + std::to_string(k)] = add_draco_attribute(dm, GA::TEX_COORD, draco::DT_FLOAT32, 2, false, floats(mesh.uvs[k]), n);
+  if (!mesh.colors.empty()) ids["COLOR_0"] = add_draco_attribute(dm, GA::COLOR, draco::DT_FLOAT32, 4, false, floats(mesh.colors), n);
+  // Joint indices in bytes when every one fits, as the plain writer does.
+  const auto fits_byte = [](const std::vector<ushort4>& joints) {
+    return std::all_of(joints.begin(), joints.end(), [](const ushort4& j) { return std::max({j[0], j[1], j[2], j[3]}) < 256; });
+  };
+  const bool byte_joints = fits_byte(mesh.joints) && fits_byte(mesh.joints1);
+  const std::vector<ushort4>* joints[2] = {&mesh.joints, &mesh.joints1};
+  const std::vector<float4>* weights[2] = {&mesh.weights, &mesh.weights1};
+  for (size_t set = 0; set < 2; ++set) {
+    const std::string suffix = "_" + std::to_string(set);
+    if (!joints[set]->empty()) {
+      if (byte_joints) {
+        std::vector<uint8_t> narrow(4 * n);
+        for (size_t v = 0; v < n; ++v)
+          for (size_t k = 0; k < 4; ++k) narrow[4 * v + k] = uint8_t((*joints[set])[v][k]);
+        ids["JOINTS" + suffix] = add_draco_attribute(dm, GA::GENERIC, draco::DT_UINT8, 4, false, narrow.data(), n);
+      } else {
+        ids["JOINTS" + suffix] = add_draco_attribute(dm, GA::GENERIC, draco::DT_UINT16, 4, false,
+                                                     reinterpret_cast<const uint16_t*>(joints[set]->data()), n);
+      }
+      out.component_types["JOINTS" + suffix] = byte_joints ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE : TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+    }
+    if (!weights[set]->empty())
+      ids["WEIGHTS" + suffix] = add_draco_attribute(dm, GA::GENERIC, draco::DT_FLOAT32, 4, false, floats(*weights[set]), n);
+  }
+  for (const auto& [semantic, id] : ids) {
+    out.attributes[semantic] = dm.attribute(id)->unique_id();
+    out.component_types.emplace(semantic, TINYGLTF_COMPONENT_TYPE_FLOAT);  // (joints set above)
+  }
+
+  draco::Encoder encoder;
+  encoder.SetAttributeQuantization(GA::POSITION, position_bits);
+  encoder.SetAttributeQuantization(GA::NORMAL, 10);
+  encoder.SetAttributeQuantization(GA::TEX_COORD, 12);
+  encoder.SetAttributeQuantization(GA::COLOR, 8);
+  encoder.SetAttributeQuantization(GA::GENERIC, 12);  // float streams only: joint indices stay exact
+  encoder.SetSpeedOptions(5, 5);
+  encoder.SetEncodingMethod(keep_order ? draco::MESH_SEQUENTIAL_ENCODING : draco::MESH_EDGEBREAKER_ENCODING);
+  draco::EncoderBuffer buffer;
+  const draco::Status status = encoder.EncodeMeshToBuffer(dm, &buffer);
+  if (!status.ok()) throw_internal("Draco: encoding failed: " + status.error_msg_string());
+  out.bytes.assign(buffer.data(), buffer.data() + buffer.size());
+
+  // What a loader will see: counts and the position bounds of the decoded stream.
+  draco::DecoderBuffer input;
+  input.Init(buffer.data(), buffer.size());
+  draco::Decoder decoder;
+  auto decoded = decoder.DecodeMeshFromBuffer(&input);
+  if (!decoded.ok()) throw_internal("Draco: the encoded stream does not decode: " + decoded.status().error_msg_string());
+  const std::unique_ptr<draco::Mesh> back = std::move(decoded).value();
+  out.points = back->num_points(), out.triangles = back->num_faces();
+  if (keep_order && (out.points != n || out.triangles != faces))
+    throw_internal("Draco: sequential encoding changed the vertex or triangle count");
+  const draco::PointAttribute* position = back->GetAttributeByUniqueId(out.attributes["POSITION"]);
+  if (!position) throw_internal("Draco: the decoded stream has no positions");
+  float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (uint32_t i = 0; i < out.points; ++i) {
+    float p[3];
+    position->ConvertValue<float>(position->mapped_index(draco::PointIndex(i)), 3, p);
+    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], p[c]), hi[c] = std::max(hi[c], p[c]);
+  }
+  out.position_min = {lo[0], lo[1], lo[2]}, out.position_max = {hi[0], hi[1], hi[2]};
+  return out;
 }
 
 }  // namespace lod::io

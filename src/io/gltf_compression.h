@@ -11,9 +11,12 @@
 #include <tiny_gltf.h>
 
 #include <cstdint>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
+
+#include "lodkit/mesh.h"
 
 namespace lod::io {
 
@@ -46,5 +49,22 @@ void decode_compressed_geometry(tinygltf::Model& model, const std::vector<uint64
 // versions are set to the ones the extension admits (vertex 0, index 1) before each encoding:
 // meshoptimizer keeps them in globals. Nothing changes when no view gets smaller.
 void compress_meshopt(nlohmann::json& doc, std::vector<uint8_t>& bin);
+
+// Writing (WriteOptions::draco): a triangle mesh's vertex streams and indices as one Draco stream
+// for KHR_draco_mesh_compression. Positions are quantized to `position_bits`, normals to 10 bits
+// (octahedral), UVs to 12, colours to 8, and the other float streams (tangents, skin weights) to 12;
+// joint indices and the connectivity are exact. `keep_order` (a primitive whose morph targets or
+// other streams stay outside the stream and must line up with it) encodes sequentially, which keeps
+// every vertex and triangle in place; otherwise Edgebreaker may renumber both. The stream is
+// decoded again to describe the accessors, which must match what a loader decodes.
+inline constexpr const char* draco_extension = "KHR_draco_mesh_compression";
+struct DracoPrimitive {
+  std::vector<uint8_t> bytes;
+  std::map<std::string, uint32_t> attributes;  // glTF semantic -> Draco unique id
+  std::map<std::string, int> component_types;  // glTF semantic -> accessor componentType
+  uint64_t points = 0, triangles = 0;
+  float3 position_min, position_max;  // of the decoded positions
+};
+DracoPrimitive encode_draco(const Mesh& mesh, int position_bits, bool keep_order);
 
 }  // namespace lod::io

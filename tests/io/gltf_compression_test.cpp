@@ -167,6 +167,36 @@ TEST(GltfCompression, MeshoptFilesReadLikeTheirUncompressedTwin) {
   test::expect_valid_gltf({dir / "out.glb"});
 }
 
+// Draco quantizes each attribute on a grid of 2^bits - 1 steps over its largest extent, so a value
+// moves at most half a step per component. Returns, per decoded vertex, the one source vertex
+// within that of it (positions at `position_bits` over `extent`; UVs at 12 bits over the torus's
+// span of 1; the seam copies share positions, not UVs), its 10-bit octahedral normal within a
+// degree (a fraction of one in fact).
+std::vector<uint32_t> match_within_quantization(const Mesh& source, const Mesh& decoded, int position_bits, float extent) {
+  const float position_bound = std::sqrt(3.0f) * 0.5f * extent / float((1 << position_bits) - 1) + 1e-6f;
+  const float uv_bound = std::sqrt(2.0f) * 0.5f * 1.0f / float((1 << 12) - 1) + 1e-6f;
+  EXPECT_EQ(decoded.normals.size(), source.normals.size() ? decoded.vertex_count() : 0);
+  EXPECT_EQ(decoded.uvs[0].size(), source.uvs[0].size() ? decoded.vertex_count() : 0);
+  std::vector<uint32_t> match(decoded.vertex_count(), 0);
+  for (size_t v = 0; v < decoded.vertex_count(); ++v) {
+    int found = 0;
+    for (size_t s = 0; s < source.vertex_count(); ++s) {
+      const float3 a = decoded.positions[v], b = source.positions[s];
+      const float3 d = {a.x - b.x, a.y - b.y, a.z - b.z};
+      float uv = 0;
+      if (!source.uvs[0].empty()) uv = std::hypot(decoded.uvs[0][v].x - source.uvs[0][s].x, decoded.uvs[0][v].y - source.uvs[0][s].y);
+      if (length3(d) <= position_bound && uv <= uv_bound) {
+        match[v] = uint32_t(s);
+        ++found;
+      }
+    }
+    EXPECT_EQ(found, 1) << "decoded vertex " << v;
+    if (!source.normals.empty())
+      EXPECT_GT(cosine(decoded.normals[v], source.normals[match[v]]), std::cos(3.14159265f / 180.0f)) << "vertex " << v;
+  }
+  return match;
+}
+
 TEST(GltfCompression, DracoFileMatchesItsSourceWithinTheQuantizationStep) {
   if (!test::program_available("draco_transcoder")) GTEST_SKIP() << "draco_transcoder not installed (scripts/setup.sh installs it)";
   TempDir dir;
@@ -182,28 +212,7 @@ TEST(GltfCompression, DracoFileMatchesItsSourceWithinTheQuantizationStep) {
   ASSERT_EQ(decoded.normals.size(), decoded.vertex_count());
   ASSERT_EQ(decoded.uvs[0].size(), decoded.vertex_count());
 
-  // Draco quantizes each attribute on a grid of 2^bits - 1 steps over its largest extent, so a
-  // value moves at most half a step per component. The torus spans 2.5 in x and y; its UVs span 1.
-  const float position_bound = std::sqrt(3.0f) * 0.5f * 2.5f / float((1 << 14) - 1) + 1e-6f;
-  const float uv_bound = std::sqrt(2.0f) * 0.5f * 1.0f / float((1 << 12) - 1) + 1e-6f;
-  // Each decoded vertex is exactly one source vertex: the seam copies share positions, not UVs.
-  std::vector<uint32_t> match(decoded.vertex_count());
-  for (size_t v = 0; v < decoded.vertex_count(); ++v) {
-    int found = 0;
-    for (size_t s = 0; s < source.vertex_count(); ++s) {
-      const float3 a = decoded.positions[v], b = source.positions[s];
-      const float3 d = {a.x - b.x, a.y - b.y, a.z - b.z};
-      const float du = decoded.uvs[0][v].x - source.uvs[0][s].x, dv = decoded.uvs[0][v].y - source.uvs[0][s].y;
-      if (length3(d) <= position_bound && std::sqrt(du * du + dv * dv) <= uv_bound) {
-        match[v] = uint32_t(s);
-        ++found;
-      }
-    }
-    ASSERT_EQ(found, 1) << "decoded vertex " << v;
-    // 10-bit octahedral normals are within a fraction of a degree; cos(1 degree) leaves room.
-    const float3 n = decoded.normals[v], m = source.normals[match[v]];
-    EXPECT_GT(cosine(n, m), std::cos(3.14159265f / 180.0f)) << "vertex " << v;
-  }
+  const std::vector<uint32_t> match = match_within_quantization(source, decoded, 14, 2.5f);
   EXPECT_EQ(triangles(decoded.indices, &match), triangles(source.indices, nullptr));  // winding included
 
   // Written back: plain, valid glTF with the decoded mesh.
@@ -559,6 +568,152 @@ TEST(GltfCompression, CommandsWriteCompressedWithDashC) {
     }
     test::expect_valid_gltf({dir / "c.glb"});
   }
+}
+
+// ---- writing Draco ----------------------------------------------------------------------------------
+
+// Written with WriteOptions::draco, the torus reads back within Draco's quantization steps, every
+// triangle with its winding (Edgebreaker may renumber vertices and triangles), from a file much
+// smaller than the plain one, whose primitive's accessors have no bufferView and that requires the
+// extension; it passes the validator. Its stream decodes with Debian's draco_decoder too.
+TEST(GltfCompression, DracoOutputMatchesItsSourceWithinTheQuantizationStep) {
+  TempDir dir;
+  const Mesh source = shapes::torus(1.0f, 0.25f, 24, 12);
+  WriteOptions o;
+  o.draco = true;
+  write_scene(scene_from_mesh(source), dir / "d.glb", o);
+  write_scene(scene_from_mesh(source), dir / "plain.glb");
+  EXPECT_LT(std::filesystem::file_size(dir / "d.glb"), std::filesystem::file_size(dir / "plain.glb") / 3);
+  const Json doc = test::glb_json(dir / "d.glb");
+  ASSERT_TRUE(contains(doc["extensionsRequired"], kDraco));
+  ASSERT_TRUE(contains(doc["extensionsUsed"], kDraco));
+  const Json& prim = doc["meshes"][0]["primitives"][0];
+  ASSERT_TRUE(prim["extensions"].contains(kDraco));
+  for (const auto& [semantic, accessor] : prim["attributes"].items()) {
+    EXPECT_FALSE(doc["accessors"][accessor.get<size_t>()].contains("bufferView")) << semantic;
+    EXPECT_TRUE(prim["extensions"][kDraco]["attributes"].contains(semantic)) << semantic;
+  }
+  EXPECT_FALSE(doc["accessors"][prim["indices"].get<size_t>()].contains("bufferView"));
+  test::expect_valid_gltf({dir / "d.glb"});
+
+  const Mesh decoded = only_mesh(read_scene(dir / "d.glb"));
+  ASSERT_EQ(decoded.triangle_count(), source.triangle_count());
+  const std::vector<uint32_t> match = match_within_quantization(source, decoded, 14, 2.5f);
+  EXPECT_EQ(triangles(decoded.indices, &match), triangles(source.indices, nullptr));
+
+  // Fewer position bits: a coarser grid, still within its step.
+  o.position_bits = 8;
+  write_scene(scene_from_mesh(source), dir / "d8.glb", o);
+  const Mesh coarse = only_mesh(read_scene(dir / "d8.glb"));
+  const float step = 2.5f / 255.0f;
+  float worst = 0;
+  for (const float3& p : coarse.positions) {
+    float nearest = INFINITY;
+    for (const float3& q : source.positions) nearest = std::min(nearest, length3({p.x - q.x, p.y - q.y, p.z - q.z}));
+    worst = std::max(worst, nearest);
+  }
+  EXPECT_LE(worst, std::sqrt(3.0f) * 0.5f * step + 1e-6f);
+  EXPECT_GT(worst, 0.01f * step);  // (8 bits do move the vertices)
+
+  if (test::program_available("draco_decoder")) {
+    // The stream alone, through Draco's own command-line decoder.
+    const test::Glb glb = test::read_glb(dir / "d.glb");
+    const Json& view = doc["bufferViews"][prim["extensions"][kDraco]["bufferView"].get<size_t>()];
+    const size_t offset = view.value("byteOffset", size_t(0)), length = view["byteLength"].get<size_t>();
+    test::write_bytes(dir / "stream.drc", std::vector<uint8_t>(glb.bin.begin() + ptrdiff_t(offset), glb.bin.begin() + ptrdiff_t(offset + length)));
+    run_tool({"draco_decoder", "-i", (dir / "stream.drc").string(), "-o", (dir / "stream.obj").string()});
+    EXPECT_EQ(read_mesh(dir / "stream.obj").triangle_count(), source.triangle_count());
+  }
+}
+
+// A primitive with a morph target stays in its vertex order (sequential encoding): vertex v within
+// a position step of the source's vertex v, the same index list, the target exact.
+TEST(GltfCompression, DracoOutputKeepsTheOrderOfAMorphingPrimitive) {
+  TempDir dir;
+  Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 20, 10));
+  const Mesh source = scene.primitives[0].mesh;
+  MorphTarget target;
+  for (const float3& p : source.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
+  scene.primitives[0].targets.push_back(target);
+  WriteOptions o;
+  o.draco = true;
+  write_scene(scene, dir / "m.glb", o);
+  test::expect_valid_gltf({dir / "m.glb"});
+  const Scene back = read_scene(dir / "m.glb");
+  const Mesh& m = only_mesh(back);
+  ASSERT_EQ(m.vertex_count(), source.vertex_count());
+  EXPECT_EQ(m.indices, source.indices);
+  const float bound = std::sqrt(3.0f) * 0.5f * 2.6f / float((1 << 14) - 1) + 1e-6f;
+  for (size_t v = 0; v < m.vertex_count(); ++v) {
+    const float3 a = m.positions[v], b = source.positions[v];
+    ASSERT_LE(length3({a.x - b.x, a.y - b.y, a.z - b.z}), bound) << v;
+  }
+  const std::vector<MorphTarget> targets = source_morph_targets(back, 0);
+  ASSERT_EQ(targets.size(), 1u);
+  EXPECT_EQ(targets[0].positions, target.positions);
+}
+
+// A skinned, animated character: joint indices exact, weights within a 12-bit step, positions within
+// a 14-bit one; skin and clips as they were.
+TEST(GltfCompression, DracoOutputOfASkinnedCharacter) {
+  TempDir dir;
+  const Scene input = fixtures::humanoid_scene();
+  write_scene(input, dir / "plain.glb");
+  WriteOptions o;
+  o.draco = true;
+  write_scene(input, dir / "d.glb", o);
+  test::expect_valid_gltf({dir / "d.glb"});
+  const Scene plain = read_scene(dir / "plain.glb"), back = read_scene(dir / "d.glb");
+  const Mesh &a = only_mesh(plain), &b = only_mesh(back);
+  ASSERT_EQ(a.vertex_count(), b.vertex_count());
+  float3 lo, hi;
+  bounding_box(a, lo, hi);
+  const float extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+  const float position_bound = std::sqrt(3.0f) * 0.5f * extent / float((1 << 14) - 1) + 1e-6f;
+  const float weight_bound = 0.5f / float((1 << 12) - 1) + 1e-6f;
+  // Match by position (the character's vertices are distinct there).
+  for (size_t v = 0; v < b.vertex_count(); ++v) {
+    size_t found = 0, s = 0;
+    for (size_t k = 0; k < a.vertex_count(); ++k) {
+      const float3 p = b.positions[v], q = a.positions[k];
+      if (length3({p.x - q.x, p.y - q.y, p.z - q.z}) <= position_bound) ++found, s = k;
+    }
+    ASSERT_EQ(found, 1u) << v;
+    EXPECT_EQ(b.joints[v], a.joints[s]) << v;
+    const float4 &wb = b.weights[v], &wa = a.weights[s];
+    EXPECT_LE(std::max({std::fabs(wb.x - wa.x), std::fabs(wb.y - wa.y), std::fabs(wb.z - wa.z), std::fabs(wb.w - wa.w)}), weight_bound) << v;
+  }
+  ASSERT_EQ(back.animations.size(), plain.animations.size());
+  for (size_t k = 0; k < back.animations.size(); ++k)
+    for (size_t c = 0; c < back.animations[k].channels.size(); ++c)
+      EXPECT_EQ(back.animations[k].channels[c].values, plain.animations[k].channels[c].values);
+  EXPECT_EQ(back.skins[0].inverse_bind_matrices, plain.skins[0].inverse_bind_matrices);
+}
+
+// The CLI's --draco: a LOD chain, valid, every level compressed; with -c, meshopt takes the rest
+// (the geomorphs' morph targets); with -q, refused.
+TEST(GltfCompression, CommandsWriteDracoWithDashDashDraco) {
+  TempDir dir;
+  write_scene(scene_from_mesh(shapes::torus(1.0f, 0.25f, 48, 24)), dir / "in.glb");
+  test::RunResult r = test::run_cli({"lod", (dir / "in.glb").string(), "-o", (dir / "d.glb").string(), "--levels", "3", "--draco"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  Json doc = test::glb_json(dir / "d.glb");
+  for (const Json& mesh : doc["meshes"]) EXPECT_TRUE(mesh["primitives"][0]["extensions"].contains(kDraco));
+  test::expect_valid_gltf({dir / "d.glb"});
+  EXPECT_EQ(read_scene(dir / "d.glb").primitives.size(), 3u);
+
+  r = test::run_cli({"lod", (dir / "in.glb").string(), "-o", (dir / "dc.glb").string(), "--levels", "3", "--morph", "--draco", "-c"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  doc = test::glb_json(dir / "dc.glb");
+  EXPECT_TRUE(contains(doc["extensionsRequired"], kDraco));
+  EXPECT_TRUE(contains(doc["extensionsRequired"], kMeshopt));
+  test::expect_valid_gltf({dir / "dc.glb"});
+
+  r = test::run_cli({"convert", (dir / "in.glb").string(), (dir / "dq.glb").string(), "--draco", "-q"});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("-q"), std::string::npos) << r.err;
+  r = test::run_cli({"convert", (dir / "in.glb").string(), (dir / "d.obj").string(), "--draco"});
+  EXPECT_NE(r.exit_code, 0);
 }
 
 // lod -c orders its levels for the codec (an LRU-style cache order): smaller than the same chain in

@@ -60,8 +60,9 @@ void GeometryFile::write(const std::string& output, const WriteOptions& options)
 }
 
 void check_gltf_output_flags(const WriteOptions& options, const std::string& output) {
-  if ((options.meshopt_compression || options.quantize) && !is_gltf(output))
-    throw_usage(output + ": -c and -q apply to glTF output (.gltf, .glb) only");
+  if ((options.meshopt_compression || options.quantize || options.draco) && !is_gltf(output))
+    throw_usage(output + ": -c, -q and --draco apply to glTF output (.gltf, .glb) only");
+  if (options.draco && options.quantize) throw_usage("--draco quantizes by itself: not with -q");
 }
 
 void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
@@ -71,7 +72,10 @@ void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
   app->add_flag("-q,--quantize", options.quantize,
                 "glTF output: vertex streams in fewer bits (KHR_mesh_quantization, then required): positions on a "
                 "grid of --position-bits, normals and tangents in bytes, UVs in 16 bits, colours and weights in bytes");
-  app->add_option("--position-bits", options.position_bits, "With -q: bits per position coordinate (default 14)")
+  app->add_flag("--draco", options.draco,
+                "glTF output: each triangle primitive's geometry as a Draco stream (KHR_draco_mesh_compression, then "
+                "required): positions in --position-bits, normals 10 bits, UVs 12, colours 8, weights and tangents 12");
+  app->add_option("--position-bits", options.position_bits, "With -q or --draco: bits per position coordinate (default 14)")
       ->check(CLI::Range(1, 16));
 }
 
