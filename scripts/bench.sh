@@ -49,8 +49,9 @@
 # draw, write) RUNS times, each under /usr/bin/time -v; prints the medians and peak memory (target:
 # under 5 s) and writes bench/results/render.json.
 #
-# compress: glTF output with -c (EXT_meshopt_compression) and -c -q (KHR_mesh_quantization) against gltfpack 0.18 on
-# the same optimized files (-noq, -c -noq and its quantized -c): sizes raw and gzipped, and lodkit's
+# compress: glTF output with -c (EXT_meshopt_compression) and -c -q (KHR_mesh_quantization) against
+# gltfpack 0.18 on the same optimized files (-noq, -c -noq and its quantized -c), and --draco against
+# draco_transcoder at the same bit depths: sizes raw and gzipped, and lodkit's
 # load time and peak memory, plain against compressed (bench/compress/run.py); writes
 # bench/results/compress.json.
 #
@@ -279,6 +280,7 @@ area_compress() {
   local runs=${1:-5} started=$SECONDS
   [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
   command -v gltfpack >/dev/null || { echo "bench: gltfpack is not installed (scripts/setup.sh installs it)" >&2; exit 1; }
+  command -v draco_transcoder >/dev/null || { echo "bench: draco_transcoder is not installed (scripts/setup.sh installs it)" >&2; exit 1; }
   configure
   build_targets lodkit_cli lodkit_fixtures
   [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh

@@ -10,11 +10,16 @@ their clips, and bunny00's LOD chain as `lodkit lod` writes it):
     with -c -q (gltfpack's default bit depths: 14-bit positions, 8-bit normals);
   - gltfpack (Debian, 0.18) on the same plain file: -noq (its reordering, no quantization), -c -noq
     (the same compression lodkit writes), and -c (its defaults: quantized, lossy).
+  - Draco: `lodkit convert --draco` of the plain file against Debian's draco_transcoder (libdraco
+    1.5.5, the same library) on it at the same bit depths (14-bit positions, 10-bit normals, 12-bit
+    UVs, tangents and weights, 8-bit colours) and its default compression level, as lodkit uses.
 Sizes raw and after gzip -9 (what a web server sends), the ratios lodkit -c / gltfpack -c -noq and
 lodkit -c -q / gltfpack -c, the quantized files' symmetric Hausdorff distance from the plain file
 (`lodkit compare`, relative to the bounding-box diagonal), and lodkit's load time (median of N
 `lodkit info --json` load_seconds) and peak RSS, plain against -c and -c -q. Every lodkit -c and
--c -q file must read back with the plain file's triangle and vertex counts.
+-c -q file must read back with the plain file's triangle and vertex counts. For Draco: sizes, the
+encoding time (median of N runs of each command, process start and file writing included), lodkit's
+load time of each file (decoding included) and each file's Hausdorff distance from the plain one.
 """
 import gzip
 import json
@@ -23,6 +28,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import time
 
 CORPUS = ["bunny00.off", "armadillo.off", "ChineseDragon-10kv.off", "fandisk_large.off", "elephant.off",
           "mushroom.off", "man.off", "refined_elephant.off", "femur.off", "cylinder.off"]
@@ -49,6 +55,18 @@ def load(lodkit, path, runs):
     log = subprocess.run(["/usr/bin/time", "-v", lodkit, "info", "--json", path], capture_output=True, text=True)
     rss = next(int(l.split(":")[1]) for l in log.stderr.splitlines() if "Maximum resident set size" in l)
     return statistics.median(times), rss / 1024
+
+
+def timed(args, runs):
+    times = []
+    for _ in range(runs):
+        start = time.perf_counter()
+        run(args)
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+DRACO_BITS = ["-qp", "14", "-qn", "10", "-qt", "12", "-qtg", "12", "-qw", "12", "-qg", "12", "-qc", "8"]
 
 
 def hausdorff(lodkit, a, b):
@@ -114,6 +132,24 @@ def main():
         # (A skinned character is compared at rest, its bind pose: flatten places a quantized one
         # by the grid its joints carry.)
         row["hausdorff"] = {tool: hausdorff(lodkit, files["lodkit"], files[tool]) for tool in ["lodkit -c -q", "gltfpack -c"]}
+        # Draco, from the same plain file.
+        draco = {"lodkit --draco": stem + "-draco.glb", "draco_transcoder": stem + "-transcoder.glb"}
+        commands = {"lodkit --draco": [lodkit, "convert", files["lodkit"], draco["lodkit --draco"], "--draco"],
+                    "draco_transcoder": ["draco_transcoder", "-i", files["lodkit"], "-o", draco["draco_transcoder"]] + DRACO_BITS}
+        row["draco"] = {}
+        for tool, path in draco.items():
+            seconds = timed(commands[tool], runs)
+            report = info(lodkit, path)
+            back = report["stats"]
+            load_s, rss = load(lodkit, path, runs)
+            row["draco"][tool] = {"bytes": os.path.getsize(path), "gzip": gz(path), "encode_s": seconds, "load_s": load_s,
+                                  "rss_mib": rss, "hausdorff": hausdorff(lodkit, files["lodkit"], path),
+                                  "triangles": back["triangles"], "primitives": report["gltf"]["primitives"]}
+            if back["triangles"] != plain["triangles"]:
+                raise RuntimeError(f"{name}: {tool} read back {back['triangles']} triangles")
+        # draco_transcoder keeps only the meshes the scene's node tree draws: a chain's coarser
+        # levels (MSFT_lod nodes outside the tree) are lost, so no ratio is given then.
+        row["draco_same_content"] = row["draco"]["lodkit --draco"]["primitives"] == row["draco"]["draco_transcoder"]["primitives"]
         rows.append(row)
         print(f"  {name}: done", file=sys.stderr)
 
@@ -141,6 +177,24 @@ def main():
           f"min {min(ratios):.3f}, max {max(ratios):.3f} over {len(ratios)} inputs (runs per load time: {runs})")
     print(f"lodkit -c -q ÷ gltfpack -c, raw size: median {statistics.median(qratios):.3f}, "
           f"min {min(qratios):.3f}, max {max(qratios):.3f}")
+    print()
+    print("| input | lodkit --draco KiB (gzip) | draco_transcoder KiB (gzip) | lodkit ÷ transcoder | encode lodkit / transcoder |"
+          " load (lodkit) --draco / transcoder's | Hausdorff / diagonal, lodkit / transcoder |")
+    print("|---|---|---|---|---|---|---|")
+    dratios = []
+    for r in rows:
+        a, b = r["draco"]["lodkit --draco"], r["draco"]["draco_transcoder"]
+        ratio = f"{a['bytes'] / b['bytes']:.3f}"
+        if r["draco_same_content"]:
+            dratios.append(a["bytes"] / b["bytes"])
+        else:
+            ratio = f"— (transcoder kept {b['primitives']} of {a['primitives']} primitives)"
+        print(f"| {r['input']} | {a['bytes'] / 1024:.0f} ({a['gzip'] / 1024:.0f}) | {b['bytes'] / 1024:.0f} ({b['gzip'] / 1024:.0f}) | "
+              f"{ratio} | {a['encode_s'] * 1000:.0f} / {b['encode_s'] * 1000:.0f} ms | "
+              f"{a['load_s'] * 1000:.1f} / {b['load_s'] * 1000:.1f} ms | {a['hausdorff']:.2e} / {b['hausdorff']:.2e} |")
+    print()
+    print(f"lodkit --draco ÷ draco_transcoder, raw size: median {statistics.median(dratios):.3f}, "
+          f"min {min(dratios):.3f}, max {max(dratios):.3f} over the {len(dratios)} inputs both write whole")
     with open(out, "w") as f:
         json.dump({"runs": runs, "rows": rows}, f, indent=1)
 

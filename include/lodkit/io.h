@@ -49,9 +49,9 @@ struct WriteOptions {
   // skinned GPU instancing or a skin shared with such a mesh ties to its own space.
   bool quantize = false;
   // glTF: each triangle primitive's vertex streams and indices as a Draco stream
-  // (KHR_draco_mesh_compression, then required), as gltf-transform and gltf-pipeline write it:
-  // positions quantized to `position_bits`, normals to 10 bits, UVs to 12, colours to 8, tangents
-  // and skin weights to 12; joint indices and connectivity exact. Edgebreaker may renumber a
+  // (KHR_draco_mesh_compression, then required) at Draco's default compression level 7, as
+  // draco_transcoder writes it: positions quantized to `position_bits`, normals to 10 bits, UVs to
+  // 12, colours to 8, tangents and skin weights to 12; joint indices and connectivity exact. Edgebreaker may renumber a
   // primitive's vertices and triangles; one with morph targets or other streams outside the Draco
   // stream is encoded sequentially, in place. Not with `quantize` (Draco quantizes by itself);
   // with `meshopt_compression`, meshopt compresses what Draco does not (animation, morph targets).
