@@ -7,7 +7,8 @@
 // must the same scene with every primitive's vertices renumbered (Primitive::source_vertices),
 // written with EXT_meshopt_compression (triangles up to the codec's rotations), and both must give
 // the same vertex classes (source_vertex_classes) and morph targets (source_morph_targets). Written
-// quantized (KHR_mesh_quantization), it must read back with the same vertices and triangles.
+// quantized (KHR_mesh_quantization), it must read back with the same vertices and triangles; with
+// Draco (the reversed copy), with its triangles and positions within a quantization step.
 // The shared oracle lives in fuzz_common.h.
 #include <unistd.h>
 
@@ -117,11 +118,13 @@ Mesh canonical_rotations(Mesh mesh) {
 
 // `quantize` (WriteOptions::quantize): positions may move to the grid, so only the topology must
 // come back (vertex count, triangles), with valid streams.
-void check_round_trip(const Scene& scene, const std::string& stage, bool compress, bool quantize = false) {
+// `draco` (WriteOptions::draco): every triangle comes back but those with a repeated corner, which
+// Edgebreaker drops, and every position within a 14-bit quantization step of the input's bounds.
+void check_round_trip(const Scene& scene, const std::string& stage, bool compress, bool quantize = false, bool draco = false) {
   static const ScratchFolder folder;
   const std::filesystem::path file = folder.path() / "round-trip.glb";
   run_step(stage + ": write", false, [&] {
-    write_gltf(scene, file, {.meshopt_compression = compress, .quantize = quantize});
+    write_gltf(scene, file, {.meshopt_compression = compress, .quantize = quantize, .draco = draco});
     return true;
   });
   const std::optional<std::vector<uint8_t>> bytes = run_step(stage + ": load", false, [&] {
@@ -146,6 +149,28 @@ void check_round_trip(const Scene& scene, const std::string& stage, bool compres
     check_mesh(after.mesh, where + " read back");
     if (after.material != before.material)
       fail(where, "material changed from " + std::to_string(before.material) + " to " + std::to_string(after.material));
+    if (draco) {
+      const size_t triangles = before.mesh.triangle_count();
+      size_t repeated = 0;
+      for (size_t t = 0; t < triangles; ++t) {
+        const uint32_t* c = &before.mesh.indices[3 * t];
+        repeated += c[0] == c[1] || c[1] == c[2] || c[2] == c[0];
+      }
+      if (after.mesh.triangle_count() > triangles || after.mesh.triangle_count() + repeated < triangles)
+        fail(where, "Draco: " + std::to_string(after.mesh.triangle_count()) + " triangles read back of " + std::to_string(triangles) +
+                        " (" + std::to_string(repeated) + " with a repeated corner)");
+      float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+      for (const float3& p : before.mesh.positions)
+        for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], (&p.x)[c]), hi[c] = std::max(hi[c], (&p.x)[c]);
+      double extent = 0;
+      for (int c = 0; c < 3; ++c) extent = std::max(extent, double(hi[c]) - double(lo[c]));
+      const double margin = extent / 16383.0 + 1e-30;
+      for (const float3& p : after.mesh.positions)
+        for (int c = 0; c < 3; ++c)
+          if (!(double((&p.x)[c]) >= lo[c] - margin && double((&p.x)[c]) <= hi[c] + margin))
+            fail(where, "Draco: a position read back outside the input's bounds by more than a quantization step");
+      continue;
+    }
     if (quantize) {
       if (after.mesh.vertex_count() != before.mesh.vertex_count() || after.mesh.indices != before.mesh.indices)
         fail(where, "quantized, the vertex count or the triangles changed");
@@ -231,6 +256,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const Scene backwards = reversed(*scene);
   check_round_trip(backwards, "gltf round trip, vertices reversed, meshopt-compressed", true);
   check_round_trip(*scene, "gltf round trip, quantized", false, true);
+  check_round_trip(backwards, "gltf round trip, vertices reversed, Draco", false, false, true);
   check_vertex_classes(*scene, backwards);
   check_morph_targets(*scene, backwards);
   return 0;

@@ -52,8 +52,9 @@ struct WriteOptions {
   // (KHR_draco_mesh_compression, then required) at Draco's default compression level 7, as
   // draco_transcoder writes it: positions quantized to `position_bits`, normals to 10 bits, UVs to
   // 12, colours to 8, tangents and skin weights to 12; joint indices and connectivity exact. Edgebreaker may renumber a
-  // primitive's vertices and triangles; one with morph targets or other streams outside the Draco
-  // stream is encoded sequentially, in place. Not with `quantize` (Draco quantizes by itself);
+  // primitive's vertices and triangles, and drops those with a repeated corner; one with morph
+  // targets or other streams outside the Draco stream is encoded sequentially, in place. A stream
+  // whose range overflows a float is stored exactly (libdraco 1.5.5 crashes quantizing it). Not with `quantize` (Draco quantizes by itself);
   // with `meshopt_compression`, meshopt compresses what Draco does not (animation, morph targets).
   bool draco = false;
   int position_bits = 14;

@@ -4,7 +4,7 @@
 #include "io/gltf_compression.h"
 
 #include <draco/compression/decode.h>
-#include <draco/compression/encode.h>
+#include <draco/compression/expert_encode.h>
 #include <meshoptimizer.h>
 
 #include <algorithm>
@@ -602,18 +602,36 @@ DracoPrimitive encode_draco(const Mesh& mesh, int position_bits, bool keep_order
     out.component_types.emplace(semantic, TINYGLTF_COMPONENT_TYPE_FLOAT);  // (joints set above)
   }
 
-  draco::Encoder encoder;
-  encoder.SetAttributeQuantization(GA::POSITION, position_bits);
-  encoder.SetAttributeQuantization(GA::NORMAL, 10);
-  encoder.SetAttributeQuantization(GA::TEX_COORD, 12);
-  encoder.SetAttributeQuantization(GA::COLOR, 8);
-  encoder.SetAttributeQuantization(GA::GENERIC, 12);  // float streams only: joint indices stay exact
+  // Quantization bits per attribute. Draco quantizes over the largest per-component range, which
+  // must be a finite float: libdraco 1.5.5 crashes on a stream spanning more (coordinates near
+  // +-3e38), so such a stream is stored exactly instead.
+  draco::ExpertEncoder encoder(dm);
+  for (const auto& [semantic, id] : ids) {
+    const draco::PointAttribute& a = *dm.attribute(id);
+    if (a.data_type() != draco::DT_FLOAT32) continue;  // joint indices: exact
+    const int bits = semantic == "POSITION" ? position_bits
+                     : semantic == "NORMAL" ? 10
+                     : semantic.starts_with("TEXCOORD_") ? 12
+                     : semantic == "COLOR_0" ? 8
+                                             : 12;  // tangents, weights
+    bool finite_range = true;
+    for (int c = 0; c < a.num_components(); ++c) {
+      float lo = INFINITY, hi = -INFINITY;
+      for (uint32_t i = 0; i < a.size(); ++i) {
+        float v[4];
+        a.GetValue(draco::AttributeValueIndex(i), v);
+        lo = std::min(lo, v[c]), hi = std::max(hi, v[c]);
+      }
+      finite_range = finite_range && std::isfinite(hi - lo);
+    }
+    if (finite_range) encoder.SetAttributeQuantization(id, bits);
+  }
   // Draco's own default, compression level 7 (draco_encoder, draco_transcoder): 7-9% smaller than
   // level 5 on the bench's meshes, 20% on the skinned humanoid.
   encoder.SetSpeedOptions(3, 3);
   encoder.SetEncodingMethod(keep_order ? draco::MESH_SEQUENTIAL_ENCODING : draco::MESH_EDGEBREAKER_ENCODING);
   draco::EncoderBuffer buffer;
-  const draco::Status status = encoder.EncodeMeshToBuffer(dm, &buffer);
+  const draco::Status status = encoder.EncodeToBuffer(&buffer);
   if (!status.ok()) throw_internal("Draco: encoding failed: " + status.error_msg_string());
   out.bytes.assign(buffer.data(), buffer.data() + buffer.size());
 

@@ -11,6 +11,7 @@
 #include <map>
 #include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "core/shapes.h"
@@ -688,6 +689,36 @@ TEST(GltfCompression, DracoOutputOfASkinnedCharacter) {
     for (size_t c = 0; c < back.animations[k].channels.size(); ++c)
       EXPECT_EQ(back.animations[k].channels[c].values, plain.animations[k].channels[c].values);
   EXPECT_EQ(back.skins[0].inverse_bind_matrices, plain.skins[0].inverse_bind_matrices);
+}
+
+// libdraco 1.5.5 crashes quantizing a stream whose range overflows a float: such a stream (here the
+// positions and the UVs, with coordinates near +-3e38) is stored exactly instead, the others still
+// quantized. A triangle with a repeated corner is dropped by Edgebreaker (it draws nothing).
+TEST(GltfCompression, DracoStoresStreamsTooWideToQuantizeExactly) {
+  TempDir dir;
+  Mesh m = shapes::torus(1.0f, 0.3f, 12, 6);
+  m.positions[0] = {3e38f, 0, 0}, m.positions[1] = {-3e38f, 1, 0};
+  m.uvs[0][0] = {3e38f, 0}, m.uvs[0][1] = {-3e38f, 0};
+  m.indices.insert(m.indices.end(), {2, 2, 3});
+  WriteOptions o;
+  o.draco = true;
+  write_scene(scene_from_mesh(m), dir / "wide.glb", o);
+  const Mesh back = only_mesh(read_scene(dir / "wide.glb"));
+  EXPECT_EQ(back.triangle_count(), m.triangle_count() - 1);
+  const auto sorted = [](std::vector<float3> p) {
+    std::sort(p.begin(), p.end(), [](const float3& a, const float3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); });
+    return p;
+  };
+  EXPECT_EQ(sorted(back.positions), sorted(m.positions));
+  bool normals_moved = false;  // (10-bit normals: quantized as ever)
+  std::map<std::array<float, 3>, float3> normal_at;
+  for (size_t v = 0; v < m.vertex_count(); ++v) normal_at[{m.positions[v].x, m.positions[v].y, m.positions[v].z}] = m.normals[v];
+  for (size_t v = 0; v < back.vertex_count(); ++v) {
+    const float3 n = normal_at.at({back.positions[v].x, back.positions[v].y, back.positions[v].z});
+    normals_moved |= !(n.x == back.normals[v].x && n.y == back.normals[v].y && n.z == back.normals[v].z);
+    EXPECT_GT(cosine(n, back.normals[v]), std::cos(3.14159265f / 180.0f));
+  }
+  EXPECT_TRUE(normals_moved);
 }
 
 // The CLI's --draco: a LOD chain, valid, every level compressed; with -c, meshopt takes the rest
