@@ -629,9 +629,19 @@ DracoPrimitive encode_draco(const Mesh& mesh, int position_bits, bool keep_order
   // Draco's own default, compression level 7 (draco_encoder, draco_transcoder): 7-9% smaller than
   // level 5 on the bench's meshes, 20% on the skinned humanoid.
   encoder.SetSpeedOptions(3, 3);
-  encoder.SetEncodingMethod(keep_order ? draco::MESH_SEQUENTIAL_ENCODING : draco::MESH_EDGEBREAKER_ENCODING);
   draco::EncoderBuffer buffer;
-  const draco::Status status = encoder.EncodeToBuffer(&buffer);
+  draco::Status status = draco::Status(draco::Status::DRACO_ERROR, "");
+  if (!keep_order) {
+    encoder.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
+    status = encoder.EncodeToBuffer(&buffer);
+  }
+  // Edgebreaker refuses a mesh whose triangles all repeat a corner; sequential encoding takes any.
+  if (!status.ok()) {
+    keep_order = true;
+    buffer.Clear();
+    encoder.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
+    status = encoder.EncodeToBuffer(&buffer);
+  }
   if (!status.ok()) throw_internal("Draco: encoding failed: " + status.error_msg_string());
   out.bytes.assign(buffer.data(), buffer.data() + buffer.size());
 

@@ -719,6 +719,13 @@ TEST(GltfCompression, DracoStoresStreamsTooWideToQuantizeExactly) {
     EXPECT_GT(cosine(n, back.normals[v]), std::cos(3.14159265f / 180.0f));
   }
   EXPECT_TRUE(normals_moved);
+
+  // Every triangle repeats a corner: Edgebreaker refuses the mesh, sequential encoding keeps it.
+  Mesh flat;
+  flat.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  flat.indices = {0, 0, 1, 1, 2, 2};
+  write_scene(scene_from_mesh(flat), dir / "flat.glb", o);
+  EXPECT_EQ(only_mesh(read_scene(dir / "flat.glb")).indices, flat.indices);
 }
 
 // The CLI's --draco: a LOD chain, valid, every level compressed; with -c, meshopt takes the rest
