@@ -54,7 +54,8 @@ struct WriteOptions {
   // 12, colours to 8, tangents and skin weights to 12; joint indices and connectivity exact. Edgebreaker may renumber a
   // primitive's vertices and triangles, and drops those with a repeated corner; one with morph
   // targets or other streams outside the Draco stream is encoded sequentially, in place. A stream
-  // whose range overflows a float is stored exactly (libdraco 1.5.5 crashes quantizing it). Not with `quantize` (Draco quantizes by itself);
+  // whose range overflows a float is stored exactly (libdraco 1.5.5 crashes quantizing it), and a
+  // primitive libdraco cannot round-trip (a triangle with three equal corners) is written plain. Not with `quantize` (Draco quantizes by itself);
   // with `meshopt_compression`, meshopt compresses what Draco does not (animation, morph targets).
   bool draco = false;
   int position_bits = 14;

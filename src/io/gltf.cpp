@@ -1394,7 +1394,10 @@ class BinWriter {
   // vertices' order (kept when `keep_order` or when there are targets).
   void add_draco_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim, int position_bits,
                           bool keep_order) {
-    const io::DracoPrimitive d = io::encode_draco(mesh, position_bits, keep_order || !targets.empty() || !prim.targets.empty());
+    const std::optional<io::DracoPrimitive> encoded =
+        io::encode_draco(mesh, position_bits, keep_order || !targets.empty() || !prim.targets.empty());
+    if (!encoded) return add_geometry(mesh, targets, prim, {});  // (libdraco cannot take it)
+    const io::DracoPrimitive& d = *encoded;
     const int view = add_view(d.bytes.data(), d.bytes.size(), 0);
     tg::Value::Object ids;
     for (const auto& [semantic, id] : d.attributes) {

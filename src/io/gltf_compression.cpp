@@ -13,6 +13,7 @@
 #include <cstring>
 #include <limits>
 #include <new>
+#include <optional>
 
 #include "io/gltf_types.h"
 #include "lodkit/error.h"
@@ -551,7 +552,7 @@ int add_draco_attribute(draco::Mesh& mesh, draco::GeometryAttribute::Type type, 
 
 }  // namespace
 
-DracoPrimitive encode_draco(const Mesh& mesh, int position_bits, bool keep_order) {
+std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, bool keep_order) {
   const size_t n = mesh.vertex_count(), faces = mesh.triangle_count();
   draco::Mesh dm;
   dm.set_num_points(uint32_t(n));
@@ -605,7 +606,7 @@ DracoPrimitive encode_draco(const Mesh& mesh, int position_bits, bool keep_order
   // Quantization bits per attribute. Draco quantizes over the largest per-component range, which
   // must be a finite float: libdraco 1.5.5 crashes on a stream spanning more (coordinates near
   // +-3e38), so such a stream is stored exactly instead.
-  draco::ExpertEncoder encoder(dm);
+  std::vector<std::pair<int, int>> quantized;  // (attribute id, bits)
   for (const auto& [semantic, id] : ids) {
     const draco::PointAttribute& a = *dm.attribute(id);
     if (a.data_type() != draco::DT_FLOAT32) continue;  // joint indices: exact
@@ -624,37 +625,49 @@ DracoPrimitive encode_draco(const Mesh& mesh, int position_bits, bool keep_order
       }
       finite_range = finite_range && std::isfinite(hi - lo);
     }
-    if (finite_range) encoder.SetAttributeQuantization(id, bits);
+    if (finite_range) quantized.emplace_back(id, bits);
   }
-  // Draco's own default, compression level 7 (draco_encoder, draco_transcoder): 7-9% smaller than
-  // level 5 on the bench's meshes, 20% on the skinned humanoid.
-  encoder.SetSpeedOptions(3, 3);
-  draco::EncoderBuffer buffer;
-  draco::Status status = draco::Status(draco::Status::DRACO_ERROR, "");
-  if (!keep_order) {
-    encoder.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
-    status = encoder.EncodeToBuffer(&buffer);
-  }
-  // Edgebreaker refuses a mesh whose triangles all repeat a corner; sequential encoding takes any.
-  if (!status.ok()) {
-    keep_order = true;
-    buffer.Clear();
-    encoder.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
-    status = encoder.EncodeToBuffer(&buffer);
-  }
-  if (!status.ok()) throw_internal("Draco: encoding failed: " + status.error_msg_string());
-  out.bytes.assign(buffer.data(), buffer.data() + buffer.size());
 
-  // What a loader will see: counts and the position bounds of the decoded stream.
-  draco::DecoderBuffer input;
-  input.Init(buffer.data(), buffer.size());
-  draco::Decoder decoder;
-  auto decoded = decoder.DecodeMeshFromBuffer(&input);
-  if (!decoded.ok()) throw_internal("Draco: the encoded stream does not decode: " + decoded.status().error_msg_string());
-  const std::unique_ptr<draco::Mesh> back = std::move(decoded).value();
+  // libdraco 1.5.5 does not take every mesh it is given: Edgebreaker refuses one whose triangles all
+  // repeat a corner, and a stream it writes of a triangle with three equal corners does not decode
+  // (both found by fuzz_gltf). Each stream is decoded again here, and a failure falls back to
+  // sequential encoding, then to sequential encoding without quantization; if none decodes, the
+  // caller writes the primitive plain.
+  struct Attempt {
+    bool sequential, quantize;
+  };
+  std::vector<Attempt> attempts;
+  if (!keep_order) attempts.push_back({false, true});
+  attempts.push_back({true, true});
+  attempts.push_back({true, false});
+  std::unique_ptr<draco::Mesh> back;
+  for (const Attempt& attempt : attempts) {
+    draco::ExpertEncoder encoder(dm);
+    if (attempt.quantize)
+      for (const auto& [id, bits] : quantized) encoder.SetAttributeQuantization(id, bits);
+    // Draco's own default, compression level 7 (draco_encoder, draco_transcoder): 7-9% smaller
+    // than level 5 on the bench's meshes, 20% on the skinned humanoid.
+    encoder.SetSpeedOptions(3, 3);
+    encoder.SetEncodingMethod(attempt.sequential ? draco::MESH_SEQUENTIAL_ENCODING : draco::MESH_EDGEBREAKER_ENCODING);
+    draco::EncoderBuffer buffer;
+    const draco::Status status = encoder.EncodeToBuffer(&buffer);
+    if (!status.ok()) continue;
+    // What a loader will see: counts and the position bounds of the decoded stream.
+    draco::DecoderBuffer input;
+    input.Init(buffer.data(), buffer.size());
+    draco::Decoder decoder;
+    auto decoded = decoder.DecodeMeshFromBuffer(&input);
+    if (!decoded.ok()) continue;
+    back = std::move(decoded).value();
+    if (attempt.sequential && (back->num_points() != n || back->num_faces() != faces)) {
+      back.reset();  // (it must keep both in place)
+      continue;
+    }
+    out.bytes.assign(buffer.data(), buffer.data() + buffer.size());
+    break;
+  }
+  if (!back) return std::nullopt;
   out.points = back->num_points(), out.triangles = back->num_faces();
-  if (keep_order && (out.points != n || out.triangles != faces))
-    throw_internal("Draco: sequential encoding changed the vertex or triangle count");
   const draco::PointAttribute* position = back->GetAttributeByUniqueId(out.attributes["POSITION"]);
   if (!position) throw_internal("Draco: the decoded stream has no positions");
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -65,6 +66,8 @@ struct DracoPrimitive {
   uint64_t points = 0, triangles = 0;
   float3 position_min, position_max;  // of the decoded positions
 };
-DracoPrimitive encode_draco(const Mesh& mesh, int position_bits, bool keep_order);
+// Nothing when libdraco cannot encode the mesh so that it decodes again (a triangle with three
+// equal corners): the primitive is then written plain.
+std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, bool keep_order);
 
 }  // namespace lod::io

@@ -726,6 +726,16 @@ TEST(GltfCompression, DracoStoresStreamsTooWideToQuantizeExactly) {
   flat.indices = {0, 0, 1, 1, 2, 2};
   write_scene(scene_from_mesh(flat), dir / "flat.glb", o);
   EXPECT_EQ(only_mesh(read_scene(dir / "flat.glb")).indices, flat.indices);
+  EXPECT_TRUE(contains(test::glb_json(dir / "flat.glb")["extensionsRequired"], kDraco));
+  // A lone triangle with three equal corners beside unused vertices: libdraco writes a stream it
+  // cannot decode, in any mode, so the primitive is written plain (found by fuzz_gltf).
+  flat.positions.push_back({1, 1, 0});
+  flat.indices = {0, 0, 0};
+  write_scene(scene_from_mesh(flat), dir / "point.glb", o);
+  EXPECT_EQ(only_mesh(read_scene(dir / "point.glb")).indices, flat.indices);
+  const Json doc = test::glb_json(dir / "point.glb");
+  EXPECT_FALSE(doc.contains("extensionsUsed") && contains(doc["extensionsUsed"], kDraco)) << doc.dump();
+  test::expect_valid_gltf({dir / "point.glb"});
 }
 
 // The CLI's --draco: a LOD chain, valid, every level compressed; with -c, meshopt takes the rest
