@@ -1416,11 +1416,13 @@ class BinWriter {
       ids[semantic] = tg::Value(int(id));
     }
     tg::Accessor indices;
-    indices.componentType = d.points <= 65536 ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+    // (16-bit while no index can be 65535, a primitive restart to some readers, as add_indices.)
+    indices.componentType = d.points <= 65535 ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
     indices.type = TINYGLTF_TYPE_SCALAR;
     indices.count = d.triangles * 3;
     model_.accessors.push_back(std::move(indices));
     prim.indices = int(model_.accessors.size() - 1);
+    prim.mode = TINYGLTF_MODE_TRIANGLES;  // (a source's strip or fan is a list now)
     tg::Value::Object ext;
     ext["bufferView"] = tg::Value(view);
     ext["attributes"] = tg::Value(std::move(ids));

@@ -801,8 +801,20 @@ TEST(GltfRead, FansAndNonIndexedStripsBecomeTriangleLists) {
   HandBuilt f;
   const int fan = f.positions({0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, -1, 0, 0});
   f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", fan}}}, {"mode", 6}}}}}});
-  const Mesh m = read_gltf(f.glb(), "fan.glb").primitives[0].mesh;
+  const Scene fan_scene = read_gltf(f.glb(), "fan.glb");
+  const Mesh& m = fan_scene.primitives[0].mesh;
   EXPECT_EQ(m.indices, (std::vector<uint32_t>{1, 2, 0, 2, 3, 0, 3, 4, 0}));
+  // Written with Draco, the source's fan is a triangle list (a Draco primitive with mode 6 would not
+  // read: found by fuzz_gltf).
+  TempDir dir;
+  WriteOptions o;
+  o.draco = true;
+  write_scene(fan_scene, dir / "fan-draco.glb", o);
+  const Json doc = test::glb_json(dir / "fan-draco.glb");
+  const Json& prim = doc["meshes"][0]["primitives"][0];
+  EXPECT_TRUE(prim["extensions"].contains("KHR_draco_mesh_compression"));
+  EXPECT_EQ(prim.value("mode", 4), 4);
+  EXPECT_EQ(read_scene(dir / "fan-draco.glb").primitives[0].mesh.triangle_count(), 3u);
 }
 
 TEST(GltfWrite, PointsAndLinesAreKeptUnchanged) {
