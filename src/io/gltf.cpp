@@ -1351,12 +1351,7 @@ class BinWriter {
       if (!mesh.uvs[k].empty())
         prim.attributes["TEXCOORD_" + str(k)] = add_float_stream(mesh.uvs[k], TINYGLTF_TYPE_VEC2, "TEXCOORD", coding);
     if (!mesh.colors.empty()) prim.attributes["COLOR_0"] = add_float_stream(mesh.colors, TINYGLTF_TYPE_VEC4, "COLOR_0", coding);
-    // Joint indices in bytes when every one fits (skeletons of up to 256 joints): the same values
-    // in half the space.
-    const auto fits_byte = [](const std::vector<ushort4>& joints) {
-      return std::all_of(joints.begin(), joints.end(), [](const ushort4& j) { return std::max({j[0], j[1], j[2], j[3]}) < 256; });
-    };
-    const bool byte_joints = fits_byte(mesh.joints) && fits_byte(mesh.joints1);
+    const bool byte_joints = io::joints_fit_bytes(mesh);
     const auto add_joints = [&](const std::vector<ushort4>& joints) {
       if (!byte_joints) return add_accessor(joints, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4, array);
       std::vector<std::array<uint8_t, 4>> narrow(joints.size());

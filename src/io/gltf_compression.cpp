@@ -574,11 +574,7 @@ std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, 
     if (!mesh.uvs[k].empty())
       ids["TEXCOORD_" + std::to_string(k)] = add_draco_attribute(dm, GA::TEX_COORD, draco::DT_FLOAT32, 2, false, floats(mesh.uvs[k]), n);
   if (!mesh.colors.empty()) ids["COLOR_0"] = add_draco_attribute(dm, GA::COLOR, draco::DT_FLOAT32, 4, false, floats(mesh.colors), n);
-  // Joint indices in bytes when every one fits, as the plain writer does.
-  const auto fits_byte = [](const std::vector<ushort4>& joints) {
-    return std::all_of(joints.begin(), joints.end(), [](const ushort4& j) { return std::max({j[0], j[1], j[2], j[3]}) < 256; });
-  };
-  const bool byte_joints = fits_byte(mesh.joints) && fits_byte(mesh.joints1);
+  const bool byte_joints = joints_fit_bytes(mesh);
   const std::vector<ushort4>* joints[2] = {&mesh.joints, &mesh.joints1};
   const std::vector<float4>* weights[2] = {&mesh.weights, &mesh.weights1};
   for (size_t set = 0; set < 2; ++set) {

@@ -4,10 +4,22 @@
 
 #include <tiny_gltf.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <string_view>
 
+#include "lodkit/mesh.h"
+
 namespace lod::io {
+
+// Joint indices are written in bytes when every one of both sets fits (skeletons of up to 256
+// joints): the same values in half the space (plain accessors and Draco streams alike).
+inline bool joints_fit_bytes(const Mesh& m) {
+  const auto fits = [](const std::vector<ushort4>& joints) {
+    return std::all_of(joints.begin(), joints.end(), [](const ushort4& j) { return std::max({j[0], j[1], j[2], j[3]}) < 256; });
+  };
+  return fits(m.joints) && fits(m.joints1);
+}
 
 inline size_t component_bytes(int component_type) {
   switch (component_type) {
