@@ -1395,12 +1395,10 @@ class BinWriter {
     const io::DracoPrimitive& d = *encoded;
     const int view = add_view(d.bytes.data(), d.bytes.size(), 0);
     tg::Value::Object ids;
-    for (const auto& [semantic, id] : d.attributes) {
+    for (const auto& [semantic, a] : d.attributes) {
       tg::Accessor acc;
-      acc.componentType = d.component_types.at(semantic);
-      acc.type = semantic == "POSITION" || semantic == "NORMAL" ? TINYGLTF_TYPE_VEC3
-                 : semantic.starts_with("TEXCOORD_")            ? TINYGLTF_TYPE_VEC2
-                                                                : TINYGLTF_TYPE_VEC4;
+      acc.componentType = a.component_type;
+      acc.type = a.type;
       acc.count = d.points;
       if (semantic == "POSITION") {
         acc.minValues = {d.position_min.x, d.position_min.y, d.position_min.z};
@@ -1408,7 +1406,7 @@ class BinWriter {
       }
       model_.accessors.push_back(std::move(acc));
       prim.attributes[semantic] = int(model_.accessors.size() - 1);
-      ids[semantic] = tg::Value(int(id));
+      ids[semantic] = tg::Value(int(a.unique_id));
     }
     tg::Accessor indices;
     // (16-bit while no index can be 65535, a primitive restart to some readers, as add_indices.)

@@ -14,6 +14,7 @@
 #include <limits>
 #include <new>
 #include <optional>
+#include <type_traits>
 
 #include "io/gltf_types.h"
 #include "lodkit/error.h"
@@ -534,24 +535,6 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin) {
   }
 }
 
-namespace {
-
-// A Draco attribute of `n` points with identity mapping, filled from `values` (n * components
-// elements of T).
-template <class T>
-int add_draco_attribute(draco::Mesh& mesh, draco::GeometryAttribute::Type type, draco::DataType data_type, int components,
-                        bool normalized, const T* values, size_t n) {
-  draco::GeometryAttribute attribute;
-  attribute.Init(type, nullptr, uint8_t(components), data_type, normalized, int64_t(sizeof(T)) * components, 0);
-  const int id = mesh.AddAttribute(attribute, true, uint32_t(n));
-  if (id < 0) throw_internal("Draco: could not add an attribute");
-  draco::PointAttribute* a = mesh.attribute(id);
-  for (size_t i = 0; i < n; ++i) a->SetAttributeValue(draco::AttributeValueIndex(uint32_t(i)), values + i * size_t(components));
-  return id;
-}
-
-}  // namespace
-
 std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, bool keep_order) {
   const size_t n = mesh.vertex_count(), faces = mesh.triangle_count();
   draco::Mesh dm;
@@ -563,65 +546,61 @@ std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, 
     dm.SetFace(draco::FaceIndex(uint32_t(f)), face);
   }
   DracoPrimitive out;
-  std::map<std::string, int> ids;  // semantic -> attribute id in dm
+  // Each stream as a Draco attribute of the n points (identity mapping), described for its glTF
+  // accessor. Float streams are quantized to `bits` where Draco can: it quantizes over the largest
+  // per-component range, which must be a finite float (libdraco 1.5.5 crashes on a stream spanning
+  // more, coordinates near +-3e38), so such a stream is stored exactly instead.
+  std::vector<std::pair<int, int>> quantized;  // (Draco attribute id, bits)
+  const auto add = [&](const std::string& semantic, draco::GeometryAttribute::Type kind, int gltf_type, int components,
+                       const auto* values, int bits) {
+    using T = std::remove_cv_t<std::remove_pointer_t<decltype(values)>>;
+    constexpr bool is_float = std::is_same_v<T, float>;
+    draco::GeometryAttribute attribute;
+    attribute.Init(kind, nullptr, uint8_t(components),
+                   is_float ? draco::DT_FLOAT32 : sizeof(T) == 1 ? draco::DT_UINT8 : draco::DT_UINT16, false,
+                   int64_t(sizeof(T)) * components, 0);
+    const int id = dm.AddAttribute(attribute, true, uint32_t(n));
+    if (id < 0) throw_internal("Draco: could not add an attribute");
+    draco::PointAttribute* a = dm.attribute(id);
+    for (size_t i = 0; i < n; ++i) a->SetAttributeValue(draco::AttributeValueIndex(uint32_t(i)), values + i * size_t(components));
+    const int component_type = is_float         ? TINYGLTF_COMPONENT_TYPE_FLOAT
+                               : sizeof(T) == 1 ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE
+                                                : TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+    out.attributes[semantic] = {a->unique_id(), component_type, gltf_type};
+    if constexpr (is_float) {
+      bool finite_range = true;
+      for (int c = 0; c < components; ++c) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (size_t i = 0; i < n; ++i) lo = std::min(lo, values[i * size_t(components) + size_t(c)]), hi = std::max(hi, values[i * size_t(components) + size_t(c)]);
+        finite_range = finite_range && std::isfinite(hi - lo);
+      }
+      if (finite_range) quantized.emplace_back(id, bits);
+    }
+  };
   using GA = draco::GeometryAttribute;
   const auto floats = [](const auto& v) { return reinterpret_cast<const float*>(v.data()); };
-  ids["POSITION"] = add_draco_attribute(dm, GA::POSITION, draco::DT_FLOAT32, 3, false, floats(mesh.positions), n);
-  out.component_types["POSITION"] = TINYGLTF_COMPONENT_TYPE_FLOAT;
-  if (!mesh.normals.empty()) ids["NORMAL"] = add_draco_attribute(dm, GA::NORMAL, draco::DT_FLOAT32, 3, false, floats(mesh.normals), n);
-  if (!mesh.tangents.empty()) ids["TANGENT"] = add_draco_attribute(dm, GA::GENERIC, draco::DT_FLOAT32, 4, false, floats(mesh.tangents), n);
+  add("POSITION", GA::POSITION, TINYGLTF_TYPE_VEC3, 3, floats(mesh.positions), position_bits);
+  if (!mesh.normals.empty()) add("NORMAL", GA::NORMAL, TINYGLTF_TYPE_VEC3, 3, floats(mesh.normals), 10);
+  if (!mesh.tangents.empty()) add("TANGENT", GA::GENERIC, TINYGLTF_TYPE_VEC4, 4, floats(mesh.tangents), 12);
   for (size_t k = 0; k < max_uv_sets; ++k)
-    if (!mesh.uvs[k].empty())
-      ids["TEXCOORD_" + std::to_string(k)] = add_draco_attribute(dm, GA::TEX_COORD, draco::DT_FLOAT32, 2, false, floats(mesh.uvs[k]), n);
-  if (!mesh.colors.empty()) ids["COLOR_0"] = add_draco_attribute(dm, GA::COLOR, draco::DT_FLOAT32, 4, false, floats(mesh.colors), n);
+    if (!mesh.uvs[k].empty()) add("TEXCOORD_" + std::to_string(k), GA::TEX_COORD, TINYGLTF_TYPE_VEC2, 2, floats(mesh.uvs[k]), 12);
+  if (!mesh.colors.empty()) add("COLOR_0", GA::COLOR, TINYGLTF_TYPE_VEC4, 4, floats(mesh.colors), 8);
   const bool byte_joints = joints_fit_bytes(mesh);
   const std::vector<ushort4>* joints[2] = {&mesh.joints, &mesh.joints1};
   const std::vector<float4>* weights[2] = {&mesh.weights, &mesh.weights1};
   for (size_t set = 0; set < 2; ++set) {
-    const std::string suffix = "_" + std::to_string(set);
-    if (!joints[set]->empty()) {
+    const std::string suffix = set == 0 ? "_0" : "_1";
+    if (!joints[set]->empty()) {  // (integers: exact)
       if (byte_joints) {
         std::vector<uint8_t> narrow(4 * n);
         for (size_t v = 0; v < n; ++v)
           for (size_t k = 0; k < 4; ++k) narrow[4 * v + k] = uint8_t((*joints[set])[v][k]);
-        ids["JOINTS" + suffix] = add_draco_attribute(dm, GA::GENERIC, draco::DT_UINT8, 4, false, narrow.data(), n);
+        add("JOINTS" + suffix, GA::GENERIC, TINYGLTF_TYPE_VEC4, 4, narrow.data(), 0);
       } else {
-        ids["JOINTS" + suffix] = add_draco_attribute(dm, GA::GENERIC, draco::DT_UINT16, 4, false,
-                                                     reinterpret_cast<const uint16_t*>(joints[set]->data()), n);
+        add("JOINTS" + suffix, GA::GENERIC, TINYGLTF_TYPE_VEC4, 4, reinterpret_cast<const uint16_t*>(joints[set]->data()), 0);
       }
-      out.component_types["JOINTS" + suffix] = byte_joints ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE : TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
     }
-    if (!weights[set]->empty())
-      ids["WEIGHTS" + suffix] = add_draco_attribute(dm, GA::GENERIC, draco::DT_FLOAT32, 4, false, floats(*weights[set]), n);
-  }
-  for (const auto& [semantic, id] : ids) {
-    out.attributes[semantic] = dm.attribute(id)->unique_id();
-    out.component_types.emplace(semantic, TINYGLTF_COMPONENT_TYPE_FLOAT);  // (joints set above)
-  }
-
-  // Quantization bits per attribute. Draco quantizes over the largest per-component range, which
-  // must be a finite float: libdraco 1.5.5 crashes on a stream spanning more (coordinates near
-  // +-3e38), so such a stream is stored exactly instead.
-  std::vector<std::pair<int, int>> quantized;  // (attribute id, bits)
-  for (const auto& [semantic, id] : ids) {
-    const draco::PointAttribute& a = *dm.attribute(id);
-    if (a.data_type() != draco::DT_FLOAT32) continue;  // joint indices: exact
-    const int bits = semantic == "POSITION" ? position_bits
-                     : semantic == "NORMAL" ? 10
-                     : semantic.starts_with("TEXCOORD_") ? 12
-                     : semantic == "COLOR_0" ? 8
-                                             : 12;  // tangents, weights
-    bool finite_range = true;
-    for (int c = 0; c < a.num_components(); ++c) {
-      float lo = INFINITY, hi = -INFINITY;
-      for (uint32_t i = 0; i < a.size(); ++i) {
-        float v[4];
-        a.GetValue(draco::AttributeValueIndex(i), v);
-        lo = std::min(lo, v[c]), hi = std::max(hi, v[c]);
-      }
-      finite_range = finite_range && std::isfinite(hi - lo);
-    }
-    if (finite_range) quantized.emplace_back(id, bits);
+    if (!weights[set]->empty()) add("WEIGHTS" + suffix, GA::GENERIC, TINYGLTF_TYPE_VEC4, 4, floats(*weights[set]), 12);
   }
 
   // libdraco 1.5.5 does not take every mesh it is given: Edgebreaker refuses one whose triangles all
@@ -664,7 +643,7 @@ std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, 
   }
   if (!back) return std::nullopt;
   out.points = back->num_points(), out.triangles = back->num_faces();
-  const draco::PointAttribute* position = back->GetAttributeByUniqueId(out.attributes["POSITION"]);
+  const draco::PointAttribute* position = back->GetAttributeByUniqueId(out.attributes["POSITION"].unique_id);
   if (!position) throw_internal("Draco: the decoded stream has no positions");
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (uint32_t i = 0; i < out.points; ++i) {

@@ -59,10 +59,14 @@ void compress_meshopt(nlohmann::json& doc, std::vector<uint8_t>& bin);
 // every vertex and triangle in place; otherwise Edgebreaker may renumber both. The stream is
 // decoded again to describe the accessors, which must match what a loader decodes.
 inline constexpr const char* draco_extension = "KHR_draco_mesh_compression";
+struct DracoAttribute {
+  uint32_t unique_id = 0;  // in the Draco stream
+  int component_type = 0;  // the accessor's
+  int type = 0;            // the accessor's (TINYGLTF_TYPE_VEC2 ...)
+};
 struct DracoPrimitive {
   std::vector<uint8_t> bytes;
-  std::map<std::string, uint32_t> attributes;  // glTF semantic -> Draco unique id
-  std::map<std::string, int> component_types;  // glTF semantic -> accessor componentType
+  std::map<std::string, DracoAttribute> attributes;  // by glTF semantic
   uint64_t points = 0, triangles = 0;
   float3 position_min, position_max;  // of the decoded positions
 };

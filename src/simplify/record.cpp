@@ -39,10 +39,6 @@ std::vector<float> gather_attributes(const Mesh& mesh, const AttributeLayout& la
 
 namespace {
 
-bool has_weight(const Influences& w) {
-  return std::any_of(std::begin(w.weight), std::end(w.weight), [](float x) { return x != 0; });
-}
-
 // Appends input vertex v with its current position and attributes.
 void append_current(Mesh& out, const Mesh& input, const Snapshot& s, uint32_t v) {
   append_vertex(out, input, v);

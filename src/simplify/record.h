@@ -2,6 +2,8 @@
 // one compaction shared by the engine and by replay (so a replay is the engine's output exactly).
 #pragma once
 
+#include <algorithm>
+#include <iterator>
 #include <span>
 #include <vector>
 
@@ -10,6 +12,11 @@
 namespace lod::collapse {
 
 AttributeLayout attribute_layout(const Mesh& mesh);
+
+// Influences without any weight stand for "the wedges' own" (InfluenceChange::old_value, replay).
+inline bool has_weight(const Influences& w) {
+  return std::any_of(std::begin(w.weight), std::end(w.weight), [](float x) { return x != 0; });
+}
 // Normals, UV sets and colour of every vertex, packed per the layout.
 std::vector<float> gather_attributes(const Mesh& mesh, const AttributeLayout& layout);
 

@@ -1405,18 +1405,15 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
   result.record.stride = state.layout.stride;
   const auto engine_start = clock::now();
   result.seconds_setup = seconds(start, engine_start);
-  std::vector<Influences> final_influences;  // multipose: per input vertex, where `chosen`
-  std::vector<uint8_t> chosen;
+  // multipose: per input vertex, its position's influences where a collapse chose them, else
+  // weightless (the vertex keeps its own, as a replay of the record does).
+  std::vector<Influences> final_influences;
   if (multipose) {
     MultiposeMetric metric(*multipose);
     run(state, metric, {}, target, cost_limit, result);
-    // A position no collapse kept keeps its wedges' own influences (as a replay of the record does).
     final_influences.resize(mesh.vertex_count());
-    chosen.resize(mesh.vertex_count());
-    for (size_t v = 0; v < mesh.vertex_count(); ++v) {
-      const uint32_t p = state.position_of[v];
-      if ((chosen[v] = metric.chose(p))) final_influences[v] = metric.influences(p);
-    }
+    for (size_t v = 0; v < mesh.vertex_count(); ++v)
+      if (metric.chose(state.position_of[v])) final_influences[v] = metric.influences(state.position_of[v]);
   } else if (options.metric == Metric::edge_length) {
     EdgeLengthMetric metric;
     run(state, metric, {}, target, cost_limit, result);
@@ -1458,8 +1455,8 @@ SimplifyResult simplify_once(const Mesh& mesh, const SimplifyOptions& options, c
   for (uint32_t w = 0; w < mesh.vertex_count(); ++w) result.vertex_successor[w] = output_of[core::chain_end(next, w)];
   if (multipose)
     for (size_t v = 0; v < result.mesh.vertex_count(); ++v) {
-      if (!chosen[result.vertex_origin[v]]) continue;
       const Influences& w = final_influences[result.vertex_origin[v]];
+      if (!has_weight(w)) continue;
       result.mesh.joints[v] = {w.joint[0], w.joint[1], w.joint[2], w.joint[3]};
       result.mesh.weights[v] = {w.weight[0], w.weight[1], w.weight[2], w.weight[3]};
       if (!result.mesh.joints1.empty()) {
