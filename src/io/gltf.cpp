@@ -1113,6 +1113,14 @@ bool is_triangle_mode(int mode) {
 
 // The semantics lodkit regenerates from a Mesh; any other attribute of a regenerated primitive is
 // kept only while the vertex count is unchanged.
+// The elements of `bytes` (`element` bytes each) that `source` names, in its order: a stream
+// following renumbered vertices.
+std::vector<uint8_t> gather_elements(const std::vector<uint8_t>& bytes, size_t element, const std::vector<uint32_t>& source) {
+  std::vector<uint8_t> out(source.size() * element);
+  for (size_t i = 0; i < source.size(); ++i) std::memcpy(out.data() + i * element, bytes.data() + size_t(source[i]) * element, element);
+  return out;
+}
+
 bool is_regenerated_semantic(const std::string& semantic) {
   return semantic == "POSITION" || semantic == "NORMAL" || semantic == "TANGENT" || semantic == "TEXCOORD_0" ||
          semantic == "TEXCOORD_1" || semantic == "TEXCOORD_2" || semantic == "TEXCOORD_3" || semantic == "COLOR_0" ||
@@ -1385,13 +1393,20 @@ class BinWriter {
   }
 
   // KHR_draco_mesh_compression: the vertex streams and indices as one Draco stream
-  // (io::encode_draco), its accessors without a bufferView; morph targets stay plain, in the
-  // vertices' order (kept when `keep_order` or when there are targets).
-  void add_draco_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim, int position_bits,
-                          bool keep_order) {
-    const std::optional<io::DracoPrimitive> encoded =
-        io::encode_draco(mesh, position_bits, keep_order || !targets.empty() || !prim.targets.empty());
-    if (!encoded) return add_geometry(mesh, targets, prim, {});  // (libdraco cannot take it)
+  // (io::encode_draco), its accessors without a bufferView. Streams outside it must follow the
+  // decoded vertices: lodkit's morph targets are gathered here; `outside` says whether the caller
+  // has more it can gather (the decoded points' source vertices are returned, empty when they are
+  // the mesh's own in order). Accessors of the source already on `prim` keep the vertex order.
+  std::vector<uint32_t> add_draco_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim,
+                                           int position_bits, bool outside) {
+    const io::DracoOrder order = !prim.attributes.empty() || !prim.targets.empty() ? io::DracoOrder::kept
+                                 : outside || !targets.empty()                      ? io::DracoOrder::tracked
+                                                                                    : io::DracoOrder::any;
+    std::optional<io::DracoPrimitive> encoded = io::encode_draco(mesh, position_bits, order);
+    if (!encoded) {
+      add_geometry(mesh, targets, prim, {});  // (libdraco cannot take it)
+      return {};
+    }
     const io::DracoPrimitive& d = *encoded;
     const int view = add_view(d.bytes.data(), d.bytes.size(), 0);
     tg::Value::Object ids;
@@ -1421,7 +1436,18 @@ class BinWriter {
     ext["attributes"] = tg::Value(std::move(ids));
     prim.extensions[io::draco_extension] = tg::Value(std::move(ext));
     used_draco_ = true;
-    if (prim.targets.empty()) add_targets(mesh, targets, prim, {});
+    if (!prim.targets.empty()) return {};
+    if (d.point_source.empty()) {
+      add_targets(mesh, targets, prim, {});
+      return {};
+    }
+    std::vector<MorphTarget> moved(targets.size());
+    for (size_t k = 0; k < targets.size(); ++k)
+      for (const auto stream : morph_streams)
+        if (!(targets[k].*stream).empty())
+          for (const uint32_t v : d.point_source) (moved[k].*stream).push_back((targets[k].*stream)[v]);
+    add_targets(mesh, moved, prim, {});
+    return std::move(encoded->point_source);
   }
   bool used_draco() const { return used_draco_; }
 
@@ -2170,12 +2196,14 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     const Primitive& in = scene.primitives[p.scene_primitive];
     tg::Primitive& out = model.meshes[p.mesh].primitives[p.primitive];
     const int32_t shared = in.shares_vertices_with;
-    const std::vector<Gathered>& extra = gathered[p.scene_primitive];
+    std::vector<Gathered>& extra = gathered[p.scene_primitive];
     const StreamCoding coding{options.quantize, on_grid[p.mesh] ? &grid : nullptr};
     if (options.draco) {
-      // Each primitive its own stream (Draco has no shared vertex buffers); streams outside it
-      // (gathered, or the source's morph targets) need the vertices in place.
-      writer.add_draco_geometry(in.mesh, in.targets, out, options.position_bits, !extra.empty());
+      // Each primitive its own stream (Draco has no shared vertex buffers); the gathered streams
+      // outside it follow its vertices.
+      const std::vector<uint32_t> point_source = writer.add_draco_geometry(in.mesh, in.targets, out, options.position_bits, !extra.empty());
+      if (!point_source.empty())
+        for (Gathered& g : extra) g.bytes = gather_elements(g.bytes, element_bytes(g.like.componentType, g.like.type), point_source);
     } else if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && out.targets.empty() && extra.empty() &&
         on_grid[written_mesh[size_t(shared)]] == on_grid[p.mesh]) {
       // One vertex buffer, several index buffers; each morph target too where it is the same

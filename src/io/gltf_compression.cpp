@@ -14,7 +14,9 @@
 #include <limits>
 #include <new>
 #include <optional>
+#include <string>
 #include <type_traits>
+#include <unordered_map>
 
 #include "io/gltf_types.h"
 #include "lodkit/error.h"
@@ -535,7 +537,7 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin) {
   }
 }
 
-std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, bool keep_order) {
+std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, DracoOrder order) {
   const size_t n = mesh.vertex_count(), faces = mesh.triangle_count();
   draco::Mesh dm;
   dm.set_num_points(uint32_t(n));
@@ -603,45 +605,98 @@ std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, 
     if (!weights[set]->empty()) add("WEIGHTS" + suffix, GA::GENERIC, TINYGLTF_TYPE_VEC4, 4, floats(*weights[set]), 12);
   }
 
-  // libdraco 1.5.5 does not take every mesh it is given: Edgebreaker refuses one whose triangles all
-  // repeat a corner, and a stream it writes of a triangle with three equal corners does not decode
-  // (both found by fuzz_gltf). Each stream is decoded again here, and a failure falls back to
-  // sequential encoding, then to sequential encoding without quantization; if none decodes, the
-  // caller writes the primitive plain.
-  struct Attempt {
-    bool sequential, quantize;
+  // One encoding and its stream decoded again: what a loader will see.
+  struct Encoded {
+    std::vector<uint8_t> bytes;
+    std::unique_ptr<draco::Mesh> back;
   };
-  std::vector<Attempt> attempts;
-  if (!keep_order) attempts.push_back({false, true});
-  attempts.push_back({true, true});
-  attempts.push_back({true, false});
-  std::unique_ptr<draco::Mesh> back;
-  for (const Attempt& attempt : attempts) {
+  const auto encode = [&](bool sequential, bool quantize) -> std::optional<Encoded> {
     draco::ExpertEncoder encoder(dm);
-    if (attempt.quantize)
+    if (quantize)
       for (const auto& [id, bits] : quantized) encoder.SetAttributeQuantization(id, bits);
     // Draco's own default, compression level 7 (draco_encoder, draco_transcoder): 7-9% smaller
     // than level 5 on the bench's meshes, 20% on the skinned humanoid.
     encoder.SetSpeedOptions(3, 3);
-    encoder.SetEncodingMethod(attempt.sequential ? draco::MESH_SEQUENTIAL_ENCODING : draco::MESH_EDGEBREAKER_ENCODING);
+    encoder.SetEncodingMethod(sequential ? draco::MESH_SEQUENTIAL_ENCODING : draco::MESH_EDGEBREAKER_ENCODING);
     draco::EncoderBuffer buffer;
-    const draco::Status status = encoder.EncodeToBuffer(&buffer);
-    if (!status.ok()) continue;
-    // What a loader will see: counts and the position bounds of the decoded stream.
+    if (!encoder.EncodeToBuffer(&buffer).ok()) return std::nullopt;
     draco::DecoderBuffer input;
     input.Init(buffer.data(), buffer.size());
     draco::Decoder decoder;
     auto decoded = decoder.DecodeMeshFromBuffer(&input);
-    if (!decoded.ok()) continue;
-    back = std::move(decoded).value();
-    if (attempt.sequential && (back->num_points() != n || back->num_faces() != faces)) {
-      back.reset();  // (it must keep both in place)
-      continue;
+    if (!decoded.ok()) return std::nullopt;
+    Encoded e{std::vector<uint8_t>(buffer.data(), buffer.data() + buffer.size()), std::move(decoded).value()};
+    if (sequential && (e.back->num_points() != n || e.back->num_faces() != faces)) return std::nullopt;  // (it must keep both in place)
+    return e;
+  };
+  // Edgebreaker's numbering of the points, for DracoOrder::tracked. A first encoding carries each
+  // vertex's index as one more, exact, stream; it changes libdraco's traversal, so the stream
+  // written (encoded again without it) is matched to it by the points' decoded values, which do
+  // not depend on the traversal. Two input vertices that decode to the same values cannot be told
+  // apart: the caller then gets sequential encoding.
+  const auto encode_tracked = [&]() -> std::optional<Encoded> {
+    draco::GeometryAttribute index;
+    index.Init(draco::GeometryAttribute::GENERIC, nullptr, 1, draco::DT_UINT32, false, 4, 0);
+    const int id = dm.AddAttribute(index, true, uint32_t(n));
+    if (id < 0) return std::nullopt;
+    const uint32_t unique = dm.attribute(id)->unique_id();
+    for (uint32_t v = 0; v < n; ++v) dm.attribute(id)->SetAttributeValue(draco::AttributeValueIndex(v), &v);
+    std::optional<Encoded> with = encode(false, true);
+    dm.DeleteAttribute(id);  // (the last one: the others keep their ids)
+    if (!with) return std::nullopt;
+    std::optional<Encoded> without = encode(false, true);
+    if (!without) return std::nullopt;
+    const draco::PointAttribute* sources = with->back->GetAttributeByUniqueId(unique);
+    if (!sources) return std::nullopt;
+    // A point's key: its decoded values, every stream of the written encoding in turn.
+    const auto key = [](const std::vector<const draco::PointAttribute*>& streams, uint32_t p) {
+      std::string k;
+      for (const draco::PointAttribute* a : streams)
+        k.append(reinterpret_cast<const char*>(a->GetAddress(a->mapped_index(draco::PointIndex(p)))), size_t(a->byte_stride()));
+      return k;
+    };
+    std::vector<const draco::PointAttribute*> mine, theirs;
+    for (int32_t k = 0; k < without->back->num_attributes(); ++k) {
+      mine.push_back(without->back->attribute(k));
+      theirs.push_back(with->back->GetAttributeByUniqueId(mine.back()->unique_id()));
+      if (!theirs.back() || theirs.back()->byte_stride() != mine.back()->byte_stride()) return std::nullopt;
     }
-    out.bytes.assign(buffer.data(), buffer.data() + buffer.size());
-    break;
-  }
-  if (!back) return std::nullopt;
+    constexpr uint32_t ambiguous = UINT32_MAX;
+    std::unordered_map<std::string, uint32_t> source_of;
+    source_of.reserve(with->back->num_points());
+    for (uint32_t p = 0; p < with->back->num_points(); ++p) {
+      uint32_t v = 0;
+      sources->GetValue(sources->mapped_index(draco::PointIndex(p)), &v);
+      if (v >= n) return std::nullopt;
+      const auto [it, added] = source_of.emplace(key(theirs, p), v);
+      if (!added && it->second != v) it->second = ambiguous;
+    }
+    const uint32_t points = without->back->num_points();
+    std::vector<uint32_t> source(points);
+    for (uint32_t p = 0; p < points; ++p) {
+      const auto it = source_of.find(key(mine, p));
+      if (it == source_of.end() || it->second == ambiguous) return std::nullopt;
+      source[p] = it->second;
+    }
+    bool identity = points == n;
+    for (uint32_t p = 0; identity && p < points; ++p) identity = source[p] == p;
+    if (!identity) out.point_source = std::move(source);
+    return without;
+  };
+
+  // libdraco 1.5.5 does not take every mesh it is given: Edgebreaker refuses one whose triangles all
+  // repeat a corner, and a stream it writes of a triangle with three equal corners does not decode
+  // (both found by fuzz_gltf). Each stream is decoded again, and a failure falls back to sequential
+  // encoding, then to sequential encoding without quantization; if none decodes, the caller writes
+  // the primitive plain.
+  std::optional<Encoded> chosen;
+  if (order == DracoOrder::any) chosen = encode(false, true);
+  else if (order == DracoOrder::tracked) chosen = encode_tracked();
+  if (!chosen) out.point_source.clear(), chosen = encode(true, true);
+  if (!chosen) chosen = encode(true, false);
+  if (!chosen) return std::nullopt;
+  out.bytes = std::move(chosen->bytes);
+  const std::unique_ptr<draco::Mesh>& back = chosen->back;
   out.points = back->num_points(), out.triangles = back->num_faces();
   const draco::PointAttribute* position = back->GetAttributeByUniqueId(out.attributes["POSITION"].unique_id);
   if (!position) throw_internal("Draco: the decoded stream has no positions");

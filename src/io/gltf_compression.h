@@ -54,24 +54,33 @@ void compress_meshopt(nlohmann::json& doc, std::vector<uint8_t>& bin);
 // Writing (WriteOptions::draco): a triangle mesh's vertex streams and indices as one Draco stream
 // for KHR_draco_mesh_compression. Positions are quantized to `position_bits`, normals to 10 bits
 // (octahedral), UVs to 12, colours to 8, and the other float streams (tangents, skin weights) to 12;
-// joint indices and the connectivity are exact. `keep_order` (a primitive whose morph targets or
-// other streams stay outside the stream and must line up with it) encodes sequentially, which keeps
-// every vertex and triangle in place; otherwise Edgebreaker may renumber both. The stream is
-// decoded again to describe the accessors, which must match what a loader decodes.
+// joint indices and the connectivity are exact. The stream is decoded again to describe the
+// accessors, which must match what a loader decodes.
+// Edgebreaker, the smaller encoding, may renumber both vertices and triangles. Streams kept outside
+// the Draco stream (morph targets, attributes lodkit does not model) must line up with the decoded
+// vertices, so `order` says what the caller can follow:
+// - any: no outside streams;
+// - tracked: the caller gathers its outside streams through `point_source`;
+// - kept: it cannot (they are a source's accessors, written as they are): sequential encoding,
+//   which keeps every vertex and triangle in place.
 inline constexpr const char* draco_extension = "KHR_draco_mesh_compression";
 struct DracoAttribute {
   uint32_t unique_id = 0;  // in the Draco stream
   int component_type = 0;  // the accessor's
   int type = 0;            // the accessor's (TINYGLTF_TYPE_VEC2 ...)
 };
+enum class DracoOrder { any, tracked, kept };
 struct DracoPrimitive {
   std::vector<uint8_t> bytes;
   std::map<std::string, DracoAttribute> attributes;  // by glTF semantic
   uint64_t points = 0, triangles = 0;
   float3 position_min, position_max;  // of the decoded positions
+  // DracoOrder::tracked: the input vertex of each decoded point, when they differ; empty when the
+  // points are the input's vertices in their order.
+  std::vector<uint32_t> point_source;
 };
 // Nothing when libdraco cannot encode the mesh so that it decodes again (a triangle with three
 // equal corners): the primitive is then written plain.
-std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, bool keep_order);
+std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, DracoOrder order);
 
 }  // namespace lod::io

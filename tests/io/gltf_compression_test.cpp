@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <numeric>
 #include <random>
 #include <string>
 #include <tuple>
@@ -192,8 +193,9 @@ std::vector<uint32_t> match_within_quantization(const Mesh& source, const Mesh& 
       }
     }
     EXPECT_EQ(found, 1) << "decoded vertex " << v;
-    if (!source.normals.empty())
+    if (!source.normals.empty()) {
       EXPECT_GT(cosine(decoded.normals[v], source.normals[match[v]]), std::cos(3.14159265f / 180.0f)) << "vertex " << v;
+    }
   }
   return match;
 }
@@ -627,20 +629,112 @@ TEST(GltfCompression, DracoOutputMatchesItsSourceWithinTheQuantizationStep) {
   }
 }
 
-// A primitive with a morph target stays in its vertex order (sequential encoding): vertex v within
-// a position step of the source's vertex v, the same index list, the target exact.
-TEST(GltfCompression, DracoOutputKeepsTheOrderOfAMorphingPrimitive) {
+// The encoding method of each Draco stream in a .glb, in mesh order (the byte after the "DRACO"
+// magic, the version and the encoder type: 0 sequential, 1 Edgebreaker).
+std::vector<int> draco_methods(const std::filesystem::path& path) {
+  const test::Glb glb = test::read_glb(path);
+  std::vector<int> out;
+  for (const Json& mesh : glb.doc["meshes"])
+    for (const Json& prim : mesh["primitives"]) {
+      if (!prim.contains("extensions") || !prim["extensions"].contains(kDraco)) continue;
+      const Json& view = glb.doc["bufferViews"][prim["extensions"][kDraco]["bufferView"].get<size_t>()];
+      const size_t offset = view.value("byteOffset", size_t(0));
+      EXPECT_EQ(std::string(glb.bin.begin() + ptrdiff_t(offset), glb.bin.begin() + ptrdiff_t(offset + 5)), "DRACO");
+      out.push_back(glb.bin.at(offset + 8));
+    }
+  return out;
+}
+
+// A primitive with a morph target is still encoded with Edgebreaker, which renumbers its vertices;
+// the target, stored plain outside the stream, follows them: each decoded vertex's displacement is
+// exactly the one of the source vertex it decodes from (matched within a position step), and the
+// triangles through that match are the source's.
+TEST(GltfCompression, DracoMorphTargetsFollowEdgebreakersVertexOrder) {
+  TempDir dir;
+  Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 20, 10));
+  const Mesh source = scene.primitives[0].mesh;
+  MorphTarget target;
+  for (const float3& p : source.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
+  for (const float3& p : source.positions) target.normals.push_back({0.1f * p.y, 0.2f * p.z, 0.3f * p.x});
+  scene.primitives[0].targets.push_back(target);
+  WriteOptions o;
+  o.draco = true;
+  write_scene(scene, dir / "m.glb", o);
+  test::expect_valid_gltf({dir / "m.glb"});
+  EXPECT_EQ(draco_methods(dir / "m.glb"), std::vector<int>{1});
+  const Scene back = read_scene(dir / "m.glb");
+  const Mesh& m = only_mesh(back);
+  ASSERT_EQ(m.vertex_count(), source.vertex_count());
+  const std::vector<uint32_t> match = match_within_quantization(source, m, 14, 2.6f);
+  EXPECT_EQ(triangles(m.indices, &match), triangles(source.indices, nullptr));
+  EXPECT_NE(match, [&] {
+    std::vector<uint32_t> identity(m.vertex_count());
+    std::iota(identity.begin(), identity.end(), 0u);
+    return identity;
+  }()) << "Edgebreaker kept the order: the test shows nothing";
+  const std::vector<MorphTarget> targets = source_morph_targets(back, 0);
+  ASSERT_EQ(targets.size(), 1u);
+  ASSERT_EQ(targets[0].positions.size(), m.vertex_count());
+  ASSERT_EQ(targets[0].normals.size(), m.vertex_count());
+  for (size_t v = 0; v < m.vertex_count(); ++v) {
+    EXPECT_EQ(targets[0].positions[v], target.positions[match[v]]) << v;
+    EXPECT_EQ(targets[0].normals[v], target.normals[match[v]]) << v;
+  }
+}
+
+// A LOD chain of a glTF source with its own morph target: each level's target is gathered from the
+// source (written anew, outside the Draco stream) and follows Edgebreaker's renumbering. Against
+// the same chain written plain, matched by position: the same displacement, exactly.
+TEST(GltfCompression, DracoLevelsCarryTheSourcesMorphTargets) {
+  TempDir dir;
+  Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 32, 16));
+  MorphTarget target;
+  for (const float3& p : scene.primitives[0].mesh.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
+  scene.primitives[0].targets.push_back(target);
+  write_scene(scene, dir / "in.glb");
+  for (const char* name : {"plain.glb", "d.glb"}) {
+    std::vector<std::string> argv = {"lod", (dir / "in.glb").string(), "-o", (dir / name).string(), "--levels", "3"};
+    if (std::string(name) == "d.glb") argv.push_back("--draco");
+    const test::RunResult r = test::run_cli(argv);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  test::expect_valid_gltf({dir / "d.glb"});
+  EXPECT_EQ(draco_methods(dir / "d.glb"), (std::vector<int>{1, 1, 1}));
+  const Scene plain = read_scene(dir / "plain.glb"), packed = read_scene(dir / "d.glb");
+  ASSERT_EQ(packed.primitives.size(), 3u);
+  ASSERT_EQ(plain.primitives.size(), 3u);
+  for (size_t level = 0; level < 3; ++level) {
+    const Mesh &a = plain.primitives[level].mesh, &b = packed.primitives[level].mesh;
+    ASSERT_EQ(a.vertex_count(), b.vertex_count()) << level;
+    const std::vector<uint32_t> match = match_within_quantization(a, b, 14, 2.6f);
+    EXPECT_EQ(triangles(b.indices, &match), triangles(a.indices, nullptr)) << level;
+    const std::vector<MorphTarget> ta = source_morph_targets(plain, level), tb = source_morph_targets(packed, level);
+    ASSERT_EQ(ta.size(), 1u);
+    ASSERT_EQ(tb.size(), 1u);
+    ASSERT_EQ(tb[0].positions.size(), b.vertex_count());
+    size_t moved = 0;
+    for (size_t v = 0; v < b.vertex_count(); ++v) {
+      EXPECT_EQ(tb[0].positions[v], ta[0].positions[match[v]]) << level << " " << v;
+      moved += match[v] != v;
+    }
+    EXPECT_GT(moved, 0u) << level;
+  }
+}
+
+// Written as it is (the same vertices, the source's own morph-target accessors kept), a primitive
+// keeps its vertex order: sequential encoding, the same index list, the target exact.
+TEST(GltfCompression, DracoKeepsTheOrderUnderTheSourcesOwnAccessors) {
   TempDir dir;
   Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 20, 10));
   const Mesh source = scene.primitives[0].mesh;
   MorphTarget target;
   for (const float3& p : source.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
   scene.primitives[0].targets.push_back(target);
-  WriteOptions o;
-  o.draco = true;
-  write_scene(scene, dir / "m.glb", o);
-  test::expect_valid_gltf({dir / "m.glb"});
-  const Scene back = read_scene(dir / "m.glb");
+  write_scene(scene, dir / "in.glb");
+  const test::RunResult r = test::run_cli({"convert", (dir / "in.glb").string(), (dir / "k.glb").string(), "--draco"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  test::expect_valid_gltf({dir / "k.glb"});
+  const Scene back = read_scene(dir / "k.glb");
   const Mesh& m = only_mesh(back);
   ASSERT_EQ(m.vertex_count(), source.vertex_count());
   EXPECT_EQ(m.indices, source.indices);
