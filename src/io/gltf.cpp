@@ -1395,12 +1395,15 @@ class BinWriter {
   // KHR_draco_mesh_compression: the vertex streams and indices as one Draco stream
   // (io::encode_draco), its accessors without a bufferView. Streams outside it must follow the
   // decoded vertices: lodkit's morph targets are gathered here; `outside` says whether the caller
-  // has more it can gather (the decoded points' source vertices are returned, empty when they are
-  // the mesh's own in order). Accessors of the source already on `prim` keep the vertex order.
+  // has more it can gather (slots of -1 on `prim`, or none yet). The decoded points' source
+  // vertices are returned (empty when they are the mesh's own, in order). A source accessor still
+  // on `prim`, written as it is, keeps the vertices in place.
   std::vector<uint32_t> add_draco_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim,
                                            int position_bits, bool outside) {
-    const io::DracoOrder order = !prim.attributes.empty() || !prim.targets.empty() ? io::DracoOrder::kept
-                                 : outside || !targets.empty()                      ? io::DracoOrder::tracked
+    bool kept = false;
+    for_each_unmodelled_stream(prim, [&](int, const std::string&, int index) { kept = kept || index >= 0; });
+    const io::DracoOrder order = kept                                               ? io::DracoOrder::kept
+                                 : outside || !targets.empty() || !prim.targets.empty() ? io::DracoOrder::tracked
                                                                                     : io::DracoOrder::any;
     std::optional<io::DracoPrimitive> encoded = io::encode_draco(mesh, position_bits, order);
     if (!encoded) {
@@ -1436,7 +1439,7 @@ class BinWriter {
     ext["attributes"] = tg::Value(std::move(ids));
     prim.extensions[io::draco_extension] = tg::Value(std::move(ext));
     used_draco_ = true;
-    if (!prim.targets.empty()) return {};
+    if (!prim.targets.empty()) return std::move(encoded->point_source);  // (the caller's, as in add_geometry)
     if (d.point_source.empty()) {
       add_targets(mesh, targets, prim, {});
       return {};
@@ -1895,11 +1898,14 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
       auto position = prim.attributes.find("POSITION");
       const std::vector<std::array<float, 3>>& weights = scene.primitives[size_t(owner)].source_weights;
       const size_t source_count = position != prim.attributes.end() ? model.accessors[size_t(position->second)].count : 0;
-      // Quantized, a source's own morph targets, kept as they are otherwise, get rewritten (their
-      // positions go on the grid): through the identity map.
+      // A source's own streams that lodkit does not model are kept as they are, unless they must
+      // be rewritten: quantized, its morph targets (their positions go on the grid); under Draco,
+      // all of them (they follow Edgebreaker's renumbering). Those go through the identity map.
+      bool unmodelled = false;
+      for_each_unmodelled_stream(prim, [&](auto&&...) { unmodelled = true; });
       std::vector<uint32_t> identity;
-      if (options.quantize && !prim.targets.empty() && scene.primitives[size_t(owner)].source_vertices.empty() &&
-          source_count == geometry.vertex_count()) {
+      if (((options.quantize && !prim.targets.empty()) || (options.draco && unmodelled)) &&
+          scene.primitives[size_t(owner)].source_vertices.empty() && source_count == geometry.vertex_count()) {
         identity.resize(source_count);
         std::iota(identity.begin(), identity.end(), 0u);
       }

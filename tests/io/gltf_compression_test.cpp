@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <numeric>
@@ -721,31 +722,79 @@ TEST(GltfCompression, DracoLevelsCarryTheSourcesMorphTargets) {
   }
 }
 
-// Written as it is (the same vertices, the source's own morph-target accessors kept), a primitive
-// keeps its vertex order: sequential encoding, the same index list, the target exact.
-TEST(GltfCompression, DracoKeepsTheOrderUnderTheSourcesOwnAccessors) {
-  TempDir dir;
-  Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 20, 10));
-  const Mesh source = scene.primitives[0].mesh;
-  MorphTarget target;
-  for (const float3& p : source.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
+// `mesh` (and its one morph target) as a plain .glb whose primitive also has an application
+// attribute `_ID`: each vertex's index, as a float.
+void write_with_ids(const Mesh& mesh, const MorphTarget& target, const std::filesystem::path& path) {
+  Scene scene = scene_from_mesh(mesh);
   scene.primitives[0].targets.push_back(target);
-  write_scene(scene, dir / "in.glb");
-  const test::RunResult r = test::run_cli({"convert", (dir / "in.glb").string(), (dir / "k.glb").string(), "--draco"});
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  test::expect_valid_gltf({dir / "k.glb"});
-  const Scene back = read_scene(dir / "k.glb");
-  const Mesh& m = only_mesh(back);
-  ASSERT_EQ(m.vertex_count(), source.vertex_count());
-  EXPECT_EQ(m.indices, source.indices);
-  const float bound = std::sqrt(3.0f) * 0.5f * 2.6f / float((1 << 14) - 1) + 1e-6f;
-  for (size_t v = 0; v < m.vertex_count(); ++v) {
-    const float3 a = m.positions[v], b = source.positions[v];
-    ASSERT_LE(length3({a.x - b.x, a.y - b.y, a.z - b.z}), bound) << v;
+  write_scene(scene, path);
+  test::Glb g = test::read_glb(path);
+  while (g.bin.size() % 4) g.bin.push_back(0);
+  const size_t offset = g.bin.size(), n = mesh.vertex_count();
+  for (size_t v = 0; v < n; ++v) {
+    const float id = float(v);
+    const auto* bytes = reinterpret_cast<const uint8_t*>(&id);
+    g.bin.insert(g.bin.end(), bytes, bytes + 4);
   }
-  const std::vector<MorphTarget> targets = source_morph_targets(back, 0);
-  ASSERT_EQ(targets.size(), 1u);
-  EXPECT_EQ(targets[0].positions, target.positions);
+  g.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", 4 * n}, {"target", 34962}});
+  g.doc["accessors"].push_back({{"bufferView", g.doc["bufferViews"].size() - 1}, {"componentType", 5126}, {"count", n}, {"type", "SCALAR"}});
+  g.doc["meshes"][0]["primitives"][0]["attributes"]["_ID"] = g.doc["accessors"].size() - 1;
+  g.doc["buffers"][0]["byteLength"] = g.bin.size();
+  test::write_bytes(path, test::glb_bytes(g));
+}
+
+// The `_ID` floats of a .glb's first primitive.
+std::vector<float> read_ids(const std::filesystem::path& path) {
+  const test::Glb g = test::read_glb(path);
+  const Json& a = g.doc["accessors"][g.doc["meshes"][0]["primitives"][0]["attributes"]["_ID"].get<size_t>()];
+  const Json& view = g.doc["bufferViews"][a["bufferView"].get<size_t>()];
+  const size_t stride = view.value("byteStride", size_t(4));
+  const size_t offset = view.value("byteOffset", size_t(0)) + a.value("byteOffset", size_t(0));
+  std::vector<float> out(a["count"].get<size_t>());
+  for (size_t v = 0; v < out.size(); ++v) std::memcpy(&out[v], g.bin.data() + offset + v * stride, 4);
+  return out;
+}
+
+// Written through (`convert`: the same vertices), a source's own streams that lodkit does not model
+// (an application attribute, a morph target) stay outside the Draco stream and follow Edgebreaker's
+// renumbering: each decoded vertex carries the id of one source vertex, lies within a position step
+// of it, and has its displacement exactly. When two vertices decode alike (positions only, the
+// torus's seam duplicated), their streams could not be told apart: sequential encoding keeps the
+// order instead.
+TEST(GltfCompression, DracoCarriesTheSourcesOwnStreamsThroughEdgebreaker) {
+  TempDir dir;
+  for (const bool alike : {false, true}) {
+    Mesh source = shapes::torus(1.0f, 0.3f, 20, 10);
+    if (alike) source.normals.clear(), source.uvs[0].clear();
+    MorphTarget target;
+    for (const float3& p : source.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
+    write_with_ids(source, target, dir / "in.glb");
+    const test::RunResult r = test::run_cli({"convert", (dir / "in.glb").string(), (dir / "d.glb").string(), "--draco"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    test::expect_valid_gltf({dir / "d.glb"});
+    EXPECT_EQ(draco_methods(dir / "d.glb"), std::vector<int>{alike ? 0 : 1}) << alike;
+    const Scene back = read_scene(dir / "d.glb");
+    const Mesh& m = only_mesh(back);
+    const std::vector<float> ids = read_ids(dir / "d.glb");
+    ASSERT_EQ(ids.size(), m.vertex_count());
+    const std::vector<MorphTarget> targets = source_morph_targets(back, 0);
+    ASSERT_EQ(targets.size(), 1u);
+    ASSERT_EQ(targets[0].positions.size(), m.vertex_count());
+    const float bound = std::sqrt(3.0f) * 0.5f * 2.6f / float((1 << 14) - 1) + 1e-6f;
+    std::vector<uint32_t> match(m.vertex_count());
+    size_t moved = 0;
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+      ASSERT_TRUE(ids[v] >= 0 && ids[v] < float(source.vertex_count()) && ids[v] == std::floor(ids[v])) << ids[v];
+      const uint32_t s = match[v] = uint32_t(ids[v]);
+      const float3 a = m.positions[v], b = source.positions[s];
+      EXPECT_LE(length3({a.x - b.x, a.y - b.y, a.z - b.z}), bound) << v;
+      EXPECT_EQ(targets[0].positions[v], target.positions[s]) << v;
+      moved += s != v;
+    }
+    EXPECT_EQ(triangles(m.indices, &match), triangles(source.indices, nullptr)) << alike;
+    if (alike) EXPECT_EQ(moved, 0u);
+    else EXPECT_GT(moved, 0u);
+  }
 }
 
 // A skinned, animated character: joint indices exact, weights within a 12-bit step, positions within
