@@ -98,6 +98,11 @@ struct Primitive {
   // source vertices per vertex, blended with these weights. Float and normalized streams are
   // interpolated, other integer ones (ids) take the heaviest vertex's value. Empty: one each.
   std::vector<std::array<float, 3>> source_weights;
+  // How many of the source glTF primitive's morph targets are written (the first ones), with the
+  // weights and weight clips of the nodes drawing its mesh cut to match; every primitive of a glTF
+  // mesh must say the same. lodkit simplify drops lod --morph's geomorph (the last) from a level it
+  // changes, and keeps the blend shapes before it.
+  uint32_t source_target_count = UINT32_MAX;
   uint32_t gltf_mesh = 0;       // index of the glTF mesh this primitive belongs to
   uint32_t gltf_primitive = 0;  // index within that mesh
   int32_t material = -1;        // glTF material index, -1 for none

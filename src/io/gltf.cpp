@@ -1780,18 +1780,19 @@ int append_float_accessor(tg::Model& model, tg::Buffer& data, int buffer, const 
   return int(model.accessors.size() - 1);
 }
 
-// Morph weights for the targets each mesh is written with (`targets[m]`): a node whose mesh has
-// more than its weights and clips give (lodkit lod --morph puts a level's geomorph after the
-// source's blend shapes) takes 0 for the others, in its weights and in a copy of each sampler that
-// drives them. The copies' outputs go into a new buffer of the model, repacked with the rest.
-void pad_morph_weights(tg::Model& model, const Document& source, const std::vector<size_t>& targets) {
+// Morph weights for the targets each mesh is written with (`targets[m]`, when not 0), in a node's
+// weights and in a copy of each sampler that drives them: a node whose mesh has more than its
+// weights and clips give (lodkit lod --morph puts a level's geomorph after the source's blend
+// shapes) takes 0 for the others; one whose mesh has fewer (Primitive::source_target_count) loses
+// the last ones. The copies' outputs go into a new buffer of the model, repacked with the rest.
+void fit_morph_weights(tg::Model& model, const Document& source, const std::vector<size_t>& targets) {
   const auto wanted = [&](int node) -> size_t {
     if (node < 0 || size_t(node) >= model.nodes.size()) return 0;
     const int mesh = model.nodes[size_t(node)].mesh;
     return mesh >= 0 && size_t(mesh) < targets.size() ? targets[size_t(mesh)] : 0;
   };
   for (size_t n = 0; n < model.nodes.size(); ++n)
-    if (std::vector<double>& w = model.nodes[n].weights; !w.empty() && w.size() < wanted(int(n))) w.resize(wanted(int(n)), 0.0);
+    if (std::vector<double>& w = model.nodes[n].weights; !w.empty() && wanted(int(n)) > 0) w.resize(wanted(int(n)), 0.0);
   tg::Buffer padded;
   for (tg::Animation& anim : model.animations) {
     std::map<std::pair<int, size_t>, int> copies;  // (sampler, targets) -> its padded copy
@@ -1802,15 +1803,15 @@ void pad_morph_weights(tg::Model& model, const Document& source, const std::vect
       if (sampler.input < 0 || sampler.output < 0) continue;
       const tg::Accessor& out = source.accessor(sampler.output);
       const size_t keys = source.accessor(sampler.input).count * (sampler.interpolation == "CUBICSPLINE" ? 3 : 1);
-      if (out.type != TINYGLTF_TYPE_SCALAR || keys == 0 || out.count % keys != 0 || out.count / keys >= want) continue;
+      if (out.type != TINYGLTF_TYPE_SCALAR || keys == 0 || out.count % keys != 0 || out.count / keys == want) continue;
       const auto [copy, fresh] = copies.try_emplace({ch.sampler, want}, int(anim.samplers.size()));
       if (fresh) {
-        // Each key's group (its values, or a cubic spline's tangents) followed by zeros.
+        // Each key's group (its values, or a cubic spline's tangents) followed by zeros, or cut.
         const std::vector<float> values = source.decode_floats<float>(sampler.output);
         const size_t given = out.count / keys;
         std::vector<float> grown(keys * want, 0.0f);
         for (size_t k = 0; k < keys; ++k)
-          std::copy_n(values.begin() + ptrdiff_t(k * given), given, grown.begin() + ptrdiff_t(k * want));
+          std::copy_n(values.begin() + ptrdiff_t(k * given), std::min(given, want), grown.begin() + ptrdiff_t(k * want));
         tg::AnimationSampler grown_sampler = sampler;
         grown_sampler.output = append_float_accessor(model, padded, int(model.buffers.size()), grown, TINYGLTF_TYPE_SCALAR, false);
         anim.samplers.push_back(std::move(grown_sampler));
@@ -1895,6 +1896,12 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
       if (owner < 0) continue;
       const Mesh& geometry = scene.primitives[size_t(owner)].mesh;
       if (geometry.indices.empty()) continue;
+      // Source morph targets the scene drops (lod's stale geomorph): the first ones stay.
+      if (const uint32_t keep = scene.primitives[size_t(owner)].source_target_count; keep < prim.targets.size()) {
+        prim.targets.resize(keep);
+        if (mesh.weights.size() > keep) mesh.weights.resize(keep);
+        if (keep == 0) drop_morphs = true;
+      }
       auto position = prim.attributes.find("POSITION");
       const std::vector<std::array<float, 3>>& weights = scene.primitives[size_t(owner)].source_weights;
       const size_t source_count = position != prim.attributes.end() ? model.accessors[size_t(position->second)].count : 0;
@@ -1979,7 +1986,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     for (const Pending& p : pending)
       if (model.meshes[p.mesh].primitives[p.primitive].targets.empty())
         targets[p.mesh] = std::max(targets[p.mesh], scene.primitives[p.scene_primitive].targets.size());
-    pad_morph_weights(model, source, targets);
+    fit_morph_weights(model, source, targets);
   }
 
   // Nodes instancing a removed mesh, or one that lost its morph targets, lose their weights and the

@@ -682,6 +682,37 @@ TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
     }
     EXPECT_EQ(channels, 1u);
   }
+  // lodkit simplify on that chain: each level it changes loses its geomorph (stale: it moved the
+  // old vertices), but keeps the input's blend shape, carried to its new vertices, and the clip then
+  // drives one weight per key. Level 0 was the input torus, so its new vertices' offsets name points
+  // on the morphed torus as above (level 1's, blends of blends, lie further inside its chords).
+  const test::RunResult simplified =
+      test::run_cli({"simplify", (dir / "geomorph.glb").string(), "-o", (dir / "again.glb").string(), "--ratio", "0.5"});
+  ASSERT_EQ(simplified.exit_code, 0) << simplified.err;
+  test::expect_valid_gltf({dir / "again.glb"});
+  const Scene again = read_scene(dir / "again.glb");
+  const nlohmann::json adoc = glb_json(dir / "again.glb");
+  const std::vector<size_t> again_levels = level_nodes(glb_json(dir / "geomorph.glb"));  // (the same nodes)
+  ASSERT_EQ(again_levels.size(), 2u);
+  for (const size_t n : again_levels) {
+    const nlohmann::json& node = adoc["nodes"][n];
+    EXPECT_FALSE(node.value("extras", nlohmann::json::object()).contains("LODKIT_geomorph")) << n;
+    const size_t mesh = node["mesh"];
+    ASSERT_EQ(adoc["meshes"][mesh]["primitives"][0]["targets"].size(), 1u) << "node " << n;
+    const Mesh* level = gltf_mesh(again, mesh);
+    ASSERT_NE(level, nullptr);
+    if (n == again_levels[0]) {
+      EXPECT_GT(torus_offsets_moved(dir / "again.glb", mesh, *level), 0u);
+    }
+    if (node.contains("weights")) {
+      EXPECT_EQ(node["weights"].size(), 1u) << n;
+    }
+    for (const auto& channel : adoc["animations"][0]["channels"]) {
+      if (channel["target"]["path"] != "weights" || channel["target"]["node"] != n) continue;
+      const nlohmann::json& sampler = adoc["animations"][0]["samplers"][channel["sampler"].get<size_t>()];
+      EXPECT_EQ(test::glb_floats(dir / "again.glb", sampler["output"]), (std::vector<float>{0, 1})) << n;
+    }
+  }
 }
 
 // The morphing torus drawn by two nodes (the second moved to x = 5): every level has both nodes'
