@@ -2501,9 +2501,12 @@ void add_gpu_instances(tg::Model& model, tg::Buffer& data, const Node& in, tg::N
 // (Node::morph_weights_of). One node's weights and weight channels are copied (the same samplers).
 // Several nodes' are concatenated: their rest weights (a node's own, else its mesh's, else 0), and
 // per clip one channel (lod::concatenate_weights over the decoded clips of `scene`, which lists the
-// source's animations in order) whose keys go into `data`, the model's next buffer.
+// source's animations in order) whose keys go into `data`, the model's next buffer. New nodes
+// taking the same nodes' weights (a chain's levels) share that channel's sampler: `merged` holds
+// it per (clip, source nodes), or -1 where the nodes have none.
+using MergedSamplers = std::map<std::pair<size_t, std::vector<int32_t>>, int>;
 void take_morph_weights(tg::Model& model, const Scene& scene, const std::vector<int32_t>& of, size_t i, size_t source_nodes,
-                        tg::Node& node, tg::Buffer& data) {
+                        tg::Node& node, tg::Buffer& data, MergedSamplers& merged_samplers) {
   if (of.empty() || (of.size() == 1 && of[0] < 0)) return;
   for (const int32_t s : of)
     if (s < 0 || size_t(s) >= source_nodes)
@@ -2541,19 +2544,24 @@ void take_morph_weights(tg::Model& model, const Scene& scene, const std::vector<
   if (weighted)
     for (const WeightsSource& s : sources) node.weights.insert(node.weights.end(), s.rest.begin(), s.rest.end());
   for (size_t a = 0; a < model.animations.size() && a < scene.animations.size(); ++a) {
-    for (size_t k = 0; k < of.size(); ++k) sources[k].channel = weights_channel(scene.animations[a], of[k]);
-    const std::optional<AnimationChannel> merged = concatenate_weights(sources);
-    if (!merged) continue;  // no clip of theirs, or one the merge cannot follow exactly (lodkit lod says so)
-    tg::AnimationSampler sampler;
-    sampler.input = append_float_accessor(model, data, int(model.buffers.size()), merged->times, TINYGLTF_TYPE_SCALAR, true);
-    sampler.output = append_float_accessor(model, data, int(model.buffers.size()), merged->values, TINYGLTF_TYPE_SCALAR, false);
-    sampler.interpolation = interpolation_name(merged->interpolation);
     tg::Animation& anim = model.animations[a];
+    const auto [known, fresh] = merged_samplers.try_emplace({a, of}, -1);
+    if (fresh) {
+      for (size_t k = 0; k < of.size(); ++k) sources[k].channel = weights_channel(scene.animations[a], of[k]);
+      const std::optional<AnimationChannel> merged = concatenate_weights(sources);
+      if (!merged) continue;  // no clip of theirs, or one the merge cannot follow exactly (lodkit lod says so)
+      tg::AnimationSampler sampler;
+      sampler.input = append_float_accessor(model, data, int(model.buffers.size()), merged->times, TINYGLTF_TYPE_SCALAR, true);
+      sampler.output = append_float_accessor(model, data, int(model.buffers.size()), merged->values, TINYGLTF_TYPE_SCALAR, false);
+      sampler.interpolation = interpolation_name(merged->interpolation);
+      known->second = int(anim.samplers.size());
+      anim.samplers.push_back(std::move(sampler));
+    }
+    if (known->second < 0) continue;
     tg::AnimationChannel channel;
-    channel.sampler = int(anim.samplers.size());
+    channel.sampler = known->second;
     channel.target_node = int(i);
     channel.target_path = "weights";
-    anim.samplers.push_back(std::move(sampler));
     anim.channels.push_back(std::move(channel));
   }
 }
@@ -2585,6 +2593,7 @@ void add_to_source(tg::Model& model, const Scene& scene) {
   const size_t source_nodes = model.nodes.size();
   if (scene.nodes.size() < source_nodes) return;  // a scene that lost nodes adds none
   tg::Buffer new_data;  // new nodes' instances and merged weight clips
+  MergedSamplers merged_samplers;
   for (size_t i = 0; i < scene.nodes.size(); ++i) {
     const Node& in = scene.nodes[i];
     if (i < source_nodes) {
@@ -2601,7 +2610,7 @@ void add_to_source(tg::Model& model, const Scene& scene) {
         node.skin = in.skin;
       }
     }
-    take_morph_weights(model, scene, in.morph_weights_of, i, source_nodes, node, new_data);
+    take_morph_weights(model, scene, in.morph_weights_of, i, source_nodes, node, new_data, merged_samplers);
     add_gpu_instances(model, new_data, in, node);
     set_lod_and_extras(model, in, node);
     set_transform(in, node);

@@ -790,6 +790,13 @@ TEST(CliLod, StaticLevelsMergeSeveralNodesMorphTargets) {
     }
   }
   EXPECT_EQ(levels.size(), 2u);
+  // The levels take the same two nodes' weights: one merged sampler per clip serves them all.
+  for (size_t a = 0; a < 2; ++a) {
+    std::set<size_t> samplers;
+    for (const auto& channel : doc["animations"][a]["channels"])
+      if (channel["target"]["path"] == "weights") samplers.insert(channel["sampler"].get<size_t>());
+    EXPECT_EQ(samplers.size(), 1u) << "clip " << a;
+  }
 
   // Node 1's curve as a step: no one channel can follow both.
   input.animations[0].channels.back().interpolation = Interpolation::step;
