@@ -51,12 +51,16 @@ struct WriteOptions {
   // glTF: each triangle primitive's vertex streams and indices as a Draco stream
   // (KHR_draco_mesh_compression, then required) at Draco's default compression level 7, as
   // draco_transcoder writes it: positions quantized to `position_bits`, normals to 10 bits, UVs to
-  // 12, colours to 8, tangents and skin weights to 12; joint indices and connectivity exact. Edgebreaker may renumber a
-  // primitive's vertices and triangles, and drops those with a repeated corner; one with morph
-  // targets or other streams outside the Draco stream is encoded sequentially, in place. A stream
-  // whose range overflows a float is stored exactly (libdraco 1.5.5 crashes quantizing it), and a
-  // primitive libdraco cannot round-trip (a triangle with three equal corners) is written plain. Not with `quantize` (Draco quantizes by itself);
-  // with `meshopt_compression`, meshopt compresses what Draco does not (animation, morph targets).
+  // 12, colours to 8, tangents and skin weights to 12; joint indices and connectivity exact.
+  // Edgebreaker may renumber a primitive's vertices and triangles, and drops those with a repeated
+  // corner; morph targets and other streams outside the Draco stream follow the renumbering (a
+  // primitive where two vertices decode alike, whose outside streams could not be told apart, is
+  // encoded sequentially, in place). A stream whose range overflows a float is stored exactly
+  // (libdraco 1.5.5 crashes quantizing it), and a primitive libdraco cannot round-trip (a triangle
+  // with three equal corners) is written plain. With `quantize`, positions on its grid go into the
+  // Draco stream as their grid coordinates, exactly, and morph targets, animation and the streams
+  // outside are stored as `quantize` says; Draco quantizes the other vertex streams. With
+  // `meshopt_compression`, meshopt compresses what Draco does not (animation, morph targets).
   bool draco = false;
   int position_bits = 14;
   // Text formats print floats with the shortest representation that reads back bit-exact.

@@ -1152,6 +1152,11 @@ struct PositionGrid {
   double top = 0;  // 2^bits - 1; 0: no grid (positions stay floats)
 };
 
+// A position component's grid coordinate: the nearest step, clamped to the grid.
+auto grid_code(const PositionGrid& grid) {
+  return [&grid](float x, size_t c) { return std::lround(std::clamp((x - grid.offset[c]) / grid.scale, 0.0, grid.top)); };
+}
+
 // How BinWriter stores one primitive's streams.
 struct StreamCoding {
   bool quantize = false;               // normals, tangents, UVs, colours and weights in fewer bits
@@ -1317,8 +1322,7 @@ class BinWriter {
       return index;
     }
     used_quantization_ = true;
-    const auto on_grid = [grid](float x, size_t c) { return std::lround(std::clamp((x - grid->offset[c]) / grid->scale, 0.0, grid->top)); };
-    return add_packed(pack_components<uint16_t>(positions, on_grid), TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC3,
+    return add_packed(pack_components<uint16_t>(positions, grid_code(*grid)), TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC3,
                       false, true);
   }
 
@@ -1397,19 +1401,29 @@ class BinWriter {
   // decoded vertices: lodkit's morph targets are gathered here; `outside` says whether the caller
   // has more it can gather (slots of -1 on `prim`, or none yet). The decoded points' source
   // vertices are returned (empty when they are the mesh's own, in order). A source accessor still
-  // on `prim`, written as it is, keeps the vertices in place.
+  // on `prim`, written as it is, keeps the vertices in place. On -q's grid (`coding`), the
+  // positions go into the stream as their grid coordinates, exactly, and the morph targets are
+  // stored as -q stores them; Draco quantizes the other streams either way.
   std::vector<uint32_t> add_draco_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim,
-                                           int position_bits, bool outside) {
+                                           int position_bits, bool outside, const StreamCoding& coding) {
     bool kept = false;
     for_each_unmodelled_stream(prim, [&](int, const std::string&, int index) { kept = kept || index >= 0; });
     const io::DracoOrder order = kept                                               ? io::DracoOrder::kept
                                  : outside || !targets.empty() || !prim.targets.empty() ? io::DracoOrder::tracked
                                                                                     : io::DracoOrder::any;
-    std::optional<io::DracoPrimitive> encoded = io::encode_draco(mesh, position_bits, order);
+    std::vector<uint16_t> grid_positions;
+    if (coding.grid) {
+      const auto code = grid_code(*coding.grid);
+      grid_positions.reserve(3 * mesh.vertex_count());
+      for (const float3& p : mesh.positions)
+        for (const auto& [x, c] : {std::pair{p.x, 0}, std::pair{p.y, 1}, std::pair{p.z, 2}}) grid_positions.push_back(uint16_t(code(x, size_t(c))));
+    }
+    std::optional<io::DracoPrimitive> encoded = io::encode_draco(mesh, position_bits, order, grid_positions);
     if (!encoded) {
-      add_geometry(mesh, targets, prim, {});  // (libdraco cannot take it)
+      add_geometry(mesh, targets, prim, coding);  // (libdraco cannot take it)
       return {};
     }
+    used_quantization_ = used_quantization_ || coding.grid;
     const io::DracoPrimitive& d = *encoded;
     const int view = add_view(d.bytes.data(), d.bytes.size(), 0);
     tg::Value::Object ids;
@@ -1441,7 +1455,7 @@ class BinWriter {
     used_draco_ = true;
     if (!prim.targets.empty()) return std::move(encoded->point_source);  // (the caller's, as in add_geometry)
     if (d.point_source.empty()) {
-      add_targets(mesh, targets, prim, {});
+      add_targets(mesh, targets, prim, coding);
       return {};
     }
     std::vector<MorphTarget> moved(targets.size());
@@ -1449,7 +1463,7 @@ class BinWriter {
       for (const auto stream : morph_streams)
         if (!(targets[k].*stream).empty())
           for (const uint32_t v : d.point_source) (moved[k].*stream).push_back((targets[k].*stream)[v]);
-    add_targets(mesh, moved, prim, {});
+    add_targets(mesh, moved, prim, coding);
     return std::move(encoded->point_source);
   }
   bool used_draco() const { return used_draco_; }
@@ -2214,7 +2228,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     if (options.draco) {
       // Each primitive its own stream (Draco has no shared vertex buffers); the gathered streams
       // outside it follow its vertices.
-      const std::vector<uint32_t> point_source = writer.add_draco_geometry(in.mesh, in.targets, out, options.position_bits, !extra.empty());
+      const std::vector<uint32_t> point_source = writer.add_draco_geometry(in.mesh, in.targets, out, options.position_bits, !extra.empty(), coding);
       if (!point_source.empty())
         for (Gathered& g : extra) g.bytes = gather_elements(g.bytes, element_bytes(g.like.componentType, g.like.type), point_source);
     } else if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && out.targets.empty() && extra.empty() &&
@@ -3038,8 +3052,6 @@ void write_gltf(const Scene& scene, const std::filesystem::path& path, const Wri
   } else {
     model = model_from_scene(scene, slots);
   }
-  if (options.draco && options.quantize)
-    throw_usage("cannot write glTF: Draco and KHR_mesh_quantization both quantize the vertex streams; choose one");
   if (options.draco && (options.position_bits < 1 || options.position_bits > 30))
     throw_usage("cannot write glTF: position_bits is " + std::to_string(options.position_bits) + ", not 1 to 30 (Draco)");
   std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots, options);

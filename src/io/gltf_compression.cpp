@@ -537,7 +537,7 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin) {
   }
 }
 
-std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, DracoOrder order) {
+std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, DracoOrder order, std::span<const uint16_t> grid_positions) {
   const size_t n = mesh.vertex_count(), faces = mesh.triangle_count();
   draco::Mesh dm;
   dm.set_num_points(uint32_t(n));
@@ -581,7 +581,12 @@ std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, 
   };
   using GA = draco::GeometryAttribute;
   const auto floats = [](const auto& v) { return reinterpret_cast<const float*>(v.data()); };
-  add("POSITION", GA::POSITION, TINYGLTF_TYPE_VEC3, 3, floats(mesh.positions), position_bits);
+  if (!grid_positions.empty()) {
+    if (grid_positions.size() != 3 * n) throw_internal("Draco: grid positions for another vertex count");
+    add("POSITION", GA::POSITION, TINYGLTF_TYPE_VEC3, 3, grid_positions.data(), 0);  // (integers: exact)
+  } else {
+    add("POSITION", GA::POSITION, TINYGLTF_TYPE_VEC3, 3, floats(mesh.positions), position_bits);
+  }
   if (!mesh.normals.empty()) add("NORMAL", GA::NORMAL, TINYGLTF_TYPE_VEC3, 3, floats(mesh.normals), 10);
   if (!mesh.tangents.empty()) add("TANGENT", GA::GENERIC, TINYGLTF_TYPE_VEC4, 4, floats(mesh.tangents), 12);
   for (size_t k = 0; k < max_uv_sets; ++k)

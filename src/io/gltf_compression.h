@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <span>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -79,8 +80,12 @@ struct DracoPrimitive {
   // points are the input's vertices in their order.
   std::vector<uint32_t> point_source;
 };
+// `grid_positions` (3 per vertex, or empty): the positions already on -q's grid, stored exactly as
+// unsigned shorts (KHR_mesh_quantization) instead of quantized to `position_bits`; the position
+// bounds are then in grid steps.
 // Nothing when libdraco cannot encode the mesh so that it decodes again (a triangle with three
 // equal corners): the primitive is then written plain.
-std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, DracoOrder order);
+std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, DracoOrder order,
+                                           std::span<const uint16_t> grid_positions = {});
 
 }  // namespace lod::io

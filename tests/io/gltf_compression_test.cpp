@@ -797,6 +797,45 @@ TEST(GltfCompression, DracoCarriesTheSourcesOwnStreamsThroughEdgebreaker) {
   }
 }
 
+// Draco with -q: a morphing sphere's positions go into the Draco stream as -q's grid coordinates
+// (unsigned shorts, exact) and its morph target is stored in grid steps outside it. Flattened
+// (each node's dequantizing transform applied), the file is the -q file's mesh with its vertices
+// renumbered: the same positions exactly, normals within Draco's 10 bits of -q's bytes, the same
+// displacement per vertex, and triangles.
+TEST(GltfCompression, DracoWithQuantizationPutsTheGridInTheStream) {
+  TempDir dir;
+  Scene scene = scene_from_mesh(shapes::icosphere(3));
+  MorphTarget target;
+  for (const float3& p : scene.primitives[0].mesh.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
+  scene.primitives[0].targets.push_back(target);
+  WriteOptions q;
+  q.quantize = true;
+  write_scene(scene, dir / "q.glb", q);
+  WriteOptions dq = q;
+  dq.draco = true;
+  write_scene(scene, dir / "dq.glb", dq);
+  test::expect_valid_gltf({dir / "dq.glb"});
+  EXPECT_EQ(draco_methods(dir / "dq.glb"), std::vector<int>{1});
+  const Json doc = test::glb_json(dir / "dq.glb");
+  EXPECT_TRUE(contains(doc["extensionsRequired"], "KHR_mesh_quantization"));
+  const Json& prim = doc["meshes"][0]["primitives"][0];
+  EXPECT_EQ(doc["accessors"][prim["attributes"]["POSITION"].get<size_t>()]["componentType"], 5123);  // unsigned short
+  EXPECT_EQ(doc["accessors"][prim["targets"][0]["POSITION"].get<size_t>()]["componentType"], 5122);  // short
+  EXPECT_LT(std::filesystem::file_size(dir / "dq.glb"), std::filesystem::file_size(dir / "q.glb"));
+
+  const Scene a_scene = read_scene(dir / "q.glb"), b_scene = read_scene(dir / "dq.glb");
+  const Mesh a = flatten(a_scene), b = flatten(b_scene);
+  expect_same_up_to_order(a, b, std::cos(2.0f * 3.14159265f / 180.0f));
+  const FlatMorphTargets ta = flatten_morph_targets(a_scene), tb = flatten_morph_targets(b_scene);
+  ASSERT_EQ(ta.targets.size(), 1u);
+  ASSERT_EQ(tb.targets.size(), 1u);
+  std::map<std::array<float, 3>, float3> displacement;
+  for (size_t v = 0; v < a.vertex_count(); ++v) displacement[{a.positions[v].x, a.positions[v].y, a.positions[v].z}] = ta.targets[0].positions[v];
+  ASSERT_EQ(tb.targets[0].positions.size(), b.vertex_count());
+  for (size_t v = 0; v < b.vertex_count(); ++v)
+    EXPECT_EQ(tb.targets[0].positions[v], displacement.at({b.positions[v].x, b.positions[v].y, b.positions[v].z})) << v;
+}
+
 // A skinned, animated character: joint indices exact, weights within a 12-bit step, positions within
 // a 14-bit one; skin and clips as they were.
 TEST(GltfCompression, DracoOutputOfASkinnedCharacter) {
@@ -882,7 +921,7 @@ TEST(GltfCompression, DracoStoresStreamsTooWideToQuantizeExactly) {
 }
 
 // The CLI's --draco: a LOD chain, valid, every level compressed; with -c, meshopt takes the rest
-// (the geomorphs' morph targets); with -q, refused.
+// (the geomorphs' morph targets); with -q too, both extensions are required.
 TEST(GltfCompression, CommandsWriteDracoWithDashDashDraco) {
   TempDir dir;
   write_scene(scene_from_mesh(shapes::torus(1.0f, 0.25f, 48, 24)), dir / "in.glb");
@@ -901,8 +940,11 @@ TEST(GltfCompression, CommandsWriteDracoWithDashDashDraco) {
   test::expect_valid_gltf({dir / "dc.glb"});
 
   r = test::run_cli({"convert", (dir / "in.glb").string(), (dir / "dq.glb").string(), "--draco", "-q"});
-  EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.err.find("-q"), std::string::npos) << r.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  doc = test::glb_json(dir / "dq.glb");
+  EXPECT_TRUE(contains(doc["extensionsRequired"], kDraco));
+  EXPECT_TRUE(contains(doc["extensionsRequired"], "KHR_mesh_quantization"));
+  test::expect_valid_gltf({dir / "dq.glb"});
   r = test::run_cli({"convert", (dir / "in.glb").string(), (dir / "d.obj").string(), "--draco"});
   EXPECT_NE(r.exit_code, 0);
 }

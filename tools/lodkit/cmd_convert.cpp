@@ -62,7 +62,6 @@ void GeometryFile::write(const std::string& output, const WriteOptions& options)
 void check_gltf_output_flags(const WriteOptions& options, const std::string& output) {
   if ((options.meshopt_compression || options.quantize || options.draco) && !is_gltf(output))
     throw_usage(output + ": -c, -q and --draco apply to glTF output (.gltf, .glb) only");
-  if (options.draco && options.quantize) throw_usage("--draco quantizes by itself: not with -q");
 }
 
 void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
