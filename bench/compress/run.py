@@ -195,8 +195,45 @@ def main():
     print()
     print(f"lodkit --draco ÷ draco_transcoder, raw size: median {statistics.median(dratios):.3f}, "
           f"min {min(dratios):.3f}, max {max(dratios):.3f} over the {len(dratios)} inputs both write whole")
+    morphs = geomorph_chain(lodkit, tmp, runs)
+    print()
+    print("bunny00's geomorph chain (`lodkit lod data/corpus/bunny00.off --morph`, four levels, three geomorph targets), per output form:")
+    print()
+    print("| form | KiB (gzip) | ÷ plain | write | load | primitives, morph targets read back | Hausdorff / diagonal from the plain chain |")
+    print("|---|---|---|---|---|---|---|")
+    plain_bytes = morphs[0]["bytes"]
+    for m in morphs:
+        print(f"| {m['form']} | {m['bytes'] / 1024:.0f} ({m['gzip'] / 1024:.0f}) | {m['bytes'] / plain_bytes:.3f} | "
+              f"{m['write_s']:.2f} s | {m['load_s'] * 1000:.1f} ms | {m['primitives']}, {m['morph_targets']} | {m['hausdorff']:.2e} |")
     with open(out, "w") as f:
-        json.dump({"runs": runs, "rows": rows}, f, indent=1)
+        json.dump({"runs": runs, "rows": rows, "geomorph_chain": morphs}, f, indent=1)
+
+
+# bunny00's LOD chain with geomorphs written in each form lodkit offers (and gltfpack's -c of the
+# plain one): sizes, write and load times, what reads back, and the distance from the plain chain
+# (all levels flattened together).
+def geomorph_chain(lodkit, tmp, runs):
+    forms = [("plain", []), ("-c", ["-c"]), ("-c -q", ["-c", "-q"]), ("--draco", ["--draco"]),
+             ("--draco -c", ["--draco", "-c"]), ("--draco -q -c", ["--draco", "-q", "-c"])]
+    out = []
+    plain = None
+    for form, flags in forms:
+        path = os.path.join(tmp, "morph-" + form.replace(" ", "").replace("-", "_") + ".glb")
+        seconds = timed([lodkit, "lod", "data/corpus/bunny00.off", "-o", path, "--morph"] + flags, runs)
+        plain = plain or path
+        report = info(lodkit, path)
+        load_s, _ = load(lodkit, path, runs)
+        out.append({"form": "lodkit " + form, "bytes": os.path.getsize(path), "gzip": gz(path), "write_s": seconds,
+                    "load_s": load_s, "primitives": report["gltf"]["primitives"], "morph_targets": report["gltf"]["morph_targets"],
+                    "hausdorff": hausdorff(lodkit, plain, path)})
+    path = os.path.join(tmp, "morph-gltfpack-c.glb")
+    seconds = timed(["gltfpack", "-i", plain, "-o", path, "-c"], runs)
+    report = info(lodkit, path)
+    load_s, _ = load(lodkit, path, runs)
+    out.append({"form": "gltfpack -c (of the plain chain)", "bytes": os.path.getsize(path), "gzip": gz(path), "write_s": seconds,
+                "load_s": load_s, "primitives": report["gltf"]["primitives"], "morph_targets": report["gltf"]["morph_targets"],
+                "hausdorff": hausdorff(lodkit, plain, path)})
+    return out
 
 
 if __name__ == "__main__":
