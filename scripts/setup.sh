@@ -40,11 +40,15 @@ fi
 
 scripts/fetch-corpus.sh
 
-# Khronos glTF validator for the glTF tests (npm registry); skipped quietly when npm is absent.
-if command -v npm >/dev/null && [ ! -d tests/gltf-validator/node_modules/gltf-validator ]; then
-  echo "setup: installing gltf-validator (npm)"
-  npm ci --prefix tests/gltf-validator --silent --no-audit --no-fund >/dev/null
-fi
+# The glTF tests' Node.js tools (npm registry), each at its lockfile's versions; skipped quietly
+# when npm is absent (the tests that need them then skip): Khronos' glTF validator, and a second
+# glTF reader (glTF-Transform with Google's draco3dgltf and meshoptimizer's decoders).
+for tool in gltf-validator gltf-loader; do
+  if command -v npm >/dev/null && [ ! -f "tests/$tool/node_modules/.package-lock.json" ]; then
+    echo "setup: installing $tool (npm)"
+    npm ci --prefix "tests/$tool" --silent --no-audit --no-fund >/dev/null
+  fi
+done
 
 # LODKIT_SETUP_BENCH=0 (CI) leaves the peer benchmarks out of a new build: CGAL makes them the
 # slowest part to compile, and no test needs them.

@@ -169,6 +169,18 @@ std::string expect_bad_input(const Reader& read, const std::string& input, const
 
 static std::filesystem::path validator_script() { return std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-validator/validate.mjs"; }
 
+bool second_reader_available() {
+  std::error_code ec;
+  return std::filesystem::exists(std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-loader/node_modules/@gltf-transform/core", ec) &&
+         std::system("command -v node >/dev/null 2>&1") == 0;
+}
+
+nlohmann::json read_with_second_reader(const std::filesystem::path& file) {
+  const RunResult r = run_program({"node", (std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-loader/load.mjs").string(), file.string()});
+  EXPECT_EQ(r.exit_code, 0) << file << ": " << r.err;
+  return r.exit_code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::array();
+}
+
 bool validator_available() {
   std::error_code ec;
   return std::filesystem::exists(std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-validator/node_modules/gltf-validator", ec) &&

@@ -43,6 +43,13 @@ std::vector<std::filesystem::path> corpus_files();
 
 void write_text(const std::filesystem::path& path, const std::string& text);
 
+// A second glTF reader (tests/gltf-loader: glTF-Transform with Google's draco3dgltf WebAssembly
+// decoder and meshoptimizer's JavaScript one, installed by scripts/setup.sh through npm): every
+// mesh primitive of `file` as it decodes it (load.mjs's JSON: mesh, primitive, attributes and
+// morph targets as {type, normalized, values}, indices). Fails the calling test when it cannot.
+bool second_reader_available();
+nlohmann::json read_with_second_reader(const std::filesystem::path& file);
+
 // Khronos gltf-validator (tests/gltf-validator, installed by scripts/setup.sh through npm).
 struct ValidatorRun {
   int status = -1;     // 0 when every file has zero errors

@@ -836,6 +836,99 @@ TEST(GltfCompression, DracoWithQuantizationPutsTheGridInTheStream) {
     EXPECT_EQ(tb.targets[0].positions[v], displacement.at({b.positions[v].x, b.positions[v].y, b.positions[v].z})) << v;
 }
 
+// A stream as the second reader gives it (stored values), as floats: normalized integers as glTF
+// defines them, other integers as they are.
+std::vector<float> second_reader_floats(const Json& stream) {
+  const int type = stream["type"];
+  const bool normalized = stream["normalized"];
+  std::vector<float> out;
+  for (const Json& v : stream["values"]) {
+    const double x = v.get<double>();
+    if (!normalized || type == 5126) out.push_back(float(x));
+    else if (type == 5120) out.push_back(std::max(float(x) / 127.0f, -1.0f));
+    else if (type == 5121) out.push_back(float(x) / 255.0f);
+    else if (type == 5122) out.push_back(std::max(float(x) / 32767.0f, -1.0f));
+    else out.push_back(float(x) / 65535.0f);
+  }
+  return out;
+}
+
+std::vector<float> components(const std::vector<float3>& v) {
+  std::vector<float> out;
+  for (const float3& p : v) out.insert(out.end(), {p.x, p.y, p.z});
+  return out;
+}
+
+// `file` read by lodkit and by the second reader: every triangle primitive's indices, positions,
+// normals and morph-target positions alike, and each POSITION accessor's min and max the bounds
+// of the positions the second reader decoded (glTF requires them exact).
+void expect_second_reader_agrees(const std::filesystem::path& file) {
+  const Json theirs = test::read_with_second_reader(file);
+  const Scene scene = read_scene(file);
+  const Json doc = test::glb_json(file);
+  ASSERT_EQ(theirs.size(), scene.primitives.size()) << file;
+  for (size_t i = 0; i < scene.primitives.size(); ++i) {
+    const Primitive& mine = scene.primitives[i];
+    const std::string where = file.filename().string() + " primitive " + std::to_string(i);
+    const Json* match = nullptr;
+    for (const Json& p : theirs)
+      if (p["mesh"] == mine.gltf_mesh && p["primitive"] == mine.gltf_primitive) match = &p;
+    ASSERT_NE(match, nullptr) << where;
+    const Json& p = *match;
+    EXPECT_EQ(p["indices"].get<std::vector<uint32_t>>(), mine.mesh.indices) << where;
+    const std::vector<float> positions = second_reader_floats(p["attributes"]["POSITION"]);
+    EXPECT_EQ(positions, components(mine.mesh.positions)) << where;
+    if (!mine.mesh.normals.empty()) {
+      ASSERT_TRUE(p["attributes"].contains("NORMAL")) << where;
+      EXPECT_EQ(second_reader_floats(p["attributes"]["NORMAL"]), components(mine.mesh.normals)) << where;
+    }
+    const std::vector<MorphTarget> targets = source_morph_targets(scene, i);
+    ASSERT_EQ(p["targets"].size(), targets.size()) << where;
+    for (size_t t = 0; t < targets.size(); ++t)
+      EXPECT_EQ(second_reader_floats(p["targets"][t]["POSITION"]), components(targets[t].positions)) << where << " target " << t;
+    // The bounds, in stored units.
+    const Json& accessor = doc["accessors"][doc["meshes"][mine.gltf_mesh]["primitives"][mine.gltf_primitive]["attributes"]["POSITION"].get<size_t>()];
+    const Json& stored = p["attributes"]["POSITION"]["values"];
+    for (size_t c = 0; c < 3; ++c) {
+      double lo = INFINITY, hi = -INFINITY;
+      for (size_t k = c; k < stored.size(); k += 3) lo = std::min(lo, stored[k].get<double>()), hi = std::max(hi, stored[k].get<double>());
+      EXPECT_EQ(accessor["min"][c].get<double>(), lo) << where << " axis " << c;
+      EXPECT_EQ(accessor["max"][c].get<double>(), hi) << where << " axis " << c;
+    }
+  }
+}
+
+// Every form lodkit writes, read by a second reader (glTF-Transform, with Google's draco3dgltf
+// WebAssembly decoder and meshoptimizer's JavaScript one), gives what lodkit's own reader gives:
+// a morphing torus's LOD chain with geomorphs (lodkit's targets after the source's, gathered
+// through Edgebreaker's renumbering under Draco) in every flag set, and the skinned humanoid.
+TEST(GltfCompression, ASecondReaderDecodesWhatLodkitReads) {
+  if (!test::second_reader_available()) GTEST_SKIP() << "tests/gltf-loader not installed (scripts/setup.sh installs it)";
+  TempDir dir;
+  Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 32, 16));
+  MorphTarget target;
+  for (const float3& p : scene.primitives[0].mesh.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
+  scene.primitives[0].targets.push_back(target);
+  write_scene(scene, dir / "in.glb");
+  write_scene(fixtures::humanoid_scene(), dir / "humanoid.glb");
+  const std::vector<std::vector<std::string>> forms = {{}, {"-c"}, {"-q"}, {"-c", "-q"}, {"--draco"}, {"--draco", "-c"}, {"--draco", "-q", "-c"}};
+  for (size_t f = 0; f < forms.size(); ++f) {
+    const std::filesystem::path out = dir / ("chain" + std::to_string(f) + ".glb");
+    std::vector<std::string> argv = {"lod", (dir / "in.glb").string(), "-o", out.string(), "--levels", "3", "--morph"};
+    argv.insert(argv.end(), forms[f].begin(), forms[f].end());
+    const test::RunResult r = test::run_cli(argv);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    expect_second_reader_agrees(out);
+  }
+  for (const std::vector<std::string>& flags : {std::vector<std::string>{"-c", "-q"}, std::vector<std::string>{"--draco", "-q", "-c"}}) {
+    std::vector<std::string> argv = {"convert", (dir / "humanoid.glb").string(), (dir / "h.glb").string()};
+    argv.insert(argv.end(), flags.begin(), flags.end());
+    const test::RunResult r = test::run_cli(argv);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    expect_second_reader_agrees(dir / "h.glb");
+  }
+}
+
 // A skinned, animated character: joint indices exact, weights within a 12-bit step, positions within
 // a 14-bit one; skin and clips as they were.
 TEST(GltfCompression, DracoOutputOfASkinnedCharacter) {
