@@ -582,7 +582,7 @@ using detail::max_extra_starts;
 //
 // Every candidate is scored by its misses on the caller's cache, and the first with the fewest
 // wins: the input order, then for a FIFO the fan orderer and its extra starts (small inputs) or
-// else Tipsify; for an LRU the Forsyth-style walk and Tipsify. For a FIFO the orderers' own
+// else Tipsify; for an LRU the Forsyth-style walk and Tipsify (not for the index codec). For a FIFO the orderers' own
 // simulated caches are the caller's, so their miss counts need no separate simulation, and a run
 // stops as soon as its lower bound (detail::fan_run) shows it cannot beat the best so far; when the
 // best needs one miss per referenced vertex nothing can beat it and no orderer runs. None of this
@@ -614,7 +614,7 @@ const uint32_t* choose_order(std::span<const uint32_t> indices, size_t vertex_co
       if (misses < best_misses) best_misses = misses, lru_order = std::move(order), input_best = false;
     };
     consider(detail::greedy_cache_order(indices, vertex_count, detail::default_scoring(K)));
-    consider(detail::tipsify_order(indices, vertex_count, K));
+    if (!options.index_codec) consider(detail::tipsify_order(indices, vertex_count, K));
     return input_best ? nullptr : lru_order.data();
   }
 

@@ -613,7 +613,7 @@ Command register_lod(CLI::App& root) {
             options.simplify.threads = o->threads;
             // Compressed output: the levels in the LRU-style order meshoptimizer's codecs favour
             // (bunny00's chain 4% smaller than in the FIFO order; bench/README.md, compress).
-            if (o->gltf.meshopt_compression) options.cache.policy = CachePolicy::lru;
+            if (o->gltf.meshopt_compression) options.cache.policy = CachePolicy::lru, options.cache.index_codec = true;
             if (!o->attributes.empty()) parse_attributes(o->attributes, options.simplify);
 
             auto start = std::chrono::steady_clock::now();
