@@ -630,6 +630,13 @@ TEST(GltfCompression, DracoOutputMatchesItsSourceWithinTheQuantizationStep) {
   }
 }
 
+// A morph target that displaces each vertex by a linear function of its position.
+MorphTarget linear_target(const std::vector<float3>& positions) {
+  MorphTarget target;
+  for (const float3& p : positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
+  return target;
+}
+
 // The encoding method of each Draco stream in a .glb, in mesh order (the byte after the "DRACO"
 // magic, the version and the encoder type: 0 sequential, 1 Edgebreaker).
 std::vector<int> draco_methods(const std::filesystem::path& path) {
@@ -654,8 +661,7 @@ TEST(GltfCompression, DracoMorphTargetsFollowEdgebreakersVertexOrder) {
   TempDir dir;
   Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 20, 10));
   const Mesh source = scene.primitives[0].mesh;
-  MorphTarget target;
-  for (const float3& p : source.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
+  MorphTarget target = linear_target(source.positions);
   for (const float3& p : source.positions) target.normals.push_back({0.1f * p.y, 0.2f * p.z, 0.3f * p.x});
   scene.primitives[0].targets.push_back(target);
   WriteOptions o;
@@ -689,9 +695,7 @@ TEST(GltfCompression, DracoMorphTargetsFollowEdgebreakersVertexOrder) {
 TEST(GltfCompression, DracoLevelsCarryTheSourcesMorphTargets) {
   TempDir dir;
   Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 32, 16));
-  MorphTarget target;
-  for (const float3& p : scene.primitives[0].mesh.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
-  scene.primitives[0].targets.push_back(target);
+  scene.primitives[0].targets.push_back(linear_target(scene.primitives[0].mesh.positions));
   write_scene(scene, dir / "in.glb");
   for (const char* name : {"plain.glb", "d.glb"}) {
     std::vector<std::string> argv = {"lod", (dir / "in.glb").string(), "-o", (dir / name).string(), "--levels", "3"};
@@ -766,8 +770,7 @@ TEST(GltfCompression, DracoCarriesTheSourcesOwnStreamsThroughEdgebreaker) {
   for (const bool alike : {false, true}) {
     Mesh source = shapes::torus(1.0f, 0.3f, 20, 10);
     if (alike) source.normals.clear(), source.uvs[0].clear();
-    MorphTarget target;
-    for (const float3& p : source.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
+    const MorphTarget target = linear_target(source.positions);
     write_with_ids(source, target, dir / "in.glb");
     const test::RunResult r = test::run_cli({"convert", (dir / "in.glb").string(), (dir / "d.glb").string(), "--draco"});
     ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -805,9 +808,7 @@ TEST(GltfCompression, DracoCarriesTheSourcesOwnStreamsThroughEdgebreaker) {
 TEST(GltfCompression, DracoWithQuantizationPutsTheGridInTheStream) {
   TempDir dir;
   Scene scene = scene_from_mesh(shapes::icosphere(3));
-  MorphTarget target;
-  for (const float3& p : scene.primitives[0].mesh.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
-  scene.primitives[0].targets.push_back(target);
+  scene.primitives[0].targets.push_back(linear_target(scene.primitives[0].mesh.positions));
   WriteOptions q;
   q.quantize = true;
   write_scene(scene, dir / "q.glb", q);
@@ -906,9 +907,7 @@ TEST(GltfCompression, ASecondReaderDecodesWhatLodkitReads) {
   if (!test::second_reader_available()) GTEST_SKIP() << "tests/gltf-loader not installed (scripts/setup.sh installs it)";
   TempDir dir;
   Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 32, 16));
-  MorphTarget target;
-  for (const float3& p : scene.primitives[0].mesh.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
-  scene.primitives[0].targets.push_back(target);
+  scene.primitives[0].targets.push_back(linear_target(scene.primitives[0].mesh.positions));
   write_scene(scene, dir / "in.glb");
   write_scene(fixtures::humanoid_scene(), dir / "humanoid.glb");
   const std::vector<std::vector<std::string>> forms = {{}, {"-c"}, {"-q"}, {"-c", "-q"}, {"--draco"}, {"--draco", "-c"}, {"--draco", "-q", "-c"}};
