@@ -1111,8 +1111,6 @@ bool is_triangle_mode(int mode) {
   return mode == TINYGLTF_MODE_TRIANGLES || mode == TINYGLTF_MODE_TRIANGLE_STRIP || mode == TINYGLTF_MODE_TRIANGLE_FAN;
 }
 
-// The semantics lodkit regenerates from a Mesh; any other attribute of a regenerated primitive is
-// kept only while the vertex count is unchanged.
 // The elements of `bytes` (`element` bytes each) that `source` names, in its order: a stream
 // following renumbered vertices.
 std::vector<uint8_t> gather_elements(const std::vector<uint8_t>& bytes, size_t element, const std::vector<uint32_t>& source) {
@@ -1121,6 +1119,8 @@ std::vector<uint8_t> gather_elements(const std::vector<uint8_t>& bytes, size_t e
   return out;
 }
 
+// The semantics lodkit regenerates from a Mesh; any other attribute of a regenerated primitive is
+// kept only while the vertex count is unchanged.
 bool is_regenerated_semantic(const std::string& semantic) {
   return semantic == "POSITION" || semantic == "NORMAL" || semantic == "TANGENT" || semantic == "TEXCOORD_0" ||
          semantic == "TEXCOORD_1" || semantic == "TEXCOORD_2" || semantic == "TEXCOORD_3" || semantic == "COLOR_0" ||
@@ -1399,18 +1399,17 @@ class BinWriter {
   // KHR_draco_mesh_compression: the vertex streams and indices as one Draco stream
   // (io::encode_draco), its accessors without a bufferView. Streams outside it must follow the
   // decoded vertices: lodkit's morph targets are gathered here; `outside` says whether the caller
-  // has more it can gather (slots of -1 on `prim`, or none yet). The decoded points' source
-  // vertices are returned (empty when they are the mesh's own, in order). A source accessor still
-  // on `prim`, written as it is, keeps the vertices in place. On -q's grid (`coding`), the
-  // positions go into the stream as their grid coordinates, exactly, and the morph targets are
-  // stored as -q stores them; Draco quantizes the other streams either way.
+  // has more it gathers (slots of -1 on `prim`, or none yet). The decoded points' source vertices
+  // are returned (empty when they are the mesh's own, in order). Under Draco the writer gathers
+  // every source stream it keeps (rebuild_geometry), so none is left on `prim` as it was. On -q's
+  // grid (`coding`), the positions go into the stream as their grid coordinates, exactly, and the
+  // morph targets are stored as -q stores them; Draco quantizes the other streams either way.
   std::vector<uint32_t> add_draco_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim,
                                            int position_bits, bool outside, const StreamCoding& coding) {
-    bool kept = false;
-    for_each_unmodelled_stream(prim, [&](int, const std::string&, int index) { kept = kept || index >= 0; });
-    const io::DracoOrder order = kept                                               ? io::DracoOrder::kept
-                                 : outside || !targets.empty() || !prim.targets.empty() ? io::DracoOrder::tracked
-                                                                                    : io::DracoOrder::any;
+    for_each_unmodelled_stream(prim, [&](int, const std::string& semantic, int index) {
+      if (index >= 0) throw_internal("Draco: the source's " + semantic + " stream would not follow the renumbered vertices");
+    });
+    const bool track_points = outside || !targets.empty() || !prim.targets.empty();
     std::vector<uint16_t> grid_positions;
     if (coding.grid) {
       const auto code = grid_code(*coding.grid);
@@ -1418,7 +1417,7 @@ class BinWriter {
       for (const float3& p : mesh.positions)
         for (const auto& [x, c] : {std::pair{p.x, 0}, std::pair{p.y, 1}, std::pair{p.z, 2}}) grid_positions.push_back(uint16_t(code(x, size_t(c))));
     }
-    std::optional<io::DracoPrimitive> encoded = io::encode_draco(mesh, position_bits, order, grid_positions);
+    std::optional<io::DracoPrimitive> encoded = io::encode_draco(mesh, position_bits, track_points, grid_positions);
     if (!encoded) {
       add_geometry(mesh, targets, prim, coding);  // (libdraco cannot take it)
       return {};
@@ -2516,8 +2515,8 @@ void add_gpu_instances(tg::Model& model, tg::Buffer& data, const Node& in, tg::N
 // Several nodes' are concatenated: their rest weights (a node's own, else its mesh's, else 0), and
 // per clip one channel (lod::concatenate_weights over the decoded clips of `scene`, which lists the
 // source's animations in order) whose keys go into `data`, the model's next buffer. New nodes
-// taking the same nodes' weights (a chain's levels) share that channel's sampler: `merged` holds
-// it per (clip, source nodes), or -1 where the nodes have none.
+// taking the same nodes' weights (a chain's levels) share that channel's sampler: `merged_samplers`
+// holds it per (clip, source nodes), or -1 where the nodes have none.
 using MergedSamplers = std::map<std::pair<size_t, std::vector<int32_t>>, int>;
 void take_morph_weights(tg::Model& model, const Scene& scene, const std::vector<int32_t>& of, size_t i, size_t source_nodes,
                         tg::Node& node, tg::Buffer& data, MergedSamplers& merged_samplers) {

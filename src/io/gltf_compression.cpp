@@ -537,7 +537,7 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin) {
   }
 }
 
-std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, DracoOrder order, std::span<const uint16_t> grid_positions) {
+std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, bool track_points, std::span<const uint16_t> grid_positions) {
   const size_t n = mesh.vertex_count(), faces = mesh.triangle_count();
   draco::Mesh dm;
   dm.set_num_points(uint32_t(n));
@@ -634,7 +634,7 @@ std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, 
     if (sequential && (e.back->num_points() != n || e.back->num_faces() != faces)) return std::nullopt;  // (it must keep both in place)
     return e;
   };
-  // Edgebreaker's numbering of the points, for DracoOrder::tracked. A first encoding carries each
+  // Edgebreaker's numbering of the points, for `track_points`. A first encoding carries each
   // vertex's index as one more, exact, stream; it changes libdraco's traversal, so the stream
   // written (encoded again without it) is matched to it by the points' decoded values, which do
   // not depend on the traversal. Two input vertices that decode to the same values cannot be told
@@ -694,9 +694,7 @@ std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, 
   // (both found by fuzz_gltf). Each stream is decoded again, and a failure falls back to sequential
   // encoding, then to sequential encoding without quantization; if none decodes, the caller writes
   // the primitive plain.
-  std::optional<Encoded> chosen;
-  if (order == DracoOrder::any) chosen = encode(false, true);
-  else if (order == DracoOrder::tracked) chosen = encode_tracked();
+  std::optional<Encoded> chosen = track_points ? encode_tracked() : encode(false, true);
   if (!chosen) out.point_source.clear(), chosen = encode(true, true);
   if (!chosen) chosen = encode(true, false);
   if (!chosen) return std::nullopt;

@@ -59,24 +59,19 @@ void compress_meshopt(nlohmann::json& doc, std::vector<uint8_t>& bin);
 // accessors, which must match what a loader decodes.
 // Edgebreaker, the smaller encoding, may renumber both vertices and triangles. Streams kept outside
 // the Draco stream (morph targets, attributes lodkit does not model) must line up with the decoded
-// vertices, so `order` says what the caller can follow:
-// - any: no outside streams;
-// - tracked: the caller gathers its outside streams through `point_source`;
-// - kept: it cannot (they are a source's accessors, written as they are): sequential encoding,
-//   which keeps every vertex and triangle in place.
+// vertices: with `track_points` the caller gathers them through `point_source`.
 inline constexpr const char* draco_extension = "KHR_draco_mesh_compression";
 struct DracoAttribute {
   uint32_t unique_id = 0;  // in the Draco stream
   int component_type = 0;  // the accessor's
   int type = 0;            // the accessor's (TINYGLTF_TYPE_VEC2 ...)
 };
-enum class DracoOrder { any, tracked, kept };
 struct DracoPrimitive {
   std::vector<uint8_t> bytes;
   std::map<std::string, DracoAttribute> attributes;  // by glTF semantic
   uint64_t points = 0, triangles = 0;
   float3 position_min, position_max;  // of the decoded positions
-  // DracoOrder::tracked: the input vertex of each decoded point, when they differ; empty when the
+  // With `track_points`: the input vertex of each decoded point, when they differ; empty when the
   // points are the input's vertices in their order.
   std::vector<uint32_t> point_source;
 };
@@ -85,7 +80,7 @@ struct DracoPrimitive {
 // bounds are then in grid steps.
 // Nothing when libdraco cannot encode the mesh so that it decodes again (a triangle with three
 // equal corners): the primitive is then written plain.
-std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, DracoOrder order,
+std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, bool track_points,
                                            std::span<const uint16_t> grid_positions = {});
 
 }  // namespace lod::io
