@@ -365,7 +365,8 @@ CompressedJson prepare_compressed_json(Json& doc, bool glb) {
       Json& buffer = (*buffers)[b];
       if (!buffer.is_object() || compressed_users[b] == 0 || plain_users[b] != 0) continue;
       const Json* ext = meshopt_json(buffer);
-      const bool fallback = ext && ext->is_object() && ext->value("fallback", false) == true;
+      // (Only `true` marks a fallback; any other value, malformed, leaves the buffer as it is.)
+      const bool fallback = ext && ext->is_object() && ext->contains("fallback") && (*ext)["fallback"] == true;
       // A GLB's buffer 0 without a URI is its BIN chunk, which holds real bytes.
       if (!fallback && (buffer.contains("uri") || (glb && b == 0))) continue;
       auto length = buffer.find("byteLength");

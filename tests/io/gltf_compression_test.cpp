@@ -499,6 +499,13 @@ TEST(GltfCompression, MeshoptOutputReadsBackExactly) {
   EXPECT_EQ(difference_but_rotations(degenerate, only_mesh(read_scene(dir / "d.glb"))), "");
   // (The decoder is the one the gltfpack-made files above check; gltfpack 0.18 itself refuses
   // compressed input, so it cannot check the encoder.)
+
+  // A fallback flag that is not a boolean (malformed; fuzzing found it throwing a JSON type error
+  // out of the reader): the buffer without bytes is still read as a fallback.
+  test::Glb odd = c;
+  odd.doc["buffers"][1]["extensions"][kMeshopt]["fallback"] = 5120;
+  test::write_bytes(dir / "odd.glb", test::glb_bytes(odd));
+  EXPECT_EQ(difference_but_rotations(plain, only_mesh(read_scene(dir / "odd.glb"))), "");
 }
 
 // A skinned, animated character: its mesh (joints and weights too) and skin matrices are compressed
