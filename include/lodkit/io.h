@@ -217,10 +217,20 @@ struct Scene {
 Mesh read_mesh(const std::filesystem::path& path, const ReadOptions& options = {});
 Scene read_scene(const std::filesystem::path& path, const ReadOptions& options = {});
 
+// What a write did, for reports.
+struct WriteReport {
+  uint64_t bytes = 0;  // every file written (a .gltf's .bin too)
+  // WriteOptions::draco: triangle primitives by how they went into Draco. Edgebreaker; sequential,
+  // in place (two vertices decode alike while streams outside the Draco stream must follow them,
+  // or libdraco's Edgebreaker could not take the mesh); plain, not in Draco (libdraco could not
+  // round-trip it).
+  uint32_t draco_edgebreaker = 0, draco_sequential = 0, draco_plain = 0;
+};
+
 // Writes atomically (temporary file in the same folder, then rename). A glTF scene keeps everything
 // it was read with; writing a Mesh to glTF makes a one-node scene.
-void write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& options = {});
-void write_scene(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options = {});
+WriteReport write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& options = {});
+WriteReport write_scene(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options = {});
 
 // Every primitive instance of the default scene, in world space, merged into one mesh.
 // Material ids are glTF material indices (+1, so 0 means "no material"); names follow. A skinned
@@ -281,7 +291,7 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options =
 void write_off(const Mesh& mesh, std::string& out, const WriteOptions& options = {});
 void write_stl(const Mesh& mesh, std::string& out, const WriteOptions& options = {});
 // glTF: `path` decides .gltf (JSON + a .bin beside it) or .glb; every file is written atomically.
-void write_gltf(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options = {});
+WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options = {});
 
 // A whole file's bytes, read-only: memory-mapped (no copy, no zero-fill: multi-gigabyte scans load
 // at page-cache speed), or read into memory when the file cannot be mapped. Move-only.

@@ -1419,9 +1419,11 @@ class BinWriter {
     }
     std::optional<io::DracoPrimitive> encoded = io::encode_draco(mesh, position_bits, track_points, grid_positions);
     if (!encoded) {
+      ++report_.draco_plain;
       add_geometry(mesh, targets, prim, coding);  // (libdraco cannot take it)
       return {};
     }
+    ++(encoded->sequential ? report_.draco_sequential : report_.draco_edgebreaker);
     used_quantization_ = used_quantization_ || coding.grid;
     const io::DracoPrimitive& d = *encoded;
     const int view = add_view(d.bytes.data(), d.bytes.size(), 0);
@@ -1466,6 +1468,7 @@ class BinWriter {
     return std::move(encoded->point_source);
   }
   bool used_draco() const { return used_draco_; }
+  const WriteReport& report() const { return report_; }
 
   // Morph targets of `mesh`'s vertices.
   void add_targets(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim, const StreamCoding& coding) {
@@ -1512,6 +1515,7 @@ class BinWriter {
   std::vector<uint8_t>& bin_;
   bool used_quantization_ = false;
   bool used_draco_ = false;
+  WriteReport report_;  // its Draco counts
 };
 
 // A Mesh the writer can turn into valid accessors: streams sized, indices in range, positions finite.
@@ -1838,9 +1842,9 @@ void fit_morph_weights(tg::Model& model, const Document& source, const std::vect
 // Replaces the geometry of the triangle primitives listed in `slots` by scene.primitives[i].mesh,
 // drops what nothing references any more, and packs the surviving bufferViews and the new geometry
 // into one buffer (returned; buffer 0 of the model, whose `buffers` list is left empty), quantized as
-// `options` asks.
+// `options` asks. `report` gets the Draco counts.
 std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, const std::vector<Slot>& slots,
-                                      const WriteOptions& options) {
+                                      const WriteOptions& options, WriteReport& report) {
   const size_t mesh_count = model.meshes.size();
   // Which scene primitive replaces each glTF primitive (-1: none).
   std::vector<std::vector<int>> replaced_by(mesh_count);
@@ -2289,6 +2293,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     if (std::find(model.extensionsRequired.begin(), model.extensionsRequired.end(), ext) == model.extensionsRequired.end())
       model.extensionsRequired.push_back(ext);
   }
+  report = writer.report();
   return bin;
 }
 
@@ -3040,7 +3045,7 @@ std::vector<MorphTarget> source_morph_targets(const Scene& scene, size_t primiti
   return targets;
 }
 
-void write_gltf(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options) {
+WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options) {
   const bool glb = format_from_path(path) == FileFormat::glb;
   std::vector<Slot> slots;
   tg::Model model;
@@ -3053,7 +3058,8 @@ void write_gltf(const Scene& scene, const std::filesystem::path& path, const Wri
   }
   if (options.draco && (options.position_bits < 1 || options.position_bits > 30))
     throw_usage("cannot write glTF: position_bits is " + std::to_string(options.position_bits) + ", not 1 to 30 (Draco)");
-  std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots, options);
+  WriteReport report;
+  std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots, options, report);
   // MSFT_lod and instancing are declared only while a node still uses them.
   for (const std::string ext : {"MSFT_lod", gpu_instancing})
     if (std::none_of(model.nodes.begin(), model.nodes.end(), [&](const tg::Node& n) { return n.extensions.count(ext) > 0; }))
@@ -3063,11 +3069,16 @@ void write_gltf(const Scene& scene, const std::filesystem::path& path, const Wri
   Json doc = serialize_json(model, bin.size(), glb ? "" : uri_escape(bin_name));
   if (options.meshopt_compression) io::compress_meshopt(doc, bin);
   if (glb) {
-    write_file_atomic(path, make_glb(dump_json(doc, false), bin, path.string()));
-    return;
+    const std::vector<uint8_t> bytes = make_glb(dump_json(doc, false), bin, path.string());
+    write_file_atomic(path, bytes);
+    report.bytes = bytes.size();
+    return report;
   }
   if (!bin.empty()) write_file_atomic(path.parent_path() / bin_name, bin);
-  write_file_atomic(path, dump_json(doc, true));
+  const std::string json = dump_json(doc, true);
+  write_file_atomic(path, json);
+  report.bytes = bin.size() + json.size();
+  return report;
 }
 
 }  // namespace lod

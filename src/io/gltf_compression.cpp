@@ -696,7 +696,7 @@ std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, 
   // encoding, then to sequential encoding without quantization; if none decodes, the caller writes
   // the primitive plain.
   std::optional<Encoded> chosen = track_points ? encode_tracked() : encode(false, true);
-  if (!chosen) out.point_source.clear(), chosen = encode(true, true);
+  if (!chosen) out.point_source.clear(), out.sequential = true, chosen = encode(true, true);
   if (!chosen) chosen = encode(true, false);
   if (!chosen) return std::nullopt;
   out.bytes = std::move(chosen->bytes);

@@ -74,6 +74,7 @@ struct DracoPrimitive {
   // With `track_points`: the input vertex of each decoded point, when they differ; empty when the
   // points are the input's vertices in their order.
   std::vector<uint32_t> point_source;
+  bool sequential = false;  // encoded in place, not by Edgebreaker
 };
 // `grid_positions` (3 per vertex, or empty): the positions already on -q's grid, stored exactly as
 // unsigned shorts (KHR_mesh_quantization) instead of quantized to `position_bits`; the position

@@ -60,7 +60,7 @@ Mesh read_mesh(const std::filesystem::path& path, const ReadOptions& options) {
   }
 }
 
-void write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& options) {
+WriteReport write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& options) {
   FileFormat format = format_from_path(path);
   if (format == FileFormat::gltf || format == FileFormat::glb) return write_gltf(scene_from_mesh(mesh), path, options);
   std::string out;
@@ -71,12 +71,13 @@ void write_mesh(const Mesh& mesh, const std::filesystem::path& path, const Write
     default: write_stl(mesh, out, options); break;
   }
   write_file_atomic(path, out);
+  return {.bytes = out.size()};
 }
 
-void write_scene(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options) {
+WriteReport write_scene(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options) {
   FileFormat format = format_from_path(path);
   if (format == FileFormat::gltf || format == FileFormat::glb) return write_gltf(scene, path, options);
-  write_mesh(flatten(scene), path, options);
+  return write_mesh(flatten(scene), path, options);
 }
 
 }  // namespace lod

@@ -779,10 +779,16 @@ TEST(GltfCompression, DracoCarriesTheSourcesOwnStreamsThroughEdgebreaker) {
     if (alike) source.normals.clear(), source.uvs[0].clear();
     const MorphTarget target = linear_target(source.positions);
     write_with_ids(source, target, dir / "in.glb");
-    const test::RunResult r = test::run_cli({"convert", (dir / "in.glb").string(), (dir / "d.glb").string(), "--draco"});
+    const test::RunResult r = test::run_cli({"convert", (dir / "in.glb").string(), (dir / "d.glb").string(), "--draco", "--json"});
     ASSERT_EQ(r.exit_code, 0) << r.err;
     test::expect_valid_gltf({dir / "d.glb"});
     EXPECT_EQ(draco_methods(dir / "d.glb"), std::vector<int>{alike ? 0 : 1}) << alike;
+    // The report says what the stream's header says, and the bytes on disk.
+    const Json report = Json::parse(r.out);
+    EXPECT_EQ(report["draco"]["sequential"], alike ? 1 : 0);
+    EXPECT_EQ(report["draco"]["edgebreaker"], alike ? 0 : 1);
+    EXPECT_EQ(report["draco"]["plain"], 0);
+    EXPECT_EQ(report["output_bytes"], std::filesystem::file_size(dir / "d.glb"));
     const Scene back = read_scene(dir / "d.glb");
     const Mesh& m = only_mesh(back);
     const std::vector<float> ids = read_ids(dir / "d.glb");
@@ -1005,18 +1011,28 @@ TEST(GltfCompression, DracoStoresStreamsTooWideToQuantizeExactly) {
   Mesh flat;
   flat.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   flat.indices = {0, 0, 1, 1, 2, 2};
-  write_scene(scene_from_mesh(flat), dir / "flat.glb", o);
+  WriteReport report = write_scene(scene_from_mesh(flat), dir / "flat.glb", o);
   EXPECT_EQ(only_mesh(read_scene(dir / "flat.glb")).indices, flat.indices);
   EXPECT_TRUE(contains(test::glb_json(dir / "flat.glb")["extensionsRequired"], kDraco));
+  EXPECT_EQ(draco_methods(dir / "flat.glb"), std::vector<int>{0});
+  EXPECT_EQ(std::tuple(report.draco_edgebreaker, report.draco_sequential, report.draco_plain), std::tuple(0u, 1u, 0u));
   // A lone triangle with three equal corners beside unused vertices: libdraco writes a stream it
   // cannot decode, in any mode, so the primitive is written plain (found by fuzz_gltf).
   flat.positions.push_back({1, 1, 0});
   flat.indices = {0, 0, 0};
-  write_scene(scene_from_mesh(flat), dir / "point.glb", o);
+  report = write_scene(scene_from_mesh(flat), dir / "point.glb", o);
   EXPECT_EQ(only_mesh(read_scene(dir / "point.glb")).indices, flat.indices);
   const Json doc = test::glb_json(dir / "point.glb");
   EXPECT_FALSE(doc.contains("extensionsUsed") && contains(doc["extensionsUsed"], kDraco)) << doc.dump();
   test::expect_valid_gltf({dir / "point.glb"});
+  EXPECT_EQ(std::tuple(report.draco_edgebreaker, report.draco_sequential, report.draco_plain), std::tuple(0u, 0u, 1u));
+  EXPECT_EQ(report.bytes, std::filesystem::file_size(dir / "point.glb"));
+  // The CLI says so: a warning, and the report's line.
+  const test::RunResult r = test::run_cli({"convert", (dir / "point.glb").string(), (dir / "again.glb").string(), "--draco"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("1 primitive(s) written without Draco"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("1 plain"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("(" + std::to_string(std::filesystem::file_size(dir / "again.glb")) + " bytes)"), std::string::npos) << r.out;
 }
 
 // The CLI's --draco: a LOD chain, valid, every level compressed; with -c, meshopt takes the rest

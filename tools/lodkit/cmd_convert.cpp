@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -54,14 +55,40 @@ GeometryFile::GeometryFile(const std::string& input, const std::string& output)
     meshes.push_back(&mesh_);
 }
 
-void GeometryFile::write(const std::string& output, const WriteOptions& options) const {
-  if (as_scene_) write_scene(scene_, output, options);
-  else write_mesh(mesh_, output, options);
+WriteReport GeometryFile::write(const std::string& output, const WriteOptions& options) const {
+  return as_scene_ ? write_scene(scene_, output, options) : write_mesh(mesh_, output, options);
 }
 
 void check_gltf_output_flags(const WriteOptions& options, const std::string& output) {
   if ((options.meshopt_compression || options.quantize || options.draco) && !is_gltf(output))
     throw_usage(output + ": -c, -q and --draco apply to glTF output (.gltf, .glb) only");
+}
+
+namespace {
+// Each command reports once, as JSON or as text: both warn.
+void warn_plain(const WriteReport& report) {
+  if (report.draco_plain)
+    std::fprintf(stderr, "lodkit: warning: %u primitive(s) written without Draco: libdraco could not round-trip them\n",
+                 report.draco_plain);
+}
+}  // namespace
+
+void add_write_report(nlohmann::json& json, const WriteReport& report, const WriteOptions& options) {
+  warn_plain(report);
+  json["output_bytes"] = report.bytes;
+  if (options.draco)
+    json["draco"] = {{"edgebreaker", report.draco_edgebreaker}, {"sequential", report.draco_sequential},
+                     {"plain", report.draco_plain}};
+}
+
+std::string draco_line(const WriteReport& report, const WriteOptions& options) {
+  warn_plain(report);
+  if (!options.draco) return {};
+  std::string line = fmt::format("draco: {} primitive(s) by Edgebreaker", report.draco_edgebreaker);
+  if (report.draco_sequential)
+    line += fmt::format(", {} sequentially (vertices that decode alike, or Edgebreaker refused them)", report.draco_sequential);
+  if (report.draco_plain) line += fmt::format(", {} plain (libdraco could not round-trip them)", report.draco_plain);
+  return line + "\n";
 }
 
 void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
@@ -242,18 +269,21 @@ Command register_convert(CLI::App& root) {
             start = std::chrono::steady_clock::now();
             WriteOptions write_options = o.gltf;
             write_options.binary = !o.ascii;
-            if (as_scene) write_scene(scene, o.output, write_options);
-            else write_mesh(mesh, o.output, write_options);
+            const WriteReport written = as_scene ? write_scene(scene, o.output, write_options)
+                                                 : write_mesh(mesh, o.output, write_options);
             double write_seconds = seconds_since(start);
             if (o.json) {
               nlohmann::json j = {{"input", o.input}, {"output", o.output}, {"vertices", vertices},
                                   {"triangles", triangles}, {"load_seconds", load_seconds},
                                   {"write_seconds", write_seconds}};
+              add_write_report(j, written, write_options);
               fmt::print("{}\n", j.dump(2));
             } else {
               fmt::print("{:<8}{:>12}{:>12}{:>10}  {}\n", "step", "triangles", "vertices", "time", "file");
               fmt::print("{:<8}{:>12}{:>12}{:>9.3f}s  {}\n", "read", triangles, vertices, load_seconds, o.input);
-              fmt::print("{:<8}{:>12}{:>12}{:>9.3f}s  {}\n", "write", triangles, vertices, write_seconds, o.output);
+              fmt::print("{:<8}{:>12}{:>12}{:>9.3f}s  {} ({} bytes)\n", "write", triangles, vertices, write_seconds, o.output,
+                         written.bytes);
+              fmt::print("{}", draco_line(written, write_options));
             }
             return 0;
           }};

@@ -700,6 +700,7 @@ Command register_lod(CLI::App& root) {
             for (ChainReport& r : reports) set_switching(r, *o);
 
             start = std::chrono::steady_clock::now();
+            WriteReport written;
             if (!skinned.empty()) {
               // The progressive mesh spans the input down to the coarsest level's size.
               if (!o->lpm.empty())
@@ -707,7 +708,7 @@ Command register_lod(CLI::App& root) {
                                                                 options.simplify,
                                                                 reports[0].chain.levels.back().mesh.triangle_count()),
                                        o->lpm);
-              write_scene(skinned_scene(std::move(scene), skinned, reports), o->output, o->gltf);
+              written = write_scene(skinned_scene(std::move(scene), skinned, reports), o->output, o->gltf);
             } else {
               Scene out = chain_document(scene.source ? &scene : nullptr, reports[0].chain.levels.front().mesh.material_names);
               const size_t first_instanced = chains.size() - instanced.size();
@@ -721,7 +722,7 @@ Command register_lod(CLI::App& root) {
                   meshes = add_chain(out, reports[c], chains[c].targets, {name + "_", n, node.gpu_instances, n, meshes});
                 }
               }
-              write_scene(out, o->output, o->gltf);
+              written = write_scene(out, o->output, o->gltf);
               if (!o->lpm.empty()) {
                 // The progressive mesh spans the input down to the coarsest level's size.
                 SimplifyOptions so = options.simplify;
@@ -750,6 +751,7 @@ Command register_lod(CLI::App& root) {
                                   {"morph_targets", morph_targets}, {"morph_targets_dropped", !head.targets_dropped.empty()}};
               if (!skinned.empty()) j["skinned"] = {{"mode", o->skin_mode}, {"poses", o->poses}, {"chains", listed}};
               if (!instanced.empty()) j["instanced"] = listed;
+              add_write_report(j, written, o->gltf);
               fmt::print("{}\n", j.dump(2));
             } else {
               for (const ChainReport& r : reports) {
@@ -774,8 +776,9 @@ Command register_lod(CLI::App& root) {
                            head.targets.nodes.size() > 1 ? fmt::format(" (of {} nodes, their clips merged)", head.targets.nodes.size()) : "",
                            o->shared ? "exact (one vertex buffer)" : "interpolated where the vertices moved");
               if (!head.targets_dropped.empty()) fmt::print("morph targets dropped: {}\n", head.targets_dropped);
-              fmt::print("loaded in {:.3f}s, built in {:.3f}s, wrote {} in {:.3f}s\n", load_seconds, build_seconds,
-                         o->output, write_seconds);
+              fmt::print("{}", draco_line(written, o->gltf));
+              fmt::print("loaded in {:.3f}s, built in {:.3f}s, wrote {} ({} bytes) in {:.3f}s\n", load_seconds, build_seconds,
+                         o->output, written.bytes, write_seconds);
             }
             return 0;
           }};

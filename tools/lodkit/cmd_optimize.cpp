@@ -163,7 +163,7 @@ Command register_optimize(CLI::App& root) {
                            static_cast<unsigned long long>(non_orientable));
 
             start = std::chrono::steady_clock::now();
-            file.write(o->output, o->gltf);
+            const WriteReport written = file.write(o->output, o->gltf);
             if (!o->strip_indices.empty()) write_indices(o->strip_indices, strip_buffer);
             const double write_seconds = seconds_since(start);
 
@@ -191,6 +191,7 @@ Command register_optimize(CLI::App& root) {
                 j["strips"] = {{"method", o->strips}, {"restart", o->restart}, {"indices", strip_stats.indices},
                                {"strips", strip_stats.strips}, {"triangles", strip_stats.triangles},
                                {"indices_per_triangle", strip_stats.indices_per_triangle}};
+              add_write_report(j, written, o->gltf);
               fmt::print("{}\n", j.dump(2));
             } else {
               fmt::print("{:<10}{:>12}{:>12}{:>10}{:>10}  {}\n", "step", "triangles", "vertices", "ACMR", "time", "");
@@ -223,8 +224,9 @@ Command register_optimize(CLI::App& root) {
               if (options.vertex_fetch)
                 fmt::print("{:<10}{:>12}{:>12}{:>10.3f}{:>9.3f}s  vertices by first use\n", "fetch", out_triangles,
                            out_vertices, after.acmr, seconds[3]);
-              fmt::print("{:<10}{:>12}{:>12}{:>10}{:>9.3f}s  {}\n", "write", out_triangles, out_vertices, "", write_seconds,
-                         o->output);
+              fmt::print("{:<10}{:>12}{:>12}{:>10}{:>9.3f}s  {} ({} bytes)\n", "write", out_triangles, out_vertices, "",
+                         write_seconds, o->output, written.bytes);
+              fmt::print("{}", draco_line(written, o->gltf));
             }
             return 0;
           }};

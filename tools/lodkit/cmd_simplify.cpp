@@ -300,7 +300,7 @@ Command register_simplify(CLI::App& root) {
             file.forget_lod_facts(changed);
             const double simplify_seconds = seconds_since(start);
             start = std::chrono::steady_clock::now();
-            file.write(o->output, o->gltf);
+            const WriteReport written = file.write(o->output, o->gltf);
             const double write_seconds = seconds_since(start);
 
             if (o->json) {
@@ -318,6 +318,7 @@ Command register_simplify(CLI::App& root) {
                                   {"fit_seconds", fit_seconds},
                                   {"write_seconds", write_seconds}};
               for (const auto& [name, value] : steps.named()) j["collapse_step_seconds"][name] = value;
+              add_write_report(j, written, o->gltf);
               fmt::print("{}\n", j.dump(2));
             } else {
               fmt::print("{:<10}{:>12}{:>12}{:>14}{:>10}  {}\n", "step", "triangles", "vertices", "error", "time", "");
@@ -343,8 +344,9 @@ Command register_simplify(CLI::App& root) {
               if (any_two_sided) way += ", double-sided: fronts simplified, backs made again";
               fmt::print("{:<10}{:>12}{:>12}{:>13.4f}%{:>9.3f}s  {} ({} = {:.6g}, final fit {:.3f}s)\n", "simplify", out_triangles,
                          out_vertices, 100.0 * relative_error, simplify_seconds, way, "error", error, fit_seconds);
-              fmt::print("{:<10}{:>12}{:>12}{:>14}{:>9.3f}s  {}\n", "write", out_triangles, out_vertices, "",
-                         write_seconds, o->output);
+              fmt::print("{:<10}{:>12}{:>12}{:>14}{:>9.3f}s  {} ({} bytes)\n", "write", out_triangles, out_vertices, "",
+                         write_seconds, o->output, written.bytes);
+              fmt::print("{}", draco_line(written, o->gltf));
             }
             return 0;
           }};

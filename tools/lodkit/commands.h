@@ -2,6 +2,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json_fwd.hpp>
 #include <functional>
 #include <optional>
 #include <span>
@@ -40,7 +41,7 @@ class GeometryFile {
   GeometryFile(const std::string& input, const std::string& output);
   GeometryFile(const GeometryFile&) = delete;
   GeometryFile& operator=(const GeometryFile&) = delete;
-  void write(const std::string& output, const WriteOptions& options = {}) const;
+  WriteReport write(const std::string& output, const WriteOptions& options = {}) const;
   // After meshes[i] changed for each i where changed[i]: the facts `lodkit lod` wrote on the glTF
   // nodes that draw them (extras "lodkit": triangles, errors, switch distance; "LODKIT_geomorph": a
   // morph target) no longer hold, and are removed, the geomorph's target too.
@@ -86,6 +87,11 @@ std::vector<uint32_t> weld_duplicates(Mesh& mesh, std::span<const uint32_t> clas
 void add_gltf_output_flags(CLI::App* app, WriteOptions& options);
 // Refuses those flags for an output that is not glTF (they would do nothing).
 void check_gltf_output_flags(const WriteOptions& options, const std::string& output);
+// What a write did, for a command's report: `output_bytes`, and under --draco the primitives by
+// how they went into Draco, added to `json`; as text, a line of it (nothing without --draco). Either
+// warns on stderr of a primitive left plain: the user asked for Draco and did not get it there.
+void add_write_report(nlohmann::json& json, const WriteReport& report, const WriteOptions& options);
+std::string draco_line(const WriteReport& report, const WriteOptions& options);
 
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);
