@@ -120,6 +120,24 @@ std::string base64(std::span<const uint8_t> bytes) {
   return out;
 }
 
+std::vector<uint8_t> from_base64(const std::string& text) {
+  std::vector<uint8_t> out;
+  uint32_t v = 0;
+  int bits = 0;
+  for (const char c : text) {
+    int d = -1;
+    if (c >= 'A' && c <= 'Z') d = c - 'A';
+    else if (c >= 'a' && c <= 'z') d = c - 'a' + 26;
+    else if (c >= '0' && c <= '9') d = c - '0' + 52;
+    else if (c == '+') d = 62;
+    else if (c == '/') d = 63;
+    if (d < 0) continue;
+    v = (v << 6) | uint32_t(d), bits += 6;
+    if (bits >= 8) bits -= 8, out.push_back(uint8_t(v >> bits));
+  }
+  return out;
+}
+
 namespace {
 template <class T>
 bool bits_equal(const std::vector<T>& a, const std::vector<T>& b) {

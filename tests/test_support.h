@@ -61,8 +61,10 @@ ValidatorRun run_validator(const std::vector<std::filesystem::path>& files);
 void expect_valid_gltf(const std::vector<std::filesystem::path>& files);
 void write_bytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes);
 
-// Standard base64 with '=' padding (for data: URIs in hand-written glTF files).
+// Standard base64 with '=' padding (for data: URIs in hand-written glTF files), and back (for test
+// data other programs write; characters outside the alphabet are skipped).
 std::string base64(std::span<const uint8_t> bytes);
+std::vector<uint8_t> from_base64(const std::string& text);
 
 inline std::span<const uint8_t> bytes_of(const std::string& s) {
   return {reinterpret_cast<const uint8_t*>(s.data()), s.size()};

@@ -2,6 +2,7 @@
 // count is checked before a decoder runs or anything is allocated: a decoded size is bounded by the
 // compressed bytes actually present (meshopt) or must equal the accessors' counts (Draco).
 #include "io/gltf_compression.h"
+#include "io/meshopt_codec.h"
 
 #include <draco/compression/decode.h>
 #include <draco/compression/expert_encode.h>
@@ -167,8 +168,10 @@ class Decoder {
       if (stride != 4 && stride != 8) fail(where + ": filter OCTAHEDRAL needs byteStride 4 or 8, not " + str(stride));
     } else if (filter == "QUATERNION") {
       if (stride != 8) fail(where + ": filter QUATERNION needs byteStride 8, not " + str(stride));
+    } else if (filter == "COLOR") {
+      if (stride != 4 && stride != 8) fail(where + ": filter COLOR needs byteStride 4 or 8, not " + str(stride));
     } else if (filter != "NONE" && filter != "EXPONENTIAL") {
-      fail(where + ": filter '" + filter + "' is not NONE, OCTAHEDRAL, QUATERNION or EXPONENTIAL");
+      fail(where + ": filter '" + filter + "' is not NONE, OCTAHEDRAL, QUATERNION, EXPONENTIAL or COLOR");
     }
     if (count == 0) fail(where + ": count is 0");
     const uint64_t bytes = count * stride;  // count < 2^53 and stride <= 256: no overflow
@@ -183,24 +186,30 @@ class Decoder {
 
     const size_t at = reserve(bytes);
     unsigned char* out = decoded_.data() + at;
-    int rc = 0;
-    if (mode == "ATTRIBUTES") rc = meshopt_decodeVertexBuffer(out, size_t(count), size_t(stride), source, size_t(length));
-    else if (mode == "TRIANGLES") rc = meshopt_decodeIndexBuffer(out, size_t(count), size_t(stride), source, size_t(length));
-    else rc = meshopt_decodeIndexSequence(out, size_t(count), size_t(stride), source, size_t(length));
-    if (rc != 0) {
-      // A vertex stream's first byte is 0xa0 plus its codec version. Version 1 (meshoptimizer 0.23,
-      // which KHR_meshopt_compression allows) is not corrupt, only newer than the linked library.
-      std::string why = "corrupt, or a newer bitstream version";
-      if (mode == "ATTRIBUTES" && length > 0 && (source[0] & 0xf0) == 0xa0 && (source[0] & 0x0f) != 0)
-        why = "vertex codec version " + std::to_string(source[0] & 0x0f) + ", newer than this build's meshoptimizer " +
-              std::to_string(MESHOPTIMIZER_VERSION / 1000) + "." + std::to_string(MESHOPTIMIZER_VERSION % 1000 / 10) +
-              " decodes";
-      fail(where + ": bytes " + str(offset) + ".." + str(offset + length) + " of buffers[" + str(buffer) + "] do not decode as " +
-           mode + " data (meshoptimizer error " + std::to_string(rc) + ": " + why + ")");
+    const std::string bytes_where = where + ": bytes " + str(offset) + ".." + str(offset + length) + " of buffers[" + str(buffer) + "]";
+    const std::span<const uint8_t> stream(source, size_t(length));
+    if (mode == "ATTRIBUTES" && length > 0 && source[0] != 0xa0) {
+      // Vertex codec version 1 (KHR_meshopt_compression, meshoptimizer 0.23 and later), newer than
+      // Debian's meshoptimizer 0.18: lodkit's own decoder (a header it does not know fails there).
+      const std::string why = decode_meshopt_vertices(out, size_t(count), size_t(stride), stream);
+      if (!why.empty()) fail(bytes_where + " do not decode as ATTRIBUTES data: " + why);
+    } else {
+      // meshoptimizer's SIMD decoders; a vertex stream they refuse is decoded again by lodkit's,
+      // which says where it goes wrong.
+      int rc = 0;
+      if (mode == "ATTRIBUTES") rc = meshopt_decodeVertexBuffer(out, size_t(count), size_t(stride), source, size_t(length));
+      else if (mode == "TRIANGLES") rc = meshopt_decodeIndexBuffer(out, size_t(count), size_t(stride), source, size_t(length));
+      else rc = meshopt_decodeIndexSequence(out, size_t(count), size_t(stride), source, size_t(length));
+      if (rc != 0) {
+        std::string why = mode == "ATTRIBUTES" ? decode_meshopt_vertices(out, size_t(count), size_t(stride), stream) : "";
+        if (why.empty()) why = "corrupt";
+        fail(bytes_where + " do not decode as " + mode + " data (meshoptimizer error " + std::to_string(rc) + ": " + why + ")");
+      }
     }
     if (filter == "OCTAHEDRAL") meshopt_decodeFilterOct(out, size_t(count), size_t(stride));
     else if (filter == "QUATERNION") meshopt_decodeFilterQuat(out, size_t(count), size_t(stride));
     else if (filter == "EXPONENTIAL") meshopt_decodeFilterExp(out, size_t(count), size_t(stride));
+    else if (filter == "COLOR") decode_meshopt_color_filter(out, size_t(count), size_t(stride));  // (newer than 0.18 too)
 
     view.buffer = filling_buffer();
     view.byteOffset = at;

@@ -1,0 +1,172 @@
+// KHR_meshopt_compression's vertex codec (versions 0 and 1) and COLOR filter, from the extension's
+// specification (see meshopt_codec.h).
+#include "io/meshopt_codec.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+namespace lod::io {
+
+namespace {
+
+constexpr size_t group_elements = 16;
+
+uint8_t unzigzag8(uint8_t v) { return uint8_t((v >> 1) ^ uint8_t(0u - (v & 1u))); }
+uint16_t unzigzag16(uint16_t v) { return uint16_t((v >> 1) ^ uint16_t(0u - (v & 1u))); }
+uint32_t rotate_right(uint32_t v, unsigned r) { return r ? (v >> r) | (v << (32 - r)) : v; }
+
+std::string at(size_t offset, const std::string& what) { return "byte " + std::to_string(offset) + ": " + what; }
+
+std::string hex(unsigned byte) {
+  constexpr char digits[] = "0123456789abcdef";
+  return std::string("0x") + digits[(byte >> 4) & 15] + digits[byte & 15];
+}
+
+}  // namespace
+
+std::string decode_meshopt_vertices(uint8_t* out, size_t count, size_t stride, std::span<const uint8_t> in) {
+  if (stride == 0 || stride % 4 != 0 || stride > 256) return "byteStride " + std::to_string(stride) + " is not a multiple of 4 in 4..256";
+  if (in.empty()) return "no bytes";
+  if (in[0] != 0xa0 && in[0] != 0xa1) return at(0, "header " + hex(in[0]) + " is not 0xa0 or 0xa1 (vertex codec version 0 or 1)");
+  const bool v1 = in[0] == 0xa1;
+  // The tail: the baseline element, then (version 1) one channel mode per 4 bytes, padded before it
+  // with zeros to at least 24 (version 1) or 32 bytes.
+  const size_t tail = stride + (v1 ? stride / 4 : 0);
+  const size_t padded = std::max<size_t>(tail, v1 ? 24 : 32);
+  if (in.size() < 1 + padded)
+    return "the stream's " + std::to_string(in.size()) + " bytes cannot hold its header and a tail of " + std::to_string(padded);
+  const size_t end = in.size() - padded;  // where the blocks must end, exactly
+  const uint8_t* const baseline = in.data() + in.size() - tail;
+  const uint8_t* const channels = baseline + stride;
+  if (v1)
+    for (size_t c = 0; c < stride / 4; ++c) {
+      const unsigned mode = channels[c] & 15u, rotation = channels[c] >> 4;
+      if (mode > 2 || (mode < 2 && rotation != 0))
+        return at(size_t(channels + c - in.data()), "channel mode " + hex(channels[c]) + " is not 0x00, 0x01 or 0xR2 (XOR, rotated by R)");
+    }
+
+  std::array<uint8_t, 256> last{};  // the previous element: deltas chain across blocks
+  std::memcpy(last.data(), baseline, stride);
+  const size_t block_max = std::min<size_t>((8192 / stride) & ~(group_elements - 1), 256);
+  std::vector<uint8_t> deltas(block_max * stride);  // per byte position, a row of block_max deltas
+  // Bits per delta by a group's 2-bit mode: version 0, then version 1 under control modes 0 and 1.
+  static constexpr uint8_t bits_by_mode[3][4] = {{0, 2, 4, 8}, {0, 1, 2, 4}, {1, 2, 4, 8}};
+  size_t pos = 1;
+  const auto take = [&](size_t bytes) { return bytes <= end - pos; };  // (pos <= end throughout)
+  const std::string ends_early = "the blocks run into the tail (the stream ends early)";
+
+  for (size_t first = 0; first < count; first += block_max) {
+    const size_t elements = std::min(count - first, block_max);
+    const size_t groups = (elements + group_elements - 1) / group_elements;
+    const size_t control_at = pos;
+    if (v1) {
+      if (!take(stride / 4)) return at(pos, ends_early);
+      pos += stride / 4;
+    }
+    for (size_t k = 0; k < stride; ++k) {
+      uint8_t* row = deltas.data() + k * block_max;
+      const unsigned control = v1 ? (in[control_at + k / 4] >> (2 * (k % 4))) & 3u : 0u;
+      if (control == 2) {  // every delta 0
+        std::memset(row, 0, elements);
+        continue;
+      }
+      if (control == 3) {  // literal deltas, one byte per element, no group headers
+        if (!take(elements)) return at(pos, ends_early);
+        std::memcpy(row, in.data() + pos, elements);
+        pos += elements;
+        continue;
+      }
+      const size_t header_at = pos, header_bytes = (groups + 3) / 4;
+      if (!take(header_bytes)) return at(pos, ends_early);
+      pos += header_bytes;
+      for (size_t g = 0; g < groups; ++g) {
+        const unsigned mode = (in[header_at + g / 4] >> (2 * (g % 4))) & 3u;
+        const unsigned bits = bits_by_mode[v1 ? control + 1 : 0][mode];
+        uint8_t* group = row + g * group_elements;  // (rows hold whole groups: block_max is a multiple of 16)
+        if (bits == 0) {
+          std::memset(group, 0, group_elements);
+        } else if (bits == 8) {
+          if (!take(group_elements)) return at(pos, ends_early);
+          std::memcpy(group, in.data() + pos, group_elements);
+          pos += group_elements;
+        } else {
+          // 16 packed deltas (1-bit ones from the low bit up, 2- and 4-bit ones from the high bits
+          // down); a delta of all ones stands for a whole byte, which follows in order.
+          const size_t packed_at = pos, packed = 2 * bits;
+          if (!take(packed)) return at(pos, ends_early);
+          pos += packed;
+          const unsigned sentinel = (1u << bits) - 1;
+          for (size_t m = 0; m < group_elements; ++m) {
+            unsigned v;
+            if (bits == 1) v = (in[packed_at + m / 8] >> (m % 8)) & 1u;
+            else if (bits == 2) v = (in[packed_at + m / 4] >> (6 - 2 * (m % 4))) & 3u;
+            else v = (in[packed_at + m / 2] >> (4 - 4 * (m % 2))) & 15u;
+            if (v == sentinel) {
+              if (!take(1)) return at(pos, ends_early);
+              v = in[pos++];
+            }
+            group[m] = uint8_t(v);
+          }
+        }
+      }
+    }
+    // The deltas onto the previous element, by channel (4 bytes): zigzag byte deltas, zigzag 16-bit
+    // deltas, or a 32-bit XOR rotated right by the mode's high 4 bits.
+    for (size_t e = 0; e < elements; ++e) {
+      const auto delta = [&](size_t k) { return deltas[k * block_max + e]; };
+      for (size_t c = 0; c < stride; c += 4) {
+        const unsigned mode = v1 ? channels[c / 4] : 0u;
+        if ((mode & 15u) == 0) {
+          for (size_t k = c; k < c + 4; ++k) last[k] = uint8_t(last[k] + unzigzag8(delta(k)));
+        } else if ((mode & 15u) == 1) {
+          for (size_t k = c; k < c + 4; k += 2) {
+            const uint16_t v = uint16_t((last[k] | last[k + 1] << 8) + unzigzag16(uint16_t(delta(k) | delta(k + 1) << 8)));
+            last[k] = uint8_t(v), last[k + 1] = uint8_t(v >> 8);
+          }
+        } else {
+          uint32_t previous = 0, d = 0;
+          for (size_t b = 0; b < 4; ++b) previous |= uint32_t(last[c + b]) << (8 * b), d |= uint32_t(delta(c + b)) << (8 * b);
+          const uint32_t v = previous ^ rotate_right(d, mode >> 4);
+          for (size_t b = 0; b < 4; ++b) last[c + b] = uint8_t(v >> (8 * b));
+        }
+      }
+      std::memcpy(out + (first + e) * stride, last.data(), stride);
+    }
+  }
+  if (pos != end) return at(pos, std::to_string(end - pos) + " byte(s) left over between the blocks and the tail");
+  return {};
+}
+
+void decode_meshopt_color_filter(uint8_t* data, size_t count, size_t stride) {
+  const bool wide = stride == 8;
+  const float top = wide ? 65535.0f : 255.0f;
+  for (size_t i = 0; i < count; ++i) {
+    uint8_t* e = data + i * stride;
+    int32_t c[4];
+    for (size_t k = 0; k < 4; ++k) {
+      const uint32_t u = wide ? uint32_t(e[2 * k] | e[2 * k + 1] << 8) : e[k];
+      // Co and Cg are signed; luma and alpha unsigned.
+      c[k] = (k == 1 || k == 2) ? (wide ? int32_t(int16_t(u)) : int32_t(int8_t(u))) : int32_t(u);
+    }
+    // The alpha's highest set bit marks the precision K: its top value is 2^K - 1.
+    const int k_bits = c[3] ? std::bit_width(uint32_t(c[3])) : 1;
+    const int32_t full = (1 << k_bits) - 1;
+    int32_t a = c[3] & (full >> 1);
+    a = (a << 1) | (a & 1);  // K-1 bits of alpha widened to K, the last bit repeated
+    const int32_t y = c[0], co = c[1], cg = c[2];
+    const int32_t rgba[4] = {y + co - cg, y + cg, y - co - cg, a};
+    const float scale = top / float(full);
+    for (size_t k = 0; k < 4; ++k) {
+      const float v = std::clamp(std::round(float(rgba[k]) * scale), 0.0f, top);  // (a malformed stream may leave the range)
+      const uint32_t u = uint32_t(v);
+      if (wide) e[2 * k] = uint8_t(u), e[2 * k + 1] = uint8_t(u >> 8);
+      else e[k] = uint8_t(u);
+    }
+  }
+}
+
+}  // namespace lod::io

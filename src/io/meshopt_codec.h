@@ -1,0 +1,29 @@
+// Internal to the glTF reader: the parts of KHR_meshopt_compression that Debian's meshoptimizer
+// (0.18) predates, written from the extension's specification (Appendix A and B):
+//  - the vertex codec's version 1 (a control mode per byte position, 1-bit groups, literal bytes,
+//    and 2-byte and XOR channel deltas), which meshoptimizer 0.23 and later write;
+//  - the COLOR filter (YCoCg).
+// Version 0 streams are decoded here too (its groups are version 1's with a fixed control mode):
+// the reader gives them to meshoptimizer's SIMD decoder, and the tests and fuzz_meshopt hold the two
+// decoders to the same output on them.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+
+namespace lod::io {
+
+// Decodes a meshopt ATTRIBUTES stream of `count` elements of `stride` bytes (a multiple of 4 in
+// 4..256) into `out` (count * stride bytes). Returns an empty string, or what is wrong and at which
+// byte of `in` (header, a group running past the tail, bytes left over, an invalid channel mode).
+// Reads only `in` and writes only `out`, whatever the bytes.
+std::string decode_meshopt_vertices(uint8_t* out, size_t count, size_t stride, std::span<const uint8_t> in);
+
+// The COLOR filter in place: `count` elements of `stride` 4 (four 8-bit components) or 8 (16-bit),
+// YCoCg with the alpha's top bit giving the precision, into unsigned normalized RGBA. An alpha of
+// 0 (no precision bit, which no encoder writes) decodes as if the precision were 1 bit.
+void decode_meshopt_color_filter(uint8_t* data, size_t count, size_t stride);
+
+}  // namespace lod::io

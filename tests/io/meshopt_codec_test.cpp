@@ -1,0 +1,212 @@
+// lodkit's own meshopt vertex decoder (versions 0 and 1) and COLOR filter, against meshoptimizer:
+// its JavaScript encoder and decoder (tests/gltf-loader/meshopt_vectors.mjs) make the test data, and
+// Debian's libmeshoptimizer decodes the version 0 streams too.
+#include "io/meshopt_codec.h"
+
+#include <gtest/gtest.h>
+#include <meshoptimizer.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/shapes.h"
+#include "lodkit/io.h"
+#include "skin/fixtures.h"
+#include "test_support.h"
+
+namespace lod {
+namespace {
+
+using io::decode_meshopt_vertices;
+using Json = nlohmann::json;
+
+std::filesystem::path vectors_script() { return std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-loader/meshopt_vectors.mjs"; }
+
+// The vectors, made once for the whole test program (about a second of Node).
+const Json& vectors() {
+  static const Json doc = [] {
+    test::TempDir dir;
+    const test::RunResult r = test::run_program({"node", vectors_script().string(), "vectors", (dir / "v.json").string()});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    std::ifstream in(dir / "v.json");
+    return r.exit_code == 0 ? Json::parse(in) : Json::object();
+  }();
+  return doc;
+}
+
+struct Stream {
+  size_t stride = 0, count = 0;
+  int version = 0, level = 0;
+  std::string kind;
+  std::vector<uint8_t> source, encoded;
+};
+
+std::vector<Stream> streams() {
+  std::vector<Stream> out;
+  if (!vectors().contains("streams")) return out;
+  for (const Json& s : vectors()["streams"])
+    out.push_back({s["stride"], s["count"], s["version"], s["level"], s["kind"], test::from_base64(s["source"]),
+                   test::from_base64(s["encoded"])});
+  return out;
+}
+
+std::string name(const Stream& s) {
+  return s.kind + " stride " + std::to_string(s.stride) + " count " + std::to_string(s.count) + " v" +
+         std::to_string(s.version) + " level " + std::to_string(s.level);
+}
+
+#define SKIP_WITHOUT_NODE() \
+  if (!test::second_reader_available()) GTEST_SKIP() << "tests/gltf-loader is not installed (scripts/setup.sh)"
+
+// Every stream meshoptimizer encodes decodes to its source bytes; the version 1 ones use every
+// control mode and every channel mode (else this test would not cover them).
+TEST(MeshoptCodec, DecodesWhatMeshoptimizerEncodes) {
+  SKIP_WITHOUT_NODE();
+  const std::vector<Stream> all = streams();
+  ASSERT_GT(all.size(), 200u);
+  size_t versions[2] = {}, controls[4] = {}, channels[3] = {};
+  for (const Stream& s : all) {
+    ASSERT_EQ(s.source.size(), s.count * s.stride) << name(s);
+    std::vector<uint8_t> out(s.source.size(), 0xcd);
+    EXPECT_EQ(decode_meshopt_vertices(out.data(), s.count, s.stride, s.encoded), "") << name(s);
+    EXPECT_EQ(out, s.source) << name(s);
+    ++versions[s.version];
+    if (s.version == 1) {
+      for (size_t k = 0; k < s.stride; ++k) ++controls[(s.encoded[1 + k / 4] >> (2 * (k % 4))) & 3];  // the first block's
+      for (size_t c = 0; c < s.stride / 4; ++c) ++channels[std::min(2, s.encoded[s.encoded.size() - s.stride / 4 + c] & 15)];
+    } else {
+      // Debian's meshoptimizer agrees.
+      std::vector<uint8_t> theirs(s.source.size());
+      EXPECT_EQ(meshopt_decodeVertexBuffer(theirs.data(), s.count, s.stride, s.encoded.data(), s.encoded.size()), 0) << name(s);
+      EXPECT_EQ(theirs, s.source) << name(s);
+    }
+  }
+  EXPECT_GT(versions[0], 50u);
+  EXPECT_GT(versions[1], 200u);
+  for (size_t m = 0; m < 4; ++m) EXPECT_GT(controls[m], 0u) << "control mode " << m;
+  for (size_t m = 0; m < 3; ++m) EXPECT_GT(channels[m], 0u) << "channel mode " << m;
+}
+
+// COLOR: the spec allows one unit in the last place against meshoptimizer's decoder.
+TEST(MeshoptCodec, ColorFilterMatchesMeshoptimizer) {
+  SKIP_WITHOUT_NODE();
+  ASSERT_TRUE(vectors().contains("colors"));
+  for (const Json& c : vectors()["colors"]) {
+    const size_t stride = c["stride"], count = c["count"];
+    const std::string what = "stride " + std::to_string(stride) + " bits " + std::to_string(c["bits"].get<int>());
+    const std::vector<uint8_t> encoded = test::from_base64(c["encoded"]), filtered = test::from_base64(c["filtered"]),
+                               expected = test::from_base64(c["decoded"]);
+    std::vector<uint8_t> out(count * stride);
+    ASSERT_EQ(decode_meshopt_vertices(out.data(), count, stride, encoded), "") << what;
+    EXPECT_EQ(out, filtered) << what;
+    io::decode_meshopt_color_filter(out.data(), count, stride);
+    size_t exact = 0;
+    for (size_t i = 0; i < count * 4; ++i) {
+      const int a = stride == 4 ? out[i] : out[2 * i] | out[2 * i + 1] << 8;
+      const int b = stride == 4 ? expected[i] : expected[2 * i] | expected[2 * i + 1] << 8;
+      EXPECT_LE(std::abs(a - b), 1) << what << " component " << i;
+      exact += a == b;
+    }
+    EXPECT_GT(exact, count * 4 * 99 / 100) << what;  // off by one only at rounding ties
+  }
+}
+
+// A truncated or padded stream, and a bad channel mode, are refused with the byte where it goes
+// wrong; random damage never reads or writes out of bounds (run under ASan by the sanitizer preset),
+// and on version 0 lodkit's decoder accepts exactly what meshoptimizer's does, with the same output.
+TEST(MeshoptCodec, DamagedStreamsAreRefusedLikeMeshoptimizerRefusesThem) {
+  SKIP_WITHOUT_NODE();
+  const std::vector<Stream> all = streams();
+  ASSERT_FALSE(all.empty());
+  const Stream* v1 = nullptr;
+  for (const Stream& s : all)
+    if (s.version == 1 && s.kind == "smooth-float" && s.stride == 16 && s.count == 1000) v1 = &s;
+  ASSERT_NE(v1, nullptr);
+  std::vector<uint8_t> out(v1->source.size());
+  std::vector<uint8_t> shorter(v1->encoded.begin(), v1->encoded.end() - 1), longer = v1->encoded;
+  longer.insert(longer.begin() + ptrdiff_t(longer.size() - 24), 0);
+  EXPECT_NE(decode_meshopt_vertices(out.data(), v1->count, v1->stride, shorter), "");
+  EXPECT_NE(decode_meshopt_vertices(out.data(), v1->count, v1->stride, longer).find("left over"), std::string::npos);
+  std::vector<uint8_t> bad_channel = v1->encoded;
+  bad_channel.back() = 0x13;  // mode 3, which does not exist
+  EXPECT_NE(decode_meshopt_vertices(out.data(), v1->count, v1->stride, bad_channel).find("channel mode 0x13"), std::string::npos);
+  bad_channel.back() = 0x11;  // a rotation on 2-byte deltas
+  EXPECT_NE(decode_meshopt_vertices(out.data(), v1->count, v1->stride, bad_channel).find("channel mode 0x11"), std::string::npos);
+
+  std::mt19937 rng(7);
+  size_t agreed_ok = 0, agreed_refused = 0;
+  for (const Stream& s : all) {
+    for (int trial = 0; trial < 8; ++trial) {
+      std::vector<uint8_t> damaged = s.encoded;
+      const size_t flips = 1 + rng() % 3;
+      for (size_t f = 0; f < flips; ++f) damaged[rng() % damaged.size()] ^= uint8_t(1u << (rng() % 8));
+      std::vector<uint8_t> mine(s.source.size());
+      const bool ok = decode_meshopt_vertices(mine.data(), s.count, s.stride, damaged).empty();
+      if (s.version != 0 || damaged[0] != 0xa0) continue;
+      std::vector<uint8_t> theirs(s.source.size());
+      const bool their_ok = meshopt_decodeVertexBuffer(theirs.data(), s.count, s.stride, damaged.data(), damaged.size()) == 0;
+      EXPECT_EQ(ok, their_ok) << name(s) << " trial " << trial;
+      if (ok && their_ok) EXPECT_EQ(mine, theirs) << name(s) << " trial " << trial;
+      (ok ? agreed_ok : agreed_refused) += ok == their_ok;
+    }
+  }
+  EXPECT_GT(agreed_ok, 20u);
+  EXPECT_GT(agreed_refused, 20u);
+}
+
+// A whole file in KHR_meshopt_compression with vertex codec version 1 (lodkit's -c output encoded
+// again by meshoptimizer's JavaScript encoder) reads as the -c file it came from: a skinned,
+// animated character and a torus's LOD chain with geomorph morph targets.
+TEST(MeshoptCodec, ReadsKhrMeshoptCompressionVersion1Files) {
+  SKIP_WITHOUT_NODE();
+  test::TempDir dir;
+  write_scene(fixtures::humanoid_scene(), dir / "humanoid.glb");
+  test::RunResult r = test::run_cli({"convert", (dir / "humanoid.glb").string(), (dir / "h-ext.glb").string(), "-c"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  write_scene(scene_from_mesh(shapes::torus(1.0f, 0.3f, 64, 32)), dir / "torus.glb");
+  r = test::run_cli({"lod", (dir / "torus.glb").string(), "-o", (dir / "chain.glb").string(), "--levels", "3", "--morph"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = test::run_cli({"convert", (dir / "chain.glb").string(), (dir / "c-ext.glb").string(), "-c"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  size_t channel_modes = 0;
+  for (const std::string stem : {"h", "c"}) {
+    const auto ext = dir / (stem + "-ext.glb"), khr = dir / (stem + "-khr.glb");
+    r = test::run_program({"node", vectors_script().string(), "khr", ext.string(), khr.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Json modes = Json::parse(r.out);
+    for (const auto& [mode, n] : modes["channelModes"].items()) channel_modes += mode != "0" ? n.get<size_t>() : 0;
+    // The file is what this test means it to be: KHR, every vertex stream at version 1.
+    const test::Glb glb = test::read_glb(khr);
+    EXPECT_NE(glb.doc["extensionsRequired"].dump().find("KHR_meshopt_compression"), std::string::npos);
+    size_t version1 = 0;
+    for (const Json& view : glb.doc["bufferViews"])
+      if (view.contains("extensions") && view["extensions"]["KHR_meshopt_compression"].value("mode", "") == "ATTRIBUTES") {
+        ++version1;
+        EXPECT_EQ(glb.bin.at(view["extensions"]["KHR_meshopt_compression"].value("byteOffset", size_t(0))), 0xa1);
+      }
+    EXPECT_GT(version1, 3u) << stem;
+
+    const Scene a = read_scene(ext), b = read_scene(khr);
+    ASSERT_EQ(a.primitives.size(), b.primitives.size()) << stem;
+    for (size_t p = 0; p < a.primitives.size(); ++p) {
+      EXPECT_EQ(test::mesh_difference(a.primitives[p].mesh, b.primitives[p].mesh), "") << stem << " primitive " << p;
+      const std::vector<MorphTarget> ta = source_morph_targets(a, p), tb = source_morph_targets(b, p);
+      ASSERT_EQ(ta.size(), tb.size()) << stem << " primitive " << p;
+      for (size_t k = 0; k < ta.size(); ++k) EXPECT_TRUE(ta[k] == tb[k]) << stem << " primitive " << p << " target " << k;
+    }
+    ASSERT_EQ(a.animations.size(), b.animations.size()) << stem;
+    for (size_t k = 0; k < a.animations.size(); ++k)
+      for (size_t c = 0; c < a.animations[k].channels.size(); ++c) {
+        EXPECT_EQ(a.animations[k].channels[c].times, b.animations[k].channels[c].times) << stem;
+        EXPECT_EQ(a.animations[k].channels[c].values, b.animations[k].channels[c].values) << stem;
+      }
+  }
+  EXPECT_GT(channel_modes, 0u);  // the encoder chose 2-byte or XOR deltas somewhere
+}
+
+}  // namespace
+}  // namespace lod
