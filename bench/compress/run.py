@@ -10,6 +10,8 @@ their clips, and bunny00's LOD chain as `lodkit lod` writes it):
     with -c -q (gltfpack's default bit depths: 14-bit positions, 8-bit normals);
   - gltfpack (Debian, 0.18) on the same plain file: -noq (its reordering, no quantization), -c -noq
     (the same compression lodkit writes), and -c (its defaults: quantized, lossy).
+  - lodkit -c and -c -q with --meshopt-khr (KHR_meshopt_compression, vertex codec version 1) against
+    the same EXT ones and gltfpack's, with load times;
   - Draco: `lodkit convert --draco` of the plain file against Debian's draco_transcoder (libdraco
     1.5.5, the same library) on it at the same bit depths (14-bit positions, 10-bit normals, 12-bit
     UVs, tangents and weights, 8-bit colours) and its default compression level, as lodkit uses.
@@ -108,17 +110,22 @@ def main():
             "gltfpack -noq": stem + "-gp.glb",
             "gltfpack -c -noq": stem + "-gp-c-noq.glb",
             "gltfpack -c": stem + "-gp-c.glb",
+            "lodkit -c khr": stem + "-opt-ck.glb",
+            "lodkit -c -q khr": stem + "-opt-cqk.glb",
         }
         # --lru: the LRU-style order (lodkit's Forsyth-like walk), which the meshopt codecs favour;
         # the default FIFO order costs -c about 5% (bunny00: 438 against 415 KiB).
         run([lodkit, "optimize", src, "-o", files["lodkit"], "--lru"])
         run([lodkit, "optimize", src, "-o", files["lodkit -c"], "--lru", "-c"])
         run([lodkit, "optimize", src, "-o", files["lodkit -c -q"], "--lru", "-c", "-q"])
+        # KHR_meshopt_compression, vertex codec version 1 (lodkit's own encoder and decoder).
+        run([lodkit, "optimize", src, "-o", files["lodkit -c khr"], "--lru", "-c", "--meshopt-khr"])
+        run([lodkit, "optimize", src, "-o", files["lodkit -c -q khr"], "--lru", "-c", "-q", "--meshopt-khr"])
         run(["gltfpack", "-i", files["lodkit"], "-o", files["gltfpack -noq"], "-noq"])
         run(["gltfpack", "-i", files["lodkit"], "-o", files["gltfpack -c -noq"], "-c", "-noq"])
         run(["gltfpack", "-i", files["lodkit"], "-o", files["gltfpack -c"], "-c"])
         plain = info(lodkit, files["lodkit"])["stats"]
-        for flags in ["-c", "-c -q"]:
+        for flags in ["-c", "-c -q", "-c khr", "-c -q khr"]:
             packed = info(lodkit, files["lodkit " + flags])["stats"]
             if (plain["triangles"], plain["vertices"]) != (packed["triangles"], packed["vertices"]):
                 raise RuntimeError(f"{name}: {flags} read back {packed['triangles']} triangles, {packed['vertices']} vertices")
@@ -129,6 +136,8 @@ def main():
         row["load_plain_s"], row["rss_plain_mib"] = load(lodkit, files["lodkit"], runs)
         row["load_c_s"], row["rss_c_mib"] = load(lodkit, files["lodkit -c"], runs)
         row["load_cq_s"], row["rss_cq_mib"] = load(lodkit, files["lodkit -c -q"], runs)
+        row["load_ck_s"], _ = load(lodkit, files["lodkit -c khr"], runs)
+        row["load_cqk_s"], _ = load(lodkit, files["lodkit -c -q khr"], runs)
         # (A skinned character is compared at rest, its bind pose: flatten places a quantized one
         # by the grid its joints carry.)
         row["hausdorff"] = {tool: hausdorff(lodkit, files["lodkit"], files[tool]) for tool in ["lodkit -c -q", "gltfpack -c"]}
@@ -178,6 +187,26 @@ def main():
     print(f"lodkit -c -q ÷ gltfpack -c, raw size: median {statistics.median(qratios):.3f}, "
           f"min {min(qratios):.3f}, max {max(qratios):.3f}")
     print()
+    print("KHR_meshopt_compression with vertex codec version 1 (`--meshopt-khr`, lodkit's own encoder and decoder), against"
+          " EXT_meshopt_compression (version 0, meshoptimizer's) from lodkit and gltfpack:")
+    print()
+    print("| input | -c --meshopt-khr KiB (gzip) | ÷ lodkit -c | ÷ gltfpack -c -noq | -c -q --meshopt-khr KiB (gzip) | ÷ lodkit -c -q |"
+          " ÷ gltfpack -c | load -c / -c --meshopt-khr | load -c -q / -c -q --meshopt-khr |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    kratios, kqratios = [], []
+    for r in rows:
+        b, g = r["bytes"], r["gzip"]
+        kratios.append(b["lodkit -c khr"] / b["gltfpack -c -noq"])
+        kqratios.append(b["lodkit -c -q khr"] / b["gltfpack -c"])
+        print(f"| {r['input']} | {b['lodkit -c khr'] / 1024:.0f} ({g['lodkit -c khr'] / 1024:.0f}) | "
+              f"{b['lodkit -c khr'] / b['lodkit -c']:.3f} | {kratios[-1]:.3f} | "
+              f"{b['lodkit -c -q khr'] / 1024:.0f} ({g['lodkit -c -q khr'] / 1024:.0f}) | {b['lodkit -c -q khr'] / b['lodkit -c -q']:.3f} | "
+              f"{kqratios[-1]:.3f} | {r['load_c_s'] * 1000:.1f} / {r['load_ck_s'] * 1000:.1f} ms | "
+              f"{r['load_cq_s'] * 1000:.1f} / {r['load_cqk_s'] * 1000:.1f} ms |")
+    print()
+    print(f"-c --meshopt-khr ÷ gltfpack -c -noq: median {statistics.median(kratios):.3f} ({min(kratios):.3f}-{max(kratios):.3f}); "
+          f"-c -q --meshopt-khr ÷ gltfpack -c: median {statistics.median(kqratios):.3f} ({min(kqratios):.3f}-{max(kqratios):.3f})")
+    print()
     print("| input | lodkit --draco KiB (gzip) | draco_transcoder KiB (gzip) | lodkit ÷ transcoder | encode lodkit / transcoder |"
           " load (lodkit) --draco / transcoder's | Hausdorff / diagonal, lodkit / transcoder |")
     print("|---|---|---|---|---|---|---|")
@@ -213,7 +242,8 @@ def main():
 # plain one): sizes, write and load times, what reads back, and the distance from the plain chain
 # (all levels flattened together).
 def geomorph_chain(lodkit, tmp, runs):
-    forms = [("plain", []), ("-c", ["-c"]), ("-c -q", ["-c", "-q"]), ("--draco", ["--draco"]),
+    forms = [("plain", []), ("-c", ["-c"]), ("-c -q", ["-c", "-q"]), ("-c --meshopt-khr", ["-c", "--meshopt-khr"]),
+             ("-c -q --meshopt-khr", ["-c", "-q", "--meshopt-khr"]), ("--draco", ["--draco"]),
              ("--draco -c", ["--draco", "-c"]), ("--draco -q -c", ["--draco", "-q", "-c"])]
     out = []
     plain = None

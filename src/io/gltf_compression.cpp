@@ -464,8 +464,8 @@ std::vector<ViewUse> view_uses(const Json& doc) {
   return use;
 }
 
-// The view's bytes encoded, or nothing when that is not smaller.
-std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const ViewUse& u) {
+// The view's bytes encoded (vertex streams at version 1 with `khr`), or nothing when that is not smaller.
+std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const ViewUse& u, bool khr) {
   const size_t count = size_t(length / u.stride);
   std::vector<uint8_t> out;
   if (u.indices) {
@@ -484,6 +484,8 @@ std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const Vie
     meshopt_encodeIndexVersion(1);  // the version EXT_meshopt_compression's TRIANGLES mode requires (0.18 writes 0)
     out.resize(meshopt_encodeIndexBufferBound(count, size_t(largest) + 1));
     out.resize(meshopt_encodeIndexBuffer(out.data(), out.size(), indices.data(), count));
+  } else if (khr) {
+    out = encode_meshopt_vertices(data, count, size_t(u.stride));
   } else {
     meshopt_encodeVertexVersion(0);  // the only one EXT_meshopt_compression admits (later releases default to 1)
     out.resize(meshopt_encodeVertexBufferBound(count, size_t(u.stride)));
@@ -495,7 +497,8 @@ std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const Vie
 
 }  // namespace
 
-void compress_meshopt(Json& doc, std::vector<uint8_t>& bin) {
+void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, bool khr) {
+  const char* const extension = meshopt_names[khr ? 1 : 0];
   if (bin.empty() || !doc.contains("bufferViews") || doc["buffers"].size() != 1) return;
   Json& views = doc["bufferViews"];
   const std::vector<ViewUse> use = view_uses(doc);
@@ -505,7 +508,7 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin) {
     const ViewUse& u = use[v];
     const uint64_t length = views[v]["byteLength"].get<uint64_t>();
     if (u.excluded || u.stride == 0 || (u.indices && u.attributes) || length % u.stride != 0) continue;
-    encoded[v] = encode_view(bin.data() + views[v].value("byteOffset", uint64_t(0)), length, u);
+    encoded[v] = encode_view(bin.data() + views[v].value("byteOffset", uint64_t(0)), length, u, khr);
     any = any || !encoded[v].empty();
   }
   if (!any) return;
@@ -525,7 +528,7 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin) {
       continue;
     }
     const uint64_t stride = use[v].stride;
-    view["extensions"][meshopt_names[0]] = {{"buffer", 0},
+    view["extensions"][extension] = {{"buffer", 0},
                                             {"byteOffset", packed.size()},
                                             {"byteLength", encoded[v].size()},
                                             {"byteStride", stride},
@@ -539,11 +542,11 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin) {
   }
   bin = std::move(packed);
   doc["buffers"][0]["byteLength"] = bin.size();
-  doc["buffers"].push_back({{"byteLength", fallback}, {"extensions", {{meshopt_names[0], {{"fallback", true}}}}}});
+  doc["buffers"].push_back({{"byteLength", fallback}, {"extensions", {{extension, {{"fallback", true}}}}}});
   for (const char* list : {"extensionsUsed", "extensionsRequired"}) {
     Json& names = doc[list];
     if (!names.is_array()) names = Json::array();
-    if (std::find(names.begin(), names.end(), meshopt_names[0]) == names.end()) names.push_back(meshopt_names[0]);
+    if (std::find(names.begin(), names.end(), extension) == names.end()) names.push_back(extension);
   }
 }
 

@@ -1,12 +1,14 @@
-// KHR_meshopt_compression's vertex codec (versions 0 and 1) and COLOR filter, from the extension's
-// specification (see meshopt_codec.h).
+// KHR_meshopt_compression's vertex codec (decoding versions 0 and 1, encoding version 1) and COLOR
+// filter, from the extension's specification (see meshopt_codec.h).
 #include "io/meshopt_codec.h"
 
 #include <algorithm>
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 namespace lod::io {
@@ -167,6 +169,173 @@ void decode_meshopt_color_filter(uint8_t* data, size_t count, size_t stride) {
       else e[k] = uint8_t(u);
     }
   }
+}
+
+namespace {
+
+uint8_t zigzag8(uint8_t v) { return uint8_t((v << 1) ^ uint8_t(0u - (v >> 7))); }
+uint16_t zigzag16(uint16_t v) { return uint16_t((v << 1) ^ uint16_t(0u - (v >> 15))); }
+uint32_t rotate_left(uint32_t v, unsigned r) { return r ? (v << r) | (v >> (32 - r)) : v; }
+
+constexpr uint8_t bits_by_control[2][4] = {{0, 1, 2, 4}, {1, 2, 4, 8}};
+constexpr size_t no_fit = SIZE_MAX / 4;
+
+// Bytes of one group of 16 deltas coded with `bits` each: the packed bits, and a whole byte for
+// each delta that does not fit below the all-ones sentinel.
+size_t group_bytes(const uint8_t* d, unsigned bits) {
+  if (bits == 8) return group_elements;
+  if (bits == 0) {
+    for (size_t m = 0; m < group_elements; ++m)
+      if (d[m]) return no_fit;
+    return 0;
+  }
+  const unsigned sentinel = (1u << bits) - 1;
+  size_t escaped = 0;
+  for (size_t m = 0; m < group_elements; ++m) escaped += d[m] >= sentinel;
+  return 2 * bits + escaped;
+}
+
+// One byte position's deltas over a block (`groups` whole groups, zero past the elements), coded
+// with control mode `control` (version 1): its size, and with `out` its bytes appended.
+size_t code_row(const uint8_t* row, size_t elements, size_t groups, unsigned control, std::vector<uint8_t>* out) {
+  if (control == 2) {
+    for (size_t e = 0; e < elements; ++e)
+      if (row[e]) return no_fit;
+    return 0;
+  }
+  if (control == 3) {
+    if (out) out->insert(out->end(), row, row + elements);
+    return elements;
+  }
+  const size_t header_bytes = (groups + 3) / 4;
+  size_t size = header_bytes, header_at = 0;
+  if (out) header_at = out->size(), out->resize(out->size() + header_bytes, 0);
+  for (size_t g = 0; g < groups; ++g) {
+    const uint8_t* d = row + g * group_elements;
+    unsigned best = 0;
+    size_t best_size = no_fit;
+    for (unsigned mode = 0; mode < 4; ++mode) {
+      const size_t s = group_bytes(d, bits_by_control[control][mode]);
+      if (s < best_size) best = mode, best_size = s;
+    }
+    size += best_size;
+    if (!out) continue;
+    (*out)[header_at + g / 4] |= uint8_t(best << (2 * (g % 4)));
+    const unsigned bits = bits_by_control[control][best];
+    if (bits == 0) continue;
+    if (bits == 8) {
+      out->insert(out->end(), d, d + group_elements);
+      continue;
+    }
+    const unsigned sentinel = (1u << bits) - 1;
+    const size_t packed_at = out->size();
+    out->resize(out->size() + 2 * bits, 0);
+    for (size_t m = 0; m < group_elements; ++m) {
+      const unsigned v = std::min<unsigned>(d[m], sentinel);
+      uint8_t& byte = (*out)[packed_at + m * bits / 8];
+      if (bits == 1) byte |= uint8_t(v << (m % 8));
+      else if (bits == 2) byte |= uint8_t(v << (6 - 2 * (m % 4)));
+      else byte |= uint8_t(v << (4 - 4 * (m % 2)));
+    }
+    for (size_t m = 0; m < group_elements; ++m)
+      if (d[m] >= sentinel) out->push_back(d[m]);
+  }
+  return size;
+}
+
+// A row's cheapest control mode and its size.
+std::pair<unsigned, size_t> best_control(const uint8_t* row, size_t elements, size_t groups) {
+  std::pair<unsigned, size_t> best{3, elements};
+  for (const unsigned control : {2u, 0u, 1u}) {
+    const size_t s = code_row(row, elements, groups, control, nullptr);
+    if (s < best.second) best = {control, s};
+  }
+  return best;
+}
+
+// The deltas of channel c (bytes 4c..4c+3) of elements [first, first + elements) under channel mode
+// `mode` (low 4 bits; XOR's rotation in the high 4), into rows k = 0..3 of `rows` (block_max apart).
+void channel_deltas(const uint8_t* data, size_t stride, size_t c, size_t first, size_t elements, unsigned mode,
+                    uint8_t* rows, size_t block_max) {
+  for (size_t e = 0; e < elements; ++e) {
+    const size_t i = first + e;
+    const uint8_t* v = data + i * stride + 4 * c;
+    const uint8_t* p = i == 0 ? v : v - stride;  // the baseline is the first element
+    uint8_t d[4];
+    if ((mode & 15u) == 0) {
+      for (size_t k = 0; k < 4; ++k) d[k] = zigzag8(uint8_t(v[k] - p[k]));
+    } else if ((mode & 15u) == 1) {
+      for (size_t k = 0; k < 4; k += 2) {
+        const uint16_t z = zigzag16(uint16_t((v[k] | v[k + 1] << 8) - (p[k] | p[k + 1] << 8)));
+        d[k] = uint8_t(z), d[k + 1] = uint8_t(z >> 8);
+      }
+    } else {
+      uint32_t x = 0;
+      for (size_t k = 0; k < 4; ++k) x |= uint32_t(v[k] ^ p[k]) << (8 * k);
+      x = rotate_left(x, mode >> 4);
+      for (size_t k = 0; k < 4; ++k) d[k] = uint8_t(x >> (8 * k));
+    }
+    for (size_t k = 0; k < 4; ++k) rows[k * block_max + e] = d[k];
+  }
+}
+
+}  // namespace
+
+std::vector<uint8_t> encode_meshopt_vertices(const uint8_t* data, size_t count, size_t stride) {
+  const size_t channels = stride / 4;
+  const size_t block_max = std::min<size_t>((8192 / stride) & ~(group_elements - 1), 256);
+  const size_t blocks = (count + block_max - 1) / block_max;
+  std::vector<uint8_t> rows(4 * block_max, 0);
+  // The size a channel would take under a mode, over the blocks sampled (every one up to 64 blocks,
+  // else 64 spread evenly: the choice stays linear in the stream's size).
+  const size_t step = std::max<size_t>(1, blocks / 64);
+  const auto channel_size = [&](size_t c, unsigned mode) {
+    size_t size = 0;
+    for (size_t b = 0; b < blocks; b += step) {
+      const size_t first = b * block_max, elements = std::min(count - first, block_max);
+      const size_t groups = (elements + group_elements - 1) / group_elements;
+      std::fill(rows.begin(), rows.end(), 0);
+      channel_deltas(data, stride, c, first, elements, mode, rows.data(), block_max);
+      for (size_t k = 0; k < 4; ++k) size += best_control(rows.data() + k * block_max, elements, groups).second;
+    }
+    return size;
+  };
+  // Channel modes: byte deltas, 16-bit deltas, or XOR under each rotation; the smallest wins (the
+  // earlier on a tie).
+  std::vector<uint8_t> mode(channels, 0);
+  for (size_t c = 0; c < channels; ++c) {
+    size_t best = channel_size(c, 0);
+    for (unsigned m = 1; m < 2 + 16; ++m) {
+      const unsigned candidate = m == 1 ? 1u : 2u | (m - 2) << 4;
+      const size_t s = channel_size(c, candidate);
+      if (s < best) best = s, mode[c] = uint8_t(candidate);
+    }
+  }
+
+  std::vector<uint8_t> out{0xa1};
+  std::vector<uint8_t> block_rows(stride * block_max);
+  for (size_t first = 0; first < count; first += block_max) {
+    const size_t elements = std::min(count - first, block_max);
+    const size_t groups = (elements + group_elements - 1) / group_elements;
+    std::fill(block_rows.begin(), block_rows.end(), 0);
+    for (size_t c = 0; c < channels; ++c)
+      channel_deltas(data, stride, c, first, elements, mode[c], block_rows.data() + 4 * c * block_max, block_max);
+    const size_t control_at = out.size();
+    out.resize(out.size() + channels, 0);
+    for (size_t k = 0; k < stride; ++k) {
+      const uint8_t* row = block_rows.data() + k * block_max;
+      const unsigned control = best_control(row, elements, groups).first;
+      out[control_at + k / 4] |= uint8_t(control << (2 * (k % 4)));
+      code_row(row, elements, groups, control, &out);
+    }
+  }
+  // The tail: zeros up to 24 bytes, the baseline (the first element), the channel modes.
+  const size_t tail = stride + channels;
+  out.resize(out.size() + (tail < 24 ? 24 - tail : 0), 0);
+  if (count) out.insert(out.end(), data, data + stride);
+  else out.resize(out.size() + stride, 0);
+  out.insert(out.end(), mode.begin(), mode.end());
+  return out;
 }
 
 }  // namespace lod::io

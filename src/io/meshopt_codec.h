@@ -1,5 +1,5 @@
-// Internal to the glTF reader: the parts of KHR_meshopt_compression that Debian's meshoptimizer
-// (0.18) predates, written from the extension's specification (Appendix A and B):
+// Internal to the glTF reader and writer: the parts of KHR_meshopt_compression that Debian's
+// meshoptimizer (0.18) predates, written from the extension's specification (Appendix A and B):
 //  - the vertex codec's version 1 (a control mode per byte position, 1-bit groups, literal bytes,
 //    and 2-byte and XOR channel deltas), which meshoptimizer 0.23 and later write;
 //  - the COLOR filter (YCoCg).
@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace lod::io {
 
@@ -20,6 +21,13 @@ namespace lod::io {
 // byte of `in` (header, a group running past the tail, bytes left over, an invalid channel mode).
 // Reads only `in` and writes only `out`, whatever the bytes.
 std::string decode_meshopt_vertices(uint8_t* out, size_t count, size_t stride, std::span<const uint8_t> in);
+
+// Encodes `count` elements of `stride` bytes (a multiple of 4 in 4..256) as a version 1 stream
+// (KHR_meshopt_compression). Each 4-byte channel takes the delta mode (bytes, 16-bit, or XOR under
+// one of 16 rotations) that codes smallest over up to 64 blocks spread over the stream, and each
+// byte position of each block the cheapest control mode, each group of 16 the cheapest bit width;
+// the baseline is the first element. Deterministic; decode_meshopt_vertices gives the bytes back.
+std::vector<uint8_t> encode_meshopt_vertices(const uint8_t* data, size_t count, size_t stride);
 
 // The COLOR filter in place: `count` elements of `stride` 4 (four 8-bit components) or 8 (16-bit),
 // YCoCg with the alpha's top bit giving the precision, into unsigned normalized RGBA. An alpha of

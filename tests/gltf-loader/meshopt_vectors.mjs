@@ -9,6 +9,11 @@
 //     A file lodkit wrote with -c (EXT_meshopt_compression, vertex codec version 0) as
 //     KHR_meshopt_compression with every ATTRIBUTES view encoded again at version 1 (levels 0 to 3 in
 //     turn): the same content, in the newer bitstream. Prints the streams' channel and control modes.
+//   node meshopt_vectors.mjs ext IN.glb OUT.glb
+//     The other way: a KHR_meshopt_compression file (lodkit's -c --meshopt-khr) decoded by
+//     meshoptimizer and written as EXT_meshopt_compression at version 0.
+//   node meshopt_vectors.mjs decode IN.json OUT.json
+//     Decodes lodkit's own version 1 streams with meshoptimizer's decoder.
 import { readFileSync, writeFileSync } from 'node:fs';
 import { MeshoptEncoder, MeshoptDecoder } from 'meshoptimizer';
 
@@ -56,14 +61,13 @@ function vectors(out) {
 	for (const kind of kinds)
 		for (const stride of strides)
 			for (const count of counts) {
-				// Every combination at version 1 over the levels in turn, and a third at version 0.
+				// Every combination at version 1 (over the levels in turn) and at version 0.
 				const data = makeData(kind, count, stride);
 				const level = n % 4;
 				streams.push({ kind, stride, count, version: 1, level, source: b64(data),
 					encoded: b64(MeshoptEncoder.encodeVertexBufferLevel(data, count, stride, level, 1)) });
-				if (n % 3 === 0)
-					streams.push({ kind, stride, count, version: 0, level: 0, source: b64(data),
-						encoded: b64(MeshoptEncoder.encodeVertexBufferLevel(data, count, stride, 0, 0)) });
+				streams.push({ kind, stride, count, version: 0, level: 0, source: b64(data),
+					encoded: b64(MeshoptEncoder.encodeVertexBufferLevel(data, count, stride, 0, 0)) });
 				n++;
 			}
 	// Colours through the COLOR filter at several precisions, then the codec; meshoptimizer's own
@@ -111,8 +115,12 @@ function writeGlb(path, json, bin) {
 	writeFileSync(path, Buffer.concat([header, chunk(0x4e4f534a, text), ...(data.length ? [chunk(0x004e4942, data)] : [])]));
 }
 
-function khr(input, output) {
+// Every meshopt view of `input` decoded by meshoptimizer's decoder and encoded again, into `output`:
+// to 'khr' (KHR_meshopt_compression, vertex streams at version 1, levels 0 to 3 in turn) or to 'ext'
+// (EXT_meshopt_compression, version 0).
+function recode(input, output, to) {
 	const EXT = 'EXT_meshopt_compression', KHR = 'KHR_meshopt_compression';
+	const [from, into, version] = to === 'khr' ? [EXT, KHR, 1] : [KHR, EXT, 0];
 	const { json, bin } = readGlb(input);
 	const parts = [];
 	let size = 0, level = 0;
@@ -127,7 +135,7 @@ function khr(input, output) {
 	};
 	// Buffer 0 (the BIN chunk) in view order, each view's bytes placed anew.
 	for (const view of json.bufferViews) {
-		const ext = view.extensions && view.extensions[EXT];
+		const ext = view.extensions && view.extensions[from];
 		if (!ext) {
 			if ((view.buffer ?? 0) === 0) view.byteOffset = place(bin.subarray(view.byteOffset ?? 0, (view.byteOffset ?? 0) + view.byteLength));
 			continue;
@@ -136,31 +144,50 @@ function khr(input, output) {
 		if (ext.mode === 'ATTRIBUTES') {
 			const raw = new Uint8Array(ext.count * ext.byteStride);
 			MeshoptDecoder.decodeVertexBuffer(raw, ext.count, ext.byteStride, bytes);  // (unfiltered: lodkit writes no filters)
-			bytes = MeshoptEncoder.encodeVertexBufferLevel(raw, ext.count, ext.byteStride, level, 1);
+			bytes = MeshoptEncoder.encodeVertexBufferLevel(raw, ext.count, ext.byteStride, level, version);
 			level = (level + 1) % 4;
-			// What the stream uses: the tail's channel modes, and each block's control modes.
-			const tail = bytes.subarray(bytes.length - ext.byteStride / 4);
-			for (const mode of tail) channelModes[mode] = (channelModes[mode] || 0) + 1;
-			const control = bytes.subarray(1, 1 + ext.byteStride / 4);  // (the first block's)
-			for (let k = 0; k < ext.byteStride; k++) controlModes[(control[k >> 2] >> (2 * (k & 3))) & 3]++;
+			if (version === 1) {
+				// What the stream uses: the tail's channel modes, and the first block's control modes.
+				const tail = bytes.subarray(bytes.length - ext.byteStride / 4);
+				for (const mode of tail) channelModes[mode] = (channelModes[mode] || 0) + 1;
+				const control = bytes.subarray(1, 1 + ext.byteStride / 4);
+				for (let k = 0; k < ext.byteStride; k++) controlModes[(control[k >> 2] >> (2 * (k & 3))) & 3]++;
+			}
 		}
 		ext.byteOffset = place(bytes);
 		ext.byteLength = bytes.byteLength;
-		view.extensions = { [KHR]: ext };
+		view.extensions = { [into]: ext };
 	}
 	for (const buffer of json.buffers)
-		if (buffer.extensions && buffer.extensions[EXT]) buffer.extensions = { [KHR]: buffer.extensions[EXT] };
+		if (buffer.extensions && buffer.extensions[from]) buffer.extensions = { [into]: buffer.extensions[from] };
 	json.buffers[0].byteLength = size;
 	for (const list of ['extensionsUsed', 'extensionsRequired'])
-		if (json[list]) json[list] = json[list].map((e) => (e === EXT ? KHR : e));
+		if (json[list]) json[list] = json[list].map((e) => (e === from ? into : e));
 	writeGlb(output, json, Buffer.concat(parts));
 	console.log(JSON.stringify({ channelModes, controlModes }));
 }
 
+// Decodes streams another encoder made: [{count, stride, encoded}] in, [decoded] out (base64; null
+// where meshoptimizer's decoder refuses the stream).
+function decode(input, output) {
+	const streams = JSON.parse(readFileSync(input, 'utf8'));
+	const out = streams.map(({ count, stride, encoded }) => {
+		const target = new Uint8Array(count * stride);
+		try {
+			MeshoptDecoder.decodeVertexBuffer(target, count, stride, new Uint8Array(Buffer.from(encoded, 'base64')));
+		} catch {
+			return null;
+		}
+		return b64(target);
+	});
+	writeFileSync(output, JSON.stringify(out));
+}
+
 const [command, ...args] = process.argv.slice(2);
 if (command === 'vectors' && args.length === 1) vectors(args[0]);
-else if (command === 'khr' && args.length === 2) khr(args[0], args[1]);
+else if ((command === 'khr' || command === 'ext') && args.length === 2) recode(args[0], args[1], command);
+else if (command === 'decode' && args.length === 2) decode(args[0], args[1]);
 else {
-	console.error('usage: node meshopt_vectors.mjs vectors OUT.json | khr IN.glb OUT.glb');
+	console.error('usage: node meshopt_vectors.mjs vectors OUT.json | khr IN.glb OUT.glb | ext IN.glb OUT.glb | decode IN.json OUT.json');
 	process.exit(2);
 }

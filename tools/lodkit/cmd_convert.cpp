@@ -62,6 +62,7 @@ WriteReport GeometryFile::write(const std::string& output, const WriteOptions& o
 void check_gltf_output_flags(const WriteOptions& options, const std::string& output) {
   if ((options.meshopt_compression || options.quantize || options.draco) && !is_gltf(output))
     throw_usage(output + ": -c, -q and --draco apply to glTF output (.gltf, .glb) only");
+  if (options.meshopt_khr && !options.meshopt_compression) throw_usage("--meshopt-khr: it chooses -c's extension; add -c");
 }
 
 namespace {
@@ -95,6 +96,9 @@ void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
   app->add_flag("-c,--compress", options.meshopt_compression,
                 "glTF output: compress geometry and animation with EXT_meshopt_compression (lossless; "
                 "the extension becomes required)");
+  app->add_flag("--meshopt-khr", options.meshopt_khr,
+                "With -c: KHR_meshopt_compression instead, vertex streams in the codec's version 1 (smaller; for "
+                "loaders that implement the KHR extension)");
   app->add_flag("-q,--quantize", options.quantize,
                 "glTF output: vertex streams in fewer bits (KHR_mesh_quantization, then required): positions on a "
                 "grid of --position-bits, normals and tangents in bytes, UVs in 16 bits, colours and weights in bytes");
