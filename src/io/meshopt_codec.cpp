@@ -101,42 +101,58 @@ std::string decode_meshopt_vertices(uint8_t* out, size_t count, size_t stride, s
           const size_t packed_at = pos, packed = 2 * bits;
           if (!take(packed)) return at(pos, ends_early);
           pos += packed;
-          const unsigned sentinel = (1u << bits) - 1;
-          for (size_t m = 0; m < group_elements; ++m) {
-            unsigned v;
-            if (bits == 1) v = (in[packed_at + m / 8] >> (m % 8)) & 1u;
-            else if (bits == 2) v = (in[packed_at + m / 4] >> (6 - 2 * (m % 4))) & 3u;
-            else v = (in[packed_at + m / 2] >> (4 - 4 * (m % 2))) & 15u;
-            if (v == sentinel) {
+          // Unpacked first (a loop per width), the escaped bytes then filled in.
+          const uint8_t* p = in.data() + packed_at;
+          if (bits == 1)
+            for (size_t m = 0; m < group_elements; ++m) group[m] = uint8_t((p[m / 8] >> (m % 8)) & 1u);
+          else if (bits == 2)
+            for (size_t m = 0; m < group_elements; ++m) group[m] = uint8_t((p[m / 4] >> (6 - 2 * (m % 4))) & 3u);
+          else
+            for (size_t m = 0; m < group_elements; ++m) group[m] = uint8_t((p[m / 2] >> (4 - 4 * (m % 2))) & 15u);
+          const uint8_t sentinel = uint8_t((1u << bits) - 1);
+          for (size_t m = 0; m < group_elements; ++m)
+            if (group[m] == sentinel) {
               if (!take(1)) return at(pos, ends_early);
-              v = in[pos++];
+              group[m] = in[pos++];
             }
-            group[m] = uint8_t(v);
-          }
         }
       }
     }
     // The deltas onto the previous element, by channel (4 bytes): zigzag byte deltas, zigzag 16-bit
-    // deltas, or a 32-bit XOR rotated right by the mode's high 4 bits.
-    for (size_t e = 0; e < elements; ++e) {
-      const auto delta = [&](size_t k) { return deltas[k * block_max + e]; };
-      for (size_t c = 0; c < stride; c += 4) {
-        const unsigned mode = v1 ? channels[c / 4] : 0u;
-        if ((mode & 15u) == 0) {
-          for (size_t k = c; k < c + 4; ++k) last[k] = uint8_t(last[k] + unzigzag8(delta(k)));
-        } else if ((mode & 15u) == 1) {
-          for (size_t k = c; k < c + 4; k += 2) {
-            const uint16_t v = uint16_t((last[k] | last[k + 1] << 8) + unzigzag16(uint16_t(delta(k) | delta(k + 1) << 8)));
-            last[k] = uint8_t(v), last[k + 1] = uint8_t(v >> 8);
-          }
-        } else {
-          uint32_t previous = 0, d = 0;
-          for (size_t b = 0; b < 4; ++b) previous |= uint32_t(last[c + b]) << (8 * b), d |= uint32_t(delta(c + b)) << (8 * b);
-          const uint32_t v = previous ^ rotate_right(d, mode >> 4);
-          for (size_t b = 0; b < 4; ++b) last[c + b] = uint8_t(v >> (8 * b));
+    // deltas, or a 32-bit XOR rotated right by the mode's high 4 bits. Channel by channel, each a
+    // tight loop over the block's elements.
+    uint8_t* const block_out = out + first * stride;
+    for (size_t c = 0; c < stride; c += 4) {
+      const unsigned mode = v1 ? channels[c / 4] : 0u;
+      const uint8_t* row[4];
+      for (size_t b = 0; b < 4; ++b) row[b] = deltas.data() + (c + b) * block_max;
+      if ((mode & 15u) == 0) {
+        for (size_t b = 0; b < 4; ++b) {
+          uint8_t v = last[c + b];
+          uint8_t* o = block_out + c + b;
+          for (size_t e = 0; e < elements; ++e) v = uint8_t(v + unzigzag8(row[b][e])), o[e * stride] = v;
+          last[c + b] = v;
         }
+      } else if ((mode & 15u) == 1) {
+        for (size_t b = 0; b < 4; b += 2) {
+          uint16_t v = uint16_t(last[c + b] | last[c + b + 1] << 8);
+          uint8_t* o = block_out + c + b;
+          for (size_t e = 0; e < elements; ++e) {
+            v = uint16_t(v + unzigzag16(uint16_t(row[b][e] | row[b + 1][e] << 8)));
+            o[e * stride] = uint8_t(v), o[e * stride + 1] = uint8_t(v >> 8);
+          }
+          last[c + b] = uint8_t(v), last[c + b + 1] = uint8_t(v >> 8);
+        }
+      } else {
+        uint32_t v = 0;
+        for (size_t b = 0; b < 4; ++b) v |= uint32_t(last[c + b]) << (8 * b);
+        uint8_t* o = block_out + c;
+        for (size_t e = 0; e < elements; ++e) {
+          v ^= rotate_right(uint32_t(row[0][e]) | uint32_t(row[1][e]) << 8 | uint32_t(row[2][e]) << 16 | uint32_t(row[3][e]) << 24, mode >> 4);
+          for (size_t b = 0; b < 4; ++b) o[e * stride + b] = uint8_t(v >> (8 * b));
+        }
+        for (size_t b = 0; b < 4; ++b) last[c + b] = uint8_t(v >> (8 * b));
       }
-      std::memcpy(out + (first + e) * stride, last.data(), stride);
     }
   }
   if (pos != end) return at(pos, std::to_string(end - pos) + " byte(s) left over between the blocks and the tail");
