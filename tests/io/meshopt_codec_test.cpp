@@ -218,6 +218,21 @@ void expect_same_content(const Scene& a, const Scene& b, const std::string& what
   }
 }
 
+// The file requires KHR_meshopt_compression, has no EXT_meshopt_compression left, and each of its
+// (several) compressed vertex streams is at codec version 1.
+void expect_khr_version1(const std::filesystem::path& file) {
+  const test::Glb glb = test::read_glb(file);
+  EXPECT_NE(glb.doc["extensionsRequired"].dump().find("KHR_meshopt_compression"), std::string::npos) << file;
+  EXPECT_EQ(glb.doc.dump().find("EXT_meshopt_compression"), std::string::npos) << file;
+  size_t version1 = 0;
+  for (const Json& view : glb.doc["bufferViews"])
+    if (view.contains("extensions") && view["extensions"]["KHR_meshopt_compression"].value("mode", "") == "ATTRIBUTES") {
+      ++version1;
+      EXPECT_EQ(glb.bin.at(view["extensions"]["KHR_meshopt_compression"].value("byteOffset", size_t(0))), 0xa1) << file;
+    }
+  EXPECT_GT(version1, 3u) << file;
+}
+
 // The test files: a skinned, animated character, and a torus's LOD chain with geomorph morph targets.
 std::vector<std::filesystem::path> content_files(const test::TempDir& dir) {
   write_scene(fixtures::humanoid_scene(), dir / "humanoid.glb");
@@ -241,16 +256,7 @@ TEST(MeshoptCodec, WritesKhrMeshoptCompressionThatMeshoptimizerReads) {
     r = test::run_cli({"convert", plain.string(), ext.string(), "-c"});
     ASSERT_EQ(r.exit_code, 0) << r.err;
     test::expect_valid_gltf({khr});
-    const test::Glb glb = test::read_glb(khr);
-    EXPECT_NE(glb.doc["extensionsRequired"].dump().find("KHR_meshopt_compression"), std::string::npos) << stem;
-    EXPECT_EQ(glb.doc.dump().find("EXT_meshopt_compression"), std::string::npos) << stem;
-    size_t version1 = 0;
-    for (const Json& view : glb.doc["bufferViews"])
-      if (view.contains("extensions") && view["extensions"]["KHR_meshopt_compression"].value("mode", "") == "ATTRIBUTES") {
-        ++version1;
-        EXPECT_EQ(glb.bin.at(view["extensions"]["KHR_meshopt_compression"].value("byteOffset", size_t(0))), 0xa1);
-      }
-    EXPECT_GT(version1, 3u) << stem;
+    expect_khr_version1(khr);
     EXPECT_LT(std::filesystem::file_size(khr), std::filesystem::file_size(ext)) << stem;
     r = test::run_program({"node", vectors_script().string(), "ext", khr.string(), back.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -280,16 +286,7 @@ TEST(MeshoptCodec, ReadsKhrMeshoptCompressionVersion1Files) {
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const Json modes = Json::parse(r.out);
     for (const auto& [mode, n] : modes["channelModes"].items()) channel_modes += mode != "0" ? n.get<size_t>() : 0;
-    // The file is what this test means it to be: KHR, every vertex stream at version 1.
-    const test::Glb glb = test::read_glb(khr);
-    EXPECT_NE(glb.doc["extensionsRequired"].dump().find("KHR_meshopt_compression"), std::string::npos);
-    size_t version1 = 0;
-    for (const Json& view : glb.doc["bufferViews"])
-      if (view.contains("extensions") && view["extensions"]["KHR_meshopt_compression"].value("mode", "") == "ATTRIBUTES") {
-        ++version1;
-        EXPECT_EQ(glb.bin.at(view["extensions"]["KHR_meshopt_compression"].value("byteOffset", size_t(0))), 0xa1);
-      }
-    EXPECT_GT(version1, 3u) << stem;
+    expect_khr_version1(khr);  // (the file is what this test means it to be)
     expect_same_content(read_scene(ext), read_scene(khr), stem);
   }
   EXPECT_GT(channel_modes, 0u);  // the encoder chose 2-byte or XOR deltas somewhere
