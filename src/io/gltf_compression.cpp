@@ -33,9 +33,11 @@ constexpr const char* draco_name = draco_extension;
 // 3 zero bytes: the smallest data: URI tinygltf accepts for a buffer.
 constexpr const char* stand_in_uri = "data:application/octet-stream;base64,AAAA";
 constexpr uint64_t stand_in_length = 3;
-// A meshopt stream spends at least 2 header bits per 16 decoded bytes (attributes), a byte per
-// triangle (triangles) or per index (indices): no valid stream decodes to more than 64 times its size.
-constexpr uint64_t max_meshopt_ratio = 64;
+// A meshopt stream spends at least 2 header bits per 16 decoded bytes (attributes, version 0), a
+// byte per triangle (triangles) or per index (indices): no valid stream decodes to more than 64
+// times its size. Version 1 attributes spend at least 2 control bits per byte position of a block
+// of up to 256 elements (a constant stream): 1024 times.
+constexpr uint64_t max_meshopt_ratio = 64, max_meshopt_v1_ratio = 1024;
 
 std::string str(uint64_t v) { return std::to_string(v); }
 
@@ -180,7 +182,8 @@ class Decoder {
     if (view.byteStride != 0 && view.byteStride != stride)
       fail(view_where + ".byteStride " + str(view.byteStride) + " differs from its " + ext_name + " byteStride " + str(stride));
     const uint8_t* source = buffer_range(buffer, offset, length, where);
-    if (bytes > max_meshopt_ratio * length)
+    const bool v1 = mode == "ATTRIBUTES" && length > 0 && source[0] == 0xa1;
+    if (bytes > (v1 ? max_meshopt_v1_ratio : max_meshopt_ratio) * length)
       fail(where + ": " + str(count) + " elements of " + str(stride) + " bytes cannot come from " + str(length) +
            " bytes of compressed data");
 

@@ -270,6 +270,35 @@ TEST(MeshoptCodec, WritesKhrMeshoptCompressionThatMeshoptimizerReads) {
   EXPECT_NE(r.err.find("add -c"), std::string::npos) << r.err;
 }
 
+// A constant stream (a flat grid's normals) costs version 1 only its control bytes, 2 bits per byte
+// position per 256 elements: over 64 times smaller than the data, the most version 0 allows, which
+// the reader's size check took for a lie.
+TEST(MeshoptCodec, ConstantStreamsReadBack) {
+  test::TempDir dir;
+  Mesh grid;
+  const uint32_t n = 120;
+  for (uint32_t j = 0; j < n; ++j)
+    for (uint32_t i = 0; i < n; ++i) grid.positions.push_back({float(i), float(j), 0}), grid.normals.push_back({0, 0, 1});
+  for (uint32_t j = 0; j + 1 < n; ++j)
+    for (uint32_t i = 0; i + 1 < n; ++i) {
+      const uint32_t a = j * n + i;
+      grid.indices.insert(grid.indices.end(), {a, a + 1, a + n, a + 1, a + n + 1, a + n});
+    }
+  WriteOptions o;
+  o.meshopt_compression = true;
+  write_scene(scene_from_mesh(grid), dir / "ext.glb", o);
+  o.meshopt_khr = true;
+  write_scene(scene_from_mesh(grid), dir / "khr.glb", o);
+  const test::Glb glb = test::read_glb(dir / "khr.glb");
+  size_t smallest = SIZE_MAX;
+  for (const Json& view : glb.doc["bufferViews"])
+    if (view.contains("extensions")) smallest = std::min<size_t>(smallest, view["extensions"]["KHR_meshopt_compression"]["byteLength"]);
+  EXPECT_LT(smallest * 64, size_t(n) * n * 12);  // the normals' stream
+  const Scene ext = read_scene(dir / "ext.glb"), khr = read_scene(dir / "khr.glb");
+  ASSERT_EQ(khr.primitives.size(), 1u);
+  EXPECT_EQ(test::mesh_difference(ext.primitives[0].mesh, khr.primitives[0].mesh), "");
+}
+
 // A whole file in KHR_meshopt_compression with vertex codec version 1 (lodkit's -c output encoded
 // again by meshoptimizer's JavaScript encoder) reads as the -c file it came from: a skinned,
 // animated character and a torus's LOD chain with geomorph morph targets.
