@@ -5,7 +5,8 @@
 // and write_gltf (.glb in a per-process temporary folder) -> read_gltf must give back the same
 // primitives (minus those without a triangle, which the writer drops), positions bit for bit; so
 // must the same scene with every primitive's vertices renumbered (Primitive::source_vertices),
-// written with EXT_meshopt_compression (triangles up to the codec's rotations), and both must give
+// written with EXT_meshopt_compression (triangles up to the codec's rotations; the scene itself also
+// with KHR_meshopt_compression at vertex codec version 1), and both must give
 // the same vertex classes (source_vertex_classes) and morph targets (source_morph_targets). Written
 // quantized (KHR_mesh_quantization), it must read back with the same vertices and triangles; with
 // Draco (the reversed copy), with its triangles and positions within a quantization step, and
@@ -122,11 +123,13 @@ Mesh canonical_rotations(Mesh mesh) {
 // `draco` (WriteOptions::draco): every triangle comes back but those with a repeated corner, which
 // Edgebreaker drops, and every position within a 14-bit quantization step of the input's bounds
 // (unless quantized too: they are then in grid steps).
-void check_round_trip(const Scene& scene, const std::string& stage, bool compress, bool quantize = false, bool draco = false) {
+// `options.meshopt_khr` too: KHR_meshopt_compression, vertex streams at codec version 1.
+void check_round_trip(const Scene& scene, const std::string& stage, const WriteOptions& options) {
+  const bool compress = options.meshopt_compression, quantize = options.quantize, draco = options.draco;
   static const ScratchFolder folder;
   const std::filesystem::path file = folder.path() / "round-trip.glb";
   run_step(stage + ": write", false, [&] {
-    write_gltf(scene, file, {.meshopt_compression = compress, .quantize = quantize, .draco = draco});
+    write_gltf(scene, file, options);
     return true;
   });
   const std::optional<std::vector<uint8_t>> bytes = run_step(stage + ": load", false, [&] {
@@ -255,12 +258,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   for (size_t p = 0; p < scene->primitives.size(); ++p) check_mesh(scene->primitives[p].mesh, stage + ": primitive " + std::to_string(p));
   check_flatten(*scene);
   if (total_vertices(*scene) > max_round_trip_vertices) return 0;
-  check_round_trip(*scene, "gltf round trip", false);
+  check_round_trip(*scene, "gltf round trip", {});
   const Scene backwards = reversed(*scene);
-  check_round_trip(backwards, "gltf round trip, vertices reversed, meshopt-compressed", true);
-  check_round_trip(*scene, "gltf round trip, quantized", false, true);
-  check_round_trip(backwards, "gltf round trip, vertices reversed, Draco", false, false, true);
-  check_round_trip(backwards, "gltf round trip, vertices reversed, Draco on the -q grid", false, true, true);
+  check_round_trip(backwards, "gltf round trip, vertices reversed, meshopt-compressed", {.meshopt_compression = true});
+  check_round_trip(*scene, "gltf round trip, KHR meshopt version 1", {.meshopt_compression = true, .meshopt_khr = true});
+  check_round_trip(*scene, "gltf round trip, quantized", {.quantize = true});
+  check_round_trip(backwards, "gltf round trip, vertices reversed, Draco", {.draco = true});
+  check_round_trip(backwards, "gltf round trip, vertices reversed, Draco on the -q grid", {.quantize = true, .draco = true});
   check_vertex_classes(*scene, backwards);
   check_morph_targets(*scene, backwards);
   return 0;
