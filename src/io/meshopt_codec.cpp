@@ -16,6 +16,8 @@ namespace lod::io {
 namespace {
 
 constexpr size_t group_elements = 16;
+// Bits per delta by a group's 2-bit mode: version 0, then version 1 under control modes 0 and 1.
+constexpr uint8_t bits_by_mode[3][4] = {{0, 2, 4, 8}, {0, 1, 2, 4}, {1, 2, 4, 8}};
 
 uint8_t unzigzag8(uint8_t v) { return uint8_t((v >> 1) ^ uint8_t(0u - (v & 1u))); }
 uint16_t unzigzag16(uint16_t v) { return uint16_t((v >> 1) ^ uint16_t(0u - (v & 1u))); }
@@ -55,8 +57,6 @@ std::string decode_meshopt_vertices(uint8_t* out, size_t count, size_t stride, s
   std::memcpy(last.data(), baseline, stride);
   const size_t block_max = std::min<size_t>((8192 / stride) & ~(group_elements - 1), 256);
   std::vector<uint8_t> deltas(block_max * stride);  // per byte position, a row of block_max deltas
-  // Bits per delta by a group's 2-bit mode: version 0, then version 1 under control modes 0 and 1.
-  static constexpr uint8_t bits_by_mode[3][4] = {{0, 2, 4, 8}, {0, 1, 2, 4}, {1, 2, 4, 8}};
   size_t pos = 1;
   const auto take = [&](size_t bytes) { return bytes <= end - pos; };  // (pos <= end throughout)
   const std::string ends_early = "the blocks run into the tail (the stream ends early)";
@@ -193,7 +193,6 @@ uint8_t zigzag8(uint8_t v) { return uint8_t((v << 1) ^ uint8_t(0u - (v >> 7))); 
 uint16_t zigzag16(uint16_t v) { return uint16_t((v << 1) ^ uint16_t(0u - (v >> 15))); }
 uint32_t rotate_left(uint32_t v, unsigned r) { return r ? (v << r) | (v >> (32 - r)) : v; }
 
-constexpr uint8_t bits_by_control[2][4] = {{0, 1, 2, 4}, {1, 2, 4, 8}};
 constexpr size_t no_fit = SIZE_MAX / 4;
 
 // Bytes of one group of 16 deltas coded with `bits` each: the packed bits, and a whole byte for
@@ -231,13 +230,13 @@ size_t code_row(const uint8_t* row, size_t elements, size_t groups, unsigned con
     unsigned best = 0;
     size_t best_size = no_fit;
     for (unsigned mode = 0; mode < 4; ++mode) {
-      const size_t s = group_bytes(d, bits_by_control[control][mode]);
+      const size_t s = group_bytes(d, bits_by_mode[control + 1][mode]);
       if (s < best_size) best = mode, best_size = s;
     }
     size += best_size;
     if (!out) continue;
     (*out)[header_at + g / 4] |= uint8_t(best << (2 * (g % 4)));
-    const unsigned bits = bits_by_control[control][best];
+    const unsigned bits = bits_by_mode[control + 1][best];
     if (bits == 0) continue;
     if (bits == 8) {
       out->insert(out->end(), d, d + group_elements);
