@@ -48,8 +48,9 @@ struct WriteOptions {
   // transform. Morph target positions go on the same step in shorts, their normal and tangent
   // displacements (within [-1, 1]) in normalized bytes. Normals and tangents in normalized bytes;
   // UVs in [0, 1] in normalized unsigned shorts; colours in [0, 1] and skin weights (summing to
-  // exactly 255) in normalized unsigned bytes; rotation keyframes in normalized shorts; other
-  // streams stay as they are. Positions stay floats in a mesh that a point or line primitive,
+  // exactly 255) in normalized unsigned bytes; rotation keyframes in normalized shorts; with
+  // `meshopt_compression` too, translation and scale keyframes through meshopt's EXPONENTIAL filter
+  // (16-bit mantissas, one exponent per key); other streams stay as they are. Positions stay floats in a mesh that a point or line primitive,
   // skinned GPU instancing or a skin shared with such a mesh ties to its own space.
   bool quantize = false;
   // glTF: each triangle primitive's vertex streams and indices as a Draco stream

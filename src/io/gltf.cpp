@@ -3067,7 +3067,7 @@ WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, co
   if (scene.source) relocate_images(model, glb ? &bin : nullptr, scene.source->base_dir, path.parent_path());
   const std::string bin_name = path.stem().string() + ".bin";
   Json doc = serialize_json(model, bin.size(), glb ? "" : uri_escape(bin_name));
-  if (options.meshopt_compression) io::compress_meshopt(doc, bin, options.meshopt_khr);
+  if (options.meshopt_compression) io::compress_meshopt(doc, bin, options);
   if (glb) {
     const std::vector<uint8_t> bytes = make_glb(dump_json(doc, false), bin, path.string());
     write_file_atomic(path, bytes);

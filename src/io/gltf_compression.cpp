@@ -426,9 +426,15 @@ size_t element_size(const Json& accessor) {
   return type_components(accessor.value("type", std::string())) * component_bytes(accessor.value("componentType", 0));
 }
 
+// Mantissa bits of animation translation and scale keys under -c -q (gltfpack's -at and -as default).
+constexpr int animation_exp_bits = 16;
+
 // How a bufferView may be encoded, from the accessors that use it.
 struct ViewUse {
   bool indices = false, attributes = false, excluded = false;
+  // Every accessor of the view holds animation translation or scale keys (float VEC3): with -q
+  // they may go through the EXPONENTIAL filter.
+  bool keys = false, other = false;
   uint64_t stride = 0;  // element (or byteStride) size shared by its accessors
 };
 
@@ -443,6 +449,17 @@ std::vector<ViewUse> view_uses(const Json& doc) {
     for (const Json& primitive : mesh.value("primitives", Json::array()))
       if (primitive.contains("indices"))
         indices.at(primitive["indices"].get<size_t>()) |= primitive.value("mode", 4) == 4 ? 1 : 2;
+  // Per accessor: the output of a translation or scale channel's sampler.
+  std::vector<bool> keys(accessors.size(), false);
+  for (const Json& animation : doc.value("animations", Json::array())) {
+    const Json samplers = animation.value("samplers", Json::array());
+    for (const Json& channel : animation.value("channels", Json::array())) {
+      const std::string path = channel.value("target", Json::object()).value("path", std::string());
+      const size_t sampler = channel.value("sampler", size_t(0));
+      if ((path == "translation" || path == "scale") && sampler < samplers.size() && samplers[sampler].contains("output"))
+        keys.at(samplers[sampler]["output"].get<size_t>()) = true;
+    }
+  }
   for (size_t k = 0; k < accessors.size(); ++k) {
     const Json& accessor = accessors[k];
     if (accessor.contains("sparse"))  // its sparse parts stay plain (small, and of two kinds)
@@ -459,6 +476,9 @@ std::vector<ViewUse> view_uses(const Json& doc) {
       u.stride = element;
     } else {
       u.attributes = true;
+      const bool key = keys[k] && accessor.value("componentType", 0) == TINYGLTF_COMPONENT_TYPE_FLOAT &&
+                       accessor.value("type", std::string()) == "VEC3" && !accessor.value("normalized", false);
+      (key ? u.keys : u.other) = true;
       const uint64_t stride = view.value("byteStride", element);
       u.excluded |= stride == 0 || stride % 4 != 0 || stride > 256 || (u.stride && u.stride != stride);
       u.stride = stride;
@@ -467,8 +487,9 @@ std::vector<ViewUse> view_uses(const Json& doc) {
   return use;
 }
 
-// The view's bytes encoded (vertex streams at version 1 with `khr`), or nothing when that is not smaller.
-std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const ViewUse& u, bool khr) {
+// The view's bytes encoded (vertex streams at version 1 with `khr`; through the EXPONENTIAL filter
+// with `exponential`), or nothing when that is not smaller.
+std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const ViewUse& u, bool khr, bool exponential) {
   const size_t count = size_t(length / u.stride);
   std::vector<uint8_t> out;
   if (u.indices) {
@@ -487,12 +508,22 @@ std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const Vie
     meshopt_encodeIndexVersion(1);  // the version EXT_meshopt_compression's TRIANGLES mode requires (0.18 writes 0)
     out.resize(meshopt_encodeIndexBufferBound(count, size_t(largest) + 1));
     out.resize(meshopt_encodeIndexBuffer(out.data(), out.size(), indices.data(), count));
-  } else if (khr) {
-    out = encode_meshopt_vertices(data, count, size_t(u.stride));
   } else {
-    meshopt_encodeVertexVersion(0);  // the only one EXT_meshopt_compression admits (later releases default to 1)
-    out.resize(meshopt_encodeVertexBufferBound(count, size_t(u.stride)));
-    out.resize(meshopt_encodeVertexBuffer(out.data(), out.size(), data, count, size_t(u.stride)));
+    std::vector<uint8_t> filtered;
+    if (exponential) {
+      std::vector<float> values(size_t(length) / 4);
+      std::memcpy(values.data(), data, values.size() * 4);
+      filtered.resize(size_t(length));
+      meshopt_encodeFilterExp(filtered.data(), count, size_t(u.stride), animation_exp_bits, values.data());
+      data = filtered.data();
+    }
+    if (khr) {
+      out = encode_meshopt_vertices(data, count, size_t(u.stride));
+    } else {
+      meshopt_encodeVertexVersion(0);  // the only one EXT_meshopt_compression admits (later releases default to 1)
+      out.resize(meshopt_encodeVertexBufferBound(count, size_t(u.stride)));
+      out.resize(meshopt_encodeVertexBuffer(out.data(), out.size(), data, count, size_t(u.stride)));
+    }
   }
   if (out.empty() || out.size() >= length) return {};
   return out;
@@ -500,18 +531,23 @@ std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const Vie
 
 }  // namespace
 
-void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, bool khr) {
+void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& options) {
+  const bool khr = options.meshopt_khr;
   const char* const extension = meshopt_names[khr ? 1 : 0];
   if (bin.empty() || !doc.contains("bufferViews") || doc["buffers"].size() != 1) return;
   Json& views = doc["bufferViews"];
   const std::vector<ViewUse> use = view_uses(doc);
   std::vector<std::vector<uint8_t>> encoded(views.size());
+  // Under -q (lossy already), views of translation and scale keys only go through the exponential
+  // filter, as gltfpack -c does: 16-bit mantissas, one exponent per key.
+  std::vector<bool> exponential(views.size(), false);
   bool any = false;
   for (size_t v = 0; v < views.size(); ++v) {
     const ViewUse& u = use[v];
     const uint64_t length = views[v]["byteLength"].get<uint64_t>();
     if (u.excluded || u.stride == 0 || (u.indices && u.attributes) || length % u.stride != 0) continue;
-    encoded[v] = encode_view(bin.data() + views[v].value("byteOffset", uint64_t(0)), length, u, khr);
+    exponential[v] = options.quantize && u.keys && !u.other && u.stride == 12;
+    encoded[v] = encode_view(bin.data() + views[v].value("byteOffset", uint64_t(0)), length, u, khr, exponential[v]);
     any = any || !encoded[v].empty();
   }
   if (!any) return;
@@ -532,11 +568,12 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, bool khr) {
     }
     const uint64_t stride = use[v].stride;
     view["extensions"][extension] = {{"buffer", 0},
-                                            {"byteOffset", packed.size()},
-                                            {"byteLength", encoded[v].size()},
-                                            {"byteStride", stride},
-                                            {"count", length / stride},
-                                            {"mode", use[v].indices ? "TRIANGLES" : "ATTRIBUTES"}};
+                                     {"byteOffset", packed.size()},
+                                     {"byteLength", encoded[v].size()},
+                                     {"byteStride", stride},
+                                     {"count", length / stride},
+                                     {"mode", use[v].indices ? "TRIANGLES" : "ATTRIBUTES"}};
+    if (exponential[v]) view["extensions"][extension]["filter"] = "EXPONENTIAL";
     packed.insert(packed.end(), encoded[v].begin(), encoded[v].end());
     fallback = align(fallback);
     view["buffer"] = 1;

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "lodkit/io.h"
 #include "lodkit/mesh.h"
 
 namespace lod::io {
@@ -49,9 +50,11 @@ void decode_compressed_geometry(tinygltf::Model& model, const std::vector<uint64
 // smaller. Compressed views keep their place in a fallback buffer without bytes (the extension is
 // then required); `bin` holds the compressed views and the others (images, sparse data). The codec
 // versions are set to the ones the extension admits (vertex 0, index 1) before each encoding:
-// meshoptimizer keeps them in globals. With `khr`, KHR_meshopt_compression, its vertex streams at
-// version 1 by lodkit's own encoder (meshopt_codec.h). Nothing changes when no view gets smaller.
-void compress_meshopt(nlohmann::json& doc, std::vector<uint8_t>& bin, bool khr = false);
+// meshoptimizer keeps them in globals. With `meshopt_khr`, KHR_meshopt_compression, its vertex
+// streams at version 1 by lodkit's own encoder (meshopt_codec.h). With `quantize` (lossy already),
+// animation translation and scale keys go through the EXPONENTIAL filter (16-bit mantissas, one
+// exponent per key), as gltfpack -c does. Nothing changes when no view gets smaller.
+void compress_meshopt(nlohmann::json& doc, std::vector<uint8_t>& bin, const WriteOptions& options);
 
 // Writing (WriteOptions::draco): a triangle mesh's vertex streams and indices as one Draco stream
 // for KHR_draco_mesh_compression. Positions are quantized to `position_bits`, normals to 10 bits

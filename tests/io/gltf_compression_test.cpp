@@ -1039,6 +1039,66 @@ TEST(GltfCompression, DracoStoresStreamsTooWideToQuantizeExactly) {
   EXPECT_NE(r.out.find("(" + std::to_string(std::filesystem::file_size(dir / "again.glb")) + " bytes)"), std::string::npos) << r.out;
 }
 
+// -c -q: translation and scale keys go through meshopt's exponential filter (16-bit mantissas,
+// one exponent per key), as gltfpack -c does; their views code smaller than -c's exact ones, and
+// each key comes back within 2^-14 of its largest component. -c alone stays exact.
+TEST(GltfCompression, QuantizedCompressionFiltersTranslationAndScaleKeys) {
+  TempDir dir;
+  Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 24, 12));
+  Animation clip;
+  AnimationChannel move, grow;
+  move.node = grow.node = 0;
+  move.path = AnimationPath::translation, grow.path = AnimationPath::scale;
+  for (int k = 0; k < 600; ++k) {
+    const float t = float(k) / 30.0f;
+    move.times.push_back(t), grow.times.push_back(t);
+    move.values.insert(move.values.end(), {3.0f * std::sin(t), 0.01f * t, -2.0f + std::cos(1.3f * t)});
+    grow.values.insert(grow.values.end(), {1.0f + 0.2f * std::sin(t), 1.0f, 0.5f + 0.1f * std::cos(t)});
+  }
+  clip.channels = {move, grow};
+  scene.animations.push_back(clip);
+  write_scene(scene, dir / "c.glb", {.meshopt_compression = true});
+  write_scene(scene, dir / "cq.glb", {.meshopt_compression = true, .quantize = true});
+  const Scene exact = read_scene(dir / "c.glb"), filtered = read_scene(dir / "cq.glb");
+  ASSERT_EQ(exact.animations.size(), 1u);
+  ASSERT_EQ(filtered.animations.size(), 1u);
+  for (size_t c = 0; c < 2; ++c) {
+    const AnimationChannel& source = clip.channels[c];
+    EXPECT_EQ(exact.animations[0].channels[c].values, source.values) << c;
+    const std::vector<float>& back = filtered.animations[0].channels[c].values;
+    ASSERT_EQ(back.size(), source.values.size()) << c;
+    EXPECT_EQ(filtered.animations[0].channels[c].times, source.times) << c;
+    size_t moved = 0;
+    for (size_t k = 0; k < back.size(); k += 3) {
+      const double largest = std::max({std::fabs(source.values[k]), std::fabs(source.values[k + 1]), std::fabs(source.values[k + 2])});
+      for (size_t i = k; i < k + 3; ++i) {
+        EXPECT_LE(std::fabs(double(back[i]) - source.values[i]), largest / 16384) << c << " " << i;
+        moved += back[i] != source.values[i];
+      }
+    }
+    EXPECT_GT(moved, back.size() / 4) << c;  // the filter did apply
+  }
+  // The keys' views: filtered under -c -q and smaller there; exact under -c.
+  const auto key_views = [](const std::filesystem::path& file) {
+    const Json doc = test::glb_json(file);
+    std::vector<Json> out;
+    for (const Json& channel : doc["animations"][0]["channels"]) {
+      const Json& sampler = doc["animations"][0]["samplers"][channel["sampler"].get<size_t>()];
+      const Json& view = doc["bufferViews"][doc["accessors"][sampler["output"].get<size_t>()]["bufferView"].get<size_t>()];
+      out.push_back(view["extensions"]["EXT_meshopt_compression"]);
+    }
+    return out;
+  };
+  const std::vector<Json> plain_views = key_views(dir / "c.glb"), filtered_views = key_views(dir / "cq.glb");
+  ASSERT_EQ(filtered_views.size(), 2u);
+  for (size_t c = 0; c < 2; ++c) {
+    EXPECT_EQ(filtered_views[c].value("filter", ""), "EXPONENTIAL") << c;
+    EXPECT_EQ(plain_views[c].value("filter", "NONE"), "NONE") << c;
+    EXPECT_LT(filtered_views[c]["byteLength"].get<size_t>(), plain_views[c]["byteLength"].get<size_t>()) << c;
+  }
+  test::expect_valid_gltf({dir / "cq.glb"});
+}
+
 // The CLI's --draco: a LOD chain, valid, every level compressed; with -c, meshopt takes the rest
 // (the geomorphs' morph targets); with -q too, both extensions are required.
 TEST(GltfCompression, CommandsWriteDracoWithDashDashDraco) {
