@@ -540,14 +540,13 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& 
   std::vector<std::vector<uint8_t>> encoded(views.size());
   // Under -q (lossy already), views of translation and scale keys only go through the exponential
   // filter, as gltfpack -c does: 16-bit mantissas, one exponent per key.
-  std::vector<bool> exponential(views.size(), false);
+  const auto exponential = [&](size_t v) { return options.quantize && use[v].keys && !use[v].other && use[v].stride == 12; };
   bool any = false;
   for (size_t v = 0; v < views.size(); ++v) {
     const ViewUse& u = use[v];
     const uint64_t length = views[v]["byteLength"].get<uint64_t>();
     if (u.excluded || u.stride == 0 || (u.indices && u.attributes) || length % u.stride != 0) continue;
-    exponential[v] = options.quantize && u.keys && !u.other && u.stride == 12;
-    encoded[v] = encode_view(bin.data() + views[v].value("byteOffset", uint64_t(0)), length, u, khr, exponential[v]);
+    encoded[v] = encode_view(bin.data() + views[v].value("byteOffset", uint64_t(0)), length, u, khr, exponential(v));
     any = any || !encoded[v].empty();
   }
   if (!any) return;
@@ -573,7 +572,7 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& 
                                      {"byteStride", stride},
                                      {"count", length / stride},
                                      {"mode", use[v].indices ? "TRIANGLES" : "ATTRIBUTES"}};
-    if (exponential[v]) view["extensions"][extension]["filter"] = "EXPONENTIAL";
+    if (exponential(v)) view["extensions"][extension]["filter"] = "EXPONENTIAL";
     packed.insert(packed.end(), encoded[v].begin(), encoded[v].end());
     fallback = align(fallback);
     view["buffer"] = 1;
