@@ -246,35 +246,22 @@ Command register_convert(CLI::App& root) {
             format_from_path(o.output);
             check_not_input(o.input, o.output, o.force);
             check_gltf_output_flags(o.gltf, o.output);
-            // glTF to glTF goes through the scene, so everything lodkit does not change is kept; any
-            // other pair converts the (flattened) mesh, keeping its vertex order and material ids.
-            const auto is_gltf = [](const std::string& f) {
-              const FileFormat format = format_from_path(f);
-              return format == FileFormat::gltf || format == FileFormat::glb;
-            };
-            const bool as_scene = is_gltf(o.input) && is_gltf(o.output);
+            // glTF to glTF goes through the scene (GeometryFile), so everything lodkit does not
+            // change is kept; any other pair converts the (flattened) mesh, keeping its vertex order
+            // and material ids.
             auto start = std::chrono::steady_clock::now();
-            Scene scene;
-            Mesh mesh;
-            {
-              ProgressBar bar("loading");
-              if (as_scene) scene = read_scene(o.input, bar.read_options());
-              else mesh = read_mesh(o.input, bar.read_options());
-            }
+            const GeometryFile file(o.input, o.output);
             double load_seconds = seconds_since(start);
             size_t vertices = 0, triangles = 0;
-            auto count = [&](const Mesh& m) {
-              validate(m, o.input);
-              vertices += m.vertex_count();
-              triangles += m.triangle_count();
-            };
-            if (as_scene) for (const Primitive& p : scene.primitives) count(p.mesh);
-            else count(mesh);
+            for (const Mesh* m : file.meshes) {
+              validate(*m, o.input);
+              vertices += m->vertex_count();
+              triangles += m->triangle_count();
+            }
             start = std::chrono::steady_clock::now();
             WriteOptions write_options = o.gltf;
             write_options.binary = !o.ascii;
-            const WriteReport written = as_scene ? write_scene(scene, o.output, write_options)
-                                                 : write_mesh(mesh, o.output, write_options);
+            const WriteReport written = file.write(o.output, write_options);
             double write_seconds = seconds_since(start);
             if (o.json) {
               nlohmann::json j = {{"input", o.input}, {"output", o.output}, {"vertices", vertices},
