@@ -193,8 +193,10 @@ bool second_reader_available() {
          std::system("command -v node >/dev/null 2>&1") == 0;
 }
 
-nlohmann::json read_with_second_reader(const std::filesystem::path& file) {
-  const RunResult r = run_program({"node", (std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-loader/load.mjs").string(), file.string()});
+nlohmann::json read_with_second_reader(const std::filesystem::path& file, const std::string& flag) {
+  std::vector<std::string> argv = {"node", (std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-loader/load.mjs").string(), file.string()};
+  if (!flag.empty()) argv.push_back(flag);
+  const RunResult r = run_program(argv);
   EXPECT_EQ(r.exit_code, 0) << file << ": " << r.err;
   return r.exit_code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::array();
 }

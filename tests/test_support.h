@@ -46,9 +46,10 @@ void write_text(const std::filesystem::path& path, const std::string& text);
 // A second glTF reader (tests/gltf-loader: glTF-Transform with Google's draco3dgltf WebAssembly
 // decoder and meshoptimizer's JavaScript one, installed by scripts/setup.sh through npm): every
 // mesh primitive of `file` as it decodes it (load.mjs's JSON: mesh, primitive, attributes and
-// morph targets as {type, normalized, values}, indices). Fails the calling test when it cannot.
+// morph targets as {type, normalized, values}, indices); with flag "--textures", per material its
+// texture references (slot, texCoord, KHR_texture_transform). Fails the calling test when it cannot.
 bool second_reader_available();
-nlohmann::json read_with_second_reader(const std::filesystem::path& file);
+nlohmann::json read_with_second_reader(const std::filesystem::path& file, const std::string& flag = {});
 
 // Khronos gltf-validator (tests/gltf-validator, installed by scripts/setup.sh through npm).
 struct ValidatorRun {

@@ -18,6 +18,7 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstring>
@@ -25,6 +26,8 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <optional>
+#include <set>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -1157,10 +1160,19 @@ auto grid_code(const PositionGrid& grid) {
   return [&grid](float x, size_t c) { return std::lround(std::clamp((x - grid.offset[c]) / grid.scale, 0.0, grid.top)); };
 }
 
+// -q's box for a UV set outside [0, 1]: stored = (uv - offset) / scale in normalized unsigned
+// shorts, which the KHR_texture_transform of every texture sampling the set maps back.
+struct UvBox {
+  float offset[2] = {0, 0}, scale[2] = {1, 1};
+  bool operator==(const UvBox&) const = default;
+};
+using UvBoxes = std::array<std::optional<UvBox>, max_uv_sets>;
+
 // How BinWriter stores one primitive's streams.
 struct StreamCoding {
   bool quantize = false;               // normals, tangents, UVs, colours and weights in fewer bits
   const PositionGrid* grid = nullptr;  // positions and target positions on this grid
+  const UvBoxes* uv_boxes = nullptr;   // quantized: UV sets outside [0, 1] stored on these boxes
 };
 
 // Each element's float components (float2, float3, float4), stored as integers I = code(value,
@@ -1314,6 +1326,18 @@ class BinWriter {
     return add_accessor(values, TINYGLTF_COMPONENT_TYPE_FLOAT, type, array);
   }
 
+  // UV set `set`: on its box where -q gave it one, else as add_float_stream stores it.
+  int add_uv_stream(const std::vector<float2>& uvs, size_t set, const StreamCoding& coding) {
+    if (coding.quantize && coding.uv_boxes && (*coding.uv_boxes)[set]) {
+      const UvBox& box = *(*coding.uv_boxes)[set];
+      return add_packed(pack_components<uint16_t>(uvs, [&box](float x, size_t c) {
+                          return std::lround(std::clamp((double(x) - box.offset[c]) / box.scale[c], 0.0, 1.0) * 65535.0);
+                        }),
+                        TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC2, true);
+    }
+    return add_float_stream(uvs, TINYGLTF_TYPE_VEC2, "TEXCOORD", coding);
+  }
+
   // Positions: floats with their bounds, or on the grid in unsigned shorts.
   int add_positions(const std::vector<float3>& positions, const PositionGrid* grid) {
     if (!grid) {
@@ -1360,8 +1384,7 @@ class BinWriter {
     if (!mesh.normals.empty()) prim.attributes["NORMAL"] = add_float_stream(mesh.normals, TINYGLTF_TYPE_VEC3, "NORMAL", coding);
     if (!mesh.tangents.empty()) prim.attributes["TANGENT"] = add_float_stream(mesh.tangents, TINYGLTF_TYPE_VEC4, "TANGENT", coding);
     for (size_t k = 0; k < max_uv_sets; ++k)
-      if (!mesh.uvs[k].empty())
-        prim.attributes["TEXCOORD_" + str(k)] = add_float_stream(mesh.uvs[k], TINYGLTF_TYPE_VEC2, "TEXCOORD", coding);
+      if (!mesh.uvs[k].empty()) prim.attributes["TEXCOORD_" + str(k)] = add_uv_stream(mesh.uvs[k], k, coding);
     if (!mesh.colors.empty()) prim.attributes["COLOR_0"] = add_float_stream(mesh.colors, TINYGLTF_TYPE_VEC4, "COLOR_0", coding);
     const bool byte_joints = io::joints_fit_bytes(mesh);
     const auto add_joints = [&](const std::vector<ushort4>& joints) {
@@ -1839,6 +1862,201 @@ void fit_morph_weights(tg::Model& model, const Document& source, const std::vect
   if (!padded.data.empty()) model.buffers.push_back(std::move(padded));
 }
 
+// ---- -q: UV sets outside [0, 1] (KHR_texture_transform) -------------------------------------------
+
+constexpr const char* texture_transform = "KHR_texture_transform";
+
+// A texture reference's KHR_texture_transform: uv' = offset + R(rotation) (scale o uv), R turning
+// counter-clockwise (the extension's matrix); tex_coord overrides the reference's set when >= 0.
+struct TextureTransform {
+  double offset[2] = {0, 0}, rotation = 0, scale[2] = {1, 1};
+  int tex_coord = -1;
+};
+
+TextureTransform read_texture_transform(const tg::ExtensionMap& extensions) {
+  TextureTransform t;
+  const auto found = extensions.find(texture_transform);
+  if (found == extensions.end() || !found->second.IsObject()) return t;
+  const tg::Value& v = found->second;
+  const auto pair = [&](const char* key, double (&out)[2]) {
+    if (v.Has(key) && v.Get(key).IsArray() && v.Get(key).ArrayLen() == 2 && v.Get(key).Get(0).IsNumber() && v.Get(key).Get(1).IsNumber())
+      out[0] = v.Get(key).Get(0).GetNumberAsDouble(), out[1] = v.Get(key).Get(1).GetNumberAsDouble();
+  };
+  pair("offset", t.offset);
+  pair("scale", t.scale);
+  if (v.Has("rotation") && v.Get("rotation").IsNumber()) t.rotation = v.Get("rotation").GetNumberAsDouble();
+  if (v.Has("texCoord") && v.Get("texCoord").IsInt()) t.tex_coord = v.Get("texCoord").GetNumberAsInt();
+  return t;
+}
+
+// The transform that reads a box's stored values the way `t` read the UVs: t (offset + scale o q)
+// = (t.offset + R (t.scale o offset)) + R ((t.scale o scale) o q).
+TextureTransform after_box(const TextureTransform& t, const UvBox& box) {
+  TextureTransform out = t;
+  const double c = std::cos(t.rotation), s = std::sin(t.rotation);
+  const double x = t.scale[0] * box.offset[0], y = t.scale[1] * box.offset[1];
+  out.offset[0] = t.offset[0] + c * x - s * y;
+  out.offset[1] = t.offset[1] + s * x + c * y;
+  out.scale[0] = t.scale[0] * box.scale[0];
+  out.scale[1] = t.scale[1] * box.scale[1];
+  return out;
+}
+
+tg::Value texture_transform_value(const TextureTransform& t) {
+  tg::Value::Object v;
+  v["offset"] = tg::Value(tg::Value::Array{tg::Value(t.offset[0]), tg::Value(t.offset[1])});
+  v["scale"] = tg::Value(tg::Value::Array{tg::Value(t.scale[0]), tg::Value(t.scale[1])});
+  if (t.rotation != 0) v["rotation"] = tg::Value(t.rotation);
+  if (t.tex_coord >= 0) v["texCoord"] = tg::Value(t.tex_coord);
+  return tg::Value(std::move(v));
+}
+
+// Calls f(tex_coord, extensions) on each texture reference of a material: the core ones, and those
+// its extensions hold (KHR_materials_*: members named "...Texture", objects with an "index").
+template <class F>
+void for_each_texture(tg::Material& material, F&& f) {
+  for (auto* info : {&material.pbrMetallicRoughness.baseColorTexture, &material.pbrMetallicRoughness.metallicRoughnessTexture,
+                     &material.emissiveTexture})
+    if (info->index >= 0) f(info->texCoord, info->extensions);
+  if (material.normalTexture.index >= 0) f(material.normalTexture.texCoord, material.normalTexture.extensions);
+  if (material.occlusionTexture.index >= 0) f(material.occlusionTexture.texCoord, material.occlusionTexture.extensions);
+  const auto walk = [&](auto&& self, tg::Value& value) -> void {
+    if (!value.IsObject()) return;
+    for (std::pair<const std::string, tg::Value>& entry : value.Get<tg::Value::Object>()) {
+      const std::string& key = entry.first;
+      tg::Value& member = entry.second;
+      if (!member.IsObject()) continue;
+      if (key.ends_with("Texture") && member.Has("index") && member.Get("index").IsInt()) {
+        tg::Value::Object& info = member.Get<tg::Value::Object>();
+        const int tex_coord = info.count("texCoord") && info["texCoord"].IsInt() ? info["texCoord"].GetNumberAsInt() : 0;
+        tg::ExtensionMap extensions;
+        if (info.count("extensions") && info["extensions"].IsObject()) extensions = info["extensions"].Get<tg::Value::Object>();
+        f(tex_coord, extensions);
+        if (!extensions.empty()) info["extensions"] = tg::Value(tg::Value::Object(extensions.begin(), extensions.end()));
+      } else {
+        self(self, member);
+      }
+    }
+  };
+  for (auto& [name, value] : material.extensions) walk(walk, value);
+}
+
+// The UV set a texture reference samples.
+int texture_set(int tex_coord, const tg::ExtensionMap& extensions) {
+  const int over = read_texture_transform(extensions).tex_coord;
+  return over >= 0 ? over : tex_coord;
+}
+
+// -q's UV boxes, per written primitive (`where[i]`, a mesh and primitive of the rebuilt document,
+// drawing meshes[i]). UV sets within [0, 1] need none. A set outside takes one box per group of
+// materials (a primitive's material and its KHR_materials_variants alternatives), over every
+// primitive drawn with them, and each of their textures sampling the set has its
+// KHR_texture_transform composed with the box. A set stays in floats where that cannot hold: no
+// texture samples it (the box would be lost), a primitive drawn with the group is not rewritten (a
+// point or line primitive kept as it was) or morphs that UV set, or the box is wider than 8 (a
+// step would pass 2^-13, a quarter of a 2048 texture's texel). Returns whether any box was made.
+bool make_uv_boxes(tg::Model& model, const std::vector<std::pair<size_t, size_t>>& where, const std::vector<const Mesh*>& meshes,
+                   std::vector<UvBoxes>& boxes) {
+  boxes.assign(where.size(), UvBoxes{});
+  const size_t materials = model.materials.size();
+  if (materials == 0) return false;
+  std::vector<size_t> parent(materials);
+  std::iota(parent.begin(), parent.end(), size_t(0));
+  const auto find = [&](size_t m) {
+    while (parent[m] != m) m = parent[m] = parent[parent[m]];
+    return m;
+  };
+  // A primitive's materials: its own and its variants'.
+  const auto materials_of = [&](const tg::Primitive& prim) {
+    std::vector<size_t> out;
+    if (prim.material >= 0 && size_t(prim.material) < materials) out.push_back(size_t(prim.material));
+    const auto variants = prim.extensions.find("KHR_materials_variants");
+    if (variants != prim.extensions.end() && variants->second.Has("mappings") && variants->second.Get("mappings").IsArray()) {
+      const tg::Value& mappings = variants->second.Get("mappings");
+      for (size_t k = 0; k < mappings.ArrayLen(); ++k)
+        if (mappings.Get(int(k)).Has("material") && mappings.Get(int(k)).Get("material").IsInt()) {
+          const int m = mappings.Get(int(k)).Get("material").GetNumberAsInt();
+          if (m >= 0 && size_t(m) < materials) out.push_back(size_t(m));
+        }
+    }
+    return out;
+  };
+  for (const tg::Mesh& mesh : model.meshes)
+    for (const tg::Primitive& prim : mesh.primitives) {
+      const std::vector<size_t> own = materials_of(prim);
+      for (size_t k = 1; k < own.size(); ++k) parent[find(own[k])] = find(own[0]);
+    }
+
+  // Per group and set: whether a box can hold, and its bounds.
+  struct Bounds {
+    bool ok = true, sampled = false, outside = false;
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+  };
+  std::vector<std::array<Bounds, max_uv_sets>> group(materials);
+  for (size_t m = 0; m < materials; ++m)
+    for_each_texture(model.materials[m], [&](int tex_coord, const tg::ExtensionMap& extensions) {
+      const int set = texture_set(tex_coord, extensions);
+      if (set >= 0 && size_t(set) < max_uv_sets) group[find(m)][size_t(set)].sampled = true;
+    });
+  std::set<std::pair<size_t, size_t>> written(where.begin(), where.end());
+  for (size_t m = 0; m < model.meshes.size(); ++m)
+    for (size_t p = 0; p < model.meshes[m].primitives.size(); ++p) {
+      const tg::Primitive& prim = model.meshes[m].primitives[p];
+      for (const size_t material : materials_of(prim))
+        for (size_t set = 0; set < max_uv_sets; ++set)
+          if (!written.count({m, p}) || std::any_of(prim.targets.begin(), prim.targets.end(), [&](const auto& target) {
+                return target.count("TEXCOORD_" + str(set)) > 0;
+              }))
+            group[find(material)][set].ok = false;
+    }
+  for (size_t i = 0; i < where.size(); ++i) {
+    const tg::Primitive& prim = model.meshes[where[i].first].primitives[where[i].second];
+    for (const size_t material : materials_of(prim))
+      for (size_t set = 0; set < max_uv_sets; ++set) {
+        Bounds& b = group[find(material)][set];
+        for (const float2& uv : meshes[i]->uvs[set]) {
+          if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) b.ok = false;
+          b.outside = b.outside || uv.x < 0 || uv.x > 1 || uv.y < 0 || uv.y > 1;
+          b.lo[0] = std::min(b.lo[0], double(uv.x)), b.hi[0] = std::max(b.hi[0], double(uv.x));
+          b.lo[1] = std::min(b.lo[1], double(uv.y)), b.hi[1] = std::max(b.hi[1], double(uv.y));
+        }
+      }
+  }
+
+  std::vector<UvBoxes> of_group(materials);
+  bool made = false;
+  for (size_t g = 0; g < materials; ++g)
+    for (size_t set = 0; set < max_uv_sets; ++set) {
+      const Bounds& b = group[g][set];
+      if (!b.ok || !b.sampled || !b.outside || b.hi[0] - b.lo[0] > 8 || b.hi[1] - b.lo[1] > 8) continue;
+      UvBox box;
+      for (size_t c = 0; c < 2; ++c) {
+        // Floats, rounded outwards: the box holds every value, and the transform written is the
+        // one the values were stored with.
+        box.offset[c] = float(b.lo[c]);
+        if (box.offset[c] > b.lo[c]) box.offset[c] = std::nextafter(box.offset[c], -INFINITY);
+        const double extent = b.hi[c] - box.offset[c];
+        box.scale[c] = float(extent);
+        if (box.scale[c] < extent) box.scale[c] = std::nextafter(box.scale[c], INFINITY);
+        if (box.scale[c] == 0) box.scale[c] = 1;
+      }
+      of_group[g][set] = box;
+      made = true;
+    }
+  if (!made) return false;
+  for (size_t m = 0; m < materials; ++m)
+    for_each_texture(model.materials[m], [&](int tex_coord, tg::ExtensionMap& extensions) {
+      const int set = texture_set(tex_coord, extensions);
+      if (set < 0 || size_t(set) >= max_uv_sets || !of_group[find(m)][size_t(set)]) return;
+      extensions[texture_transform] = texture_transform_value(after_box(read_texture_transform(extensions), *of_group[find(m)][size_t(set)]));
+    });
+  for (size_t i = 0; i < where.size(); ++i) {
+    const tg::Primitive& prim = model.meshes[where[i].first].primitives[where[i].second];
+    if (prim.material >= 0 && size_t(prim.material) < materials) boxes[i] = of_group[find(size_t(prim.material))];
+  }
+  return true;
+}
+
 // Replaces the geometry of the triangle primitives listed in `slots` by scene.primitives[i].mesh,
 // drops what nothing references any more, and packs the surviving bufferViews and the new geometry
 // into one buffer (returned; buffer 0 of the model, whose `buffers` list is left empty), quantized as
@@ -2079,6 +2297,16 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     if (grid.top == 0) on_grid.assign(on_grid.size(), false);
   }
 
+  // Quantized (Draco quantizes UVs its own way): the UV boxes, per pending primitive.
+  std::vector<UvBoxes> uv_boxes;
+  bool used_uv_boxes = false;
+  if (options.quantize && !options.draco) {
+    std::vector<std::pair<size_t, size_t>> where;
+    std::vector<const Mesh*> drawn;
+    for (const Pending& p : pending) where.emplace_back(p.mesh, p.primitive), drawn.push_back(&scene.primitives[p.scene_primitive].mesh);
+    used_uv_boxes = make_uv_boxes(model, where, drawn, uv_boxes);
+  }
+
   // GPU instances of a grid mesh take the grid in their own transforms (below the node's, which
   // children and cameras share): instance T R S becomes T R S D, that is the translation
   // T + R (S o) and the scale S s. Computed now, so that the old accessors are pruned; written with
@@ -2222,12 +2450,15 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
   BinWriter writer(model, bin);
   std::vector<const tg::Primitive*> written(scene.primitives.size(), nullptr);
   std::vector<size_t> written_mesh(scene.primitives.size(), 0);
-  for (const Pending& p : pending) {
+  std::vector<const UvBoxes*> written_boxes(scene.primitives.size(), nullptr);
+  for (size_t i = 0; i < pending.size(); ++i) {
+    const Pending& p = pending[i];
     const Primitive& in = scene.primitives[p.scene_primitive];
     tg::Primitive& out = model.meshes[p.mesh].primitives[p.primitive];
     const int32_t shared = in.shares_vertices_with;
     std::vector<Gathered>& extra = gathered[p.scene_primitive];
-    const StreamCoding coding{options.quantize, on_grid[p.mesh] ? &grid : nullptr};
+    const UvBoxes* boxes = uv_boxes.empty() ? nullptr : &uv_boxes[i];
+    const StreamCoding coding{options.quantize, on_grid[p.mesh] ? &grid : nullptr, boxes};
     if (options.draco) {
       // Each primitive its own stream (Draco has no shared vertex buffers); the gathered streams
       // outside it follow its vertices.
@@ -2235,7 +2466,8 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
       if (!point_source.empty())
         for (Gathered& g : extra) g.bytes = gather_elements(g.bytes, element_bytes(g.like.componentType, g.like.type), point_source);
     } else if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && out.targets.empty() && extra.empty() &&
-        on_grid[written_mesh[size_t(shared)]] == on_grid[p.mesh]) {
+        on_grid[written_mesh[size_t(shared)]] == on_grid[p.mesh] &&
+        (written_boxes[size_t(shared)] ? *written_boxes[size_t(shared)] : UvBoxes{}) == (boxes ? *boxes : UvBoxes{})) {
       // One vertex buffer, several index buffers; each morph target too where it is the same
       // (--shared-vertices' blend shapes), else the primitive's own (each level's geomorph).
       out.attributes = written[size_t(shared)]->attributes;
@@ -2270,6 +2502,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     }
     written[p.scene_primitive] = &out;
     written_mesh[p.scene_primitive] = p.mesh;
+    written_boxes[p.scene_primitive] = boxes;
   }
   for (const GridInstances& g : grid_instances) {
     tg::Value::Object ext = model.nodes[g.node].extensions[gpu_instancing].Get<tg::Value::Object>();
@@ -2286,13 +2519,12 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
   if (writer.used_draco())
     for (std::vector<std::string>* list : {&model.extensionsUsed, &model.extensionsRequired})
       if (std::find(list->begin(), list->end(), io::draco_extension) == list->end()) list->push_back(io::draco_extension);
-  if (writer.used_quantization()) {
-    const std::string ext = "KHR_mesh_quantization";
-    if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), ext) == model.extensionsUsed.end())
-      model.extensionsUsed.push_back(ext);
-    if (std::find(model.extensionsRequired.begin(), model.extensionsRequired.end(), ext) == model.extensionsRequired.end())
-      model.extensionsRequired.push_back(ext);
-  }
+  // Both are required: without them the streams would be read wrong (a UV box's transform places
+  // the textures).
+  for (const auto& [used, ext] : {std::pair{writer.used_quantization(), "KHR_mesh_quantization"}, std::pair{used_uv_boxes, texture_transform}})
+    if (used)
+      for (std::vector<std::string>* list : {&model.extensionsUsed, &model.extensionsRequired})
+        if (std::find(list->begin(), list->end(), ext) == list->end()) list->push_back(ext);
   report = writer.report();
   return bin;
 }

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -390,6 +391,160 @@ TEST(GltfQuantize, MorphTargetsMoveOnTheGrid) {
 
 // The CLI's -q (and --position-bits, and with -c): each command's output reads back within the
 // step of its float twin, placed; a non-glTF output is refused rather than silently left as it is.
+// -q: UVs outside [0, 1] go in normalized shorts on a box, and every texture sampling them gets a
+// KHR_texture_transform that maps the stored values back: composed with a texture's own transform
+// (offset, rotation, scale), in a core texture and in a material extension's. Checked against the
+// extension's formula applied here, per vertex: what each texture samples must not move by more
+// than the box's half step, carried through the texture's own scale.
+std::array<double, 2> apply_texture_transform(const Json& info, double u, double v) {
+  if (!info.contains("extensions") || !info["extensions"].contains("KHR_texture_transform")) return {u, v};
+  const Json& t = info["extensions"]["KHR_texture_transform"];
+  const Json offset = t.value("offset", Json::array({0.0, 0.0})), scale = t.value("scale", Json::array({1.0, 1.0}));
+  const double r = t.value("rotation", 0.0), x = scale[0].get<double>() * u, y = scale[1].get<double>() * v;
+  // The extension's GLSL: rotation = mat3(cos, sin, 0, -sin, cos, 0, 0, 0, 1), columns first.
+  return {offset[0].get<double>() + std::cos(r) * x - std::sin(r) * y, offset[1].get<double>() + std::sin(r) * x + std::cos(r) * y};
+}
+
+// A textured grid: TEXCOORD_0 over [-1.5, 2.25] x [0.5, 3]; material 0 samples it in a plain base
+// colour texture, a normal texture with its own transform, and a clearcoat texture.
+Json textured_grid_document(const std::filesystem::path& dir, Mesh& m) {
+  m = shapes::grid(6, 5);
+  for (float2& uv : m.uvs[0]) uv = {-1.5f + 3.75f * uv.x, 0.5f + 2.5f * uv.y};
+  m.materials.assign(m.triangle_count(), 0);
+  m.material_names = {"tiles"};
+  write_scene(scene_from_mesh(m), dir / "plain.gltf");
+  Json doc;
+  {
+    std::ifstream file(dir / "plain.gltf");
+    doc = Json::parse(file);
+  }
+  doc["images"] = {{{"uri", "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg=="}}};
+  doc["textures"] = {{{"source", 0}}};
+  Json& material = doc["materials"][0];
+  material["pbrMetallicRoughness"] = {{"baseColorTexture", {{"index", 0}}}};
+  material["normalTexture"] = {{"index", 0},
+                               {"extensions", {{"KHR_texture_transform", {{"offset", {0.1, -0.2}}, {"rotation", 0.3}, {"scale", {2.0, 0.5}}}}}}};
+  material["extensions"] = {{"KHR_materials_clearcoat", {{"clearcoatFactor", 1.0}, {"clearcoatTexture", {{"index", 0}}}}}};
+  doc["extensionsUsed"] = {"KHR_texture_transform", "KHR_materials_clearcoat"};
+  return doc;
+}
+
+void write_json(const std::filesystem::path& path, const Json& doc) {
+  std::ofstream file(path);
+  file << doc.dump();
+}
+
+TEST(GltfQuantize, UvsOutsideTheUnitSquareTakeABoxThatTheTextureTransformsUndo) {
+  TempDir dir;
+  Mesh m;
+  const Json in = textured_grid_document(dir.path, m);
+  write_json(dir / "textured.gltf", in);
+  write_scene(read_scene(dir / "textured.gltf"), dir / "q.glb", {.quantize = true});
+  const test::Glb glb = test::read_glb(dir / "q.glb");
+  EXPECT_TRUE(contains(glb.doc["extensionsRequired"], "KHR_texture_transform"));
+  const Json& uv = glb.doc["accessors"][glb.doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"].get<size_t>()];
+  ASSERT_EQ(uv["componentType"], 5123);  // unsigned short
+  EXPECT_TRUE(uv.value("normalized", false));
+  const std::vector<double> q = stored<uint16_t>(glb, &uv - &glb.doc["accessors"][0], 2);
+  ASSERT_EQ(q.size(), 2 * m.vertex_count());
+  const Json& out = glb.doc["materials"][0];
+  const Json* infos[3][2] = {{&in["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"], &out["pbrMetallicRoughness"]["baseColorTexture"]},
+                             {&in["materials"][0]["normalTexture"], &out["normalTexture"]},
+                             {&in["materials"][0]["extensions"]["KHR_materials_clearcoat"]["clearcoatTexture"],
+                              &out["extensions"]["KHR_materials_clearcoat"]["clearcoatTexture"]}};
+  for (size_t t = 0; t < 3; ++t) {
+    SCOPED_TRACE(t);
+    // Half a step of the box (3.75 by 2.5), scaled by the texture's own transform (the normal
+    // texture's 2 and 0.5), and a float's rounding of the offsets.
+    const double half_step = 0.5 / 65535 * 3.75 * (t == 1 ? 2 : 1) + 1e-6;
+    double worst = 0;
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+      const auto want = apply_texture_transform(*infos[t][0], m.uvs[0][v].x, m.uvs[0][v].y);
+      const auto got = apply_texture_transform(*infos[t][1], q[2 * v] / 65535, q[2 * v + 1] / 65535);
+      worst = std::max({worst, std::fabs(want[0] - got[0]), std::fabs(want[1] - got[1])});
+    }
+    EXPECT_LE(worst, half_step);
+    EXPECT_GT(worst, half_step / 64);  // (quantized: not the floats)
+  }
+  // The same through glTF-Transform: its reading of the stored UVs and of every texture reference's
+  // transform, the clearcoat's included.
+  if (test::second_reader_available()) {
+    const Json before = test::read_with_second_reader(dir / "textured.gltf", "--textures");
+    const Json after = test::read_with_second_reader(dir / "q.glb", "--textures");
+    const Json stream = test::read_with_second_reader(dir / "q.glb")[0]["attributes"]["TEXCOORD_0"];
+    ASSERT_EQ(before.size(), 1u);
+    ASSERT_EQ(after.size(), 1u);
+    ASSERT_EQ(after[0].size(), 3u);
+    ASSERT_EQ(stream["values"].size(), 2 * m.vertex_count());
+    EXPECT_TRUE(stream["normalized"].get<bool>());
+    const auto sample = [](const Json& ref, double u, double v) {
+      if (!ref.contains("transform")) return std::array<double, 2>{u, v};
+      const Json& t = ref["transform"];
+      const double r = t["rotation"], x = t["scale"][0].get<double>() * u, y = t["scale"][1].get<double>() * v;
+      return std::array<double, 2>{t["offset"][0].get<double>() + std::cos(r) * x - std::sin(r) * y,
+                                   t["offset"][1].get<double>() + std::sin(r) * x + std::cos(r) * y};
+    };
+    for (size_t t = 0; t < 3; ++t) {
+      SCOPED_TRACE(after[0][t]["slot"].get<std::string>());
+      EXPECT_EQ(after[0][t]["slot"], before[0][t]["slot"]);
+      EXPECT_TRUE(after[0][t].contains("transform"));
+      double worst = 0;
+      for (size_t v = 0; v < m.vertex_count(); ++v) {
+        const auto want = sample(before[0][t], m.uvs[0][v].x, m.uvs[0][v].y);
+        const auto got = sample(after[0][t], stream["values"][2 * v].get<double>() / 65535, stream["values"][2 * v + 1].get<double>() / 65535);
+        worst = std::max({worst, std::fabs(want[0] - got[0]), std::fabs(want[1] - got[1])});
+      }
+      EXPECT_LE(worst, 0.5 / 65535 * 3.75 * 2 + 1e-6);
+    }
+  }
+  // The rest of the material is as it was.
+  EXPECT_EQ(out["extensions"]["KHR_materials_clearcoat"]["clearcoatFactor"], 1.0);
+  EXPECT_EQ(out["normalTexture"]["index"], 0);
+  test::expect_valid_gltf({dir / "q.glb"});
+}
+
+// Where a box could not hold, the UVs stay floats and the materials as they were: a material no
+// texture of which samples the set, a box wider than 8, a lines primitive drawn with the material
+// (kept as it was, in the source's UVs).
+TEST(GltfQuantize, UvsKeepFloatsWhereNoBoxCanHold) {
+  TempDir dir;
+  Mesh m;
+  const Json base = textured_grid_document(dir.path, m);
+  Json untextured = base, wide = base, lines = base;
+  untextured["materials"][0] = {{"name", "tiles"}};
+  untextured.erase("extensionsUsed");
+  {
+    // TEXCOORD_0's u times 3 (over 11.25): a second buffer holding the wider UVs.
+    std::vector<float> floats;
+    for (const float2& uv : m.uvs[0]) floats.insert(floats.end(), {uv.x * 3, uv.y});
+    const std::vector<uint8_t> bytes(reinterpret_cast<const uint8_t*>(floats.data()),
+                                     reinterpret_cast<const uint8_t*>(floats.data() + floats.size()));
+    wide["buffers"].push_back({{"byteLength", bytes.size()}, {"uri", "data:application/octet-stream;base64," + test::base64(bytes)}});
+    wide["bufferViews"].push_back({{"buffer", wide["buffers"].size() - 1}, {"byteLength", bytes.size()}});
+    Json accessor = wide["accessors"][wide["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"].get<size_t>()];
+    accessor["bufferView"] = wide["bufferViews"].size() - 1;
+    accessor.erase("byteOffset"), accessor.erase("min"), accessor.erase("max");
+    wide["accessors"].push_back(accessor);
+    wide["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = wide["accessors"].size() - 1;
+  }
+  {
+    Json line = lines["meshes"][0]["primitives"][0];
+    line["mode"] = 1;  // LINES, over the triangles' indices
+    lines["meshes"][0]["primitives"].push_back(line);
+  }
+  for (const auto& [name, doc] : {std::pair{"untextured", &untextured}, std::pair{"wide", &wide}, std::pair{"lines", &lines}}) {
+    SCOPED_TRACE(name);
+    write_json(dir / "in.gltf", *doc);
+    write_scene(read_scene(dir / "in.gltf"), dir / "q.glb", {.quantize = true});
+    const Json out = test::glb_json(dir / "q.glb");
+    EXPECT_FALSE(contains(out.value("extensionsRequired", Json::array()), "KHR_texture_transform"));
+    const Json& uv = out["accessors"][out["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"].get<size_t>()];
+    EXPECT_EQ(uv["componentType"], 5126);  // float
+    EXPECT_EQ(out["materials"], (*doc)["materials"]);
+    test::expect_valid_gltf({dir / "q.glb"});
+  }
+}
+
 TEST(GltfQuantize, CommandsQuantizeWithDashQ) {
   TempDir dir;
   write_scene(scene_from_mesh(shapes::torus(1.0f, 0.25f, 48, 24)), dir / "in.glb");

@@ -101,7 +101,8 @@ void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
                 "loaders that implement the KHR extension)");
   app->add_flag("-q,--quantize", options.quantize,
                 "glTF output: vertex streams in fewer bits (KHR_mesh_quantization, then required): positions on a "
-                "grid of --position-bits, normals and tangents in bytes, UVs in 16 bits, colours and weights in bytes");
+                "grid of --position-bits, normals and tangents in bytes, UVs in 16 bits (outside [0,1]: on a box, with KHR_texture_transform), colours and "
+                "weights in bytes");
   app->add_flag("--draco", options.draco,
                 "glTF output: each triangle primitive's geometry as a Draco stream (KHR_draco_mesh_compression, then "
                 "required): positions in --position-bits, normals 10 bits, UVs 12, colours 8, weights and tangents 12");
