@@ -35,6 +35,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "core/quaternion.h"
 #include "core/vec3d.h"
 #include "io/gltf_compression.h"
 #include "io/gltf_types.h"
@@ -1862,6 +1863,66 @@ void fit_morph_weights(tg::Model& model, const Document& source, const std::vect
   if (!padded.data.empty()) model.buffers.push_back(std::move(padded));
 }
 
+// ---- -q: animation keys ---------------------------------------------------------------------------
+
+// How far -q lets a reduced curve stray from a key it drops: 2^-14 of the track's largest component
+// (translations, scales: the -c -q exponential filter's bound), or 2^-11 radians (0.028 degrees:
+// a 1 m bone's tip moves 0.5 mm; Unity's keyframe reduction defaults to 0.5 degrees).
+constexpr double key_tolerance = 1.0 / 16384, rotation_key_tolerance = 1.0 / 2048;
+
+// The keys of a sampler that -q keeps (indices, ascending; the first and the last always, so the
+// clip keeps its length). LINEAR: greedily, each kept key far after the previous one while every key
+// between still lies within `tolerance` of the two's interpolation (the largest component
+// difference; rotations: the angle between the key and the slerp, in radians); the distance is
+// found by doubling, then bisection, so a run of r keys costs O(r log r) checks. STEP: a key that
+// repeats the previous one's value goes. Keys whose times do not increase are all kept.
+std::vector<uint32_t> kept_keys(const std::vector<float>& times, const std::vector<float>& values, size_t components,
+                                bool rotation, bool step, double tolerance) {
+  const size_t n = times.size();
+  std::vector<uint32_t> keep;
+  if (n <= 2) {
+    for (uint32_t k = 0; k < n; ++k) keep.push_back(k);
+    return keep;
+  }
+  const auto key = [&](size_t k) { return values.data() + k * components; };
+  if (step) {
+    for (uint32_t k = 0; k < n; ++k)
+      if (k == 0 || k + 1 == n || !std::equal(key(k), key(k) + components, key(k - 1))) keep.push_back(k);
+    return keep;
+  }
+  const auto quaternion = [&](size_t k) { return core::normalized({key(k)[0], key(k)[1], key(k)[2], key(k)[3]}); };
+  // Whether every key strictly between i and j lies on the interpolation of i and j.
+  const auto fits = [&](size_t i, size_t j) {
+    const double t0 = times[i], span = double(times[j]) - t0;
+    for (size_t k = i + 1; k < j; ++k) {
+      const double s = (times[k] - t0) / span;
+      if (rotation) {
+        if (core::rotation_angle(core::slerp(quaternion(i), quaternion(j), float(s)), quaternion(k)) > tolerance) return false;
+        continue;
+      }
+      for (size_t c = 0; c < components; ++c)
+        if (std::fabs(double(key(i)[c]) + s * (double(key(j)[c]) - key(i)[c]) - key(k)[c]) > tolerance) return false;
+    }
+    return true;
+  };
+  // The last key of the run from i whose times increase.
+  std::vector<size_t> run_end(n, n - 1);
+  for (size_t k = n - 1; k-- > 0;) run_end[k] = times[k + 1] > times[k] ? run_end[k + 1] : k;
+  keep.push_back(0);
+  for (size_t i = 0; i + 1 < n;) {
+    const size_t last = std::max(run_end[i], i + 1);  // (a key at the same time as i: kept next)
+    size_t good = i + 1, stride = 1;
+    while (good + stride <= last && fits(i, good + stride)) good += stride, stride *= 2;
+    for (size_t bad = std::min(good + stride, last + 1); bad - good > 1;) {  // fits(i, good); not fits(i, bad) or past the run
+      const size_t mid = good + (bad - good) / 2;
+      (fits(i, mid) ? good : bad) = mid;
+    }
+    keep.push_back(uint32_t(good));
+    i = good;
+  }
+  return keep;
+}
+
 // ---- -q: UV sets outside [0, 1] (KHR_texture_transform) -------------------------------------------
 
 constexpr const char* texture_transform = "KHR_texture_transform";
@@ -2333,32 +2394,70 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     node.extensions[gpu_instancing] = tg::Value(std::move(ext));
   }
 
-  // Quantized: rotation keyframes in normalized shorts, as core glTF allows (half the bytes, within
-  // 1/65534 per component), read now and written with the geometry; the float accessors go. Only
-  // where every channel of the sampler animates a rotation, and (cubic splines) the tangents fit.
-  struct ShortRotations {
+  // Quantized: animation keys, read now and written with the geometry (the old accessors go where
+  // nothing else uses them). A sampler that drives translations, rotations or scales (LINEAR or STEP;
+  // cubic splines keep their keys) keeps the keys its curve needs (kept_keys), where that makes it
+  // smaller: its new times cost 4 bytes a key, shared by the samplers that keep the same ones.
+  // Rotation keyframes go in normalized shorts, as core glTF allows (half the bytes, within 1/65534
+  // per component), where every value, cubic tangents included, lies in [-1, 1].
+  struct SamplerKeys {
     size_t animation, sampler;
-    std::vector<std::array<int16_t, 4>> values;
+    std::vector<float> times;  // empty: the input accessor stays
+    std::vector<float> values;
+    bool rotation, shorts;
   };
-  std::vector<ShortRotations> short_rotations;
+  std::vector<SamplerKeys> sampler_keys;
   if (options.quantize)
     for (size_t a = 0; a < model.animations.size(); ++a) {
       tg::Animation& anim = model.animations[a];
       for (size_t k = 0; k < anim.samplers.size(); ++k) {
         tg::AnimationSampler& sampler = anim.samplers[k];
-        const bool rotations_only = std::all_of(anim.channels.begin(), anim.channels.end(), [&](const tg::AnimationChannel& ch) {
-          return ch.sampler != int(k) || ch.target_path == "rotation";
-        });
-        if (!rotations_only || sampler.output < 0 || size_t(sampler.output) >= model.accessors.size()) continue;
+        std::string path;
+        bool one_path = true;
+        for (const tg::AnimationChannel& ch : anim.channels)
+          if (ch.sampler == int(k)) one_path = one_path && (path.empty() || path == ch.target_path), path = ch.target_path;
+        const bool rotation = path == "rotation";
+        if (!one_path || (!rotation && path != "translation" && path != "scale")) continue;
+        if (sampler.input < 0 || size_t(sampler.input) >= model.accessors.size() || sampler.output < 0 ||
+            size_t(sampler.output) >= model.accessors.size())
+          continue;
+        const tg::Accessor& in = model.accessors[size_t(sampler.input)];
         const tg::Accessor& acc = model.accessors[size_t(sampler.output)];
-        if (acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT || acc.type != TINYGLTF_TYPE_VEC4) continue;
-        const std::vector<float4> values = source.decode_floats<float4>(sampler.output);
-        if (!all_in_range(values, -1.0f, 1.0f)) continue;
-        ShortRotations& out = short_rotations.emplace_back(ShortRotations{a, k, {}});
-        const std::vector<uint8_t> packed = snorm<int16_t>(values);
-        out.values.resize(values.size());
-        std::memcpy(out.values.data(), packed.data(), packed.size());
-        sampler.output = -1;  // (its float accessor is pruned below)
+        const size_t components = rotation ? 4 : 3;
+        if (in.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT || in.type != TINYGLTF_TYPE_SCALAR ||
+            acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT || acc.type != (rotation ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3))
+          continue;
+        const bool cubic = sampler.interpolation == "CUBICSPLINE", step = sampler.interpolation == "STEP";
+        SamplerKeys out{a, k, source.decode_floats<float>(sampler.input), {}, rotation, false};
+        if (rotation)
+          for (const float4& q : source.decode_floats<float4>(sampler.output)) out.values.insert(out.values.end(), {q.x, q.y, q.z, q.w});
+        else
+          for (const float3& v : source.decode_floats<float3>(sampler.output)) out.values.insert(out.values.end(), {v.x, v.y, v.z});
+        const size_t n = out.times.size();
+        if (out.values.size() != n * components * (cubic ? 3 : 1)) continue;  // (the reader refuses such files)
+        // The keys: floats, or shorts (rotations in range) for the values.
+        const size_t value_bytes = rotation && all_in_range(out.values, -1.0f, 1.0f) ? 8 : 4 * components;
+        const bool finite = std::all_of(out.values.begin(), out.values.end(), [](float x) { return std::isfinite(x); });
+        double largest = 0;
+        for (const float x : out.values) largest = std::max(largest, std::fabs(double(x)));
+        const double tolerance = rotation ? rotation_key_tolerance : largest * key_tolerance;
+        const std::vector<uint32_t> keep = cubic || !finite ? std::vector<uint32_t>{}
+                                                            : kept_keys(out.times, out.values, components, rotation, step, tolerance);
+        if (!keep.empty() && keep.size() < n && keep.size() * (4 + value_bytes) < n * value_bytes) {
+          std::vector<float> times, values;
+          for (const uint32_t key : keep) {
+            times.push_back(out.times[key]);
+            values.insert(values.end(), out.values.begin() + ptrdiff_t(key * components), out.values.begin() + ptrdiff_t((key + 1) * components));
+          }
+          out.times = std::move(times), out.values = std::move(values);
+          sampler.input = -1;
+        } else {
+          out.times.clear();
+        }
+        out.shorts = value_bytes == 8;
+        if (out.times.empty() && !out.shorts) continue;
+        sampler.output = -1;  // (the old accessors are pruned below)
+        sampler_keys.push_back(std::move(out));
       }
     }
 
@@ -2512,9 +2611,36 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     ext["attributes"] = tg::Value(std::move(attributes));
     model.nodes[g.node].extensions[gpu_instancing] = tg::Value(std::move(ext));
   }
-  for (const ShortRotations& r : short_rotations)
-    model.animations[r.animation].samplers[r.sampler].output =
-        writer.add_accessor(r.values, TINYGLTF_COMPONENT_TYPE_SHORT, TINYGLTF_TYPE_VEC4, 0, true);
+  {
+    std::map<std::vector<float>, int> inputs;  // reduced key times -> their accessor
+    for (const SamplerKeys& keys : sampler_keys) {
+      tg::AnimationSampler& sampler = model.animations[keys.animation].samplers[keys.sampler];
+      if (!keys.times.empty()) {
+        const auto [found, fresh] = inputs.try_emplace(keys.times, -1);
+        if (fresh) {
+          found->second = writer.add_accessor(keys.times, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, 0);
+          tg::Accessor& acc = model.accessors[size_t(found->second)];  // (sampler inputs need bounds)
+          acc.minValues = {*std::min_element(keys.times.begin(), keys.times.end())};
+          acc.maxValues = {*std::max_element(keys.times.begin(), keys.times.end())};
+        }
+        sampler.input = found->second;
+      }
+      if (keys.shorts) {
+        const std::vector<uint8_t> packed = snorm<int16_t>(keys.values);
+        std::vector<std::array<int16_t, 4>> q(keys.values.size() / 4);
+        std::memcpy(q.data(), packed.data(), packed.size());
+        sampler.output = writer.add_accessor(q, TINYGLTF_COMPONENT_TYPE_SHORT, TINYGLTF_TYPE_VEC4, 0, true);
+      } else if (keys.rotation) {
+        std::vector<float4> q;
+        for (size_t i = 0; i + 3 < keys.values.size(); i += 4) q.push_back({keys.values[i], keys.values[i + 1], keys.values[i + 2], keys.values[i + 3]});
+        sampler.output = writer.add_accessor(q, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, 0);
+      } else {
+        std::vector<float3> v;
+        for (size_t i = 0; i + 2 < keys.values.size(); i += 3) v.push_back({keys.values[i], keys.values[i + 1], keys.values[i + 2]});
+        sampler.output = writer.add_accessor(v, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, 0);
+      }
+    }
+  }
   if (std::find(on_grid.begin(), on_grid.end(), true) != on_grid.end()) place_position_grid(model, bin, writer, grid, on_grid);
   if (writer.used_draco())
     for (std::vector<std::string>* list : {&model.extensionsUsed, &model.extensionsRequired})

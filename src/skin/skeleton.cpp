@@ -8,6 +8,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/quaternion.h"
 #include "lodkit/error.h"
 #include "lodkit/skin.h"
 
@@ -15,36 +16,10 @@ namespace lod {
 
 namespace {
 
+using core::normalized;
+using core::slerp;
+
 std::string str(size_t value) { return std::to_string(value); }
-
-// ---- quaternions (x, y, z, w) -------------------------------------------------------------------
-
-// Unit length; a zero or non-finite quaternion becomes the identity rather than NaNs in every matrix.
-float4 normalized(const float4& q) {
-  const double len = std::sqrt(double(q.x) * q.x + double(q.y) * q.y + double(q.z) * q.z + double(q.w) * q.w);
-  if (!(len > 0) || !std::isfinite(len)) return {0, 0, 0, 1};
-  return {float(q.x / len), float(q.y / len), float(q.z / len), float(q.w / len)};
-}
-
-// Spherical interpolation along the shorter arc (q and -q are the same rotation).
-float4 slerp(const float4& a, const float4& b_in, float t) {
-  double b[4] = {b_in.x, b_in.y, b_in.z, b_in.w};
-  double d = double(a.x) * b[0] + double(a.y) * b[1] + double(a.z) * b[2] + double(a.w) * b[3];
-  if (d < 0) {
-    for (double& c : b) c = -c;
-    d = -d;
-  }
-  double wa = 1 - t, wb = t;
-  // Nearly parallel: sin(theta) ~ 0, and the chord is the arc to float precision.
-  if (d < 0.9999) {
-    const double theta = std::acos(std::min(d, 1.0));
-    const double s = std::sin(theta);
-    wa = std::sin((1 - t) * theta) / s;
-    wb = std::sin(t * theta) / s;
-  }
-  return normalized({float(wa * a.x + wb * b[0]), float(wa * a.y + wb * b[1]), float(wa * a.z + wb * b[2]),
-                     float(wa * a.w + wb * b[3])});
-}
 
 // ---- channel sampling ---------------------------------------------------------------------------
 

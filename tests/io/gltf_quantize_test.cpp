@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -280,19 +281,43 @@ TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
   // The matrices were changed in place: no stale copy is left in the file.
   const Json doc = test::glb_json(dir / "q.glb");
   EXPECT_EQ(std::count_if(doc["accessors"].begin(), doc["accessors"].end(), [](const Json& accessor) { return accessor["type"] == "MAT4"; }), 1);
-  // Rotation keys in normalized shorts, within half their step; translations stay floats.
+  // Rotation keys in normalized shorts; translations stay floats; and the keys are those the curves
+  // need: at every key time of the plain file (where the piecewise curves of both break), each node's
+  // pose lies within the reduction's bound, 2^-14 of a track's largest component (2^-11 rad for
+  // rotations, plus the shorts' step: 2 |dq| <= 2 / 32767).
   ASSERT_EQ(plain.animations.size(), quantized.animations.size());
-  size_t rotations = 0;
+  size_t rotations = 0, keys = 0, kept = 0;
   for (size_t k = 0; k < plain.animations.size(); ++k) {
     ASSERT_EQ(plain.animations[k].channels.size(), quantized.animations[k].channels.size());
+    double largest[2] = {0, 0};  // translations, scales
+    std::set<float> times;
     for (size_t c = 0; c < plain.animations[k].channels.size(); ++c) {
       const AnimationChannel &x = plain.animations[k].channels[c], &y = quantized.animations[k].channels[c];
-      ASSERT_EQ(x.values.size(), y.values.size());
-      const double tolerance = x.path == AnimationPath::rotation ? 0.5 / 32767 + 1e-7 : 0.0;
-      for (size_t i = 0; i < x.values.size(); ++i) EXPECT_LE(std::fabs(double(x.values[i]) - y.values[i]), tolerance) << k << " " << c;
+      ASSERT_EQ(x.path, y.path);
+      ASSERT_EQ(x.times.front(), y.times.front());
+      ASSERT_EQ(x.times.back(), y.times.back());  // (the clip keeps its length)
+      if (x.path == AnimationPath::translation || x.path == AnimationPath::scale)
+        for (const float v : x.values) largest[x.path == AnimationPath::scale] = std::max(largest[x.path == AnimationPath::scale], std::fabs(double(v)));
+      times.insert(x.times.begin(), x.times.end());
+      keys += x.times.size(), kept += y.times.size();
       rotations += x.path == AnimationPath::rotation;
     }
+    for (const float time : times) {
+      Pose pa = rest_pose(plain), pb = rest_pose(quantized);
+      sample_animation(plain, k, time, pa);
+      sample_animation(quantized, k, time, pb);
+      for (size_t n = 0; n < std::min(pa.rotation.size(), pb.rotation.size()); ++n) {
+        const float4 &qa = pa.rotation[n], &qb = pb.rotation[n];
+        // The rotation between them: twice the angle of the 4D chord (well conditioned when small).
+        const double s = double(qa.x) * qb.x + double(qa.y) * qb.y + double(qa.z) * qb.z + double(qa.w) * qb.w < 0 ? -1 : 1;
+        const double chord = std::hypot(std::hypot(qa.x - s * qb.x, qa.y - s * qb.y), std::hypot(qa.z - s * qb.z, qa.w - s * qb.w));
+        EXPECT_LE(4 * std::asin(std::min(chord / 2, 1.0)), 1.0 / 2048 + 2.0 / 32767 + 1e-6) << k << " node " << n << " t " << time;
+        EXPECT_LE(distance(pa.translation[n], pb.translation[n]), std::sqrt(3.0) * largest[0] / 16384 + 1e-6) << k << " node " << n;
+        EXPECT_LE(distance(pa.scale[n], pb.scale[n]), std::sqrt(3.0) * largest[1] / 16384 + 1e-6) << k << " node " << n;
+      }
+    }
   }
+  EXPECT_LT(kept, keys);  // (the fixture's clips have keys their curves do not need)
   EXPECT_GT(rotations, 0u);
   for (const Json& anim : doc["animations"])
     for (const Json& channel : anim["channels"]) {
@@ -543,6 +568,92 @@ TEST(GltfQuantize, UvsKeepFloatsWhereNoBoxCanHold) {
     EXPECT_EQ(out["materials"], (*doc)["materials"]);
     test::expect_valid_gltf({dir / "q.glb"});
   }
+}
+
+// -q keeps the keys a curve needs. A 10 s clip baked at 60 Hz: a translation moving on a line
+// (2 keys are enough), a smooth translation, rotation and scale, a constant scale, and a STEP
+// translation with runs of equal keys. At every baked key time (where the piecewise curves of both
+// files break) each pose lies within the bound, the clip keeps its length, the smooth curves lose
+// most keys, and the file shrinks; without -q every key stays.
+TEST(GltfQuantize, AnimationsKeepTheKeysTheirCurvesNeed) {
+  TempDir dir;
+  Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 24, 12));
+  ASSERT_EQ(scene.nodes.size(), 1u);
+  const auto channel = [](AnimationPath path, Interpolation interpolation, uint32_t components, auto&& f) {
+    AnimationChannel ch;
+    ch.node = 0, ch.path = path, ch.interpolation = interpolation, ch.components = components;
+    for (int k = 0; k <= 600; ++k) {
+      const float t = float(k) / 60;
+      ch.times.push_back(t);
+      const std::array<float, 4> v = f(t);
+      ch.values.insert(ch.values.end(), v.begin(), v.begin() + components);
+    }
+    return ch;
+  };
+  const auto clip = [&](std::vector<AnimationChannel> channels) {
+    Animation a;
+    a.channels = std::move(channels);
+    return a;
+  };
+  using P = AnimationPath;
+  const Interpolation linear = Interpolation::linear;
+  scene.animations = {
+      clip({channel(P::translation, linear, 3, [](float t) { return std::array<float, 4>{2 * t, -t, 0.5f, 0}; }),
+            channel(P::rotation, linear, 4, [](float t) {
+              const float a = 0.8f * std::sin(1.7f * t);  // about (0, 0.6, 0.8)
+              return std::array<float, 4>{0, 0.6f * std::sin(a / 2), 0.8f * std::sin(a / 2), std::cos(a / 2)};
+            }),
+            channel(P::scale, linear, 3, [](float) { return std::array<float, 4>{1, 2, 1, 0}; })}),
+      clip({channel(P::translation, linear, 3, [](float t) { return std::array<float, 4>{3 * std::sin(0.25f * t), std::cos(0.5f * t), 0.1f * t, 0}; }),
+            channel(P::scale, linear, 3, [](float t) { return std::array<float, 4>{1 + 0.3f * std::sin(0.5f * t), 1, 1, 0}; })}),
+      clip({channel(P::translation, Interpolation::step, 3, [](float t) { return std::array<float, 4>{std::floor(t), 0, 0, 0}; })})};
+  write_scene(scene, dir / "plain.glb");
+  write_scene(scene, dir / "q.glb", {.quantize = true});
+  const Scene plain = read_scene(dir / "plain.glb"), quantized = read_scene(dir / "q.glb");
+  ASSERT_EQ(quantized.animations.size(), 3u);
+  // Keys kept per clip and channel.
+  std::vector<std::vector<size_t>> kept;
+  for (size_t k = 0; k < 3; ++k) {
+    SCOPED_TRACE(k);
+    ASSERT_EQ(plain.animations[k].channels.size(), scene.animations[k].channels.size());
+    ASSERT_EQ(quantized.animations[k].channels.size(), scene.animations[k].channels.size());
+    double largest[2] = {0, 0};
+    kept.emplace_back();
+    for (size_t c = 0; c < scene.animations[k].channels.size(); ++c) {
+      const AnimationChannel &x = scene.animations[k].channels[c], &y = quantized.animations[k].channels[c];
+      EXPECT_EQ(plain.animations[k].channels[c].times.size(), 601u);  // (without -q)
+      ASSERT_FALSE(y.times.empty());
+      EXPECT_EQ(y.times.front(), x.times.front());
+      EXPECT_EQ(y.times.back(), x.times.back());
+      EXPECT_EQ(y.values.size(), y.times.size() * x.components);
+      kept.back().push_back(y.times.size());
+      if (x.path != P::rotation)
+        for (const float v : x.values) largest[x.path == P::scale] = std::max(largest[x.path == P::scale], std::fabs(double(v)));
+    }
+    double worst[3] = {0, 0, 0};  // translation / largest, rotation (rad), scale / largest
+    for (const float time : scene.animations[k].channels[0].times) {
+      Pose pa = rest_pose(plain), pb = rest_pose(quantized);
+      sample_animation(plain, k, time, pa);
+      sample_animation(quantized, k, time, pb);
+      const float4 &qa = pa.rotation[0], &qb = pb.rotation[0];
+      const double s = double(qa.x) * qb.x + double(qa.y) * qb.y + double(qa.z) * qb.z + double(qa.w) * qb.w < 0 ? -1 : 1;
+      const double chord = std::hypot(std::hypot(qa.x - s * qb.x, qa.y - s * qb.y), std::hypot(qa.z - s * qb.z, qa.w - s * qb.w));
+      worst[0] = std::max(worst[0], distance(pa.translation[0], pb.translation[0]) / largest[0]);
+      worst[1] = std::max(worst[1], 4 * std::asin(std::min(chord / 2, 1.0)));
+      if (largest[1] > 0) worst[2] = std::max(worst[2], distance(pa.scale[0], pb.scale[0]) / largest[1]);
+    }
+    EXPECT_LE(worst[0], std::sqrt(3.0) / 16384 + 1e-6);
+    EXPECT_LE(worst[1], 1.0 / 2048 + 2.0 / 32767 + 1e-6);  // (and the shorts' step)
+    EXPECT_LE(worst[2], std::sqrt(3.0) / 16384 + 1e-6);
+  }
+  EXPECT_EQ(kept[0][0], 2u);    // a line
+  EXPECT_LT(kept[0][1], 300u);  // smooth: many keys go
+  EXPECT_EQ(kept[0][2], 2u);    // constant
+  EXPECT_LT(kept[1][0], 300u);
+  EXPECT_LT(kept[1][1], 200u);
+  EXPECT_EQ(kept[2][0], 11u);   // STEP: a key where the value changes (t = 0, 1, ..., 10; the last among them)
+  EXPECT_LT(std::filesystem::file_size(dir / "q.glb"), std::filesystem::file_size(dir / "plain.glb") / 2);
+  test::expect_valid_gltf({dir / "q.glb"});
 }
 
 TEST(GltfQuantize, CommandsQuantizeWithDashQ) {
