@@ -5,7 +5,8 @@ against gltfpack.
 usage: run.py LODKIT FIXTURES OUT.json [--runs N]
 
 For each input (corpus meshes of at least 20,000 triangles, the two skinned test characters with
-their clips, and bunny00's LOD chain as `lodkit lod` writes it):
+their clips, the humanoid with a 20 s clip baked at 60 Hz, and bunny00's LOD chain as `lodkit lod`
+writes it):
   - lodkit: `lodkit optimize IN --lru` (vertex cache and fetch order) written plain, with -c, and
     with -c -q (gltfpack's default bit depths: 14-bit positions, 8-bit normals);
   - gltfpack (Debian, 0.18) on the same plain file: -noq (its reordering, no quantization), -c -noq
@@ -94,6 +95,9 @@ def main():
     os.makedirs(characters)
     run([fixtures, characters, "data/corpus/man.off"])
     inputs.append(("humanoid (skinned, 2 clips)", os.path.join(characters, "humanoid.glb")))
+    # A third clip baked at 60 Hz on every joint for 20 s (as exporters write animation): -q's key
+    # reduction and dropped still channels against gltfpack's 30 Hz resampling.
+    inputs.append(("humanoid (skinned, + 20 s baked at 60 Hz)", os.path.join(characters, "humanoid_baked.glb")))
     if os.path.exists(os.path.join(characters, "man.glb")):
         inputs.append(("man (skinned, 2 clips)", os.path.join(characters, "man.glb")))
     chain = os.path.join(tmp, "bunny-lod.glb")

@@ -283,8 +283,9 @@ TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
   EXPECT_EQ(std::count_if(doc["accessors"].begin(), doc["accessors"].end(), [](const Json& accessor) { return accessor["type"] == "MAT4"; }), 1);
   // Rotation keys in normalized shorts; translations stay floats; and the keys are those the curves
   // need: at every key time of the plain file (where the piecewise curves of both break), each node's
-  // pose lies within the reduction's bound, 2^-14 of a track's largest component (2^-11 rad for
-  // rotations, plus the shorts' step: 2 |dq| <= 2 / 32767).
+  // pose lies within the reduction's bound: 2^-12 of the mesh's extent per translation component,
+  // 2^-11 rad for rotations (plus the shorts' step: 2 |dq| <= 2 / 32767), 2^-14 of a scale track's
+  // largest component.
   ASSERT_EQ(plain.animations.size(), quantized.animations.size());
   size_t rotations = 0, keys = 0, kept = 0;
   for (size_t k = 0; k < plain.animations.size(); ++k) {
@@ -312,7 +313,7 @@ TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
         const double s = double(qa.x) * qb.x + double(qa.y) * qb.y + double(qa.z) * qb.z + double(qa.w) * qb.w < 0 ? -1 : 1;
         const double chord = std::hypot(std::hypot(qa.x - s * qb.x, qa.y - s * qb.y), std::hypot(qa.z - s * qb.z, qa.w - s * qb.w));
         EXPECT_LE(4 * std::asin(std::min(chord / 2, 1.0)), 1.0 / 2048 + 2.0 / 32767 + 1e-6) << k << " node " << n << " t " << time;
-        EXPECT_LE(distance(pa.translation[n], pb.translation[n]), std::sqrt(3.0) * largest[0] / 16384 + 1e-6) << k << " node " << n;
+        EXPECT_LE(distance(pa.translation[n], pb.translation[n]), std::sqrt(3.0) * step * 16383 / 4096 + 1e-6) << k << " node " << n;
         EXPECT_LE(distance(pa.scale[n], pb.scale[n]), std::sqrt(3.0) * largest[1] / 16384 + 1e-6) << k << " node " << n;
       }
     }
@@ -570,19 +571,26 @@ TEST(GltfQuantize, UvsKeepFloatsWhereNoBoxCanHold) {
   }
 }
 
-// -q keeps the keys a curve needs. A 10 s clip baked at 60 Hz: a translation moving on a line
+// -q keeps the keys a curve needs. Clips baked at 60 Hz for 10 s: a translation moving on a line
 // (2 keys are enough), a smooth translation, rotation and scale, a constant scale, and a STEP
-// translation with runs of equal keys. At every baked key time (where the piecewise curves of both
-// files break) each pose lies within the bound, the clip keeps its length, the smooth curves lose
-// most keys, and the file shrinks; without -q every key stays.
+// translation with runs of equal keys. A channel holding its node's own value goes (a child
+// joint's), unless another clip animates that property (then it restores it) or the clip would get
+// shorter. At every baked key time (where the piecewise curves of both files break) each node's
+// pose lies within the bound, each channel keeps its time range, the smooth curves lose many keys,
+// and the file shrinks; without -q every key stays.
 TEST(GltfQuantize, AnimationsKeepTheKeysTheirCurvesNeed) {
   TempDir dir;
   Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 24, 12));
   ASSERT_EQ(scene.nodes.size(), 1u);
-  const auto channel = [](AnimationPath path, Interpolation interpolation, uint32_t components, auto&& f) {
+  Node joint;  // a child at (0, 1, 0)
+  joint.name = "joint", joint.parent = 0, joint.translation = {0, 1, 0};
+  scene.nodes[0].children.push_back(1);
+  scene.nodes.push_back(joint);
+  const auto channel = [](AnimationPath path, Interpolation interpolation, uint32_t components, auto&& f, int32_t node = 0,
+                          int seconds = 10) {
     AnimationChannel ch;
-    ch.node = 0, ch.path = path, ch.interpolation = interpolation, ch.components = components;
-    for (int k = 0; k <= 600; ++k) {
+    ch.node = node, ch.path = path, ch.interpolation = interpolation, ch.components = components;
+    for (int k = 0; k <= 60 * seconds; ++k) {
       const float t = float(k) / 60;
       ch.times.push_back(t);
       const std::array<float, 4> v = f(t);
@@ -605,23 +613,35 @@ TEST(GltfQuantize, AnimationsKeepTheKeysTheirCurvesNeed) {
             }),
             channel(P::scale, linear, 3, [](float) { return std::array<float, 4>{1, 2, 1, 0}; })}),
       clip({channel(P::translation, linear, 3, [](float t) { return std::array<float, 4>{3 * std::sin(0.25f * t), std::cos(0.5f * t), 0.1f * t, 0}; }),
-            channel(P::scale, linear, 3, [](float t) { return std::array<float, 4>{1 + 0.3f * std::sin(0.5f * t), 1, 1, 0}; })}),
-      clip({channel(P::translation, Interpolation::step, 3, [](float t) { return std::array<float, 4>{std::floor(t), 0, 0, 0}; })})};
+            channel(P::scale, linear, 3, [](float t) { return std::array<float, 4>{1 + 0.3f * std::sin(0.5f * t), 1, 1, 0}; }),
+            // The node's own rotation, which clip 0 animates: it stays.
+            channel(P::rotation, linear, 4, [](float) { return std::array<float, 4>{0, 0, 0, 1}; }),
+            // The joint where it stands: changes nothing, and goes.
+            channel(P::translation, linear, 3, [](float) { return std::array<float, 4>{0, 1, 0, 0}; }, 1)}),
+      clip({channel(P::translation, Interpolation::step, 3, [](float t) { return std::array<float, 4>{std::floor(t), 0, 0, 0}; }),
+            // The joint's own scale, but for 12 s: the clip would get shorter without it, so it stays.
+            channel(P::scale, linear, 3, [](float) { return std::array<float, 4>{1, 1, 1, 0}; }, 1, 12)})};
   write_scene(scene, dir / "plain.glb");
   write_scene(scene, dir / "q.glb", {.quantize = true});
   const Scene plain = read_scene(dir / "plain.glb"), quantized = read_scene(dir / "q.glb");
   ASSERT_EQ(quantized.animations.size(), 3u);
+  float3 lo, hi;
+  bounding_box(scene.primitives[0].mesh, lo, hi);
+  const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});  // translations' tolerance: 2^-12 of it
   // Keys kept per clip and channel.
   std::vector<std::vector<size_t>> kept;
+  const size_t channels[3] = {3, 3, 2};
   for (size_t k = 0; k < 3; ++k) {
     SCOPED_TRACE(k);
     ASSERT_EQ(plain.animations[k].channels.size(), scene.animations[k].channels.size());
-    ASSERT_EQ(quantized.animations[k].channels.size(), scene.animations[k].channels.size());
+    ASSERT_EQ(quantized.animations[k].channels.size(), channels[k]);
     double largest[2] = {0, 0};
     kept.emplace_back();
-    for (size_t c = 0; c < scene.animations[k].channels.size(); ++c) {
+    for (size_t c = 0; c < channels[k]; ++c) {
       const AnimationChannel &x = scene.animations[k].channels[c], &y = quantized.animations[k].channels[c];
-      EXPECT_EQ(plain.animations[k].channels[c].times.size(), 601u);  // (without -q)
+      ASSERT_EQ(y.node, x.node);
+      ASSERT_EQ(y.path, x.path);
+      EXPECT_EQ(plain.animations[k].channels[c].times.size(), x.times.size());  // (without -q)
       ASSERT_FALSE(y.times.empty());
       EXPECT_EQ(y.times.front(), x.times.front());
       EXPECT_EQ(y.times.back(), x.times.back());
@@ -631,18 +651,19 @@ TEST(GltfQuantize, AnimationsKeepTheKeysTheirCurvesNeed) {
         for (const float v : x.values) largest[x.path == P::scale] = std::max(largest[x.path == P::scale], std::fabs(double(v)));
     }
     double worst[3] = {0, 0, 0};  // translation / largest, rotation (rad), scale / largest
-    for (const float time : scene.animations[k].channels[0].times) {
-      Pose pa = rest_pose(plain), pb = rest_pose(quantized);
-      sample_animation(plain, k, time, pa);
-      sample_animation(quantized, k, time, pb);
-      const float4 &qa = pa.rotation[0], &qb = pb.rotation[0];
-      const double s = double(qa.x) * qb.x + double(qa.y) * qb.y + double(qa.z) * qb.z + double(qa.w) * qb.w < 0 ? -1 : 1;
-      const double chord = std::hypot(std::hypot(qa.x - s * qb.x, qa.y - s * qb.y), std::hypot(qa.z - s * qb.z, qa.w - s * qb.w));
-      worst[0] = std::max(worst[0], distance(pa.translation[0], pb.translation[0]) / largest[0]);
-      worst[1] = std::max(worst[1], 4 * std::asin(std::min(chord / 2, 1.0)));
-      if (largest[1] > 0) worst[2] = std::max(worst[2], distance(pa.scale[0], pb.scale[0]) / largest[1]);
-    }
-    EXPECT_LE(worst[0], std::sqrt(3.0) / 16384 + 1e-6);
+    for (const float time : scene.animations[k].channels.back().times)
+      for (size_t n = 0; n < 2; ++n) {
+        Pose pa = rest_pose(plain), pb = rest_pose(quantized);
+        sample_animation(plain, k, time, pa);
+        sample_animation(quantized, k, time, pb);
+        const float4 &qa = pa.rotation[n], &qb = pb.rotation[n];
+        const double s = double(qa.x) * qb.x + double(qa.y) * qb.y + double(qa.z) * qb.z + double(qa.w) * qb.w < 0 ? -1 : 1;
+        const double chord = std::hypot(std::hypot(qa.x - s * qb.x, qa.y - s * qb.y), std::hypot(qa.z - s * qb.z, qa.w - s * qb.w));
+        worst[0] = std::max(worst[0], distance(pa.translation[n], pb.translation[n]));
+        worst[1] = std::max(worst[1], 4 * std::asin(std::min(chord / 2, 1.0)));
+        worst[2] = std::max(worst[2], distance(pa.scale[n], pb.scale[n]) / std::max(largest[1], 1.0));
+      }
+    EXPECT_LE(worst[0], std::sqrt(3.0) * extent / 4096 + 1e-6);
     EXPECT_LE(worst[1], 1.0 / 2048 + 2.0 / 32767 + 1e-6);  // (and the shorts' step)
     EXPECT_LE(worst[2], std::sqrt(3.0) / 16384 + 1e-6);
   }
@@ -651,7 +672,9 @@ TEST(GltfQuantize, AnimationsKeepTheKeysTheirCurvesNeed) {
   EXPECT_EQ(kept[0][2], 2u);    // constant
   EXPECT_LT(kept[1][0], 300u);
   EXPECT_LT(kept[1][1], 200u);
+  EXPECT_EQ(kept[1][2], 2u);
   EXPECT_EQ(kept[2][0], 11u);   // STEP: a key where the value changes (t = 0, 1, ..., 10; the last among them)
+  EXPECT_EQ(kept[2][1], 2u);    // (constant)
   EXPECT_LT(std::filesystem::file_size(dir / "q.glb"), std::filesystem::file_size(dir / "plain.glb") / 2);
   test::expect_valid_gltf({dir / "q.glb"});
 }

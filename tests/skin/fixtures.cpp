@@ -487,6 +487,35 @@ Scene humanoid_scene() {
   return rigged_scene("humanoid", humanoid_mesh(), humanoid_rig, std::move(clips));
 }
 
+Scene humanoid_baked_scene() {
+  Scene scene = humanoid_scene();
+  const Pose rest = rest_pose(scene);
+  Animation clip;
+  clip.name = "dance (baked)";
+  for (uint32_t j = 0; j < joint_count; ++j) {
+    AnimationChannel t, r, s;
+    t.node = r.node = s.node = int32_t(j);
+    t.path = AnimationPath::translation, r.path = AnimationPath::rotation, s.path = AnimationPath::scale;
+    r.components = 4;
+    const bool still = j % 3 == 2;
+    const double frequency = 0.4 + 0.13 * (j % 7), amplitude = 8.5 + 2.9 * (j % 5);  // Hz, degrees
+    for (int k = 0; k <= 20 * 60; ++k) {
+      const float time = float(k) / 60;
+      for (AnimationChannel* c : {&t, &r, &s}) c->times.push_back(time);
+      float3 p = rest.translation[j];
+      if (j == hips) p.z += 1.2f * time, p.y += 0.03f * float(std::sin(2 * std::numbers::pi * 1.8 * time));
+      t.values.insert(t.values.end(), {p.x, p.y, p.z});
+      const float swing = still ? 0.0f : float(amplitude * std::sin(2 * std::numbers::pi * frequency * time + j));
+      const float4 q = unit(qmul(rest.rotation[j], axis_angle(axis_x, swing)));
+      r.values.insert(r.values.end(), {q.x, q.y, q.z, q.w});
+      s.values.insert(s.values.end(), {rest.scale[j].x, rest.scale[j].y, rest.scale[j].z});
+    }
+    clip.channels.insert(clip.channels.end(), {t, r, s});
+  }
+  scene.animations.push_back(std::move(clip));
+  return scene;
+}
+
 Scene rigged_man_scene(const std::filesystem::path& man_off) {
   Mesh source = read_mesh(man_off);
   Mesh mesh;
@@ -619,6 +648,8 @@ std::vector<std::filesystem::path> write_fixtures(const std::filesystem::path& o
   std::vector<std::filesystem::path> written;
   written.push_back(out_dir / "humanoid.glb");
   write_scene(humanoid_scene(), written.back());
+  written.push_back(out_dir / "humanoid_baked.glb");
+  write_scene(humanoid_baked_scene(), written.back());
   std::error_code ec;
   if (!man_off.empty() && std::filesystem::is_regular_file(man_off, ec)) {
     written.push_back(out_dir / "man.glb");

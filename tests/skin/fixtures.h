@@ -49,6 +49,11 @@ int32_t joint_parent(uint32_t joint);     // -1 for hips
 // up to 75, arms lowered and swinging with elbows bent 60-90, a hips bob), 1 "wave" (2.0 s, right arm
 // raised, elbow between 60 and 120 degrees, left arm lowered). Linear interpolation, quaternions.
 Scene humanoid_scene();
+// The humanoid with a third clip, 2 "dance (baked)": 20 s keyed at 60 Hz on every joint's
+// translation, rotation and scale, as exporters bake animation. The hips walk forward (1.2 m/s) and
+// bob; two joints in three swing about their x axis (8.5-20 degrees, 0.4-1.2 Hz), the third stays
+// still; translations and scales hold the rest values but the hips'. For the compress benchmark.
+Scene humanoid_baked_scene();
 inline constexpr uint32_t humanoid_triangles = 7520;
 inline constexpr uint32_t humanoid_vertices = 3774;
 
@@ -83,7 +88,8 @@ std::array<double, tentacle_bones> tentacle_weights(double x);
 Mesh tentacle_mesh(uint32_t along = 64, uint32_t around = 12);
 Scene tentacle_scene(uint32_t along = 64, uint32_t around = 12);
 
-// Writes humanoid.glb, and man.glb when `man_off` names an existing file; returns the paths written.
+// Writes humanoid.glb, humanoid_baked.glb, and man.glb when `man_off` names an existing file; returns
+// the paths written.
 std::vector<std::filesystem::path> write_fixtures(const std::filesystem::path& out_dir, const std::filesystem::path& man_off = {});
 
 }  // namespace lod::fixtures

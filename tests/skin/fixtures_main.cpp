@@ -1,5 +1,5 @@
-// lodkit_fixtures OUT_DIR [MAN_OFF]: writes the skinned test characters (humanoid.glb, and man.glb
-// when man.off is there) for the skin benchmark and the README.
+// lodkit_fixtures OUT_DIR [MAN_OFF]: writes the skinned test characters (humanoid.glb,
+// humanoid_baked.glb, and man.glb when man.off is there) for the benchmarks and the README.
 #include <cstdio>
 #include <exception>
 
