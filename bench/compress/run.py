@@ -33,6 +33,7 @@ import sys
 import tempfile
 import time
 
+BAKED_CLIP = "dance (baked)"  # humanoid_baked.glb's third clip (tests/skin/fixtures.h)
 CORPUS = ["bunny00.off", "armadillo.off", "ChineseDragon-10kv.off", "fandisk_large.off", "elephant.off",
           "mushroom.off", "man.off", "refined_elephant.off", "femur.off", "cylinder.off"]
 
@@ -81,6 +82,7 @@ def hausdorff(lodkit, a, b):
 def main():
     lodkit, fixtures, out = sys.argv[1:4]
     runs = int(sys.argv[sys.argv.index("--runs") + 1]) if "--runs" in sys.argv else 5
+    anim_error = sys.argv[sys.argv.index("--anim-error") + 1] if "--anim-error" in sys.argv else None
     tmp = tempfile.mkdtemp(prefix="lodkit-bench-compress-")
     inputs = []
     for name in CORPUS:
@@ -145,6 +147,11 @@ def main():
         # (A skinned character is compared at rest, its bind pose: flatten places a quantized one
         # by the grid its joints carry.)
         row["hausdorff"] = {tool: hausdorff(lodkit, files["lodkit"], files[tool]) for tool in ["lodkit -c -q", "gltfpack -c"]}
+        # The baked clip's animation error (lodkit_bench_anim_error: the largest joint distance in
+        # world space at 240 Hz), which the sizes trade against: -q drops keys, gltfpack resamples.
+        if anim_error and src.endswith("humanoid_baked.glb"):
+            row["anim_error_m"] = {tool: json.loads(run([anim_error, src, files[tool], BAKED_CLIP]))["joint_error"]
+                                   for tool in ["lodkit -c", "lodkit -c -q", "lodkit -c -q khr", "gltfpack -c"]}
         # Draco, from the same plain file.
         draco = {"lodkit --draco": stem + "-draco.glb", "draco_transcoder": stem + "-transcoder.glb"}
         commands = {"lodkit --draco": [lodkit, "convert", files["lodkit"], draco["lodkit --draco"], "--draco"],
@@ -190,6 +197,11 @@ def main():
           f"min {min(ratios):.3f}, max {max(ratios):.3f} over {len(ratios)} inputs (runs per load time: {runs})")
     print(f"lodkit -c -q ÷ gltfpack -c, raw size: median {statistics.median(qratios):.3f}, "
           f"min {min(qratios):.3f}, max {max(qratios):.3f}")
+    for r in rows:
+        if "anim_error_m" in r:
+            e = r["anim_error_m"]
+            print(f"{r['input']}: clip '{BAKED_CLIP}', largest joint error (world space, 240 Hz): " +
+                  ", ".join(f"{tool} {e[tool] * 1000:.3f} mm" for tool in e))
     print()
     print("KHR_meshopt_compression with vertex codec version 1 (`--meshopt-khr`, lodkit's own encoder and decoder), against"
           " EXT_meshopt_compression (version 0, meshoptimizer's) from lodkit and gltfpack:")
