@@ -39,6 +39,7 @@
 #include "core/vec3d.h"
 #include "io/gltf_compression.h"
 #include "io/gltf_types.h"
+#include "io/scene_world.h"
 #include "io/text_reader.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
@@ -1865,28 +1866,82 @@ void fit_morph_weights(tg::Model& model, const Document& source, const std::vect
 
 // ---- -q: animation keys ---------------------------------------------------------------------------
 
-// How far -q lets a reduced curve stray from a key it drops. Translations: 2^-12 of the meshes'
-// extent (the largest side of their bounding box, in their own units: a bone's, in most rigs; 0.45
-// mm on a 1.85 m character), not of the track's values, which a walk takes far from the origin;
-// rotations: 2^-11 radians (0.028 degrees: a 1 m bone's tip moves 0.5 mm; Unity's keyframe
-// reduction defaults to 0.5 degrees); scales, and translations in a file without meshes: 2^-14 of
-// the track's largest component (the -c -q exponential filter's bound).
+// How far -q lets a reduced curve stray from a key it drops, per animated node: a world-space
+// distance `reach`, 2^-12 of the scene's extent at rest (the largest side of its bounding box; 0.45
+// mm on a 1.85 m character). A translation may stray by `reach` in world space (in its parent's
+// units: divided by the parent's scale); a rotation by reach / lever radians, lever the node's
+// largest distance to a descendant node plus an eighth of the extent (the geometry beyond the last
+// joints), at most 2^-7 rad, so that what the node carries moves by about `reach` (as animation
+// compressors judge rotations by their effect on virtual vertices): a hip takes 2^-12 rad where an
+// ankle takes 4x that. Scales, and nodes lodkit did not read (or a scene without meshes):
+// 2^-14 of the track's largest component, 2^-11 rad for rotations.
 struct KeyTolerances {
-  double translation = 0;  // 0: relative
   double rotation = 1.0 / 2048, relative = 1.0 / 16384;
-  double of(const std::string& path, double largest) const {
-    return path == "rotation" ? rotation : path == "translation" && translation > 0 ? translation : relative * largest;
+  std::vector<double> node_translation, node_rotation;  // per node; empty: the defaults
+  double of(const std::string& path, int node, double largest) const {
+    const bool known = node >= 0 && size_t(node) < node_rotation.size();
+    if (path == "rotation") return known ? node_rotation[size_t(node)] : rotation;
+    if (path == "translation" && known) return node_translation[size_t(node)];
+    return relative * largest;
   }
 };
 
 KeyTolerances key_tolerances(const Scene& scene) {
-  float3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
-  for (const Primitive& p : scene.primitives)
-    for (const float3& v : p.mesh.positions)
-      if (std::isfinite(v.x + v.y + v.z))
-        lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)}, hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
   KeyTolerances t;
-  if (hi.x >= lo.x) t.translation = std::max({double(hi.x) - lo.x, double(hi.y) - lo.y, double(hi.z) - lo.z}) / 4096;
+  const size_t n = scene.nodes.size();
+  const std::vector<io::Matrix> world = io::rest_world_matrices(scene);
+  // The scene's box at rest: each primitive's box where a node draws it (a skinned one where its
+  // first joint's bind placement puts it).
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (size_t i = 0; i < n; ++i) {
+    const Node& node = scene.nodes[i];
+    if (node.mesh < 0) continue;
+    io::Matrix place = world[i];
+    if (node.skin >= 0 && size_t(node.skin) < scene.skins.size()) {
+      const Skin& skin = scene.skins[size_t(node.skin)];
+      if (skin.joints.empty() || skin.inverse_bind_matrices.empty() || skin.joints[0] < 0 || size_t(skin.joints[0]) >= n) continue;
+      const io::Matrix& j = world[size_t(skin.joints[0])];
+      const std::array<float, 16>& ibm = skin.inverse_bind_matrices[0];
+      for (size_t c = 0; c < 4; ++c)
+        for (size_t r = 0; r < 4; ++r) {
+          double sum = 0;
+          for (size_t k = 0; k < 4; ++k) sum += j[4 * k + r] * ibm[4 * c + k];
+          place[4 * c + r] = sum;
+        }
+    }
+    for (const Primitive& p : scene.primitives) {
+      if (p.gltf_mesh != uint32_t(node.mesh) || p.mesh.positions.empty()) continue;
+      float3 a, b;
+      bounding_box(p.mesh, a, b);
+      for (int corner = 0; corner < 8; ++corner) {
+        const double v[3] = {corner & 1 ? b.x : a.x, corner & 2 ? b.y : a.y, corner & 4 ? b.z : a.z};
+        for (size_t r = 0; r < 3; ++r) {
+          const double x = place[r] * v[0] + place[4 + r] * v[1] + place[8 + r] * v[2] + place[12 + r];
+          lo[r] = std::min(lo[r], x), hi[r] = std::max(hi[r], x);
+        }
+      }
+    }
+  }
+  const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+  if (!(extent > 0) || !std::isfinite(extent)) return t;
+  const double reach = extent / 4096;
+  std::vector<double> lever(n, 0);
+  for (size_t d = 0; d < n; ++d) {  // each node lengthens its ancestors' levers
+    size_t steps = 0;
+    for (int32_t a = scene.nodes[d].parent; a >= 0 && size_t(a) < n && steps < n; a = scene.nodes[size_t(a)].parent, ++steps)
+      lever[size_t(a)] = std::max(lever[size_t(a)], std::hypot(world[d][12] - world[size_t(a)][12], world[d][13] - world[size_t(a)][13],
+                                                               world[d][14] - world[size_t(a)][14]));
+  }
+  t.node_translation.assign(n, reach);
+  t.node_rotation.assign(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    t.node_rotation[i] = std::min(1.0 / 128, reach / (lever[i] + extent / 8));
+    const int32_t parent = scene.nodes[i].parent;
+    if (parent < 0 || size_t(parent) >= n) continue;
+    const io::Matrix& m = world[size_t(parent)];
+    const double scale = std::max({std::hypot(m[0], m[1], m[2]), std::hypot(m[4], m[5], m[6]), std::hypot(m[8], m[9], m[10])});
+    if (scale > 0 && std::isfinite(scale)) t.node_translation[i] = reach / scale;
+  }
   return t;
 }
 
@@ -1983,7 +2038,8 @@ std::vector<bool> still_channels(const tg::Model& model, const Document& source,
                                                     : float4{0, 0, 0, 1};
       const std::vector<float4> keys = source.decode_floats<float4>(sampler.output, true);
       still[c] = !keys.empty() && std::all_of(keys.begin(), keys.end(), [&](const float4& q) {
-        return std::isfinite(q.x + q.y + q.z + q.w) && core::rotation_angle(core::normalized(q), core::normalized(rest)) <= tolerances.rotation;
+        return std::isfinite(q.x + q.y + q.z + q.w) &&
+               core::rotation_angle(core::normalized(q), core::normalized(rest)) <= tolerances.of("rotation", ch.target_node, 0);
       });
     } else {
       const std::vector<double>& given = ch.target_path == "scale" ? node.scale : node.translation;
@@ -1993,7 +2049,7 @@ std::vector<bool> still_channels(const tg::Model& model, const Document& source,
       const std::vector<float3> keys = source.decode_floats<float3>(sampler.output, true);
       double largest = std::max({std::fabs(rest[0]), std::fabs(rest[1]), std::fabs(rest[2])});
       for (const float3& v : keys) largest = std::max({largest, std::fabs(double(v.x)), std::fabs(double(v.y)), std::fabs(double(v.z))});
-      const double tolerance = tolerances.of(ch.target_path, largest);
+      const double tolerance = tolerances.of(ch.target_path, ch.target_node, largest);
       still[c] = !keys.empty() && std::all_of(keys.begin(), keys.end(), [&](const float3& v) {
         return std::fabs(v.x - rest[0]) <= tolerance && std::fabs(v.y - rest[1]) <= tolerance && std::fabs(v.z - rest[2]) <= tolerance;
       });
@@ -2396,7 +2452,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     node.mesh = mesh_remap[m];
   }
   // -q: channels that change nothing go (still_channels), decided before any goes.
-  const KeyTolerances tolerances = key_tolerances(scene);
+  const KeyTolerances tolerances = options.quantize ? key_tolerances(scene) : KeyTolerances{};
   std::vector<std::vector<bool>> still(model.animations.size());
   if (options.quantize)
     for (size_t a = 0; a < model.animations.size(); ++a) still[a] = still_channels(model, source, a, tolerances);
@@ -2509,8 +2565,10 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         tg::AnimationSampler& sampler = anim.samplers[k];
         std::string path;
         bool one_path = true;
+        std::vector<int> nodes;  // (a sampler may drive several)
         for (const tg::AnimationChannel& ch : anim.channels)
-          if (ch.sampler == int(k)) one_path = one_path && (path.empty() || path == ch.target_path), path = ch.target_path;
+          if (ch.sampler == int(k))
+            one_path = one_path && (path.empty() || path == ch.target_path), path = ch.target_path, nodes.push_back(ch.target_node);
         const bool rotation = path == "rotation";
         if (!one_path || (!rotation && path != "translation" && path != "scale")) continue;
         if (sampler.input < 0 || size_t(sampler.input) >= model.accessors.size() || sampler.output < 0 ||
@@ -2535,7 +2593,8 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         const bool finite = std::all_of(out.values.begin(), out.values.end(), [](float x) { return std::isfinite(x); });
         double largest = 0;
         for (const float x : out.values) largest = std::max(largest, std::fabs(double(x)));
-        const double tolerance = tolerances.of(path, largest);
+        double tolerance = INFINITY;
+        for (const int node : nodes) tolerance = std::min(tolerance, tolerances.of(path, node, largest));
         const std::vector<uint32_t> keep = cubic || !finite ? std::vector<uint32_t>{}
                                                             : kept_keys(out.times, out.values, components, rotation, step, tolerance);
         if (!keep.empty() && keep.size() < n && keep.size() * (4 + value_bytes) < n * value_bytes) {

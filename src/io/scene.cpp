@@ -10,6 +10,7 @@
 
 #include "core/heap.h"
 #include "core/vec3d.h"
+#include "io/scene_world.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
 
@@ -17,7 +18,8 @@ namespace lod {
 
 namespace {
 
-using Matrix = std::array<double, 16>;  // column-major, like glTF
+using io::Matrix;
+using io::rest_world_matrices;
 
 constexpr Matrix identity_matrix = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
 
@@ -96,31 +98,6 @@ struct Placement {
   // A tangent's xyz goes with the surface: by the upper 3x3 itself.
   float3 apply_to_tangent(const float3& t) const { return core::unit_float3(linear(t), t); }
 };
-
-// Every node's world matrix in the nodes' own transforms (the pose the file was saved in), through
-// Node::parent; a node on a malformed parent cycle counts as a root.
-std::vector<Matrix> rest_world_matrices(const Scene& scene) {
-  const size_t n = scene.nodes.size();
-  std::vector<Matrix> world(n);
-  std::vector<uint8_t> state(n, 0);  // 0 to do, 1 on the current path, 2 done
-  std::vector<size_t> path;
-  for (size_t start = 0; start < n; ++start) {
-    for (size_t at = start; state[at] == 0;) {  // walk up to a done node or a root
-      state[at] = 1, path.push_back(at);
-      const int32_t parent = scene.nodes[at].parent;
-      if (parent < 0 || size_t(parent) >= n || state[size_t(parent)] == 1) break;
-      at = size_t(parent);
-    }
-    for (auto it = path.rbegin(); it != path.rend(); ++it) {  // then down, root first
-      const int32_t parent = scene.nodes[*it].parent;
-      const bool above = parent >= 0 && size_t(parent) < n && state[size_t(parent)] == 2;
-      world[*it] = above ? multiply(world[size_t(parent)], local_matrix(scene.nodes[*it])) : local_matrix(scene.nodes[*it]);
-      state[*it] = 2;
-    }
-    path.clear();
-  }
-  return world;
-}
 
 // Where a skinned mesh drawn by `node` is placed. glTF ignores the node's transform: the joints
 // place it. Flattening gives the bind pose, in the mesh's own space, except where every joint
@@ -210,8 +187,30 @@ std::vector<Instance> collect_instances(const Scene& scene) {
   return instances;
 }
 
-
 }  // namespace
+
+std::vector<Matrix> io::rest_world_matrices(const Scene& scene) {
+  const size_t n = scene.nodes.size();
+  std::vector<Matrix> world(n);
+  std::vector<uint8_t> state(n, 0);  // 0 to do, 1 on the current path, 2 done
+  std::vector<size_t> path;
+  for (size_t start = 0; start < n; ++start) {
+    for (size_t at = start; state[at] == 0;) {  // walk up to a done node or a root
+      state[at] = 1, path.push_back(at);
+      const int32_t parent = scene.nodes[at].parent;
+      if (parent < 0 || size_t(parent) >= n || state[size_t(parent)] == 1) break;
+      at = size_t(parent);
+    }
+    for (auto it = path.rbegin(); it != path.rend(); ++it) {  // then down, root first
+      const int32_t parent = scene.nodes[*it].parent;
+      const bool above = parent >= 0 && size_t(parent) < n && state[size_t(parent)] == 2;
+      world[*it] = above ? multiply(world[size_t(parent)], local_matrix(scene.nodes[*it])) : local_matrix(scene.nodes[*it]);
+      state[*it] = 2;
+    }
+    path.clear();
+  }
+  return world;
+}
 
 // Streams: a vertex stream is kept only when every flattened primitive has it. Filling the gaps with
 // made-up values (zero UVs, arbitrary normals) would look like real data to later stages, which
