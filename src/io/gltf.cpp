@@ -1945,57 +1945,114 @@ KeyTolerances key_tolerances(const Scene& scene) {
   return t;
 }
 
-// The keys of a sampler that -q keeps (indices, ascending; the first and the last always, so the
-// clip keeps its length). LINEAR: greedily, each kept key far after the previous one while every key
-// between still lies within `tolerance` of the two's interpolation (the largest component
-// difference; rotations: the angle between the key and the slerp, in radians); the distance is
-// found by doubling, then bisection, so a run of r keys costs O(r log r) checks. STEP: a key that
-// repeats the previous one's value goes. Keys whose times do not increase are all kept.
-std::vector<uint32_t> kept_keys(const std::vector<float>& times, const std::vector<float>& values, size_t components,
-                                bool rotation, bool step, double tolerance) {
+// A sampler's keys: times, and values (`components` per key).
+struct Keys {
+  std::vector<float> times, values;
+};
+
+// The keys -q keeps of a LINEAR or STEP sampler (the first and the last always, at their times, so
+// the clip keeps its length). STEP: the keys whose value differs from the one before. LINEAR:
+// greedily, each kept key as far after the previous one as every key between lies within
+// `tolerance` of the two's interpolation (the largest component difference; rotations: the angle to
+// the slerp, in radians), found by doubling, then bisection (a run of r keys costs O(r log r)
+// checks). A kept key between the first and the last moves to the nearest multiple of a power of
+// two, 2^-8 s or less and at most a quarter of the shortest key interval, with the curve's value
+// there: the reduced curve's corners stay on the curve, and the times code in few mantissa bits
+// (irregular times otherwise cost most of a reduced clip). Keys whose times do not increase are all
+// kept.
+Keys reduce_keys(const std::vector<float>& times, const std::vector<float>& values, size_t components, bool rotation, bool step,
+                 double tolerance) {
   const size_t n = times.size();
-  std::vector<uint32_t> keep;
-  if (n <= 2) {
-    for (uint32_t k = 0; k < n; ++k) keep.push_back(k);
-    return keep;
-  }
   const auto key = [&](size_t k) { return values.data() + k * components; };
-  if (step) {
-    for (uint32_t k = 0; k < n; ++k)
-      if (k == 0 || k + 1 == n || !std::equal(key(k), key(k) + components, key(k - 1))) keep.push_back(k);
-    return keep;
+  Keys out;
+  const auto take = [&](size_t k) {
+    out.times.push_back(times[k]);
+    out.values.insert(out.values.end(), key(k), key(k) + components);
+  };
+  bool increasing = true;
+  for (size_t k = 1; k < n; ++k) increasing = increasing && times[k] > times[k - 1];
+  if (n <= 2 || !increasing) {
+    for (size_t k = 0; k < n; ++k) take(k);
+    return out;
   }
-  const auto quaternion = [&](size_t k) { return core::normalized({key(k)[0], key(k)[1], key(k)[2], key(k)[3]}); };
-  // Whether every key strictly between i and j lies on the interpolation of i and j.
-  const auto fits = [&](size_t i, size_t j) {
-    const double t0 = times[i], span = double(times[j]) - t0;
-    for (size_t k = i + 1; k < j; ++k) {
+  if (step) {
+    for (size_t k = 0; k < n; ++k)
+      if (k == 0 || k + 1 == n || !std::equal(key(k), key(k) + components, key(k - 1))) take(k);
+    return out;
+  }
+  // The lattice, where its multiples stay exact floats.
+  double gap = INFINITY, reach = 0;
+  for (size_t k = 1; k < n; ++k) gap = std::min(gap, double(times[k]) - times[k - 1]);
+  for (const float t : times) reach = std::max(reach, std::fabs(double(t)));
+  double lattice = std::min(std::exp2(std::floor(std::log2(gap / 4))), 1.0 / 256);
+  if (!(lattice >= 0x1p-20) || reach / lattice >= 0x1p23) lattice = 0;
+  // Each key's corners: 0 at the key, 1 at its snapped time with the curve's value there (the first
+  // and last keys, or a key whose snapped time leaves its neighbours' interval: as corner 0).
+  const auto quaternion = [](const float* q) { return core::normalized({q[0], q[1], q[2], q[3]}); };
+  std::vector<double> corner_time(2 * n);
+  std::vector<float> corner_value(2 * n * components);
+  for (size_t k = 0; k < n; ++k)
+    for (size_t snap = 0; snap < 2; ++snap) {
+      double t = times[k];
+      size_t from = k, to = k;  // the original keys the corner lies between
+      if (snap && lattice > 0 && k > 0 && k + 1 < n) {
+        const double snapped = std::round(t / lattice) * lattice;
+        if (snapped > times[k - 1] && snapped < times[k + 1]) t = snapped, from = snapped < times[k] ? k - 1 : k, to = from + 1;
+      }
+      corner_time[2 * k + snap] = t;
+      float* v = corner_value.data() + (2 * k + snap) * components;
+      const double s = to > from ? (t - times[from]) / (double(times[to]) - times[from]) : 0;
+      if (rotation) {
+        const float4 q = core::slerp(quaternion(key(from)), quaternion(key(to)), float(s));
+        v[0] = q.x, v[1] = q.y, v[2] = q.z, v[3] = q.w;
+      } else {
+        for (size_t c = 0; c < components; ++c) v[c] = float(key(from)[c] + s * (double(key(to)[c]) - key(from)[c]));
+      }
+    }
+  // Whether every key strictly between corners a and b lies on their interpolation.
+  const auto fits = [&](size_t a, size_t b) {
+    const double t0 = corner_time[a], span = corner_time[b] - t0;
+    const float *va = corner_value.data() + a * components, *vb = corner_value.data() + b * components;
+    for (size_t k = a / 2; k <= b / 2; ++k) {
+      if (!(times[k] > t0 && times[k] < corner_time[b])) continue;
       const double s = (times[k] - t0) / span;
       if (rotation) {
-        if (core::rotation_angle(core::slerp(quaternion(i), quaternion(j), float(s)), quaternion(k)) > tolerance) return false;
+        if (core::rotation_angle(core::slerp(quaternion(va), quaternion(vb), float(s)), quaternion(key(k))) > tolerance) return false;
         continue;
       }
       for (size_t c = 0; c < components; ++c)
-        if (std::fabs(double(key(i)[c]) + s * (double(key(j)[c]) - key(i)[c]) - key(k)[c]) > tolerance) return false;
+        if (std::fabs(double(va[c]) + s * (double(vb[c]) - va[c]) - key(k)[c]) > tolerance) return false;
     }
     return true;
   };
-  // The last key of the run from i whose times increase.
-  std::vector<size_t> run_end(n, n - 1);
-  for (size_t k = n - 1; k-- > 0;) run_end[k] = times[k + 1] > times[k] ? run_end[k + 1] : k;
-  keep.push_back(0);
-  for (size_t i = 0; i + 1 < n;) {
-    const size_t last = std::max(run_end[i], i + 1);  // (a key at the same time as i: kept next)
-    size_t good = i + 1, stride = 1;
-    while (good + stride <= last && fits(i, good + stride)) good += stride, stride *= 2;
-    for (size_t bad = std::min(good + stride, last + 1); bad - good > 1;) {  // fits(i, good); not fits(i, bad) or past the run
+  // From corner a, the corner of key j that fits: snapped if it does, else at the key; none: npos.
+  // A corner before its key leaves the key to the next segment, so it must reach key j + 1 too
+  // (which makes key j + 1's own corner always reachable from any corner of key j).
+  const auto reach_corner = [&](size_t a, size_t j) {
+    for (const size_t b : {2 * j + 1, 2 * j})
+      if (fits(a, b) && (corner_time[b] >= times[j] || fits(b, 2 * (j + 1)))) return b;
+    return std::string::npos;
+  };
+  const auto add = [&](size_t c) {
+    out.times.push_back(float(corner_time[c]));
+    out.values.insert(out.values.end(), corner_value.begin() + ptrdiff_t(c * components), corner_value.begin() + ptrdiff_t((c + 1) * components));
+  };
+  add(0);
+  for (size_t a = 0; a / 2 + 1 < n;) {
+    const size_t i = a / 2;
+    size_t good = i + 1, stride = 1, chosen = reach_corner(a, good);
+    if (chosen == std::string::npos) chosen = 2 * good;  // (cannot happen: see reach_corner)
+    for (size_t c; good + stride < n && (c = reach_corner(a, good + stride)) != std::string::npos; stride *= 2) good += stride, chosen = c;
+    for (size_t bad = std::min(good + stride, n); bad - good > 1;) {  // reaches good; not bad, or past the end
       const size_t mid = good + (bad - good) / 2;
-      (fits(i, mid) ? good : bad) = mid;
+      if (const size_t c = reach_corner(a, mid); c != std::string::npos) good = mid, chosen = c;
+      else bad = mid;
     }
-    keep.push_back(uint32_t(good));
-    i = good;
+    if (good + 1 == n) chosen = 2 * good;  // (the last key stays at its time)
+    add(chosen);
+    a = chosen;
   }
-  return keep;
+  return out;
 }
 
 // -q: which channels of clip `a` change nothing: every key of a LINEAR or STEP translation,
@@ -2547,7 +2604,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
 
   // Quantized: animation keys, read now and written with the geometry (the old accessors go where
   // nothing else uses them). A sampler that drives translations, rotations or scales (LINEAR or STEP;
-  // cubic splines keep their keys) keeps the keys its curve needs (kept_keys), where that makes it
+  // cubic splines keep their keys) keeps the keys its curve needs (reduce_keys), where that makes it
   // smaller: its new times cost 4 bytes a key, shared by the samplers that keep the same ones.
   // Rotation keyframes go in normalized shorts, as core glTF allows (half the bytes, within 1/65534
   // per component), where every value, cubic tangents included, lies in [-1, 1].
@@ -2595,15 +2652,11 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         for (const float x : out.values) largest = std::max(largest, std::fabs(double(x)));
         double tolerance = INFINITY;
         for (const int node : nodes) tolerance = std::min(tolerance, tolerances.of(path, node, largest));
-        const std::vector<uint32_t> keep = cubic || !finite ? std::vector<uint32_t>{}
-                                                            : kept_keys(out.times, out.values, components, rotation, step, tolerance);
-        if (!keep.empty() && keep.size() < n && keep.size() * (4 + value_bytes) < n * value_bytes) {
-          std::vector<float> times, values;
-          for (const uint32_t key : keep) {
-            times.push_back(out.times[key]);
-            values.insert(values.end(), out.values.begin() + ptrdiff_t(key * components), out.values.begin() + ptrdiff_t((key + 1) * components));
-          }
-          out.times = std::move(times), out.values = std::move(values);
+        Keys kept;
+        if (!cubic && finite) kept = reduce_keys(out.times, out.values, components, rotation, step, tolerance);
+        const size_t m = kept.times.size();
+        if (m > 0 && m < n && m * (4 + value_bytes) < n * value_bytes) {
+          out.times = std::move(kept.times), out.values = std::move(kept.values);
           sampler.input = -1;
         } else {
           out.times.clear();
