@@ -2819,34 +2819,46 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     model.nodes[g.node].extensions[gpu_instancing] = tg::Value(std::move(ext));
   }
   {
+    // One bufferView per kind of data (times, float3 keys, rotations in shorts or floats), each
+    // accessor at its offset: a few views instead of one or two per sampler, as each view costs its
+    // JSON and, under -c, a compressed stream of its own.
+    std::map<size_t, std::vector<uint8_t>> pools;  // by element size
+    std::vector<std::pair<int, size_t>> pooled;    // (accessor, element size)
+    const auto add = [&](const void* data, size_t count, size_t element, int component_type, int type, bool normalized) {
+      std::vector<uint8_t>& pool = pools[element];
+      tg::Accessor acc;
+      acc.byteOffset = pool.size();
+      acc.componentType = component_type, acc.type = type, acc.count = count, acc.normalized = normalized;
+      pool.insert(pool.end(), static_cast<const uint8_t*>(data), static_cast<const uint8_t*>(data) + count * element);
+      model.accessors.push_back(std::move(acc));
+      pooled.emplace_back(int(model.accessors.size() - 1), element);
+      return int(model.accessors.size() - 1);
+    };
     std::map<std::vector<float>, int> inputs;  // reduced key times -> their accessor
     for (const SamplerKeys& keys : sampler_keys) {
       tg::AnimationSampler& sampler = model.animations[keys.animation].samplers[keys.sampler];
       if (!keys.times.empty()) {
         const auto [found, fresh] = inputs.try_emplace(keys.times, -1);
         if (fresh) {
-          found->second = writer.add_accessor(keys.times, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, 0);
+          found->second = add(keys.times.data(), keys.times.size(), 4, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, false);
           tg::Accessor& acc = model.accessors[size_t(found->second)];  // (sampler inputs need bounds)
           acc.minValues = {*std::min_element(keys.times.begin(), keys.times.end())};
           acc.maxValues = {*std::max_element(keys.times.begin(), keys.times.end())};
         }
         sampler.input = found->second;
       }
+      const size_t count = keys.values.size() / (keys.rotation ? 4 : 3);
       if (keys.shorts) {
         const std::vector<uint8_t> packed = snorm<int16_t>(keys.values);
-        std::vector<std::array<int16_t, 4>> q(keys.values.size() / 4);
-        std::memcpy(q.data(), packed.data(), packed.size());
-        sampler.output = writer.add_accessor(q, TINYGLTF_COMPONENT_TYPE_SHORT, TINYGLTF_TYPE_VEC4, 0, true);
-      } else if (keys.rotation) {
-        std::vector<float4> q;
-        for (size_t i = 0; i + 3 < keys.values.size(); i += 4) q.push_back({keys.values[i], keys.values[i + 1], keys.values[i + 2], keys.values[i + 3]});
-        sampler.output = writer.add_accessor(q, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, 0);
+        sampler.output = add(packed.data(), count, 8, TINYGLTF_COMPONENT_TYPE_SHORT, TINYGLTF_TYPE_VEC4, true);
       } else {
-        std::vector<float3> v;
-        for (size_t i = 0; i + 2 < keys.values.size(); i += 3) v.push_back({keys.values[i], keys.values[i + 1], keys.values[i + 2]});
-        sampler.output = writer.add_accessor(v, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, 0);
+        sampler.output = add(keys.values.data(), count, keys.rotation ? 16 : 12, TINYGLTF_COMPONENT_TYPE_FLOAT,
+                             keys.rotation ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3, false);
       }
     }
+    std::map<size_t, int> pool_view;
+    for (const auto& [element, bytes] : pools) pool_view[element] = writer.add_view(bytes.data(), bytes.size(), 0);
+    for (const auto& [accessor, element] : pooled) model.accessors[size_t(accessor)].bufferView = pool_view[element];
   }
   if (std::find(on_grid.begin(), on_grid.end(), true) != on_grid.end()) place_position_grid(model, bin, writer, grid, on_grid);
   if (writer.used_draco())
