@@ -2063,6 +2063,11 @@ Keys reduce_keys(const std::vector<float>& times, const std::vector<float>& valu
 std::vector<bool> still_channels(const tg::Model& model, const Document& source, size_t a, const KeyTolerances& tolerances) {
   const tg::Animation& anim = model.animations[a];
   std::vector<bool> still(anim.channels.size(), false);
+  // A channel lodkit does not read (an extension's target) may have any sampler: its time range is
+  // unknown, so the clip keeps all its channels.
+  for (const tg::AnimationChannel& ch : anim.channels)
+    if (ch.target_path != "translation" && ch.target_path != "rotation" && ch.target_path != "scale" && ch.target_path != "weights")
+      return still;
   std::map<std::pair<int, std::string>, size_t> clips;  // (node, path) -> clips animating it
   for (const tg::Animation& other : model.animations) {
     std::set<std::pair<int, std::string>> own;
