@@ -1877,11 +1877,13 @@ void fit_morph_weights(tg::Model& model, const Document& source, const std::vect
 // 2^-14 of the track's largest component, 2^-11 rad for rotations.
 struct KeyTolerances {
   double rotation = 1.0 / 2048, relative = 1.0 / 16384;
-  std::vector<double> node_translation, node_rotation;  // per node; empty: the defaults
+  // Per node; empty: the defaults. node_weights < 0: unknown (the default).
+  std::vector<double> node_translation, node_rotation, node_weights;
   double of(const std::string& path, int node, double largest) const {
     const bool known = node >= 0 && size_t(node) < node_rotation.size();
     if (path == "rotation") return known ? node_rotation[size_t(node)] : rotation;
     if (path == "translation" && known) return node_translation[size_t(node)];
+    if (path == "weights" && known && node_weights[size_t(node)] >= 0) return node_weights[size_t(node)];
     return relative * largest;
   }
 };
@@ -1932,10 +1934,47 @@ KeyTolerances key_tolerances(const Scene& scene) {
       lever[size_t(a)] = std::max(lever[size_t(a)], std::hypot(world[d][12] - world[size_t(a)][12], world[d][13] - world[size_t(a)][13],
                                                                world[d][14] - world[size_t(a)][14]));
   }
+  // Per glTF mesh: its morph targets' longest displacement (from the POSITION accessors' bounds,
+  // which glTF requires, and lodkit's own targets); -1 where a bound is missing.
+  std::vector<double> displacement;
+  const auto grow = [&](uint32_t mesh, double length) {
+    if (mesh >= displacement.size()) displacement.resize(size_t(mesh) + 1, 0);
+    if (displacement[mesh] >= 0) displacement[mesh] = length < 0 ? -1 : std::max(displacement[mesh], length);
+  };
+  for (const Primitive& p : scene.primitives) {
+    for (const MorphTarget& target : p.targets)
+      for (const float3& d : target.positions) grow(p.gltf_mesh, std::hypot(d.x, d.y, d.z));
+    if (!scene.source || p.gltf_mesh >= scene.source->model.meshes.size() ||
+        p.gltf_primitive >= scene.source->model.meshes[p.gltf_mesh].primitives.size())
+      continue;
+    for (const auto& target : scene.source->model.meshes[p.gltf_mesh].primitives[p.gltf_primitive].targets) {
+      const auto position = target.find("POSITION");
+      if (position == target.end()) continue;
+      const tg::Accessor* acc = position->second >= 0 && size_t(position->second) < scene.source->model.accessors.size()
+                                    ? &scene.source->model.accessors[size_t(position->second)]
+                                    : nullptr;
+      if (!acc || acc->minValues.size() != 3 || acc->maxValues.size() != 3) {
+        grow(p.gltf_mesh, -1);
+        continue;
+      }
+      double sum = 0;
+      for (size_t c = 0; c < 3; ++c) sum += std::pow(std::max(std::fabs(acc->minValues[c]), std::fabs(acc->maxValues[c])), 2);
+      grow(p.gltf_mesh, std::sqrt(sum));
+    }
+  }
   t.node_translation.assign(n, reach);
   t.node_rotation.assign(n, 0);
+  t.node_weights.assign(n, -1);
   for (size_t i = 0; i < n; ++i) {
     t.node_rotation[i] = std::min(1.0 / 128, reach / (lever[i] + extent / 8));
+    // Morph weights: a weight's error moves a vertex by at most that times the longest displacement
+    // (in world units: times the node's scale).
+    if (const int32_t mesh = scene.nodes[i].mesh; mesh >= 0 && size_t(mesh) < displacement.size() && displacement[size_t(mesh)] >= 0) {
+      const io::Matrix& m = world[i];
+      const double scale = std::max({std::hypot(m[0], m[1], m[2]), std::hypot(m[4], m[5], m[6]), std::hypot(m[8], m[9], m[10])});
+      const double moved = displacement[size_t(mesh)] * scale;
+      t.node_weights[i] = moved > 0 && std::isfinite(moved) ? std::min(1.0 / 128, reach / moved) : 1.0 / 128;
+    }
     const int32_t parent = scene.nodes[i].parent;
     if (parent < 0 || size_t(parent) >= n) continue;
     const io::Matrix& m = world[size_t(parent)];
@@ -2617,7 +2656,8 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     size_t animation, sampler;
     std::vector<float> times;  // empty: the input accessor stays
     std::vector<float> values;
-    bool rotation, shorts;
+    size_t components;  // per key: 3, 4 (rotations), or the morph weights'
+    bool rotation, weights, shorts;
   };
   std::vector<SamplerKeys> sampler_keys;
   if (options.quantize)
@@ -2631,27 +2671,32 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         for (const tg::AnimationChannel& ch : anim.channels)
           if (ch.sampler == int(k))
             one_path = one_path && (path.empty() || path == ch.target_path), path = ch.target_path, nodes.push_back(ch.target_node);
-        const bool rotation = path == "rotation";
-        if (!one_path || (!rotation && path != "translation" && path != "scale")) continue;
+        const bool rotation = path == "rotation", weights = path == "weights";
+        if (!one_path || (!rotation && !weights && path != "translation" && path != "scale")) continue;
         if (sampler.input < 0 || size_t(sampler.input) >= model.accessors.size() || sampler.output < 0 ||
             size_t(sampler.output) >= model.accessors.size())
           continue;
         const tg::Accessor& in = model.accessors[size_t(sampler.input)];
         const tg::Accessor& acc = model.accessors[size_t(sampler.output)];
-        const size_t components = rotation ? 4 : 3;
-        if (in.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT || in.type != TINYGLTF_TYPE_SCALAR ||
-            acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT || acc.type != (rotation ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3))
-          continue;
         const bool cubic = sampler.interpolation == "CUBICSPLINE", step = sampler.interpolation == "STEP";
-        SamplerKeys out{a, k, source.decode_floats<float>(sampler.input), {}, rotation, false};
-        if (rotation)
+        const size_t per_key = (cubic ? 3 : 1) * in.count;
+        const size_t components = rotation ? 4 : weights ? (per_key ? acc.count / per_key : 0) : 3;
+        if (in.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT || in.type != TINYGLTF_TYPE_SCALAR || components == 0 ||
+            acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT ||
+            acc.type != (rotation ? TINYGLTF_TYPE_VEC4 : weights ? TINYGLTF_TYPE_SCALAR : TINYGLTF_TYPE_VEC3))
+          continue;
+        SamplerKeys out{a, k, source.decode_floats<float>(sampler.input), {}, components, rotation, weights, false};
+        if (weights)
+          out.values = source.decode_floats<float>(sampler.output);
+        else if (rotation)
           for (const float4& q : source.decode_floats<float4>(sampler.output)) out.values.insert(out.values.end(), {q.x, q.y, q.z, q.w});
         else
           for (const float3& v : source.decode_floats<float3>(sampler.output)) out.values.insert(out.values.end(), {v.x, v.y, v.z});
         const size_t n = out.times.size();
         if (out.values.size() != n * components * (cubic ? 3 : 1)) continue;  // (the reader refuses such files)
         // The keys: floats, or shorts (rotations in range) for the values.
-        const size_t value_bytes = rotation && all_in_range(out.values, -1.0f, 1.0f) ? 8 : 4 * components;
+        const bool shorts = rotation && all_in_range(out.values, -1.0f, 1.0f);
+        const size_t value_bytes = shorts ? 8 : 4 * components;
         const bool finite = std::all_of(out.values.begin(), out.values.end(), [](float x) { return std::isfinite(x); });
         double largest = 0;
         for (const float x : out.values) largest = std::max(largest, std::fabs(double(x)));
@@ -2666,7 +2711,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         } else {
           out.times.clear();
         }
-        out.shorts = value_bytes == 8;
+        out.shorts = shorts;
         if (out.times.empty() && !out.shorts) continue;
         sampler.output = -1;  // (the old accessors are pruned below)
         sampler_keys.push_back(std::move(out));
@@ -2852,10 +2897,12 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         }
         sampler.input = found->second;
       }
-      const size_t count = keys.values.size() / (keys.rotation ? 4 : 3);
+      const size_t count = keys.values.size() / keys.components;
       if (keys.shorts) {
         const std::vector<uint8_t> packed = snorm<int16_t>(keys.values);
         sampler.output = add(packed.data(), count, 8, TINYGLTF_COMPONENT_TYPE_SHORT, TINYGLTF_TYPE_VEC4, true);
+      } else if (keys.weights) {  // (scalars, `components` per key)
+        sampler.output = add(keys.values.data(), keys.values.size(), 4, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, false);
       } else {
         sampler.output = add(keys.values.data(), count, keys.rotation ? 16 : 12, TINYGLTF_COMPONENT_TYPE_FLOAT,
                              keys.rotation ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3, false);

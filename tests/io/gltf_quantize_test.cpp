@@ -688,6 +688,56 @@ TEST(GltfQuantize, AnimationsKeepTheKeysTheirCurvesNeed) {
   test::expect_valid_gltf({dir / "q.glb"});
 }
 
+// -q reduces morph weight keys too: a weight may stray by the reach (2^-12 of the extent) over the
+// targets' longest displacement, so that no vertex moves by more than the reach. Two targets, a
+// clip baked at 60 Hz for 10 s: one weight a sine, the other a ramp (a line for 2 keys).
+TEST(GltfQuantize, MorphWeightKeysStayWithinTheirBound) {
+  TempDir dir;
+  Scene scene = scene_from_mesh(shapes::grid(8, 8));
+  ASSERT_EQ(scene.primitives.size(), 1u);
+  const Mesh& mesh = scene.primitives[0].mesh;
+  double longest = 0;
+  for (int k = 0; k < 2; ++k) {
+    MorphTarget target;
+    for (const float3& p : mesh.positions) target.positions.push_back({0, 0, k == 0 ? 0.25f * p.x : 0.1f * p.y});
+    for (const float3& d : target.positions) longest = std::max(longest, std::hypot(double(d.x), double(d.y), double(d.z)));
+    scene.primitives[0].targets.push_back(std::move(target));
+  }
+  AnimationChannel weights;
+  weights.node = 0, weights.path = AnimationPath::weights, weights.components = 2;
+  for (int k = 0; k <= 600; ++k) {
+    const float t = float(k) / 60;
+    weights.times.push_back(t);
+    weights.values.insert(weights.values.end(), {0.5f + 0.5f * std::sin(t), t / 10});
+  }
+  Animation clip;
+  clip.channels = {weights};
+  scene.animations = {clip};
+  write_scene(scene, dir / "plain.glb");
+  write_scene(scene, dir / "q.glb", {.quantize = true});
+  const Scene plain = read_scene(dir / "plain.glb"), quantized = read_scene(dir / "q.glb");
+  ASSERT_EQ(quantized.animations.size(), 1u);
+  ASSERT_EQ(quantized.animations[0].channels.size(), 1u);
+  const AnimationChannel &x = plain.animations[0].channels[0], &y = quantized.animations[0].channels[0];
+  ASSERT_EQ(y.components, 2u);
+  EXPECT_EQ(x.times.size(), 601u);
+  EXPECT_LT(y.times.size(), 300u);
+  EXPECT_EQ(y.times.front(), x.times.front());
+  EXPECT_EQ(y.times.back(), x.times.back());
+  // The grid spans 1 (x and y); the reach is 1/4096, the longest displacement 0.25.
+  const double bound = 1.0 / 4096 / longest;
+  double worst = 0;
+  for (const float t : x.times) {
+    float a[2], b[2];
+    sample_components(x, t, a);
+    sample_components(y, t, b);
+    worst = std::max({worst, std::fabs(double(a[0]) - b[0]), std::fabs(double(a[1]) - b[1])});
+  }
+  EXPECT_LE(worst, bound + 1e-6);
+  EXPECT_GT(worst, bound / 64);  // (keys went)
+  test::expect_valid_gltf({dir / "q.glb"});
+}
+
 TEST(GltfQuantize, CommandsQuantizeWithDashQ) {
   TempDir dir;
   write_scene(scene_from_mesh(shapes::torus(1.0f, 0.25f, 48, 24)), dir / "in.glb");
