@@ -1902,14 +1902,9 @@ KeyTolerances key_tolerances(const Scene& scene) {
     if (node.skin >= 0 && size_t(node.skin) < scene.skins.size()) {
       const Skin& skin = scene.skins[size_t(node.skin)];
       if (skin.joints.empty() || skin.inverse_bind_matrices.empty() || skin.joints[0] < 0 || size_t(skin.joints[0]) >= n) continue;
-      const io::Matrix& j = world[size_t(skin.joints[0])];
-      const std::array<float, 16>& ibm = skin.inverse_bind_matrices[0];
-      for (size_t c = 0; c < 4; ++c)
-        for (size_t r = 0; r < 4; ++r) {
-          double sum = 0;
-          for (size_t k = 0; k < 4; ++k) sum += j[4 * k + r] * ibm[4 * c + k];
-          place[4 * c + r] = sum;
-        }
+      io::Matrix ibm;
+      std::copy(skin.inverse_bind_matrices[0].begin(), skin.inverse_bind_matrices[0].end(), ibm.begin());
+      place = io::multiply(world[size_t(skin.joints[0])], ibm);
     }
     for (const Primitive& p : scene.primitives) {
       if (p.gltf_mesh != uint32_t(node.mesh) || p.mesh.positions.empty()) continue;
@@ -1962,6 +1957,10 @@ KeyTolerances key_tolerances(const Scene& scene) {
       grow(p.gltf_mesh, std::sqrt(sum));
     }
   }
+  // A matrix's largest scale: the longest of its linear part's columns.
+  const auto scale_of = [](const io::Matrix& m) {
+    return std::max({std::hypot(m[0], m[1], m[2]), std::hypot(m[4], m[5], m[6]), std::hypot(m[8], m[9], m[10])});
+  };
   t.node_translation.assign(n, reach);
   t.node_rotation.assign(n, 0);
   t.node_weights.assign(n, -1);
@@ -1970,15 +1969,12 @@ KeyTolerances key_tolerances(const Scene& scene) {
     // Morph weights: a weight's error moves a vertex by at most that times the longest displacement
     // (in world units: times the node's scale).
     if (const int32_t mesh = scene.nodes[i].mesh; mesh >= 0 && size_t(mesh) < displacement.size() && displacement[size_t(mesh)] >= 0) {
-      const io::Matrix& m = world[i];
-      const double scale = std::max({std::hypot(m[0], m[1], m[2]), std::hypot(m[4], m[5], m[6]), std::hypot(m[8], m[9], m[10])});
-      const double moved = displacement[size_t(mesh)] * scale;
+      const double moved = displacement[size_t(mesh)] * scale_of(world[i]);
       t.node_weights[i] = moved > 0 && std::isfinite(moved) ? std::min(1.0 / 128, reach / moved) : 1.0 / 128;
     }
     const int32_t parent = scene.nodes[i].parent;
     if (parent < 0 || size_t(parent) >= n) continue;
-    const io::Matrix& m = world[size_t(parent)];
-    const double scale = std::max({std::hypot(m[0], m[1], m[2]), std::hypot(m[4], m[5], m[6]), std::hypot(m[8], m[9], m[10])});
+    const double scale = scale_of(world[size_t(parent)]);
     if (scale > 0 && std::isfinite(scale)) t.node_translation[i] = reach / scale;
   }
   return t;
@@ -2099,7 +2095,19 @@ Keys reduce_keys(const std::vector<float>& times, const std::vector<float>& valu
 // animates that property of that node (playing that clip first would leave its value there).
 // None where the clip's other channels would not span its time range (it would get shorter) or
 // no channel would be left.
-std::vector<bool> still_channels(const tg::Model& model, const Document& source, size_t a, const KeyTolerances& tolerances) {
+// How many clips animate each property of each node: (node, path) -> clips.
+std::map<std::pair<int, std::string>, size_t> animating_clips(const tg::Model& model) {
+  std::map<std::pair<int, std::string>, size_t> clips;
+  for (const tg::Animation& anim : model.animations) {
+    std::set<std::pair<int, std::string>> own;
+    for (const tg::AnimationChannel& ch : anim.channels) own.insert({ch.target_node, ch.target_path});
+    for (const auto& key : own) ++clips[key];
+  }
+  return clips;
+}
+
+std::vector<bool> still_channels(const tg::Model& model, const Document& source, size_t a, const KeyTolerances& tolerances,
+                                 const std::map<std::pair<int, std::string>, size_t>& clips) {
   const tg::Animation& anim = model.animations[a];
   std::vector<bool> still(anim.channels.size(), false);
   // A channel lodkit does not read (an extension's target) may have any sampler: its time range is
@@ -2107,12 +2115,6 @@ std::vector<bool> still_channels(const tg::Model& model, const Document& source,
   for (const tg::AnimationChannel& ch : anim.channels)
     if (ch.target_path != "translation" && ch.target_path != "rotation" && ch.target_path != "scale" && ch.target_path != "weights")
       return still;
-  std::map<std::pair<int, std::string>, size_t> clips;  // (node, path) -> clips animating it
-  for (const tg::Animation& other : model.animations) {
-    std::set<std::pair<int, std::string>> own;
-    for (const tg::AnimationChannel& ch : other.channels) own.insert({ch.target_node, ch.target_path});
-    for (const auto& key : own) ++clips[key];
-  }
   const auto span = [&](const tg::AnimationChannel& ch) -> std::pair<float, float> {
     const tg::AnimationSampler& sampler = anim.samplers[size_t(ch.sampler)];
     const std::vector<float> times = source.decode_floats<float>(sampler.input);
@@ -2122,7 +2124,7 @@ std::vector<bool> still_channels(const tg::Model& model, const Document& source,
   for (size_t c = 0; c < anim.channels.size(); ++c) {
     const tg::AnimationChannel& ch = anim.channels[c];
     if (ch.sampler < 0 || size_t(ch.sampler) >= anim.samplers.size() || ch.target_node < 0 ||
-        size_t(ch.target_node) >= model.nodes.size() || clips[{ch.target_node, ch.target_path}] != 1)
+        size_t(ch.target_node) >= model.nodes.size() || clips.at({ch.target_node, ch.target_path}) != 1)
       continue;
     const tg::AnimationSampler& sampler = anim.samplers[size_t(ch.sampler)];
     const tg::Node& node = model.nodes[size_t(ch.target_node)];
@@ -2555,8 +2557,10 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
   // -q: channels that change nothing go (still_channels), decided before any goes.
   const KeyTolerances tolerances = options.quantize ? key_tolerances(scene) : KeyTolerances{};
   std::vector<std::vector<bool>> still(model.animations.size());
-  if (options.quantize)
-    for (size_t a = 0; a < model.animations.size(); ++a) still[a] = still_channels(model, source, a, tolerances);
+  if (options.quantize) {
+    const auto clips = animating_clips(model);
+    for (size_t a = 0; a < model.animations.size(); ++a) still[a] = still_channels(model, source, a, tolerances, clips);
+  }
   for (size_t a = 0; a < model.animations.size(); ++a) {
     tg::Animation& anim = model.animations[a];
     for (size_t c = anim.channels.size(); c-- > 0;)
@@ -2913,12 +2917,10 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     for (const auto& [accessor, element] : pooled) model.accessors[size_t(accessor)].bufferView = pool_view[element];
   }
   if (std::find(on_grid.begin(), on_grid.end(), true) != on_grid.end()) place_position_grid(model, bin, writer, grid, on_grid);
-  if (writer.used_draco())
-    for (std::vector<std::string>* list : {&model.extensionsUsed, &model.extensionsRequired})
-      if (std::find(list->begin(), list->end(), io::draco_extension) == list->end()) list->push_back(io::draco_extension);
-  // Both are required: without them the streams would be read wrong (a UV box's transform places
+  // All are required: without them the streams would be read wrong (a UV box's transform places
   // the textures).
-  for (const auto& [used, ext] : {std::pair{writer.used_quantization(), "KHR_mesh_quantization"}, std::pair{used_uv_boxes, texture_transform}})
+  for (const auto& [used, ext] : {std::pair{writer.used_draco(), io::draco_extension}, std::pair{writer.used_quantization(), "KHR_mesh_quantization"},
+                                  std::pair{used_uv_boxes, texture_transform}})
     if (used)
       for (std::vector<std::string>* list : {&model.extensionsUsed, &model.extensionsRequired})
         if (std::find(list->begin(), list->end(), ext) == list->end()) list->push_back(ext);

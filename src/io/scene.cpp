@@ -19,20 +19,10 @@ namespace lod {
 namespace {
 
 using io::Matrix;
+using io::multiply;
 using io::rest_world_matrices;
 
 constexpr Matrix identity_matrix = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-
-Matrix multiply(const Matrix& a, const Matrix& b) {
-  Matrix r{};
-  for (int col = 0; col < 4; ++col)
-    for (int row = 0; row < 4; ++row) {
-      double sum = 0;
-      for (int k = 0; k < 4; ++k) sum += a[k * 4 + row] * b[col * 4 + k];
-      r[col * 4 + row] = sum;
-    }
-  return r;
-}
 
 // T * R * S, or the node's matrix.
 Matrix trs_matrix(const float3& t, const float4& r, const float3& s) {
@@ -188,6 +178,17 @@ std::vector<Instance> collect_instances(const Scene& scene) {
 }
 
 }  // namespace
+
+Matrix io::multiply(const Matrix& a, const Matrix& b) {
+  Matrix r{};
+  for (int col = 0; col < 4; ++col)
+    for (int row = 0; row < 4; ++row) {
+      double sum = 0;
+      for (int k = 0; k < 4; ++k) sum += a[k * 4 + row] * b[col * 4 + k];
+      r[col * 4 + row] = sum;
+    }
+  return r;
+}
 
 std::vector<Matrix> io::rest_world_matrices(const Scene& scene) {
   const size_t n = scene.nodes.size();
