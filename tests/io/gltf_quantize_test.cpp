@@ -30,6 +30,14 @@ bool contains(const Json& list, const std::string& name) {
 
 double distance(const float3& a, const float3& b) { return std::hypot(double(a.x) - b.x, double(a.y) - b.y, double(a.z) - b.z); }
 
+// The angle of the rotation between two unit quaternions (q and -q alike): four times the arcsine
+// of half their 4D chord, well conditioned when small (written here, apart from lodkit's own).
+double rotation_between(const float4& qa, const float4& qb) {
+  const double s = double(qa.x) * qb.x + double(qa.y) * qb.y + double(qa.z) * qb.z + double(qa.w) * qb.w < 0 ? -1 : 1;
+  const double chord = std::hypot(std::hypot(qa.x - s * qb.x, qa.y - s * qb.y), std::hypot(qa.z - s * qb.z, qa.w - s * qb.w));
+  return 4 * std::asin(std::min(chord / 2, 1.0));
+}
+
 // The largest distance between corresponding points (the lists have the same length).
 double largest_distance(const std::vector<float3>& a, const std::vector<float3>& b) {
   EXPECT_EQ(a.size(), b.size());
@@ -290,15 +298,15 @@ TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
   size_t rotations = 0, keys = 0, kept = 0;
   for (size_t k = 0; k < plain.animations.size(); ++k) {
     ASSERT_EQ(plain.animations[k].channels.size(), quantized.animations[k].channels.size());
-    double largest[2] = {0, 0};  // translations, scales
+    double largest_scale = 0;  // (scale tracks' bound: 2^-14 of it)
     std::set<float> times;
     for (size_t c = 0; c < plain.animations[k].channels.size(); ++c) {
       const AnimationChannel &x = plain.animations[k].channels[c], &y = quantized.animations[k].channels[c];
       ASSERT_EQ(x.path, y.path);
       ASSERT_EQ(x.times.front(), y.times.front());
       ASSERT_EQ(x.times.back(), y.times.back());  // (the clip keeps its length)
-      if (x.path == AnimationPath::translation || x.path == AnimationPath::scale)
-        for (const float v : x.values) largest[x.path == AnimationPath::scale] = std::max(largest[x.path == AnimationPath::scale], std::fabs(double(v)));
+      if (x.path == AnimationPath::scale)
+        for (const float v : x.values) largest_scale = std::max(largest_scale, std::fabs(double(v)));
       times.insert(x.times.begin(), x.times.end());
       keys += x.times.size(), kept += y.times.size();
       rotations += x.path == AnimationPath::rotation;
@@ -308,15 +316,11 @@ TEST(GltfQuantize, SkinsTakeTheGridInTheirInverseBindMatrices) {
       sample_animation(plain, k, time, pa);
       sample_animation(quantized, k, time, pb);
       for (size_t n = 0; n < std::min(pa.rotation.size(), pb.rotation.size()); ++n) {
-        const float4 &qa = pa.rotation[n], &qb = pb.rotation[n];
-        // The rotation between them: twice the angle of the 4D chord (well conditioned when small).
-        const double s = double(qa.x) * qb.x + double(qa.y) * qb.y + double(qa.z) * qb.z + double(qa.w) * qb.w < 0 ? -1 : 1;
-        const double chord = std::hypot(std::hypot(qa.x - s * qb.x, qa.y - s * qb.y), std::hypot(qa.z - s * qb.z, qa.w - s * qb.w));
         // (Each joint's own bound depends on its lever; the cap is 2^-7 rad: AnimationsKeepTheKeys
         // checks the bound itself.)
-        EXPECT_LE(4 * std::asin(std::min(chord / 2, 1.0)), 1.0 / 128 + 2.0 / 32767 + 1e-6) << k << " node " << n << " t " << time;
+        EXPECT_LE(rotation_between(pa.rotation[n], pb.rotation[n]), 1.0 / 128 + 2.0 / 32767 + 1e-6) << k << " node " << n << " t " << time;
         EXPECT_LE(distance(pa.translation[n], pb.translation[n]), std::sqrt(3.0) * step * 16383 / 4096 + 1e-6) << k << " node " << n;
-        EXPECT_LE(distance(pa.scale[n], pb.scale[n]), std::sqrt(3.0) * largest[1] / 16384 + 1e-6) << k << " node " << n;
+        EXPECT_LE(distance(pa.scale[n], pb.scale[n]), std::sqrt(3.0) * largest_scale / 16384 + 1e-6) << k << " node " << n;
       }
     }
   }
@@ -641,7 +645,7 @@ TEST(GltfQuantize, AnimationsKeepTheKeysTheirCurvesNeed) {
     SCOPED_TRACE(k);
     ASSERT_EQ(plain.animations[k].channels.size(), scene.animations[k].channels.size());
     ASSERT_EQ(quantized.animations[k].channels.size(), channels[k]);
-    double largest[2] = {0, 0};
+    double largest_scale = 0;  // (scale tracks' bound: 2^-14 of it)
     kept.emplace_back();
     for (size_t c = 0; c < channels[k]; ++c) {
       const AnimationChannel &x = scene.animations[k].channels[c], &y = quantized.animations[k].channels[c];
@@ -653,22 +657,20 @@ TEST(GltfQuantize, AnimationsKeepTheKeysTheirCurvesNeed) {
       EXPECT_EQ(y.times.back(), x.times.back());
       EXPECT_EQ(y.values.size(), y.times.size() * x.components);
       kept.back().push_back(y.times.size());
-      if (x.path != P::rotation)
-        for (const float v : x.values) largest[x.path == P::scale] = std::max(largest[x.path == P::scale], std::fabs(double(v)));
+      if (x.path == P::scale)
+        for (const float v : x.values) largest_scale = std::max(largest_scale, std::fabs(double(v)));
     }
     double worst[3] = {0, 0, 0};  // translation / largest, rotation (rad), scale / largest
-    for (const float time : scene.animations[k].channels.back().times)
+    for (const float time : scene.animations[k].channels.back().times) {
+      Pose pa = rest_pose(plain), pb = rest_pose(quantized);
+      sample_animation(plain, k, time, pa);
+      sample_animation(quantized, k, time, pb);
       for (size_t n = 0; n < 2; ++n) {
-        Pose pa = rest_pose(plain), pb = rest_pose(quantized);
-        sample_animation(plain, k, time, pa);
-        sample_animation(quantized, k, time, pb);
-        const float4 &qa = pa.rotation[n], &qb = pb.rotation[n];
-        const double s = double(qa.x) * qb.x + double(qa.y) * qb.y + double(qa.z) * qb.z + double(qa.w) * qb.w < 0 ? -1 : 1;
-        const double chord = std::hypot(std::hypot(qa.x - s * qb.x, qa.y - s * qb.y), std::hypot(qa.z - s * qb.z, qa.w - s * qb.w));
         worst[0] = std::max(worst[0], distance(pa.translation[n], pb.translation[n]));
-        worst[1] = std::max(worst[1], 4 * std::asin(std::min(chord / 2, 1.0)));
-        worst[2] = std::max(worst[2], distance(pa.scale[n], pb.scale[n]) / std::max(largest[1], 1.0));
+        worst[1] = std::max(worst[1], rotation_between(pa.rotation[n], pb.rotation[n]));
+        worst[2] = std::max(worst[2], distance(pa.scale[n], pb.scale[n]) / std::max(largest_scale, 1.0));
       }
+    }
     EXPECT_LE(worst[0], std::sqrt(3.0) * extent / 4096 + 1e-6);
     // Node 0's rotations: the reach over its lever, the child 1 unit away plus an eighth of the
     // extent (and the shorts' step).
