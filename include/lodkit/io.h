@@ -50,7 +50,8 @@ struct WriteOptions {
   // UVs in [0, 1] in normalized unsigned shorts; colours in [0, 1] and skin weights (summing to
   // exactly 255) in normalized unsigned bytes; rotation keyframes in normalized shorts; with
   // `meshopt_compression` too, translation and scale keyframes through meshopt's EXPONENTIAL filter
-  // (16-bit mantissas, one exponent per key); other streams stay as they are. Positions stay floats in a mesh that a point or line primitive,
+  // (16-bit mantissas, one exponent per key) and rotation keyframes through its QUATERNION filter
+  // (16 bits); other streams stay as they are. Positions stay floats in a mesh that a point or line primitive,
   // skinned GPU instancing or a skin shared with such a mesh ties to its own space.
   bool quantize = false;
   // glTF: each triangle primitive's vertex streams and indices as a Draco stream

@@ -1985,20 +1985,49 @@ struct Keys {
   std::vector<float> times, values;
 };
 
+// A LINEAR sampler's keys, and how far a reduced curve may stray from them: the largest component
+// difference, or for rotations the angle to the slerp, in radians.
+struct KeyCurve {
+  const std::vector<float>& times;
+  const std::vector<float>& values;
+  size_t components;
+  bool rotation;
+  double tolerance;
+
+  const float* key(size_t k) const { return values.data() + k * components; }
+  static float4 quaternion(const float* q) { return core::normalized({q[0], q[1], q[2], q[3]}); }
+  // Whether the keys first..last-1 that lie strictly between t0 and t1 are within the tolerance of
+  // the interpolation from (t0, va) to (t1, vb).
+  bool fits(size_t first, size_t last, double t0, const float* va, double t1, const float* vb) const {
+    const double span = t1 - t0;
+    for (size_t k = first; k < last; ++k) {
+      if (!(times[k] > t0 && times[k] < t1)) continue;
+      const double s = (times[k] - t0) / span;
+      if (rotation) {
+        if (core::rotation_angle(core::slerp(quaternion(va), quaternion(vb), float(s)), quaternion(key(k))) > tolerance) return false;
+        continue;
+      }
+      for (size_t c = 0; c < components; ++c)
+        if (std::fabs(double(va[c]) + s * (double(vb[c]) - va[c]) - key(k)[c]) > tolerance) return false;
+    }
+    return true;
+  }
+};
+
 // The keys -q keeps of a LINEAR or STEP sampler (the first and the last always, at their times, so
 // the clip keeps its length). STEP: the keys whose value differs from the one before. LINEAR:
 // greedily, each kept key as far after the previous one as every key between lies within
-// `tolerance` of the two's interpolation (the largest component difference; rotations: the angle to
-// the slerp, in radians), found by doubling, then bisection (a run of r keys costs O(r log r)
-// checks). A kept key between the first and the last moves to the nearest multiple of a power of
-// two, 2^-8 s or less and at most a quarter of the shortest key interval, with the curve's value
-// there: the reduced curve's corners stay on the curve, and the times code in few mantissa bits
-// (irregular times otherwise cost most of a reduced clip). Keys whose times do not increase are all
-// kept.
+// `tolerance` of the two's interpolation (KeyCurve), found by doubling, then bisection (a run of r
+// keys costs O(r log r) checks). A kept key between the first and the last moves to the nearest
+// multiple of a power of two, 2^-8 s or less and at most a quarter of the shortest key interval,
+// with the curve's value there: the reduced curve's corners stay on the curve, and the times code in
+// few mantissa bits (irregular times otherwise cost most of a reduced clip). Keys whose times do not
+// increase are all kept.
 Keys reduce_keys(const std::vector<float>& times, const std::vector<float>& values, size_t components, bool rotation, bool step,
                  double tolerance) {
   const size_t n = times.size();
-  const auto key = [&](size_t k) { return values.data() + k * components; };
+  const KeyCurve curve{times, values, components, rotation, tolerance};
+  const auto key = [&](size_t k) { return curve.key(k); };
   Keys out;
   const auto take = [&](size_t k) {
     out.times.push_back(times[k]);
@@ -2023,7 +2052,6 @@ Keys reduce_keys(const std::vector<float>& times, const std::vector<float>& valu
   if (!(lattice >= 0x1p-20) || reach / lattice >= 0x1p23) lattice = 0;
   // Each key's corners: 0 at the key, 1 at its snapped time with the curve's value there (the first
   // and last keys, or a key whose snapped time leaves its neighbours' interval: as corner 0).
-  const auto quaternion = [](const float* q) { return core::normalized({q[0], q[1], q[2], q[3]}); };
   std::vector<double> corner_time(2 * n);
   std::vector<float> corner_value(2 * n * components);
   for (size_t k = 0; k < n; ++k)
@@ -2038,7 +2066,7 @@ Keys reduce_keys(const std::vector<float>& times, const std::vector<float>& valu
       float* v = corner_value.data() + (2 * k + snap) * components;
       const double s = to > from ? (t - times[from]) / (double(times[to]) - times[from]) : 0;
       if (rotation) {
-        const float4 q = core::slerp(quaternion(key(from)), quaternion(key(to)), float(s));
+        const float4 q = core::slerp(KeyCurve::quaternion(key(from)), KeyCurve::quaternion(key(to)), float(s));
         v[0] = q.x, v[1] = q.y, v[2] = q.z, v[3] = q.w;
       } else {
         for (size_t c = 0; c < components; ++c) v[c] = float(key(from)[c] + s * (double(key(to)[c]) - key(from)[c]));
@@ -2046,19 +2074,8 @@ Keys reduce_keys(const std::vector<float>& times, const std::vector<float>& valu
     }
   // Whether every key strictly between corners a and b lies on their interpolation.
   const auto fits = [&](size_t a, size_t b) {
-    const double t0 = corner_time[a], span = corner_time[b] - t0;
-    const float *va = corner_value.data() + a * components, *vb = corner_value.data() + b * components;
-    for (size_t k = a / 2; k <= b / 2; ++k) {
-      if (!(times[k] > t0 && times[k] < corner_time[b])) continue;
-      const double s = (times[k] - t0) / span;
-      if (rotation) {
-        if (core::rotation_angle(core::slerp(quaternion(va), quaternion(vb), float(s)), quaternion(key(k))) > tolerance) return false;
-        continue;
-      }
-      for (size_t c = 0; c < components; ++c)
-        if (std::fabs(double(va[c]) + s * (double(vb[c]) - va[c]) - key(k)[c]) > tolerance) return false;
-    }
-    return true;
+    return curve.fits(a / 2, b / 2 + 1, corner_time[a], corner_value.data() + a * components, corner_time[b],
+                      corner_value.data() + b * components);
   };
   // From corner a, the corner of key j that fits: snapped if it does, else at the key; none: npos.
   // A corner before its key leaves the key to the next segment, so it must reach key j + 1 too
@@ -2089,6 +2106,40 @@ Keys reduce_keys(const std::vector<float>& times, const std::vector<float>& valu
   }
   return out;
 }
+
+// The strides s (powers of two, 2 or more) for which every s-th key of a LINEAR sampler, and the
+// last, keep its curve within the tolerance, finest first. Such keys keep their times, which the
+// samplers of one input that take the same stride share: a baked clip's smooth tracks then cost
+// their values alone, where reduce_keys' fewer keys each bring a time of their own.
+std::vector<size_t> thinning_strides(const KeyCurve& curve) {
+  const size_t n = curve.times.size();
+  std::vector<size_t> strides;
+  for (size_t k = 1; k < n; ++k)
+    if (!(curve.times[k] > curve.times[k - 1])) return strides;
+  for (size_t s = 2; n > 2 && s / 2 < n - 1; s *= 2) {
+    bool fit = true;
+    for (size_t i = 0, j; fit && i + 1 < n; i = j) {
+      j = std::min(i + s, n - 1);
+      fit = curve.fits(i + 1, j, curve.times[i], curve.key(i), curve.times[j], curve.key(j));
+    }
+    if (fit) strides.push_back(s);
+  }
+  return strides;
+}
+
+// Every s-th key, and the last.
+Keys thin_keys(const KeyCurve& curve, size_t s) {
+  Keys out;
+  const size_t n = curve.times.size();
+  for (size_t k = 0; k < n; k = k + 1 == n ? n : std::min(k + s, n - 1)) {
+    out.times.push_back(curve.times[k]);
+    out.values.insert(out.values.end(), curve.key(k), curve.key(k) + curve.components);
+  }
+  return out;
+}
+
+// The number of keys thin_keys keeps of n at stride s.
+size_t thinned_count(size_t n, size_t s) { return n < 2 ? n : (n - 2) / s + 2; }
 
 // -q: which channels of clip `a` change nothing: every key of a LINEAR or STEP translation,
 // rotation or scale holds its node's own value (within the keys' tolerance), and no other clip
@@ -2652,10 +2703,12 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
 
   // Quantized: animation keys, read now and written with the geometry (the old accessors go where
   // nothing else uses them). A sampler that drives translations, rotations or scales (LINEAR or STEP;
-  // cubic splines keep their keys) keeps the keys its curve needs (reduce_keys), where that makes it
-  // smaller: its new times cost 4 bytes a key, shared by the samplers that keep the same ones.
-  // Rotation keyframes go in normalized shorts, as core glTF allows (half the bytes, within 1/65534
-  // per component), where every value, cubic tangents included, lies in [-1, 1].
+  // cubic splines keep their keys) keeps, of three ways, the one of fewest bytes: all its keys (its
+  // input stays); the keys its curve needs (reduce_keys), whose times cost 4 bytes a key, shared only
+  // by samplers that keep the same ones; or every s-th key (thin_keys), whose times the samplers of
+  // the same input and stride share. Rotation keyframes go in normalized shorts, as core glTF allows
+  // (half the bytes, within 1/65534 per component), where every value, cubic tangents included, lies
+  // in [-1, 1].
   struct SamplerKeys {
     size_t animation, sampler;
     std::vector<float> times;  // empty: the input accessor stays
@@ -2664,6 +2717,18 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     bool rotation, weights, shorts;
   };
   std::vector<SamplerKeys> sampler_keys;
+  // A sampler's ways, with the bytes of its best so far.
+  struct Choice {
+    size_t keys;  // in sampler_keys
+    size_t input;  // samplers of equal key times (one accessor or several) have the same
+    size_t count, value_bytes;
+    double bytes;
+    bool reduce;                  // reduce_keys' way is the best of the first two
+    Keys reduced;                 // reduce_keys'
+    std::vector<size_t> strides;  // thinning_strides'
+  };
+  std::vector<Choice> choices;
+  std::map<std::vector<float>, size_t> key_times;  // -> their number in Choice::input
   if (options.quantize)
     for (size_t a = 0; a < model.animations.size(); ++a) {
       tg::Animation& anim = model.animations[a];
@@ -2706,21 +2771,59 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         for (const float x : out.values) largest = std::max(largest, std::fabs(double(x)));
         double tolerance = INFINITY;
         for (const int node : nodes) tolerance = std::min(tolerance, tolerances.of(path, node, largest));
-        Keys kept;
-        if (!cubic && finite) kept = reduce_keys(out.times, out.values, components, rotation, step, tolerance);
-        const size_t m = kept.times.size();
-        if (m > 0 && m < n && m * (4 + value_bytes) < n * value_bytes) {
-          out.times = std::move(kept.times), out.values = std::move(kept.values);
-          sampler.input = -1;
-        } else {
-          out.times.clear();
-        }
         out.shorts = shorts;
-        if (out.times.empty() && !out.shorts) continue;
-        sampler.output = -1;  // (the old accessors are pruned below)
+        Choice choice{sampler_keys.size(), key_times.try_emplace(out.times, key_times.size()).first->second, n, value_bytes, double(n * value_bytes), false, {}, {}};
+        if (!cubic && finite) {
+          const KeyCurve curve{out.times, out.values, components, rotation, tolerance};
+          choice.reduced = reduce_keys(out.times, out.values, components, rotation, step, tolerance);
+          if (const size_t m = choice.reduced.times.size(); m > 0 && m < n && m * (4 + value_bytes) < n * value_bytes)
+            choice.bytes = double(m * (4 + value_bytes)), choice.reduce = true;
+          if (!step) choice.strides = thinning_strides(curve);
+        }
         sampler_keys.push_back(std::move(out));
+        choices.push_back(std::move(choice));
       }
     }
+  // The strides the samplers of each input take: coarsest first, a stride's times are written when
+  // the bytes its samplers save (against their best other way) exceed them.
+  std::vector<size_t> stride_of(choices.size(), 0);
+  {
+    std::map<size_t, std::set<size_t, std::greater<>>> strides;  // input -> strides some sampler fits
+    for (const Choice& c : choices)
+      for (const size_t s : c.strides) strides[c.input].insert(s);
+    for (const auto& [input, set] : strides)
+      for (const size_t s : set) {
+        double saved = 0, times = 0;
+        for (const Choice& c : choices)
+          if (c.input == input && std::count(c.strides.begin(), c.strides.end(), s)) {
+            times = 4.0 * thinned_count(c.count, s);
+            saved += std::max(0.0, c.bytes - double(thinned_count(c.count, s) * c.value_bytes));
+          }
+        if (saved <= times) continue;
+        for (size_t i = 0; i < choices.size(); ++i) {
+          Choice& c = choices[i];
+          const double bytes = double(thinned_count(c.count, s) * c.value_bytes);
+          if (c.input == input && std::count(c.strides.begin(), c.strides.end(), s) && bytes < c.bytes) c.bytes = bytes, stride_of[i] = s;
+        }
+      }
+  }
+  for (size_t i = 0; i < choices.size(); ++i) {
+    Choice& c = choices[i];
+    SamplerKeys& out = sampler_keys[c.keys];
+    tg::AnimationSampler& sampler = model.animations[out.animation].samplers[out.sampler];
+    if (stride_of[i]) {
+      Keys thinned = thin_keys(KeyCurve{out.times, out.values, out.components, out.rotation, 0}, stride_of[i]);
+      out.times = std::move(thinned.times), out.values = std::move(thinned.values);
+      sampler.input = -1;
+    } else if (c.reduce) {
+      out.times = std::move(c.reduced.times), out.values = std::move(c.reduced.values);
+      sampler.input = -1;
+    } else {
+      out.times.clear();
+    }
+    if (!out.times.empty() || out.shorts) sampler.output = -1;  // (the old accessors are pruned below)
+  }
+  std::erase_if(sampler_keys, [](const SamplerKeys& keys) { return keys.times.empty() && !keys.shorts; });
 
   // Keep the accessors something still references, then the bufferViews those and the images use.
   std::vector<int> accessor_remap(model.accessors.size(), -1);

@@ -1099,6 +1099,56 @@ TEST(GltfCompression, QuantizedCompressionFiltersTranslationAndScaleKeys) {
   test::expect_valid_gltf({dir / "cq.glb"});
 }
 
+// -c -q: rotation keys go through meshopt's quaternion filter (the three smaller components in 16
+// bits, scaled by sqrt 2; the largest rebuilt, positive), which gltfpack -c leaves out. Against the
+// normalized shorts -q writes: each small component within half a step of 1/(32767 sqrt 2), the
+// rebuilt one within 3 such half steps (its error is the others' weighted by their ratio to it, at
+// most 1), then rounded to shorts again: a 4-vector difference of at most 6.6e-5, an angle of at
+// most 1.4e-4 rad (q and -q alike: the filter keeps no sign). Under EXT_ and KHR_meshopt_compression.
+TEST(GltfCompression, QuantizedCompressionFiltersRotationKeys) {
+  TempDir dir;
+  Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 24, 12));
+  Animation clip;
+  AnimationChannel turn;
+  turn.node = 0, turn.path = AnimationPath::rotation, turn.components = 4;
+  for (int k = 0; k < 600; ++k) {  // an axis sweeping around, and an angle to 3 rad and back
+    const double t = k / 30.0, angle = 3 * std::sin(0.7 * t);
+    const double axis[3] = {std::cos(t), std::sin(t) * 0.6, std::sin(t) * 0.8}, s = std::sin(angle / 2);
+    turn.times.push_back(float(t));
+    turn.values.insert(turn.values.end(), {float(axis[0] * s), float(axis[1] * s), float(axis[2] * s), float(std::cos(angle / 2))});
+  }
+  clip.channels = {turn};
+  scene.animations.push_back(clip);
+  write_scene(scene, dir / "q.glb", {.quantize = true});
+  const Scene shorts = read_scene(dir / "q.glb");
+  ASSERT_EQ(shorts.animations.size(), 1u);
+  const AnimationChannel& want = shorts.animations[0].channels.at(0);
+  for (const bool khr : {false, true}) {
+    SCOPED_TRACE(khr);
+    const std::filesystem::path file = dir / (khr ? "cqk.glb" : "cq.glb");
+    write_scene(scene, file, {.meshopt_compression = true, .meshopt_khr = khr, .quantize = true});
+    const Json doc = test::glb_json(file);
+    const Json& sampler = doc["animations"][0]["samplers"][0];
+    const Json& view = doc["bufferViews"][doc["accessors"][sampler["output"].get<size_t>()]["bufferView"].get<size_t>()];
+    EXPECT_EQ(view["extensions"][khr ? "KHR_meshopt_compression" : "EXT_meshopt_compression"].value("filter", ""), "QUATERNION");
+    const Scene back = read_scene(file);
+    ASSERT_EQ(back.animations.size(), 1u);
+    const AnimationChannel& got = back.animations[0].channels.at(0);
+    EXPECT_EQ(got.times, want.times);
+    ASSERT_EQ(got.values.size(), want.values.size());
+    double worst = 0;
+    for (size_t k = 0; k < got.values.size(); k += 4) {
+      double d = 0, dot = 0;
+      for (size_t i = 0; i < 4; ++i) dot += double(got.values[k + i]) * want.values[k + i];
+      for (size_t i = 0; i < 4; ++i) d += std::pow(double(got.values[k + i]) - (dot < 0 ? -1 : 1) * double(want.values[k + i]), 2);
+      worst = std::max(worst, std::sqrt(d));
+    }
+    EXPECT_LE(worst, 6.6e-5);
+    EXPECT_GT(worst, 0.0);  // (the filter did apply)
+    test::expect_valid_gltf({file});
+  }
+}
+
 // The CLI's --draco: a LOD chain, valid, every level compressed; with -c, meshopt takes the rest
 // (the geomorphs' morph targets); with -q too, both extensions are required.
 TEST(GltfCompression, CommandsWriteDracoWithDashDashDraco) {
