@@ -19,7 +19,7 @@ struct CacheScoring {
   float cache[max_cache_size + 1] = {};  // [cache_size]: not cached
   float live[live_table_size] = {};      // [0] unused
 };
-CacheScoring default_scoring(uint32_t cache_size);
+CacheScoring default_scoring(uint32_t cache_size, bool index_codec = false);
 
 // Forsyth-style greedy walk with the given scoring; returns the triangle order.
 std::vector<uint32_t> greedy_cache_order(std::span<const uint32_t> indices, size_t vertex_count, const CacheScoring& scoring);
