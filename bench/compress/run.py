@@ -119,6 +119,7 @@ def main():
             "gltfpack -cc": stem + "-gp-cc.glb",
             "lodkit -c khr": stem + "-opt-ck.glb",
             "lodkit -c -q khr": stem + "-opt-cqk.glb",
+            "lodkit --cc": stem + "-opt-cc.glb",
         }
         # --lru: the LRU-style order (lodkit's Forsyth-like walk), which the meshopt codecs favour;
         # the default FIFO order costs -c about 5% (bunny00: 438 against 415 KiB).
@@ -128,6 +129,8 @@ def main():
         # KHR_meshopt_compression, vertex codec version 1 (lodkit's own encoder and decoder).
         run([lodkit, "optimize", src, "-o", files["lodkit -c khr"], "--lru", "-c", "--meshopt-khr"])
         run([lodkit, "optimize", src, "-o", files["lodkit -c -q khr"], "--lru", "-c", "-q", "--meshopt-khr"])
+        # --cc: -c -q and octahedral normals and tangents, gltfpack -cc's filters.
+        run([lodkit, "optimize", src, "-o", files["lodkit --cc"], "--lru", "--cc"])
         run(["gltfpack", "-i", files["lodkit"], "-o", files["gltfpack -noq"], "-noq"])
         run(["gltfpack", "-i", files["lodkit"], "-o", files["gltfpack -c -noq"], "-c", "-noq"])
         run(["gltfpack", "-i", files["lodkit"], "-o", files["gltfpack -c"], "-c"])
@@ -150,12 +153,12 @@ def main():
         row["load_cqk_s"], _ = load(lodkit, files["lodkit -c -q khr"], runs)
         # (A skinned character is compared at rest, its bind pose: flatten places a quantized one
         # by the grid its joints carry.)
-        row["hausdorff"] = {tool: hausdorff(lodkit, files["lodkit"], files[tool]) for tool in ["lodkit -c -q", "gltfpack -c", "gltfpack -cc"]}
+        row["hausdorff"] = {tool: hausdorff(lodkit, files["lodkit"], files[tool]) for tool in ["lodkit -c -q", "gltfpack -c", "gltfpack -cc", "lodkit --cc"]}
         # The baked clip's animation error (lodkit_bench_anim_error: the largest joint distance in
         # world space at 240 Hz), which the sizes trade against: -q drops keys, gltfpack resamples.
         if anim_error and src.endswith("humanoid_baked.glb"):
             row["anim_error_m"] = {tool: json.loads(run([anim_error, src, files[tool], BAKED_CLIP]))["joint_error"]
-                                   for tool in ["lodkit -c", "lodkit -c -q", "lodkit -c -q khr", "gltfpack -c", "gltfpack -cc"]}
+                                   for tool in ["lodkit -c", "lodkit -c -q", "lodkit -c -q khr", "lodkit --cc", "gltfpack -c", "gltfpack -cc"]}
         # Draco, from the same plain file.
         draco = {"lodkit --draco": stem + "-draco.glb", "draco_transcoder": stem + "-transcoder.glb"}
         commands = {"lodkit --draco": [lodkit, "convert", files["lodkit"], draco["lodkit --draco"], "--draco"],
@@ -210,21 +213,25 @@ def main():
     print("Against gltfpack -cc (its smaller form: strip order for the codecs, octahedral normals, quaternion filter"
           " with per-joint bits; Hausdorff distance from the plain file over the diagonal):")
     print()
-    print("| input | gltfpack -cc KiB (gzip) | lodkit -c -q ÷ it (gzip) | lodkit -c -q --meshopt-khr ÷ it (gzip) |"
-          " Hausdorff, lodkit -c -q / gltfpack -cc |")
-    print("|---|---|---|---|---|")
-    ccratios, cckratios = [], []
+    print("| input | gltfpack -cc KiB (gzip) | lodkit --cc KiB (gzip) | lodkit --cc ÷ it (gzip) | lodkit -c -q ÷ it (gzip) |"
+          " lodkit -c -q --meshopt-khr ÷ it (gzip) | Hausdorff, lodkit --cc / gltfpack -cc |")
+    print("|---|---|---|---|---|---|---|")
+    ccratios, cqratios, cckratios = [], [], []
     for r in rows:
         b, g, h = r["bytes"], r["gzip"], r["hausdorff"]
-        ccratios.append(b["lodkit -c -q"] / b["gltfpack -cc"])
+        ccratios.append(b["lodkit --cc"] / b["gltfpack -cc"])
+        cqratios.append(b["lodkit -c -q"] / b["gltfpack -cc"])
         cckratios.append(b["lodkit -c -q khr"] / b["gltfpack -cc"])
         print(f"| {r['input']} | {b['gltfpack -cc'] / 1024:.0f} ({g['gltfpack -cc'] / 1024:.0f}) | "
-              f"{ccratios[-1]:.3f} ({g['lodkit -c -q'] / g['gltfpack -cc']:.3f}) | "
+              f"{b['lodkit --cc'] / 1024:.0f} ({g['lodkit --cc'] / 1024:.0f}) | "
+              f"{ccratios[-1]:.3f} ({g['lodkit --cc'] / g['gltfpack -cc']:.3f}) | "
+              f"{cqratios[-1]:.3f} ({g['lodkit -c -q'] / g['gltfpack -cc']:.3f}) | "
               f"{cckratios[-1]:.3f} ({g['lodkit -c -q khr'] / g['gltfpack -cc']:.3f}) | "
-              f"{h['lodkit -c -q']:.2e} / {h['gltfpack -cc']:.2e} |")
+              f"{h['lodkit --cc']:.2e} / {h['gltfpack -cc']:.2e} |")
     print()
-    print(f"lodkit -c -q ÷ gltfpack -cc, raw size: median {statistics.median(ccratios):.3f} ({min(ccratios):.3f}-{max(ccratios):.3f}); "
-          f"with --meshopt-khr: median {statistics.median(cckratios):.3f} ({min(cckratios):.3f}-{max(cckratios):.3f})")
+    print(f"÷ gltfpack -cc, raw size: lodkit --cc median {statistics.median(ccratios):.3f} ({min(ccratios):.3f}-{max(ccratios):.3f}); "
+          f"-c -q median {statistics.median(cqratios):.3f} ({min(cqratios):.3f}-{max(cqratios):.3f}); "
+          f"-c -q --meshopt-khr median {statistics.median(cckratios):.3f} ({min(cckratios):.3f}-{max(cckratios):.3f})")
     print()
     print("KHR_meshopt_compression with vertex codec version 1 (`--meshopt-khr`, lodkit's own encoder and decoder), against"
           " EXT_meshopt_compression (version 0, meshoptimizer's) from lodkit and gltfpack:")

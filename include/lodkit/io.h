@@ -54,6 +54,10 @@ struct WriteOptions {
   // (16 bits); other streams stay as they are. Positions stay floats in a mesh that a point or line primitive,
   // skinned GPU instancing or a skin shared with such a mesh ties to its own space.
   bool quantize = false;
+  // With `meshopt_compression` and `quantize`: normals and tangents through meshopt's OCTAHEDRAL
+  // filter too (8 bits), as gltfpack -cc: about a third fewer bytes for them, at up to 1.4 degrees
+  // from the normalized bytes `quantize` alone stores (those are within 0.4 degrees of the input).
+  bool compress_more = false;
   // glTF: each triangle primitive's vertex streams and indices as a Draco stream
   // (KHR_draco_mesh_compression, then required) at Draco's default compression level 7, as
   // draco_transcoder writes it: positions quantized to `position_bits`, normals to 10 bits, UVs to

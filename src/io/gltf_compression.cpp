@@ -433,16 +433,16 @@ constexpr int animation_exp_bits = 16;
 // rounding.
 constexpr int animation_quat_bits = 16;
 
-// A filter for a view of animation keys (under -q only: each is lossy).
-enum class KeyFilter { none, exponential, quaternion };
+// A filter for a view of animation keys or of directions (under -q only: each is lossy).
+enum class ViewFilter { none, exponential, quaternion, octahedral };
 
 // How a bufferView may be encoded, from the accessors that use it.
 struct ViewUse {
   bool indices = false, attributes = false, excluded = false;
   // Every accessor of the view holds animation translation or scale keys (float VEC3), or every one
-  // rotation keys (normalized short VEC4): with -q they may go through the EXPONENTIAL or the
-  // QUATERNION filter.
-  bool keys = false, rotations = false, other = false;
+  // rotation keys (normalized short VEC4), or every one a primitive's normals or tangents (normalized
+  // bytes): with -q they may go through the EXPONENTIAL, QUATERNION or OCTAHEDRAL filter.
+  bool keys = false, rotations = false, directions = false, other = false;
   uint64_t stride = 0;  // element (or byteStride) size shared by its accessors
 };
 
@@ -457,18 +457,24 @@ std::vector<ViewUse> view_uses(const Json& doc) {
     for (const Json& primitive : mesh.value("primitives", Json::array()))
       if (primitive.contains("indices"))
         indices.at(primitive["indices"].get<size_t>()) |= primitive.value("mode", 4) == 4 ? 1 : 2;
-  // Per accessor: the output of a translation or scale channel's sampler (1), or of a rotation's (2).
-  std::vector<int> keys(accessors.size(), 0);
+  // Per accessor: the output of a translation or scale channel's sampler (1), of a rotation's (2), a
+  // primitive's NORMAL or TANGENT (3); -1: two of those.
+  std::vector<int> kinds(accessors.size(), 0);
+  const auto mark = [&](const Json& accessor, int kind) {
+    int& k = kinds.at(accessor.get<size_t>());
+    k = k && k != kind ? -1 : kind;
+  };
+  for (const Json& mesh : doc.value("meshes", Json::array()))
+    for (const Json& primitive : mesh.value("primitives", Json::array()))
+      for (const char* name : {"NORMAL", "TANGENT"})
+        if (primitive.contains("attributes") && primitive["attributes"].contains(name)) mark(primitive["attributes"][name], 3);
   for (const Json& animation : doc.value("animations", Json::array())) {
     const Json samplers = animation.value("samplers", Json::array());
     for (const Json& channel : animation.value("channels", Json::array())) {
       const std::string path = channel.value("target", Json::object()).value("path", std::string());
       const size_t sampler = channel.value("sampler", size_t(0));
       const int kind = path == "translation" || path == "scale" ? 1 : path == "rotation" ? 2 : 0;
-      if (kind && sampler < samplers.size() && samplers[sampler].contains("output")) {
-        int& k = keys.at(samplers[sampler]["output"].get<size_t>());
-        k = k && k != kind ? -1 : kind;  // (-1: an output two kinds of channel use)
-      }
+      if (kind && sampler < samplers.size() && samplers[sampler].contains("output")) mark(samplers[sampler]["output"], kind);
     }
   }
   for (size_t k = 0; k < accessors.size(); ++k) {
@@ -490,8 +496,9 @@ std::vector<ViewUse> view_uses(const Json& doc) {
       const int type = accessor.value("componentType", 0);
       const bool normalized = accessor.value("normalized", false);
       const std::string vec = accessor.value("type", std::string());
-      if (keys[k] == 1 && type == TINYGLTF_COMPONENT_TYPE_FLOAT && vec == "VEC3" && !normalized) u.keys = true;
-      else if (keys[k] == 2 && type == TINYGLTF_COMPONENT_TYPE_SHORT && vec == "VEC4" && normalized) u.rotations = true;
+      if (kinds[k] == 1 && type == TINYGLTF_COMPONENT_TYPE_FLOAT && vec == "VEC3" && !normalized) u.keys = true;
+      else if (kinds[k] == 2 && type == TINYGLTF_COMPONENT_TYPE_SHORT && vec == "VEC4" && normalized) u.rotations = true;
+      else if (kinds[k] == 3 && type == TINYGLTF_COMPONENT_TYPE_BYTE && (vec == "VEC3" || vec == "VEC4") && normalized) u.directions = true;
       else u.other = true;
       const uint64_t stride = view.value("byteStride", element);
       u.excluded |= stride == 0 || stride % 4 != 0 || stride > 256 || (u.stride && u.stride != stride);
@@ -503,7 +510,7 @@ std::vector<ViewUse> view_uses(const Json& doc) {
 
 // The view's bytes encoded (vertex streams at version 1 with `khr`) after `filter`, or nothing when
 // that is not smaller.
-std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const ViewUse& u, bool khr, KeyFilter filter) {
+std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const ViewUse& u, bool khr, ViewFilter filter) {
   const size_t count = size_t(length / u.stride);
   std::vector<uint8_t> out;
   if (u.indices) {
@@ -524,13 +531,13 @@ std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const Vie
     out.resize(meshopt_encodeIndexBuffer(out.data(), out.size(), indices.data(), count));
   } else {
     std::vector<uint8_t> filtered;
-    if (filter == KeyFilter::exponential) {
+    if (filter == ViewFilter::exponential) {
       std::vector<float> values(size_t(length) / 4);
       std::memcpy(values.data(), data, values.size() * 4);
       filtered.resize(size_t(length));
       meshopt_encodeFilterExp(filtered.data(), count, size_t(u.stride), animation_exp_bits, values.data());
       data = filtered.data();
-    } else if (filter == KeyFilter::quaternion) {
+    } else if (filter == ViewFilter::quaternion) {
       // The filter keeps the three smaller components and drops the sign (the decoder makes the
       // largest positive): glTF interpolates rotations along the shorter arc, so q and -q animate
       // alike.
@@ -542,6 +549,14 @@ std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const Vie
       }
       filtered.resize(size_t(length));
       meshopt_encodeFilterQuat(filtered.data(), count, size_t(u.stride), animation_quat_bits, values.data());
+      data = filtered.data();
+    } else if (filter == ViewFilter::octahedral) {
+      // Normalized bytes in (a normal's fourth byte is padding; a tangent's w, its handedness, the
+      // filter keeps).
+      std::vector<float> values(static_cast<size_t>(length));
+      for (size_t i = 0; i < values.size(); ++i) values[i] = std::max(float(int8_t(data[i])) / 127.0f, -1.0f);
+      filtered.resize(size_t(length));
+      meshopt_encodeFilterOct(filtered.data(), count, size_t(u.stride), 8, values.data());
       data = filtered.data();
     }
     if (khr) {
@@ -569,12 +584,14 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& 
   // filter, as gltfpack -c does: 16-bit mantissas, one exponent per key; views of rotation keys only
   // through the quaternion filter (gltfpack -c leaves them plain: it takes 70% of their bytes, 15% of
   // a baked character's file).
+  // With compress_more, views of normals and tangents through the octahedral filter (8 bits).
   const auto filter = [&](size_t v) {
     const ViewUse& u = use[v];
-    if (!options.quantize || u.other || u.keys == u.rotations) return KeyFilter::none;
-    if (u.keys && u.stride == 12) return KeyFilter::exponential;
-    if (u.rotations && u.stride == 8) return KeyFilter::quaternion;
-    return KeyFilter::none;
+    if (!options.quantize || u.other || int(u.keys) + int(u.rotations) + int(u.directions) != 1) return ViewFilter::none;
+    if (u.keys && u.stride == 12) return ViewFilter::exponential;
+    if (u.rotations && u.stride == 8) return ViewFilter::quaternion;
+    if (u.directions && u.stride == 4 && options.compress_more) return ViewFilter::octahedral;
+    return ViewFilter::none;
   };
   bool any = false;
   for (size_t v = 0; v < views.size(); ++v) {
@@ -607,7 +624,8 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& 
                                      {"byteStride", stride},
                                      {"count", length / stride},
                                      {"mode", use[v].indices ? "TRIANGLES" : "ATTRIBUTES"}};
-    if (const KeyFilter f = filter(v); f != KeyFilter::none) view["extensions"][extension]["filter"] = f == KeyFilter::exponential ? "EXPONENTIAL" : "QUATERNION";
+    if (const ViewFilter f = filter(v); f != ViewFilter::none)
+      view["extensions"][extension]["filter"] = f == ViewFilter::exponential ? "EXPONENTIAL" : f == ViewFilter::quaternion ? "QUATERNION" : "OCTAHEDRAL";
     packed.insert(packed.end(), encoded[v].begin(), encoded[v].end());
     fallback = align(fallback);
     view["buffer"] = 1;

@@ -12,6 +12,7 @@
 #include <map>
 #include <numeric>
 #include <random>
+#include <set>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -1147,6 +1148,65 @@ TEST(GltfCompression, QuantizedCompressionFiltersRotationKeys) {
     EXPECT_GT(worst, 0.0);  // (the filter did apply)
     test::expect_valid_gltf({file});
   }
+}
+
+// compress_more (the CLI's --cc, which implies -c -q): normals and tangents go through meshopt's
+// octahedral filter in 8 bits, as gltfpack -cc. The bound against the normalized bytes -q stores:
+// the filter keeps u, v of the octahedral map within half a step (1/254) each, which moves the
+// unfolded point (u, v, 1 - |u| - |v|), at least 1/sqrt 3 long, by at most sqrt 6 / 254, so the
+// direction by at most 0.96 degrees; the decoder's own rounding to bytes adds at most
+// sqrt 3 / 254 rad (0.39 degrees): 1.4 degrees. Read back by lodkit and by meshoptimizer's
+// JavaScript decoder (the second reader), which must agree; a tangent's handedness stays. Without
+// -q, or without compress_more, no view is filtered so.
+TEST(GltfCompression, CompressMoreFiltersNormalsAndTangents) {
+  TempDir dir;
+  Mesh mesh = shapes::torus(1.0f, 0.3f, 48, 24);
+  ASSERT_EQ(mesh.normals.size(), mesh.vertex_count());
+  for (size_t v = 0; v < mesh.vertex_count(); ++v) {  // a tangent across each normal, handedness alternating
+    const float3 n = mesh.normals[v];
+    float3 t = {-n.y, n.x, 0};
+    const float len = std::hypot(t.x, t.y);
+    t = len > 1e-3f ? float3{t.x / len, t.y / len, 0} : float3{1, 0, 0};
+    mesh.tangents.push_back({t.x, t.y, t.z, v % 2 ? -1.0f : 1.0f});
+  }
+  const Scene scene = scene_from_mesh(mesh);
+  write_scene(scene, dir / "q.glb", {.quantize = true});
+  write_scene(scene, dir / "cc.glb", {.meshopt_compression = true, .quantize = true, .compress_more = true});
+  write_scene(scene, dir / "cq.glb", {.meshopt_compression = true, .quantize = true});
+  const auto filters = [](const std::filesystem::path& file) {
+    std::multiset<std::string> out;
+    const Json doc = test::glb_json(file);
+    for (const Json& view : doc["bufferViews"])
+      if (view.contains("extensions")) out.insert(view["extensions"]["EXT_meshopt_compression"].value("filter", "NONE"));
+    return out;
+  };
+  EXPECT_EQ(filters(dir / "cc.glb").count("OCTAHEDRAL"), 2u);  // the normals' view and the tangents'
+  EXPECT_EQ(filters(dir / "cq.glb").count("OCTAHEDRAL"), 0u);
+  const Mesh want = read_scene(dir / "q.glb").primitives.at(0).mesh, got = read_scene(dir / "cc.glb").primitives.at(0).mesh;
+  ASSERT_EQ(got.normals.size(), want.normals.size());
+  ASSERT_EQ(got.tangents.size(), want.tangents.size());
+  const auto degrees = [](float3 a, float3 b) {
+    const double d = double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z;
+    const double la = std::hypot(double(a.x), double(a.y), double(a.z)), lb = std::hypot(double(b.x), double(b.y), double(b.z));
+    return std::acos(std::min(1.0, d / (la * lb))) * 180 / M_PI;
+  };
+  double worst = 0;
+  size_t moved = 0;
+  for (size_t v = 0; v < got.normals.size(); ++v) {
+    worst = std::max({worst, degrees(got.normals[v], want.normals[v]),
+                      degrees({got.tangents[v].x, got.tangents[v].y, got.tangents[v].z}, {want.tangents[v].x, want.tangents[v].y, want.tangents[v].z})});
+    EXPECT_EQ(got.tangents[v].w, want.tangents[v].w) << v;
+    moved += got.normals[v].x != want.normals[v].x || got.normals[v].y != want.normals[v].y || got.normals[v].z != want.normals[v].z;
+  }
+  EXPECT_LE(worst, 1.4);
+  EXPECT_GT(moved, got.normals.size() / 4);  // (the filter did apply)
+  // meshoptimizer's decoder reads the same bytes.
+  const Json second = test::read_with_second_reader(dir / "cc.glb")[0]["attributes"]["NORMAL"]["values"];
+  ASSERT_EQ(second.size(), 3 * got.normals.size());
+  for (size_t v = 0; v < got.normals.size(); ++v)
+    for (size_t c = 0; c < 3; ++c)
+      EXPECT_NEAR(std::max(second[3 * v + c].get<double>() / 127, -1.0), (&got.normals[v].x)[c], 1e-6) << v;
+  test::expect_valid_gltf({dir / "cc.glb"});
 }
 
 // The CLI's --draco: a LOD chain, valid, every level compressed; with -c, meshopt takes the rest

@@ -802,18 +802,22 @@ TEST(GltfQuantize, CommandsQuantizeWithDashQ) {
   write_scene(scene_from_mesh(shapes::torus(1.0f, 0.25f, 48, 24)), dir / "in.glb");
   for (const std::vector<std::string>& command : std::vector<std::vector<std::string>>{
            {"lod", "--levels", "3"}, {"simplify", "--ratio", "0.3"}, {"optimize"}, {"convert"}}) {
-    for (const std::vector<std::string>& flags : std::vector<std::vector<std::string>>{{"-q"}, {"-q", "-c", "--position-bits", "10"}}) {
+    // (--cc implies -c -q)
+    for (const std::vector<std::string>& flags :
+         std::vector<std::vector<std::string>>{{"-q"}, {"-q", "-c", "--position-bits", "10"}, {"--cc"}}) {
       SCOPED_TRACE(command[0] + " " + flags.back());
+      const bool compressed = flags.size() > 1 || flags[0] == "--cc";
       std::vector<std::string> plain = command, packed = command;
       for (auto* args : {&plain, &packed}) args->insert(args->begin() + 1, (dir / "in.glb").string());
       plain.insert(plain.end(), {"-o", (dir / "plain.glb").string()});
-      if (flags.size() > 1) plain.push_back("-c");  // (lod -c orders its levels for the codec)
+      if (compressed) plain.push_back("-c");  // (lod -c orders its levels for the codec)
       packed.insert(packed.end(), {"-o", (dir / "q.glb").string()});
       packed.insert(packed.end(), flags.begin(), flags.end());
       ASSERT_EQ(test::run_cli(plain).exit_code, 0);
       const test::RunResult r = test::run_cli(packed);
       ASSERT_EQ(r.exit_code, 0) << r.err;
       EXPECT_TRUE(contains(test::glb_json(dir / "q.glb")["extensionsRequired"], "KHR_mesh_quantization"));
+      EXPECT_EQ(contains(test::glb_json(dir / "q.glb")["extensionsRequired"], "EXT_meshopt_compression"), compressed);
       const Scene a = read_scene(dir / "plain.glb");
       const Mesh pa = flatten(a), pb = flatten(read_scene(dir / "q.glb"));
       ASSERT_EQ(pa.vertex_count(), pb.vertex_count());

@@ -61,7 +61,7 @@ WriteReport GeometryFile::write(const std::string& output, const WriteOptions& o
 
 void check_gltf_output_flags(const WriteOptions& options, const std::string& output) {
   if ((options.meshopt_compression || options.quantize || options.draco) && !is_gltf(output))
-    throw_usage(output + ": -c, -q and --draco apply to glTF output (.gltf, .glb) only");
+    throw_usage(output + ": -c, -q, --cc and --draco apply to glTF output (.gltf, .glb) only");
   if (options.meshopt_khr && !options.meshopt_compression) throw_usage("--meshopt-khr: it chooses -c's extension; add -c");
 }
 
@@ -103,6 +103,11 @@ void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
                 "glTF output: vertex streams in fewer bits (KHR_mesh_quantization, then required): positions on a "
                 "grid of --position-bits, normals and tangents in bytes, UVs in 16 bits (outside [0,1]: on a box, with KHR_texture_transform), colours and "
                 "weights in bytes");
+  app->add_flag_callback(
+      "--cc",
+      [&options] { options.compress_more = options.meshopt_compression = options.quantize = true; },
+      "glTF output: -c -q, and normals and tangents through meshopt's octahedral filter (8 bits, up to 1.4 degrees "
+      "from -q's), as gltfpack -cc");
   app->add_flag("--draco", options.draco,
                 "glTF output: each triangle primitive's geometry as a Draco stream (KHR_draco_mesh_compression, then "
                 "required): positions in --position-bits, normals 10 bits, UVs 12, colours 8, weights and tangents 12");
