@@ -38,6 +38,15 @@ CORPUS = ["bunny00.off", "armadillo.off", "ChineseDragon-10kv.off", "fandisk_lar
           "mushroom.off", "man.off", "refined_elephant.off", "femur.off", "cylinder.off"]
 
 
+def kib(row, tool):
+    """A file's size in KiB, and gzipped in brackets."""
+    return f"{row['bytes'][tool] / 1024:.0f} ({row['gzip'][tool] / 1024:.0f})"
+
+
+def spread(ratios):
+    return f"median {statistics.median(ratios):.3f} ({min(ratios):.3f}-{max(ratios):.3f})"
+
+
 def run(args, **kw):
     r = subprocess.run(args, capture_output=True, text=True, **kw)
     if r.returncode != 0:
@@ -216,22 +225,16 @@ def main():
     print("| input | gltfpack -cc KiB (gzip) | lodkit --cc KiB (gzip) | lodkit --cc ÷ it (gzip) | lodkit -c -q ÷ it (gzip) |"
           " lodkit -c -q --meshopt-khr ÷ it (gzip) | Hausdorff, lodkit --cc / gltfpack -cc |")
     print("|---|---|---|---|---|---|---|")
-    ccratios, cqratios, cckratios = [], [], []
+    against = {"lodkit --cc": [], "lodkit -c -q": [], "lodkit -c -q khr": []}
     for r in rows:
-        b, g, h = r["bytes"], r["gzip"], r["hausdorff"]
-        ccratios.append(b["lodkit --cc"] / b["gltfpack -cc"])
-        cqratios.append(b["lodkit -c -q"] / b["gltfpack -cc"])
-        cckratios.append(b["lodkit -c -q khr"] / b["gltfpack -cc"])
-        print(f"| {r['input']} | {b['gltfpack -cc'] / 1024:.0f} ({g['gltfpack -cc'] / 1024:.0f}) | "
-              f"{b['lodkit --cc'] / 1024:.0f} ({g['lodkit --cc'] / 1024:.0f}) | "
-              f"{ccratios[-1]:.3f} ({g['lodkit --cc'] / g['gltfpack -cc']:.3f}) | "
-              f"{cqratios[-1]:.3f} ({g['lodkit -c -q'] / g['gltfpack -cc']:.3f}) | "
-              f"{cckratios[-1]:.3f} ({g['lodkit -c -q khr'] / g['gltfpack -cc']:.3f}) | "
-              f"{h['lodkit --cc']:.2e} / {h['gltfpack -cc']:.2e} |")
+        cells = []
+        for tool, ratios in against.items():
+            ratios.append(r["bytes"][tool] / r["bytes"]["gltfpack -cc"])
+            cells.append(f"{ratios[-1]:.3f} ({r['gzip'][tool] / r['gzip']['gltfpack -cc']:.3f})")
+        print(f"| {r['input']} | {kib(r, 'gltfpack -cc')} | {kib(r, 'lodkit --cc')} | {' | '.join(cells)} | "
+              f"{r['hausdorff']['lodkit --cc']:.2e} / {r['hausdorff']['gltfpack -cc']:.2e} |")
     print()
-    print(f"÷ gltfpack -cc, raw size: lodkit --cc median {statistics.median(ccratios):.3f} ({min(ccratios):.3f}-{max(ccratios):.3f}); "
-          f"-c -q median {statistics.median(cqratios):.3f} ({min(cqratios):.3f}-{max(cqratios):.3f}); "
-          f"-c -q --meshopt-khr median {statistics.median(cckratios):.3f} ({min(cckratios):.3f}-{max(cckratios):.3f})")
+    print("÷ gltfpack -cc, raw size: " + "; ".join(f"{tool} {spread(ratios)}" for tool, ratios in against.items()))
     print()
     print("KHR_meshopt_compression with vertex codec version 1 (`--meshopt-khr`, lodkit's own encoder and decoder), against"
           " EXT_meshopt_compression (version 0, meshoptimizer's) from lodkit and gltfpack:")
@@ -241,17 +244,16 @@ def main():
     print("|---|---|---|---|---|---|---|---|---|")
     kratios, kqratios = [], []
     for r in rows:
-        b, g = r["bytes"], r["gzip"]
+        b = r["bytes"]
         kratios.append(b["lodkit -c khr"] / b["gltfpack -c -noq"])
         kqratios.append(b["lodkit -c -q khr"] / b["gltfpack -c"])
-        print(f"| {r['input']} | {b['lodkit -c khr'] / 1024:.0f} ({g['lodkit -c khr'] / 1024:.0f}) | "
+        print(f"| {r['input']} | {kib(r, 'lodkit -c khr')} | "
               f"{b['lodkit -c khr'] / b['lodkit -c']:.3f} | {kratios[-1]:.3f} | "
-              f"{b['lodkit -c -q khr'] / 1024:.0f} ({g['lodkit -c -q khr'] / 1024:.0f}) | {b['lodkit -c -q khr'] / b['lodkit -c -q']:.3f} | "
+              f"{kib(r, 'lodkit -c -q khr')} | {b['lodkit -c -q khr'] / b['lodkit -c -q']:.3f} | "
               f"{kqratios[-1]:.3f} | {r['load_c_s'] * 1000:.1f} / {r['load_ck_s'] * 1000:.1f} ms | "
               f"{r['load_cq_s'] * 1000:.1f} / {r['load_cqk_s'] * 1000:.1f} ms |")
     print()
-    print(f"-c --meshopt-khr ÷ gltfpack -c -noq: median {statistics.median(kratios):.3f} ({min(kratios):.3f}-{max(kratios):.3f}); "
-          f"-c -q --meshopt-khr ÷ gltfpack -c: median {statistics.median(kqratios):.3f} ({min(kqratios):.3f}-{max(kqratios):.3f})")
+    print(f"-c --meshopt-khr ÷ gltfpack -c -noq: {spread(kratios)}; -c -q --meshopt-khr ÷ gltfpack -c: {spread(kqratios)}")
     print()
     print("| input | lodkit --draco KiB (gzip) | draco_transcoder KiB (gzip) | lodkit ÷ transcoder | encode lodkit / transcoder |"
           " load (lodkit) --draco / transcoder's | Hausdorff / diagonal, lodkit / transcoder |")
