@@ -53,8 +53,9 @@ void decode_compressed_geometry(tinygltf::Model& model, const std::vector<uint64
 // meshoptimizer keeps them in globals. With `meshopt_khr`, KHR_meshopt_compression, its vertex
 // streams at version 1 by lodkit's own encoder (meshopt_codec.h). With `quantize` (lossy already),
 // animation translation and scale keys go through the EXPONENTIAL filter (16-bit mantissas, one
-// exponent per key), as gltfpack -c does, and rotation keys through the QUATERNION filter (16 bits).
-// Nothing changes when no view gets smaller.
+// exponent per key), as gltfpack -c does, and rotation keys through the QUATERNION filter (16 bits);
+// with `compress_more` too, normals and tangents through the OCTAHEDRAL filter (8 bits). Nothing
+// changes when no view gets smaller.
 void compress_meshopt(nlohmann::json& doc, std::vector<uint8_t>& bin, const WriteOptions& options);
 
 // Writing (WriteOptions::draco): a triangle mesh's vertex streams and indices as one Draco stream
