@@ -3507,6 +3507,13 @@ Json serialize_json(const tg::Model& model, size_t bin_size, const std::string& 
           if (perspective.contains("zfar") && perspective["zfar"].is_number() && perspective["zfar"].get<double>() == 0)
             perspective.erase("zfar");
         }
+    // An animation sampler's LINEAR interpolation is glTF's default: left out, as gltfpack does
+    // (26 bytes a sampler; a baked character's clip has one per joint and property).
+    if (doc.contains("animations") && doc["animations"].is_array())
+      for (Json& animation : doc["animations"])
+        if (animation.contains("samplers") && animation["samplers"].is_array())
+          for (Json& sampler : animation["samplers"])
+            if (sampler.is_object() && sampler.value("interpolation", "") == "LINEAR") sampler.erase("interpolation");
     if (needs_buffer) {
       Json buffer = {{"byteLength", bin_size}};
       if (!bin_uri.empty()) buffer["uri"] = bin_uri;
