@@ -2788,24 +2788,23 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
   // the bytes its samplers save (against their best other way) exceed them.
   std::vector<size_t> stride_of(choices.size(), 0);
   {
-    std::map<size_t, std::set<size_t, std::greater<>>> strides;  // input -> strides some sampler fits
-    for (const Choice& c : choices)
-      for (const size_t s : c.strides) strides[c.input].insert(s);
-    for (const auto& [input, set] : strides)
-      for (const size_t s : set) {
-        double saved = 0, times = 0;
-        for (const Choice& c : choices)
-          if (c.input == input && std::count(c.strides.begin(), c.strides.end(), s)) {
-            times = 4.0 * thinned_count(c.count, s);
-            saved += std::max(0.0, c.bytes - double(thinned_count(c.count, s) * c.value_bytes));
-          }
-        if (saved <= times) continue;
-        for (size_t i = 0; i < choices.size(); ++i) {
-          Choice& c = choices[i];
-          const double bytes = double(thinned_count(c.count, s) * c.value_bytes);
-          if (c.input == input && std::count(c.strides.begin(), c.strides.end(), s) && bytes < c.bytes) c.bytes = bytes, stride_of[i] = s;
-        }
+    std::map<size_t, std::vector<size_t>> members;  // input -> its samplers (in choices); their key counts are equal
+    for (size_t i = 0; i < choices.size(); ++i) members[choices[i].input].push_back(i);
+    for (const auto& [input, of_input] : members) {
+      std::set<size_t, std::greater<>> strides;  // some sampler of the input fits them
+      for (const size_t i : of_input) strides.insert(choices[i].strides.begin(), choices[i].strides.end());
+      const size_t n = choices[of_input.front()].count;
+      for (const size_t s : strides) {
+        const auto fits = [&](const Choice& c) { return std::find(c.strides.begin(), c.strides.end(), s) != c.strides.end(); };
+        double saved = 0;
+        for (const size_t i : of_input)
+          if (fits(choices[i])) saved += std::max(0.0, choices[i].bytes - double(thinned_count(n, s) * choices[i].value_bytes));
+        if (saved <= 4.0 * double(thinned_count(n, s))) continue;
+        for (const size_t i : of_input)
+          if (const double bytes = double(thinned_count(n, s) * choices[i].value_bytes); fits(choices[i]) && bytes < choices[i].bytes)
+            choices[i].bytes = bytes, stride_of[i] = s;
       }
+    }
   }
   for (size_t i = 0; i < choices.size(); ++i) {
     Choice& c = choices[i];
