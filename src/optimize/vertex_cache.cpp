@@ -587,7 +587,8 @@ using detail::max_extra_starts;
 //
 // Every candidate is scored by its misses on the caller's cache, and the first with the fewest
 // wins: the input order, then for a FIFO the fan orderer and its extra starts (small inputs) or
-// else Tipsify; for an LRU the Forsyth-style walk and Tipsify (not for the index codec). For a FIFO the orderers' own
+// else Tipsify; for an LRU the Forsyth-style walk and Tipsify (for the index codec: the strip walk,
+// kept only where its indices code in fewer bytes than the input's). For a FIFO the orderers' own
 // simulated caches are the caller's, so their miss counts need no separate simulation, and a run
 // stops as soon as its lower bound (detail::fan_run) shows it cannot beat the best so far; when the
 // best needs one miss per referenced vertex nothing can beat it and no orderer runs. None of this
@@ -602,12 +603,13 @@ const uint32_t* choose_order(std::span<const uint32_t> indices, size_t vertex_co
     if (i >= vertex_count) throw_usage("optimize_vertex_cache: index " + std::to_string(i) + " out of range");
   };
 
+  if (options.policy == CachePolicy::lru)
+    for (const uint32_t i : indices) check_index(i);
   if (options.policy == CachePolicy::lru && options.index_codec) {
     // For the index codec the order whose indices code in the fewest bytes (numbered by first use, as
     // the fetch order then numbers them): the input's, or the walk's in strips. Not the fewer misses:
     // a FIFO-ordered input (a LOD chain's levels) often has fewer LRU misses than the strips and
     // codes 23-30% larger (bunny00's chain).
-    for (const uint32_t i : indices) check_index(i);
     std::vector<uint32_t> list(indices.size()), first_use(vertex_count);
     std::vector<unsigned char> buffer;
     auto bytes_of = [&](const std::vector<uint32_t>* order) {
@@ -623,14 +625,11 @@ const uint32_t* choose_order(std::span<const uint32_t> indices, size_t vertex_co
       buffer.resize(meshopt_encodeIndexBufferBound(list.size(), next));
       return meshopt_encodeIndexBuffer(buffer.data(), buffer.size(), list.data(), list.size());
     };
-    const size_t best = bytes_of(nullptr);
-    bool input_best = true;
-    std::vector<uint32_t> order = detail::greedy_cache_order(indices, vertex_count, detail::default_scoring(K, true));
-    if (bytes_of(&order) < best) lru_order = std::move(order), input_best = false;
-    return input_best ? nullptr : lru_order.data();
+    const size_t input_bytes = bytes_of(nullptr);
+    lru_order = detail::greedy_cache_order(indices, vertex_count, detail::default_scoring(K, true));
+    return bytes_of(&lru_order) < input_bytes ? lru_order.data() : nullptr;
   }
   if (options.policy == CachePolicy::lru) {
-    for (const uint32_t i : indices) check_index(i);
     auto misses_of = [&](const std::vector<uint32_t>& order) {
       std::vector<uint32_t> list(indices.size());
       for (size_t k = 0; k < order.size(); ++k)
