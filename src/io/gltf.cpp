@@ -2717,9 +2717,8 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     bool rotation, weights, shorts;
   };
   std::vector<SamplerKeys> sampler_keys;
-  // A sampler's ways, with the bytes of its best so far.
+  // A sampler's ways, with the bytes of its best so far (choices[i] is sampler_keys[i]'s).
   struct Choice {
-    size_t keys;  // in sampler_keys
     size_t input;  // samplers of equal key times (one accessor or several) have the same
     size_t count, value_bytes;
     double bytes;
@@ -2772,7 +2771,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         double tolerance = INFINITY;
         for (const int node : nodes) tolerance = std::min(tolerance, tolerances.of(path, node, largest));
         out.shorts = shorts;
-        Choice choice{sampler_keys.size(), key_times.try_emplace(out.times, key_times.size()).first->second, n, value_bytes, double(n * value_bytes), false, {}, {}};
+        Choice choice{key_times.try_emplace(out.times, key_times.size()).first->second, n, value_bytes, double(n * value_bytes), false, {}, {}};
         if (!cubic && finite) {
           const KeyCurve curve{out.times, out.values, components, rotation, tolerance};
           choice.reduced = reduce_keys(out.times, out.values, components, rotation, step, tolerance);
@@ -2808,7 +2807,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
   }
   for (size_t i = 0; i < choices.size(); ++i) {
     Choice& c = choices[i];
-    SamplerKeys& out = sampler_keys[c.keys];
+    SamplerKeys& out = sampler_keys[i];
     tg::AnimationSampler& sampler = model.animations[out.animation].samplers[out.sampler];
     if (stride_of[i]) {
       Keys thinned = thin_keys(KeyCurve{out.times, out.values, out.components, out.rotation, 0}, stride_of[i]);
