@@ -31,6 +31,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <unordered_map>
 #include <vector>
@@ -100,6 +101,126 @@ const tg::Value& msft_lod_ids(const tg::Node& node) {
   static const tg::Value none;
   const auto lod = node.extensions.find("MSFT_lod");
   return lod != node.extensions.end() && lod->second.IsObject() ? lod->second.Get("ids") : none;
+}
+
+// ---- KHR_animation_pointer -----------------------------------------------------------------------
+
+constexpr const char* animation_pointer = "KHR_animation_pointer";
+
+// A JSON pointer "/<list>/<index>/<rest>" split; index -1 when the pointer does not start with an
+// index into that list (RFC 6901: an array index has no leading zero).
+struct PointerTarget {
+  int index = -1;
+  std::string_view rest;
+};
+PointerTarget split_pointer(std::string_view pointer, std::string_view list) {
+  if (pointer.size() < list.size() + 2 || pointer[0] != '/' || pointer.substr(1, list.size()) != list ||
+      pointer[list.size() + 1] != '/')
+    return {};
+  pointer.remove_prefix(list.size() + 2);
+  const size_t digits = pointer.find('/');
+  if (digits == 0 || digits == std::string_view::npos || digits > 9 || (pointer[0] == '0' && digits > 1)) return {};
+  int index = 0;
+  for (size_t i = 0; i < digits; ++i) {
+    if (pointer[i] < '0' || pointer[i] > '9') return {};
+    index = index * 10 + (pointer[i] - '0');
+  }
+  return {index, pointer.substr(digits + 1)};
+}
+
+// A channel's KHR_animation_pointer pointer ("" when it has none).
+std::string channel_pointer(const tg::AnimationChannel& ch) {
+  const auto ext = ch.target_extensions.find(animation_pointer);
+  if (ext == ch.target_extensions.end() || !ext->second.IsObject()) return {};
+  const tg::Value& pointer = ext->second.Get("pointer");
+  return pointer.IsString() ? pointer.Get<std::string>() : std::string();
+}
+
+// What a channel animates in a node or a mesh: `list` "nodes" or "meshes", the index (-1 when
+// neither) and the property. A core channel's node and path, or a KHR_animation_pointer's
+// "/nodes/N/<property>" (one the reader left a pointer: its output is not what the core allows
+// there) or "/meshes/M/weights".
+struct ChannelTarget {
+  std::string_view list;
+  int index = -1;
+  std::string property;
+};
+ChannelTarget channel_target(const tg::AnimationChannel& ch) {
+  if (ch.target_node >= 0) return {"nodes", ch.target_node, ch.target_path};
+  const std::string pointer = channel_pointer(ch);
+  for (const std::string_view list : {"nodes", "meshes"})
+    if (const PointerTarget t = split_pointer(pointer, list); t.index >= 0) return {list, t.index, std::string(t.rest)};
+  return {};
+}
+// Points a channel at another node or mesh (`list` as channel_target gave), the property kept.
+void retarget_channel(tg::AnimationChannel& ch, std::string_view list, int index) {
+  if (ch.target_node >= 0) {
+    ch.target_node = index;
+    return;
+  }
+  const std::string pointer = "/" + std::string(list) + "/" + str(uint64_t(index)) + "/" + channel_target(ch).property;
+  ch.target_extensions[animation_pointer].Get<tg::Value::Object>()["pointer"] = tg::Value(pointer);
+}
+
+// tinygltf 2.8 drops a channel whose target has no node: KHR_animation_pointer's, and a core one
+// left to an extension. A pointer to a node's translation, rotation, scale or weights is the same
+// animation as a core channel (the extension's README gives the pair) and becomes one, so the grid,
+// -q and the morph weights treat it as they treat node channels; its output must be what the core
+// allows there. Any other such channel gets node -1, a stand-in the writer leaves out again, and
+// passes through. Returns whether the document changed.
+bool prepare_animation_targets(Json& doc) {
+  const auto list = [&](const Json& object, const char* key) -> const Json* {
+    return object.is_object() && object.contains(key) && object[key].is_array() ? &object[key] : nullptr;
+  };
+  const Json* animations = list(doc, "animations");
+  if (!animations) return false;
+  const Json *nodes = list(doc, "nodes"), *accessors = list(doc, "accessors");
+  // The output accessor of channel `ch` of `anim` holds what the core path wants.
+  const auto output_fits = [&](const Json& anim, const Json& ch, const std::string& path) {
+    const Json* samplers = list(anim, "samplers");
+    if (!samplers || !accessors || !ch.contains("sampler") || !ch["sampler"].is_number_unsigned()) return false;
+    const size_t s = ch["sampler"].get<size_t>();
+    if (s >= samplers->size() || !(*samplers)[s].is_object()) return false;
+    const Json& sampler = (*samplers)[s];
+    if (!sampler.contains("output") || !sampler["output"].is_number_unsigned()) return false;
+    const size_t a = sampler["output"].get<size_t>();
+    if (a >= accessors->size() || !(*accessors)[a].is_object()) return false;
+    const Json& accessor = (*accessors)[a];
+    const std::string type = path == "rotation" ? "VEC4" : path == "weights" ? "SCALAR" : "VEC3";
+    if (!accessor.contains("type") || accessor["type"] != type || !accessor.contains("componentType")) return false;
+    const Json& component = accessor["componentType"];
+    if (component == TINYGLTF_COMPONENT_TYPE_FLOAT) return true;
+    const bool normalized = accessor.contains("normalized") && accessor["normalized"] == true;
+    return normalized && (path == "rotation" || path == "weights") &&
+           (component == TINYGLTF_COMPONENT_TYPE_BYTE || component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+            component == TINYGLTF_COMPONENT_TYPE_SHORT || component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
+  };
+  bool changed = false;
+  for (Json& anim : doc["animations"]) {
+    if (!list(anim, "channels")) continue;
+    for (Json& ch : anim["channels"]) {
+      if (!ch.is_object() || !ch.contains("target") || !ch["target"].is_object() || ch["target"].contains("node")) continue;
+      Json& target = ch["target"];
+      target["node"] = -1;
+      changed = true;
+      if (!target.contains("path") || target["path"] != "pointer" || !target.contains("extensions") ||
+          !target["extensions"].is_object() || !target["extensions"].contains(animation_pointer))
+        continue;
+      const Json& ext = target["extensions"][animation_pointer];
+      if (!ext.is_object() || !ext.contains("pointer") || !ext["pointer"].is_string()) continue;
+      const std::string pointer = ext["pointer"].get<std::string>();
+      const PointerTarget t = split_pointer(pointer, "nodes");
+      const std::string path(t.rest);
+      if (t.index < 0 || !nodes || size_t(t.index) >= nodes->size() ||
+          (path != "translation" && path != "rotation" && path != "scale" && path != "weights") || !output_fits(anim, ch, path))
+        continue;
+      target["node"] = t.index;
+      target["path"] = path;
+      target["extensions"].erase(animation_pointer);
+      if (target["extensions"].empty()) target.erase("extensions");
+    }
+  }
+  return changed;
 }
 
 // ---- accessor layout -----------------------------------------------------------------------------
@@ -1060,6 +1181,7 @@ class SceneBuilder {
         const tg::AnimationChannel& channel = in.channels[c];
         const tg::AnimationSampler& sampler = in.samplers[size_t(channel.sampler)];
         const std::string where = "animations[" + str(a) + "].channels[" + str(c) + "]";
+        if (channel.target_node < 0) continue;  // KHR_animation_pointer's and the like: kept in the source only
         AnimationChannel ch;
         ch.node = channel.target_node;
         int output_type = TINYGLTF_TYPE_VEC3;
@@ -1695,8 +1817,9 @@ void place_position_grid(tg::Model& model, std::vector<uint8_t>& bin, BinWriter&
   std::vector<bool> animated(model.nodes.size(), false), skin_on(model.skins.size(), false);
   for (const tg::Animation& anim : model.animations)
     for (const tg::AnimationChannel& ch : anim.channels)
-      if (ch.target_node >= 0 && size_t(ch.target_node) < animated.size() && ch.target_path != "weights")
-        animated[size_t(ch.target_node)] = true;
+      if (const ChannelTarget t = channel_target(ch);
+          t.list == "nodes" && t.index >= 0 && size_t(t.index) < animated.size() && t.property != "weights")
+        animated[size_t(t.index)] = true;
   const size_t nodes = model.nodes.size();
   for (size_t n = 0; n < nodes; ++n) {
     if (model.nodes[n].mesh < 0 || !on_grid[size_t(model.nodes[n].mesh)]) continue;
@@ -1720,7 +1843,8 @@ void place_position_grid(tg::Model& model, std::vector<uint8_t>& bin, BinWriter&
       model.nodes[n].children.push_back(index);
       for (tg::Animation& anim : model.animations)
         for (tg::AnimationChannel& ch : anim.channels)
-          if (ch.target_node == int(n) && ch.target_path == "weights") ch.target_node = index;
+          if (const ChannelTarget t = channel_target(ch); t.list == "nodes" && t.index == int(n) && t.property == "weights")
+            retarget_channel(ch, "nodes", index);
       model.nodes.push_back(std::move(child));
       continue;
     }
@@ -1839,8 +1963,11 @@ void fit_morph_weights(tg::Model& model, const Document& source, const std::vect
   for (tg::Animation& anim : model.animations) {
     std::map<std::pair<int, size_t>, int> copies;  // (sampler, targets) -> its padded copy
     for (tg::AnimationChannel& ch : anim.channels) {
-      const size_t want = wanted(ch.target_node);
-      if (ch.target_path != "weights" || want == 0 || ch.sampler < 0 || size_t(ch.sampler) >= anim.samplers.size()) continue;
+      // A node's weights, or a mesh's (a KHR_animation_pointer "/meshes/M/weights").
+      const ChannelTarget t = channel_target(ch);
+      if (t.property != "weights" || t.index < 0) continue;
+      const size_t want = t.list == "nodes" ? wanted(t.index) : size_t(t.index) < targets.size() ? targets[size_t(t.index)] : 0;
+      if (want == 0 || ch.sampler < 0 || size_t(ch.sampler) >= anim.samplers.size()) continue;
       const tg::AnimationSampler sampler = anim.samplers[size_t(ch.sampler)];  // (a copy: samplers grow below)
       if (sampler.input < 0 || sampler.output < 0) continue;
       const tg::Accessor& out = source.accessor(sampler.output);
@@ -2381,6 +2508,14 @@ bool make_uv_boxes(tg::Model& model, const std::vector<std::pair<size_t, size_t>
       }
   }
 
+  // A texture transform an animation drives (KHR_animation_pointer) would overwrite the box's.
+  for (const tg::Animation& anim : model.animations)
+    for (const tg::AnimationChannel& ch : anim.channels) {
+      const std::string pointer = channel_pointer(ch);
+      const PointerTarget t = split_pointer(pointer, "materials");
+      if (t.index >= 0 && size_t(t.index) < materials && t.rest.find(std::string("/") + texture_transform + "/") != std::string_view::npos)
+        for (Bounds& b : group[find(size_t(t.index))]) b.ok = false;
+    }
   std::vector<UvBoxes> of_group(materials);
   bool made = false;
   for (size_t g = 0; g < materials; ++g)
@@ -2616,9 +2751,17 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     tg::Animation& anim = model.animations[a];
     for (size_t c = anim.channels.size(); c-- > 0;)
       if (!still[a].empty() && still[a][c]) anim.channels.erase(anim.channels.begin() + ptrdiff_t(c));
+    // A node's weights, or a mesh's own (KHR_animation_pointer), that are gone; the meshes renumbered.
     std::erase_if(anim.channels, [&](const tg::AnimationChannel& ch) {
-      return ch.target_path == "weights" && ch.target_node >= 0 && weights_gone[size_t(ch.target_node)];
+      const ChannelTarget t = channel_target(ch);
+      const size_t i = size_t(t.index);
+      const bool weights = t.property == "weights";
+      if (t.list == "nodes") return weights && i < weights_gone.size() && weights_gone[i];
+      return t.list == "meshes" && i < mesh_count && (mesh_removed[i] || (weights && mesh_lost_morphs[i]));
     });
+    for (tg::AnimationChannel& ch : anim.channels)
+      if (const ChannelTarget t = channel_target(ch); t.list == "meshes" && size_t(t.index) < mesh_count && mesh_remap[size_t(t.index)] != t.index)
+        retarget_channel(ch, "meshes", mesh_remap[size_t(t.index)]);
     // The samplers no channel uses any more go too (their accessors with them, below).
     std::vector<int> sampler_remap(anim.samplers.size(), -1);
     for (const tg::AnimationChannel& ch : anim.channels)
@@ -3507,11 +3650,19 @@ Json serialize_json(const tg::Model& model, size_t bin_size, const std::string& 
         }
     // An animation sampler's LINEAR interpolation is glTF's default: left out, as gltfpack does
     // (26 bytes a sampler; a baked character's clip has one per joint and property).
+    // A channel's node -1 stands in for none (KHR_animation_pointer's channels): left out again.
     if (doc.contains("animations") && doc["animations"].is_array())
-      for (Json& animation : doc["animations"])
+      for (Json& animation : doc["animations"]) {
         if (animation.contains("samplers") && animation["samplers"].is_array())
           for (Json& sampler : animation["samplers"])
             if (sampler.is_object() && sampler.value("interpolation", "") == "LINEAR") sampler.erase("interpolation");
+        if (animation.contains("channels") && animation["channels"].is_array())
+          for (Json& channel : animation["channels"])
+            if (channel.is_object() && channel.contains("target") && channel["target"].is_object()) {
+              Json& target = channel["target"];
+              if (target.contains("node") && target["node"].is_number_integer() && target["node"].get<int64_t>() < 0) target.erase("node");
+            }
+      }
     if (needs_buffer) {
       Json buffer = {{"byteLength", bin_size}};
       if (!bin_uri.empty()) buffer["uri"] = bin_uri;
@@ -3597,8 +3748,9 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
   // Compressed geometry needs a few stand-ins (see gltf_compression.h); tinygltf then reads the
   // rewritten document (a GLB rebuilt around the same BIN chunk).
   const io::CompressedJson compressed = io::prepare_compressed_json(doc, glb);
+  const bool targets_changed = prepare_animation_targets(doc);
   std::vector<uint8_t> rewritten;
-  if (compressed.changed) {
+  if (compressed.changed || targets_changed) {
     const std::string text = doc.dump();
     if (glb) {
       const std::vector<uint8_t> bin(bytes.begin() + ptrdiff_t(parts.bin_offset),
@@ -3803,6 +3955,12 @@ WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, co
   for (const std::string ext : {"MSFT_lod", gpu_instancing})
     if (std::none_of(model.nodes.begin(), model.nodes.end(), [&](const tg::Node& n) { return n.extensions.count(ext) > 0; }))
       std::erase(model.extensionsUsed, ext), std::erase(model.extensionsRequired, ext);
+  // So is KHR_animation_pointer (the reader makes a node property's pointer a core channel).
+  if (std::none_of(model.animations.begin(), model.animations.end(), [](const tg::Animation& anim) {
+        return std::any_of(anim.channels.begin(), anim.channels.end(),
+                           [](const tg::AnimationChannel& ch) { return ch.target_extensions.count(animation_pointer) > 0; });
+      }))
+    std::erase(model.extensionsUsed, animation_pointer), std::erase(model.extensionsRequired, animation_pointer);
   if (scene.source) relocate_images(model, glb ? &bin : nullptr, scene.source->base_dir, path.parent_path());
   const std::string bin_name = path.stem().string() + ".bin";
   Json doc = serialize_json(model, bin.size(), glb ? "" : uri_escape(bin_name));

@@ -538,12 +538,13 @@ TEST(GltfQuantize, UvsOutsideTheUnitSquareTakeABoxThatTheTextureTransformsUndo) 
 
 // Where a box could not hold, the UVs stay floats and the materials as they were: a material no
 // texture of which samples the set, a box wider than 8, a lines primitive drawn with the material
-// (kept as it was, in the source's UVs).
+// (kept as it was, in the source's UVs), an animation driving a texture's transform
+// (KHR_animation_pointer: it would overwrite the box's).
 TEST(GltfQuantize, UvsKeepFloatsWhereNoBoxCanHold) {
   TempDir dir;
   Mesh m;
   const Json base = textured_grid_document(dir.path, m);
-  Json untextured = base, wide = base, lines = base;
+  Json untextured = base, wide = base, lines = base, animated = base;
   untextured["materials"][0] = {{"name", "tiles"}};
   untextured.erase("extensionsUsed");
   {
@@ -565,7 +566,24 @@ TEST(GltfQuantize, UvsKeepFloatsWhereNoBoxCanHold) {
     line["mode"] = 1;  // LINES, over the triangles' indices
     lines["meshes"][0]["primitives"].push_back(line);
   }
-  for (const auto& [name, doc] : {std::pair{"untextured", &untextured}, std::pair{"wide", &wide}, std::pair{"lines", &lines}}) {
+  {
+    // The normal texture's offset from (0, 0) to (0.5, 0.5) over a second.
+    const std::vector<float> floats = {0, 1, 0, 0, 0.5f, 0.5f};
+    const std::vector<uint8_t> bytes(reinterpret_cast<const uint8_t*>(floats.data()),
+                                     reinterpret_cast<const uint8_t*>(floats.data() + floats.size()));
+    const size_t buffer = animated["buffers"].size(), view = animated["bufferViews"].size(), accessor = animated["accessors"].size();
+    animated["buffers"].push_back({{"byteLength", bytes.size()}, {"uri", "data:application/octet-stream;base64," + test::base64(bytes)}});
+    animated["bufferViews"].push_back({{"buffer", buffer}, {"byteLength", 8}});
+    animated["bufferViews"].push_back({{"buffer", buffer}, {"byteOffset", 8}, {"byteLength", 16}});
+    animated["accessors"].push_back({{"bufferView", view}, {"componentType", 5126}, {"count", 2}, {"type", "SCALAR"}, {"min", {0}}, {"max", {1}}});
+    animated["accessors"].push_back({{"bufferView", view + 1}, {"componentType", 5126}, {"count", 2}, {"type", "VEC2"}});
+    const Json target = {{"path", "pointer"},
+                         {"extensions", {{"KHR_animation_pointer", {{"pointer", "/materials/0/normalTexture/extensions/KHR_texture_transform/offset"}}}}}};
+    animated["animations"] = {{{"samplers", {{{"input", accessor}, {"output", accessor + 1}}}}, {"channels", {{{"sampler", 0}, {"target", target}}}}}};
+    animated["extensionsUsed"].push_back("KHR_animation_pointer");
+  }
+  for (const auto& [name, doc] : {std::pair{"untextured", &untextured}, std::pair{"wide", &wide}, std::pair{"lines", &lines},
+                                  std::pair{"animated", &animated}}) {
     SCOPED_TRACE(name);
     write_json(dir / "in.gltf", *doc);
     write_scene(read_scene(dir / "in.gltf"), dir / "q.glb", {.quantize = true});
@@ -574,6 +592,7 @@ TEST(GltfQuantize, UvsKeepFloatsWhereNoBoxCanHold) {
     const Json& uv = out["accessors"][out["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"].get<size_t>()];
     EXPECT_EQ(uv["componentType"], 5126);  // float
     EXPECT_EQ(out["materials"], (*doc)["materials"]);
+    if (doc == &animated) EXPECT_EQ(out["animations"][0]["channels"], animated["animations"][0]["channels"]);
     test::expect_valid_gltf({dir / "q.glb"});
   }
 }

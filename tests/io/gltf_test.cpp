@@ -1353,5 +1353,151 @@ TEST(GltfMorphWeights, ExtraTargetsTakeZeroInWeightsAndClips) {
   }
 }
 
+// KHR_animation_pointer: a channel without a node passes through with its sampler's keys as they
+// were (a material's colour; a pointer whose output the core does not allow on a node: unsigned
+// bytes, not normalized, for a translation), and a pointer to a node's rotation becomes the core
+// channel the extension's README pairs it with. The extension stays declared while a pointer is
+// left. Under -q a node a pointer moves keeps its transform (the grid goes to a child node).
+TEST(GltfAnimationPointer, ChannelsPassThroughAndNodePropertiesBecomeCoreChannels) {
+  const std::vector<float> times = {0, 1, 2}, colours = {1, 0, 0, 1, 0, 1, 0, 1, 0, 0, 1, 1},
+                           rotations = {0, 0, 0, 1, 0, 0.6f, 0, 0.8f, 0, 1, 0, 0};
+  const std::vector<uint8_t> steps = {0, 0, 0, 1, 2, 3, 4, 5, 6, 0};  // three VEC3 keys (and padding)
+  const auto pointer = [](int sampler, const std::string& to) {
+    return Json{{"sampler", sampler}, {"target", {{"path", "pointer"}, {"extensions", {{"KHR_animation_pointer", {{"pointer", to}}}}}}}};
+  };
+  // `which`: the channels the clip has (c colour, r rotation, t bytes translation).
+  const auto document = [&](const std::string& which) {
+    HandBuilt f;
+    const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0});
+    const std::vector<uint16_t> indices = {0, 1, 2, 2, 1, 3};
+    const int idx = f.accessor(indices, kUShort, "SCALAR", 1, kElementArrayBuffer);
+    f.doc["materials"] = Json::array({{{"pbrMetallicRoughness", {{"baseColorFactor", {1, 1, 1, 1}}}}}});
+    f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", pos}}}, {"indices", idx}, {"material", 0}}}}}});
+    f.doc["nodes"] = Json::array({{{"mesh", 0}, {"translation", {5, 0, 0}}}});
+    f.doc["scenes"] = Json::array({{{"nodes", {0}}}});
+    const int in = f.accessor(times, kFloat, "SCALAR", 1, 0, {{"min", {0}}, {"max", {2}}});
+    const int colour = f.accessor(colours, kFloat, "VEC4", 4), rotation = f.accessor(rotations, kFloat, "VEC4", 4);
+    const int bytes = f.accessor(steps, kUByte, "VEC3", 3);
+    f.doc["accessors"][size_t(bytes)]["count"] = 3;
+    Json anim = {{"name", "clip"},
+                 {"samplers", {{{"input", in}, {"output", colour}}, {{"input", in}, {"output", rotation}}, {{"input", in}, {"output", bytes}}}},
+                 {"channels", Json::array()}};
+    if (which.find('c') != std::string::npos) anim["channels"].push_back(pointer(0, "/materials/0/pbrMetallicRoughness/baseColorFactor"));
+    if (which.find('r') != std::string::npos) anim["channels"].push_back(pointer(1, "/nodes/0/rotation"));
+    if (which.find('t') != std::string::npos) anim["channels"].push_back(pointer(2, "/nodes/0/translation"));
+    f.doc["animations"] = Json::array({anim});
+    f.doc["extensionsUsed"] = {"KHR_animation_pointer"};
+    return f;
+  };
+  TempDir dir;
+  const auto keys = [&](const std::filesystem::path& file, const Json& channel) {
+    const Json doc = test::glb_json(file);
+    const Json& sampler = doc["animations"][0]["samplers"][channel["sampler"].get<size_t>()];
+    return std::pair{test::glb_floats(file, sampler["input"]), test::glb_floats(file, sampler["output"])};
+  };
+  const auto pointer_of = [](const Json& channel) {
+    return channel["target"]["extensions"]["KHR_animation_pointer"]["pointer"].get<std::string>();
+  };
+
+  test::write_bytes(dir / "crt.glb", document("crt").glb());
+  test::expect_valid_gltf({dir / "crt.glb"});
+  write_scene(read_scene(dir / "crt.glb"), dir / "out.glb");
+  test::expect_valid_gltf({dir / "out.glb"});
+  {
+    const Json doc = test::glb_json(dir / "out.glb");
+    const Json& channels = doc["animations"][0]["channels"];
+    ASSERT_EQ(channels.size(), 3u);
+    EXPECT_EQ(channels[0]["target"]["path"], "pointer");
+    EXPECT_FALSE(channels[0]["target"].contains("node"));
+    EXPECT_EQ(pointer_of(channels[0]), "/materials/0/pbrMetallicRoughness/baseColorFactor");
+    EXPECT_EQ(keys(dir / "out.glb", channels[0]), std::pair(times, colours));
+    EXPECT_EQ(channels[1]["target"], (Json{{"node", 0}, {"path", "rotation"}}));
+    EXPECT_EQ(keys(dir / "out.glb", channels[1]), std::pair(times, rotations));
+    EXPECT_EQ(pointer_of(channels[2]), "/nodes/0/translation");
+    const Json& bytes = doc["accessors"][doc["animations"][0]["samplers"][channels[2]["sampler"].get<size_t>()]["output"].get<size_t>()];
+    EXPECT_EQ(bytes["componentType"], kUByte);
+    EXPECT_FALSE(bytes.value("normalized", false));
+    EXPECT_TRUE(doc["extensionsUsed"].dump().find("KHR_animation_pointer") != std::string::npos);
+  }
+  // Only the rotation: it becomes a core channel and the extension goes.
+  test::write_bytes(dir / "r.glb", document("r").glb());
+  write_scene(read_scene(dir / "r.glb"), dir / "r-out.glb");
+  test::expect_valid_gltf({dir / "r-out.glb"});
+  {
+    const Json doc = test::glb_json(dir / "r-out.glb");
+    EXPECT_EQ(doc["animations"][0]["channels"], (Json::array({{{"sampler", 0}, {"target", {{"node", 0}, {"path", "rotation"}}}}})));
+    EXPECT_EQ(doc.value("extensionsUsed", Json::array()).dump().find("KHR_animation_pointer"), std::string::npos);
+  }
+  // -q with the colour and the bytes translation: node 0 keeps its translation and scale, a child
+  // draws the mesh on the grid; the colour's keys are as they were.
+  test::write_bytes(dir / "ct.glb", document("ct").glb());
+  write_scene(read_scene(dir / "ct.glb"), dir / "ct-q.glb", {.quantize = true});
+  test::expect_valid_gltf({dir / "ct-q.glb"});
+  {
+    const Json doc = test::glb_json(dir / "ct-q.glb");
+    ASSERT_EQ(doc["nodes"].size(), 2u);
+    EXPECT_EQ(doc["nodes"][0]["translation"], Json::array({5.0, 0.0, 0.0}));
+    EXPECT_FALSE(doc["nodes"][0].contains("scale"));
+    EXPECT_FALSE(doc["nodes"][0].contains("mesh"));
+    EXPECT_EQ(doc["nodes"][0]["children"], Json::array({1}));
+    EXPECT_EQ(doc["nodes"][1]["mesh"], 0);
+    EXPECT_NE(doc["accessors"][doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<size_t>()]["componentType"], kFloat);
+    const Json& channels = doc["animations"][0]["channels"];
+    ASSERT_EQ(channels.size(), 2u);
+    EXPECT_EQ(keys(dir / "ct-q.glb", channels[0]), std::pair(times, colours));
+    EXPECT_EQ(pointer_of(channels[1]), "/nodes/0/translation");
+  }
+}
+
+// A pointer to a mesh's own morph weights ("/meshes/M/weights") follows the mesh: renumbered when
+// an earlier mesh goes, gone with the mesh or with its morph targets.
+TEST(GltfAnimationPointer, MeshWeightsFollowTheirMesh) {
+  HandBuilt f;
+  const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+  const int target = f.positions({0, 0, 1, 0, 0, 1, 0, 0, 1});
+  const Json mesh = {{"primitives", {{{"attributes", {{"POSITION", pos}}}, {"targets", {{{"POSITION", target}}}}}}}, {"weights", {0.5}}};
+  f.doc["meshes"] = Json::array({mesh, mesh});
+  f.doc["nodes"] = Json::array({{{"mesh", 0}}, {{"mesh", 1}}});
+  f.doc["scenes"] = Json::array({{{"nodes", {0, 1}}}});
+  const std::vector<float> times = {0, 1}, first = {0.25f, 0.75f}, second = {0.125f, 0.375f};
+  const int in = f.accessor(times, kFloat, "SCALAR", 1, 0, {{"min", {0}}, {"max", {1}}});
+  const int out0 = f.accessor(first, kFloat, "SCALAR", 1), out1 = f.accessor(second, kFloat, "SCALAR", 1);
+  Json anim = {{"samplers", {{{"input", in}, {"output", out0}}, {{"input", in}, {"output", out1}}}}, {"channels", Json::array()}};
+  for (int m = 0; m < 2; ++m)
+    anim["channels"].push_back({{"sampler", m},
+                                {"target", {{"path", "pointer"},
+                                            {"extensions", {{"KHR_animation_pointer", {{"pointer", "/meshes/" + std::to_string(m) + "/weights"}}}}}}}});
+  f.doc["animations"] = Json::array({anim});
+  f.doc["extensionsUsed"] = {"KHR_animation_pointer"};
+  TempDir dir;
+  test::write_bytes(dir / "in.glb", f.glb());
+  test::expect_valid_gltf({dir / "in.glb"});
+  Scene scene = read_scene(dir / "in.glb");
+  ASSERT_EQ(scene.primitives.size(), 2u);
+  // Mesh 0 loses its triangles: mesh 1 becomes mesh 0, its channel with it.
+  scene.primitives[0].mesh.indices.clear();
+  write_scene(scene, dir / "renumbered.glb");
+  test::expect_valid_gltf({dir / "renumbered.glb"});
+  {
+    const Json doc = test::glb_json(dir / "renumbered.glb");
+    ASSERT_EQ(doc["meshes"].size(), 1u);
+    const Json& channels = doc["animations"][0]["channels"];
+    ASSERT_EQ(channels.size(), 1u);
+    EXPECT_EQ(channels[0]["target"]["extensions"]["KHR_animation_pointer"]["pointer"], "/meshes/0/weights");
+    const Json& sampler = doc["animations"][0]["samplers"][channels[0]["sampler"].get<size_t>()];
+    EXPECT_EQ(test::glb_floats(dir / "renumbered.glb", sampler["output"]), second);
+  }
+  // Mesh 1 grows a vertex as well: its targets no longer fit and go, the clip with them.
+  scene.primitives[1].mesh.positions.push_back({1, 1, 0});
+  scene.primitives[1].mesh.indices.insert(scene.primitives[1].mesh.indices.end(), {1, 3, 2});
+  write_scene(scene, dir / "gone.glb");
+  test::expect_valid_gltf({dir / "gone.glb"});
+  {
+    const Json doc = test::glb_json(dir / "gone.glb");
+    EXPECT_FALSE(doc.contains("animations"));
+    EXPECT_EQ(doc.value("extensionsUsed", Json::array()).dump().find("KHR_animation_pointer"), std::string::npos);
+  }
+}
+
 }  // namespace
 }  // namespace lod
