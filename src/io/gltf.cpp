@@ -1994,8 +1994,9 @@ void fit_morph_weights(tg::Model& model, const Document& source, const std::vect
 // ---- -q: animation keys ---------------------------------------------------------------------------
 
 // How far -q lets a reduced curve stray from a key it drops, per animated node: a world-space
-// distance `reach`, 2^-12 of the scene's extent at rest (the largest side of its bounding box; 0.45
-// mm on a 1.85 m character). A translation may stray by `reach` in world space (in its parent's
+// distance `reach`, `error` (WriteOptions::animation_error, 2^-12 by default) of the scene's extent
+// at rest (the largest side of its bounding box; 0.45 mm on a 1.85 m character). Every bound below
+// is given at the default and scales with `error`. A translation may stray by `reach` in world space (in its parent's
 // units: divided by the parent's scale); a rotation by reach / lever radians, lever the node's
 // largest distance to a descendant node plus an eighth of the extent (the geometry beyond the last
 // joints), at most 2^-7 rad, so that what the node carries moves by about `reach` (as animation
@@ -2015,8 +2016,11 @@ struct KeyTolerances {
   }
 };
 
-KeyTolerances key_tolerances(const Scene& scene) {
+KeyTolerances key_tolerances(const Scene& scene, double error) {
+  const double factor = error * 4096;  // (a power of two by default: the bounds stay exact)
   KeyTolerances t;
+  t.rotation *= factor, t.relative *= factor;
+  const double most = factor / 128;  // a rotation's or a weight's largest
   const size_t n = scene.nodes.size();
   const std::vector<io::Matrix> world = io::rest_world_matrices(scene);
   // The scene's box at rest: each primitive's box where a node draws it (a skinned one where its
@@ -2048,7 +2052,7 @@ KeyTolerances key_tolerances(const Scene& scene) {
   }
   const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
   if (!(extent > 0) || !std::isfinite(extent)) return t;
-  const double reach = extent / 4096;
+  const double reach = extent * error;
   std::vector<double> lever(n, 0);
   for (size_t d = 0; d < n; ++d) {  // each node lengthens its ancestors' levers
     size_t steps = 0;
@@ -2092,12 +2096,12 @@ KeyTolerances key_tolerances(const Scene& scene) {
   t.node_rotation.assign(n, 0);
   t.node_weights.assign(n, -1);
   for (size_t i = 0; i < n; ++i) {
-    t.node_rotation[i] = std::min(1.0 / 128, reach / (lever[i] + extent / 8));
+    t.node_rotation[i] = std::min(most, reach / (lever[i] + extent / 8));
     // Morph weights: a weight's error moves a vertex by at most that times the longest displacement
     // (in world units: times the node's scale).
     if (const int32_t mesh = scene.nodes[i].mesh; mesh >= 0 && size_t(mesh) < displacement.size() && displacement[size_t(mesh)] >= 0) {
       const double moved = displacement[size_t(mesh)] * scale_of(world[i]);
-      t.node_weights[i] = moved > 0 && std::isfinite(moved) ? std::min(1.0 / 128, reach / moved) : 1.0 / 128;
+      t.node_weights[i] = moved > 0 && std::isfinite(moved) ? std::min(most, reach / moved) : most;
     }
     const int32_t parent = scene.nodes[i].parent;
     if (parent < 0 || size_t(parent) >= n) continue;
@@ -2741,7 +2745,9 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     node.mesh = mesh_remap[m];
   }
   // -q: channels that change nothing go (still_channels), decided before any goes.
-  const KeyTolerances tolerances = options.quantize ? key_tolerances(scene) : KeyTolerances{};
+  if (options.quantize && !(options.animation_error >= 0 && options.animation_error <= 1))
+    throw_usage("cannot write glTF: animation_error is " + std::to_string(options.animation_error) + ", not 0 to 1");
+  const KeyTolerances tolerances = options.quantize ? key_tolerances(scene, options.animation_error) : KeyTolerances{};
   std::vector<std::vector<bool>> still(model.animations.size());
   if (options.quantize) {
     const auto clips = animating_clips(model);

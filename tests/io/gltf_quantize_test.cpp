@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numeric>
 #include <set>
 #include <string>
 #include <vector>
@@ -592,7 +593,9 @@ TEST(GltfQuantize, UvsKeepFloatsWhereNoBoxCanHold) {
     const Json& uv = out["accessors"][out["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"].get<size_t>()];
     EXPECT_EQ(uv["componentType"], 5126);  // float
     EXPECT_EQ(out["materials"], (*doc)["materials"]);
-    if (doc == &animated) EXPECT_EQ(out["animations"][0]["channels"], animated["animations"][0]["channels"]);
+    if (doc == &animated) {
+      EXPECT_EQ(out["animations"][0]["channels"], animated["animations"][0]["channels"]);
+    }
     test::expect_valid_gltf({dir / "q.glb"});
   }
 }
@@ -604,7 +607,9 @@ TEST(GltfQuantize, UvsKeepFloatsWhereNoBoxCanHold) {
 // joint's), unless another clip animates that property (then it restores it) or the clip would get
 // shorter. At every baked key time (where the piecewise curves of both files break) each node's
 // pose lies within the bound, each channel keeps its time range, the smooth curves lose many keys,
-// and the file shrinks; without -q every key stays.
+// and the file shrinks; without -q every key stays. With animation_error 8 times the default the
+// bounds are 8 times wider and fewer keys stay; at 0 only the keys a curve needs exactly (the
+// line's and the constants' ends) go.
 TEST(GltfQuantize, AnimationsKeepTheKeysTheirCurvesNeed) {
   TempDir dir;
   Scene scene = scene_from_mesh(shapes::torus(1.0f, 0.3f, 24, 12));
@@ -652,51 +657,61 @@ TEST(GltfQuantize, AnimationsKeepTheKeysTheirCurvesNeed) {
             // The joint's own scale, but for 12 s: the clip would get shorter without it, so it stays.
             channel(P::scale, linear, 3, [](float) { return std::array<float, 4>{1, 1, 1, 0}; }, 1, 12)})};
   write_scene(scene, dir / "plain.glb");
-  write_scene(scene, dir / "q.glb", {.quantize = true});
-  const Scene plain = read_scene(dir / "plain.glb"), quantized = read_scene(dir / "q.glb");
-  ASSERT_EQ(quantized.animations.size(), 3u);
-  float3 lo, hi;
-  bounding_box(scene.primitives[0].mesh, lo, hi);
-  const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});  // translations' tolerance: 2^-12 of it
-  // Keys kept per clip and channel.
-  std::vector<std::vector<size_t>> kept;
-  const size_t channels[3] = {3, 4, 2};
-  for (size_t k = 0; k < 3; ++k) {
-    SCOPED_TRACE(k);
-    ASSERT_EQ(plain.animations[k].channels.size(), scene.animations[k].channels.size());
-    ASSERT_EQ(quantized.animations[k].channels.size(), channels[k]);
-    double largest_scale = 0;  // (scale tracks' bound: 2^-14 of it)
-    kept.emplace_back();
-    for (size_t c = 0; c < channels[k]; ++c) {
-      const AnimationChannel &x = scene.animations[k].channels[c], &y = quantized.animations[k].channels[c];
-      ASSERT_EQ(y.node, x.node);
-      ASSERT_EQ(y.path, x.path);
-      EXPECT_EQ(plain.animations[k].channels[c].times.size(), x.times.size());  // (without -q)
-      ASSERT_FALSE(y.times.empty());
-      EXPECT_EQ(y.times.front(), x.times.front());
-      EXPECT_EQ(y.times.back(), x.times.back());
-      EXPECT_EQ(y.values.size(), y.times.size() * x.components);
-      kept.back().push_back(y.times.size());
-      if (x.path == P::scale)
-        for (const float v : x.values) largest_scale = std::max(largest_scale, std::fabs(double(v)));
-    }
-    double worst[3] = {0, 0, 0};  // translation / largest, rotation (rad), scale / largest
-    for (const float time : scene.animations[k].channels.back().times) {
-      Pose pa = rest_pose(plain), pb = rest_pose(quantized);
-      sample_animation(plain, k, time, pa);
-      sample_animation(quantized, k, time, pb);
-      for (size_t n = 0; n < 2; ++n) {
-        worst[0] = std::max(worst[0], distance(pa.translation[n], pb.translation[n]));
-        worst[1] = std::max(worst[1], rotation_between(pa.rotation[n], pb.rotation[n]));
-        worst[2] = std::max(worst[2], distance(pa.scale[n], pb.scale[n]) / std::max(largest_scale, 1.0));
+  const Scene plain = read_scene(dir / "plain.glb");
+  // Keys kept per clip and channel, with animation_error `factor` times the default; the bounds
+  // checked.
+  const auto kept_keys = [&](double factor) {
+    std::vector<std::vector<size_t>> kept;
+    write_scene(scene, dir / "q.glb", {.quantize = true, .animation_error = factor / 4096});
+    const Scene quantized = read_scene(dir / "q.glb");
+    EXPECT_EQ(quantized.animations.size(), 3u);
+    if (quantized.animations.size() != 3) return kept;
+    float3 lo, hi;
+    bounding_box(scene.primitives[0].mesh, lo, hi);
+    const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});  // translations' tolerance: 2^-12 of it
+    const size_t channels[3] = {3, 4, 2};
+    for (size_t k = 0; k < 3; ++k) {
+      SCOPED_TRACE(k);
+      EXPECT_EQ(plain.animations[k].channels.size(), scene.animations[k].channels.size());
+      EXPECT_EQ(quantized.animations[k].channels.size(), channels[k]);
+      if (quantized.animations[k].channels.size() < channels[k]) return kept;
+      double largest_scale = 0;  // (scale tracks' bound: 2^-14 of it)
+      kept.emplace_back();
+      for (size_t c = 0; c < channels[k]; ++c) {
+        const AnimationChannel &x = scene.animations[k].channels[c], &y = quantized.animations[k].channels[c];
+        EXPECT_EQ(y.node, x.node);
+        EXPECT_EQ(y.path, x.path);
+        EXPECT_EQ(plain.animations[k].channels[c].times.size(), x.times.size());  // (without -q)
+        if (y.times.empty()) return kept;
+        EXPECT_EQ(y.times.front(), x.times.front());
+        EXPECT_EQ(y.times.back(), x.times.back());
+        EXPECT_EQ(y.values.size(), y.times.size() * x.components);
+        kept.back().push_back(y.times.size());
+        if (x.path == P::scale)
+          for (const float v : x.values) largest_scale = std::max(largest_scale, std::fabs(double(v)));
       }
+      double worst[3] = {0, 0, 0};  // translation / largest, rotation (rad), scale / largest
+      for (const float time : scene.animations[k].channels.back().times) {
+        Pose pa = rest_pose(plain), pb = rest_pose(quantized);
+        sample_animation(plain, k, time, pa);
+        sample_animation(quantized, k, time, pb);
+        for (size_t n = 0; n < 2; ++n) {
+          worst[0] = std::max(worst[0], distance(pa.translation[n], pb.translation[n]));
+          worst[1] = std::max(worst[1], rotation_between(pa.rotation[n], pb.rotation[n]));
+          worst[2] = std::max(worst[2], distance(pa.scale[n], pb.scale[n]) / std::max(largest_scale, 1.0));
+        }
+      }
+      // (+ a float's half step at 20, the largest translation, per axis)
+      EXPECT_LE(worst[0], factor * std::sqrt(3.0) * extent / 4096 + std::sqrt(3.0) * 20 * 0x1p-24);
+      // Node 0's rotations: the reach over its lever, the child 1 unit away plus an eighth of the
+      // extent (and the shorts' step).
+      EXPECT_LE(worst[1], factor * extent / 4096 / (1 + extent / 8) + 2.0 / 32767 + 1e-6);
+      EXPECT_LE(worst[2], factor * std::sqrt(3.0) / 16384 + 1e-6);
     }
-    EXPECT_LE(worst[0], std::sqrt(3.0) * extent / 4096 + 1e-6);
-    // Node 0's rotations: the reach over its lever, the child 1 unit away plus an eighth of the
-    // extent (and the shorts' step).
-    EXPECT_LE(worst[1], extent / 4096 / (1 + extent / 8) + 2.0 / 32767 + 1e-6);
-    EXPECT_LE(worst[2], std::sqrt(3.0) / 16384 + 1e-6);
-  }
+    return kept;
+  };
+  const std::vector<std::vector<size_t>> kept = kept_keys(1);
+  ASSERT_EQ(kept.size(), 3u);
   EXPECT_EQ(kept[0][0], 2u);    // a line
   EXPECT_LT(kept[0][1], 300u);  // smooth: many keys go
   EXPECT_EQ(kept[0][2], 2u);    // constant
@@ -707,6 +722,23 @@ TEST(GltfQuantize, AnimationsKeepTheKeysTheirCurvesNeed) {
   EXPECT_EQ(kept[2][0], 11u);   // STEP: a key where the value changes (t = 0, 1, ..., 10; the last among them)
   EXPECT_EQ(kept[2][1], 2u);    // (constant)
   EXPECT_LT(std::filesystem::file_size(dir / "q.glb"), std::filesystem::file_size(dir / "plain.glb") / 2);
+  test::expect_valid_gltf({dir / "q.glb"});
+  const auto total = [](const std::vector<std::vector<size_t>>& per_clip) {
+    size_t sum = 0;
+    for (const auto& channels : per_clip) sum = std::accumulate(channels.begin(), channels.end(), sum);
+    return sum;
+  };
+  const std::vector<std::vector<size_t>> coarse = kept_keys(8);
+  ASSERT_EQ(coarse.size(), 3u);
+  EXPECT_LT(total(coarse), total(kept) * 3 / 4);
+  EXPECT_EQ(coarse[2][0], 11u);  // (STEP: exact either way)
+  // At 0: the constants' inner keys go (exactly on their segments); the curves keep all 601.
+  const std::vector<std::vector<size_t>> exact = kept_keys(0);
+  ASSERT_EQ(exact.size(), 3u);
+  EXPECT_EQ(exact[0][1], 601u);
+  EXPECT_EQ(exact[0][2], 2u);
+  EXPECT_EQ(exact[1][0], 601u);
+  EXPECT_EQ(exact[2][0], 11u);
   test::expect_valid_gltf({dir / "q.glb"});
 }
 
@@ -854,6 +886,34 @@ TEST(GltfQuantize, CommandsQuantizeWithDashQ) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("glTF output"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "out.obj"));
+
+  // --anim-error: a turn baked at 60 Hz keeps fewer keys at 8 times the default; out of [0, 1] the
+  // command refuses.
+  Scene turning = scene_from_mesh(shapes::torus(1.0f, 0.25f, 48, 24));
+  AnimationChannel turn{.node = 0, .path = AnimationPath::rotation, .components = 4};
+  for (int k = 0; k <= 600; ++k) {
+    const float t = float(k) / 60, half = 0.4f * std::sin(1.3f * t);
+    turn.times.push_back(t);
+    turn.values.insert(turn.values.end(), {0, std::sin(half), 0, std::cos(half)});
+  }
+  turning.animations.push_back({"turn", {turn}});
+  write_scene(turning, dir / "turn.glb");
+  const auto keys = [&](const std::vector<std::string>& flags) {
+    std::vector<std::string> args = {"convert", (dir / "turn.glb").string(), (dir / "k.glb").string(), "-q"};
+    args.insert(args.end(), flags.begin(), flags.end());
+    const test::RunResult run = test::run_cli(args);
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    const Scene back = read_scene(dir / "k.glb");
+    return back.animations.size() == 1 ? back.animations[0].channels.at(0).times.size() : size_t(0);
+  };
+  const size_t fine = keys({}), coarse = keys({"--anim-error", "0.001953125"});
+  EXPECT_LT(fine, 601u);
+  EXPECT_LT(coarse, fine / 2);
+  EXPECT_GT(coarse, 2u);
+  for (const std::string bad : {"-1", "2", "nan"}) {
+    const test::RunResult refused = test::run_cli({"convert", (dir / "turn.glb").string(), (dir / "k.glb").string(), "-q", "--anim-error", bad});
+    EXPECT_NE(refused.exit_code, 0) << bad;
+  }
 }
 
 }  // namespace

@@ -113,6 +113,10 @@ void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
                 "required): positions in --position-bits, normals 10 bits, UVs 12, colours 8, weights and tangents 12");
   app->add_option("--position-bits", options.position_bits, "With -q or --draco: bits per position coordinate (default 14)")
       ->check(CLI::Range(1, 16));
+  app->add_option("--anim-error", options.animation_error,
+                  "With -q: how far a reduced animation curve may move what it animates, as a fraction of the scene's "
+                  "extent (default 2^-12 = 0.000244; 0 keeps every key a curve needs exactly)")
+      ->check(CLI::Range(0.0, 1.0));
 }
 
 void GeometryFile::forget_lod_facts(const std::vector<bool>& changed) {
