@@ -162,7 +162,7 @@ void retarget_channel(tg::AnimationChannel& ch, std::string_view list, int index
   ch.target_extensions[animation_pointer].Get<tg::Value::Object>()["pointer"] = tg::Value(pointer);
 }
 
-// tinygltf 2.8 drops a channel whose target has no node: KHR_animation_pointer's, and a core one
+// tinygltf 2.7 drops a channel whose target has no node: KHR_animation_pointer's, and a core one
 // left to an extension. A pointer to a node's translation, rotation, scale or weights is the same
 // animation as a core channel (the extension's README gives the pair) and becomes one, so the grid,
 // -q and the morph weights treat it as they treat node channels; its output must be what the core
