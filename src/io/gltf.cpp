@@ -2862,8 +2862,9 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     size_t animation, sampler;
     std::vector<float> times;  // empty: the input accessor stays
     std::vector<float> values;
-    size_t components;  // per key: 3, 4 (rotations), or the morph weights'
-    bool rotation, weights, shorts;
+    size_t components;  // per key: 3, 4 (rotations), the morph weights', or a pointer's
+    int type;           // the output accessor's (TINYGLTF_TYPE_*)
+    bool rotation, shorts;
   };
   std::vector<SamplerKeys> sampler_keys;
   // A sampler's ways, with the bytes of its best so far (choices[i] is sampler_keys[i]'s).
@@ -2888,8 +2889,9 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         for (const tg::AnimationChannel& ch : anim.channels)
           if (ch.sampler == int(k))
             one_path = one_path && (path.empty() || path == ch.target_path), path = ch.target_path, nodes.push_back(ch.target_node);
-        const bool rotation = path == "rotation", weights = path == "weights";
-        if (!one_path || (!rotation && !weights && path != "translation" && path != "scale")) continue;
+        // (A KHR_animation_pointer's float property: a material's colour, a camera's field of view.)
+        const bool rotation = path == "rotation", weights = path == "weights", pointer = path == "pointer";
+        if (!one_path || (!rotation && !weights && !pointer && path != "translation" && path != "scale")) continue;
         if (sampler.input < 0 || size_t(sampler.input) >= model.accessors.size() || sampler.output < 0 ||
             size_t(sampler.output) >= model.accessors.size())
           continue;
@@ -2897,18 +2899,24 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
         const tg::Accessor& acc = model.accessors[size_t(sampler.output)];
         const bool cubic = sampler.interpolation == "CUBICSPLINE", step = sampler.interpolation == "STEP";
         const size_t per_key = (cubic ? 3 : 1) * in.count;
-        const size_t components = rotation ? 4 : weights ? (per_key ? acc.count / per_key : 0) : 3;
+        // A pointer's SCALAR output may hold several values a key (a float[] such as weights).
+        const int type = rotation ? TINYGLTF_TYPE_VEC4 : weights ? TINYGLTF_TYPE_SCALAR : pointer ? acc.type : TINYGLTF_TYPE_VEC3;
+        if (type != TINYGLTF_TYPE_SCALAR && type != TINYGLTF_TYPE_VEC2 && type != TINYGLTF_TYPE_VEC3 && type != TINYGLTF_TYPE_VEC4) continue;
+        const size_t components = type == TINYGLTF_TYPE_SCALAR ? (per_key ? acc.count / per_key : 0) : type_components(type);
         if (in.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT || in.type != TINYGLTF_TYPE_SCALAR || components == 0 ||
-            acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT ||
-            acc.type != (rotation ? TINYGLTF_TYPE_VEC4 : weights ? TINYGLTF_TYPE_SCALAR : TINYGLTF_TYPE_VEC3))
+            acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT || acc.type != type)
           continue;
-        SamplerKeys out{a, k, source.decode_floats<float>(sampler.input), {}, components, rotation, weights, false};
-        if (weights)
-          out.values = source.decode_floats<float>(sampler.output);
-        else if (rotation)
-          for (const float4& q : source.decode_floats<float4>(sampler.output)) out.values.insert(out.values.end(), {q.x, q.y, q.z, q.w});
-        else
-          for (const float3& v : source.decode_floats<float3>(sampler.output)) out.values.insert(out.values.end(), {v.x, v.y, v.z});
+        SamplerKeys out{a, k, source.decode_floats<float>(sampler.input), {}, components, type, rotation, false};
+        const auto flatten = [&](const auto& typed) {
+          out.values.resize(typed.size() * type_components(type));
+          if (!typed.empty()) std::memcpy(out.values.data(), typed.data(), out.values.size() * sizeof(float));
+        };
+        switch (type) {
+          case TINYGLTF_TYPE_SCALAR: out.values = source.decode_floats<float>(sampler.output); break;
+          case TINYGLTF_TYPE_VEC2: flatten(source.decode_floats<float2>(sampler.output)); break;
+          case TINYGLTF_TYPE_VEC3: flatten(source.decode_floats<float3>(sampler.output)); break;
+          default: flatten(source.decode_floats<float4>(sampler.output)); break;
+        }
         const size_t n = out.times.size();
         if (out.values.size() != n * components * (cubic ? 3 : 1)) continue;  // (the reader refuses such files)
         // The keys: floats, or shorts (rotations in range) for the values.
@@ -3155,11 +3163,10 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
       if (keys.shorts) {
         const std::vector<uint8_t> packed = snorm<int16_t>(keys.values);
         sampler.output = add(packed.data(), count, 8, TINYGLTF_COMPONENT_TYPE_SHORT, TINYGLTF_TYPE_VEC4, true);
-      } else if (keys.weights) {  // (scalars, `components` per key)
-        sampler.output = add(keys.values.data(), keys.values.size(), 4, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, false);
-      } else {
-        sampler.output = add(keys.values.data(), count, keys.rotation ? 16 : 12, TINYGLTF_COMPONENT_TYPE_FLOAT,
-                             keys.rotation ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3, false);
+      } else {  // (a SCALAR output holds `components` scalars a key)
+        const size_t per_element = type_components(keys.type);
+        sampler.output = add(keys.values.data(), keys.values.size() / per_element, 4 * per_element, TINYGLTF_COMPONENT_TYPE_FLOAT,
+                             keys.type, false);
       }
     }
     std::map<size_t, int> pool_view;

@@ -1449,6 +1449,79 @@ TEST(GltfAnimationPointer, ChannelsPassThroughAndNodePropertiesBecomeCoreChannel
   }
 }
 
+// -q reduces a pointer's float keys as it does a scale's (within 2^-14 of the largest component):
+// a material's colour baked at 60 Hz for 10 s on a straight ramp keeps its two ends, its emissive
+// colour on a slow smooth curve loses most keys and stays within the bound at every baked time (the
+// curves interpolated here), a STEP metallic factor keeps the keys where it changes.
+TEST(GltfAnimationPointer, QuantizeReducesFloatPointerKeys) {
+  HandBuilt f;
+  const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+  f.doc["materials"] = Json::array({{{"pbrMetallicRoughness", {{"baseColorFactor", {1, 1, 1, 1}}, {"metallicFactor", 0.0}}}}});
+  f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", pos}}}, {"material", 0}}}}}});
+  f.doc["nodes"] = Json::array({{{"mesh", 0}}});
+  f.doc["scenes"] = Json::array({{{"nodes", {0}}}});
+  std::vector<float> times, ramp, glow, metal;
+  for (int k = 0; k <= 600; ++k) {
+    const float t = float(k) / 60;
+    times.push_back(t);
+    ramp.insert(ramp.end(), {t / 10, 1 - t / 10, 0.5f, 1});
+    glow.insert(glow.end(), {0.5f + 0.5f * std::sin(0.2f * t), 0.25f, 0.5f + 0.25f * std::cos(0.1f * t)});
+    metal.push_back(std::floor(t / 2) / 5);
+  }
+  const int in = f.accessor(times, kFloat, "SCALAR", 1, 0, {{"min", {0}}, {"max", {10}}});
+  Json anim = {{"samplers", {{{"input", in}, {"output", f.accessor(ramp, kFloat, "VEC4", 4)}},
+                             {{"input", in}, {"output", f.accessor(glow, kFloat, "VEC3", 3)}},
+                             {{"input", in}, {"output", f.accessor(metal, kFloat, "SCALAR", 1)}, {"interpolation", "STEP"}}}},
+               {"channels", Json::array()}};
+  const char* pointers[3] = {"/materials/0/pbrMetallicRoughness/baseColorFactor", "/materials/0/emissiveFactor",
+                             "/materials/0/pbrMetallicRoughness/metallicFactor"};
+  for (int c = 0; c < 3; ++c)
+    anim["channels"].push_back({{"sampler", c}, {"target", {{"path", "pointer"}, {"extensions", {{"KHR_animation_pointer", {{"pointer", pointers[c]}}}}}}}});
+  f.doc["animations"] = Json::array({anim});
+  f.doc["extensionsUsed"] = {"KHR_animation_pointer"};
+  TempDir dir;
+  test::write_bytes(dir / "in.glb", f.glb());
+  test::expect_valid_gltf({dir / "in.glb"});
+  write_scene(read_scene(dir / "in.glb"), dir / "q.glb", {.quantize = true});
+  test::expect_valid_gltf({dir / "q.glb"});
+  const Json doc = test::glb_json(dir / "q.glb");
+  const Json& channels = doc["animations"][0]["channels"];
+  ASSERT_EQ(channels.size(), 3u);
+  const std::vector<float>* baked[3] = {&ramp, &glow, &metal};
+  const size_t components[3] = {4, 3, 1};
+  std::vector<size_t> kept;
+  for (size_t c = 0; c < 3; ++c) {
+    SCOPED_TRACE(pointers[c]);
+    EXPECT_EQ(channels[c]["target"]["extensions"]["KHR_animation_pointer"]["pointer"], pointers[c]);
+    const Json& sampler = doc["animations"][0]["samplers"][channels[c]["sampler"].get<size_t>()];
+    const bool step = sampler.value("interpolation", "LINEAR") == "STEP";
+    const std::vector<float> t = test::glb_floats(dir / "q.glb", sampler["input"]), v = test::glb_floats(dir / "q.glb", sampler["output"]);
+    const size_t n = components[c];
+    ASSERT_EQ(v.size(), t.size() * n);
+    ASSERT_GE(t.size(), 2u);
+    EXPECT_EQ(t.front(), 0.0f);
+    EXPECT_EQ(t.back(), 10.0f);
+    kept.push_back(t.size());
+    double largest = 0;
+    for (const float x : *baked[c]) largest = std::max(largest, std::fabs(double(x)));
+    double worst = 0;
+    for (size_t k = 0; k < times.size(); ++k) {
+      // The reduced curve at the baked time: the segment holding it, interpolated (or held).
+      const size_t i = size_t(std::upper_bound(t.begin(), t.end(), times[k]) - t.begin());
+      const size_t hi = std::min(i, t.size() - 1), lo = i == 0 ? 0 : i - 1;
+      const double w = step || hi == lo ? 0 : (double(times[k]) - t[lo]) / (double(t[hi]) - t[lo]);
+      for (size_t j = 0; j < n; ++j) {
+        const double got = (1 - w) * v[lo * n + j] + w * v[hi * n + j];
+        worst = std::max(worst, std::fabs(got - (*baked[c])[k * n + j]));
+      }
+    }
+    EXPECT_LE(worst, largest / 16384 + 1e-6);
+  }
+  EXPECT_EQ(kept[0], 2u);     // the ramp
+  EXPECT_LT(kept[1], 300u);   // the smooth curve
+  EXPECT_EQ(kept[2], 6u);     // where the STEP changes (t = 0, 2, 4, 6, 8) and the last
+}
+
 // A pointer to a mesh's own morph weights ("/meshes/M/weights") follows the mesh: renumbered when
 // an earlier mesh goes, gone with the mesh or with its morph targets.
 TEST(GltfAnimationPointer, MeshWeightsFollowTheirMesh) {
