@@ -1452,33 +1452,41 @@ TEST(GltfAnimationPointer, ChannelsPassThroughAndNodePropertiesBecomeCoreChannel
 // -q reduces a pointer's float keys as it does a scale's (within 2^-14 of the largest component):
 // a material's colour baked at 60 Hz for 10 s on a straight ramp keeps its two ends, its emissive
 // colour on a slow smooth curve loses most keys and stays within the bound at every baked time (the
-// curves interpolated here), a STEP metallic factor keeps the keys where it changes.
+// curves interpolated here), a STEP metallic factor keeps the keys where it changes, a normal
+// texture's offset (VEC2) sliding on a line keeps its ends.
 TEST(GltfAnimationPointer, QuantizeReducesFloatPointerKeys) {
   HandBuilt f;
   const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
-  f.doc["materials"] = Json::array({{{"pbrMetallicRoughness", {{"baseColorFactor", {1, 1, 1, 1}}, {"metallicFactor", 0.0}}}}});
-  f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", pos}}}, {"material", 0}}}}}});
+  const int uv = f.accessor(std::vector<float>{0, 0, 1, 0, 0, 1}, kFloat, "VEC2", 2, kArrayBuffer);
+  f.doc["images"] = Json::array({{{"uri", "data:image/png;base64," + base64(kPng)}}});
+  f.doc["textures"] = Json::array({{{"source", 0}}});
+  f.doc["materials"] = Json::array({{{"pbrMetallicRoughness", {{"baseColorFactor", {1, 1, 1, 1}}, {"metallicFactor", 0.0}}},
+                                     {"normalTexture", {{"index", 0}, {"extensions", {{"KHR_texture_transform", {{"offset", {0, 0}}}}}}}}}});
+  f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", pos}, {"TEXCOORD_0", uv}}}, {"material", 0}}}}}});
   f.doc["nodes"] = Json::array({{{"mesh", 0}}});
   f.doc["scenes"] = Json::array({{{"nodes", {0}}}});
-  std::vector<float> times, ramp, glow, metal;
+  std::vector<float> times, ramp, glow, metal, slide;
   for (int k = 0; k <= 600; ++k) {
     const float t = float(k) / 60;
     times.push_back(t);
     ramp.insert(ramp.end(), {t / 10, 1 - t / 10, 0.5f, 1});
     glow.insert(glow.end(), {0.5f + 0.5f * std::sin(0.2f * t), 0.25f, 0.5f + 0.25f * std::cos(0.1f * t)});
     metal.push_back(std::floor(t / 2) / 5);
+    slide.insert(slide.end(), {t / 4, -t / 8});
   }
   const int in = f.accessor(times, kFloat, "SCALAR", 1, 0, {{"min", {0}}, {"max", {10}}});
   Json anim = {{"samplers", {{{"input", in}, {"output", f.accessor(ramp, kFloat, "VEC4", 4)}},
                              {{"input", in}, {"output", f.accessor(glow, kFloat, "VEC3", 3)}},
-                             {{"input", in}, {"output", f.accessor(metal, kFloat, "SCALAR", 1)}, {"interpolation", "STEP"}}}},
+                             {{"input", in}, {"output", f.accessor(metal, kFloat, "SCALAR", 1)}, {"interpolation", "STEP"}},
+                             {{"input", in}, {"output", f.accessor(slide, kFloat, "VEC2", 2)}}}},
                {"channels", Json::array()}};
-  const char* pointers[3] = {"/materials/0/pbrMetallicRoughness/baseColorFactor", "/materials/0/emissiveFactor",
-                             "/materials/0/pbrMetallicRoughness/metallicFactor"};
-  for (int c = 0; c < 3; ++c)
+  const char* pointers[4] = {"/materials/0/pbrMetallicRoughness/baseColorFactor", "/materials/0/emissiveFactor",
+                             "/materials/0/pbrMetallicRoughness/metallicFactor",
+                             "/materials/0/normalTexture/extensions/KHR_texture_transform/offset"};
+  for (int c = 0; c < 4; ++c)
     anim["channels"].push_back({{"sampler", c}, {"target", {{"path", "pointer"}, {"extensions", {{"KHR_animation_pointer", {{"pointer", pointers[c]}}}}}}}});
   f.doc["animations"] = Json::array({anim});
-  f.doc["extensionsUsed"] = {"KHR_animation_pointer"};
+  f.doc["extensionsUsed"] = {"KHR_animation_pointer", "KHR_texture_transform"};
   TempDir dir;
   test::write_bytes(dir / "in.glb", f.glb());
   test::expect_valid_gltf({dir / "in.glb"});
@@ -1486,11 +1494,11 @@ TEST(GltfAnimationPointer, QuantizeReducesFloatPointerKeys) {
   test::expect_valid_gltf({dir / "q.glb"});
   const Json doc = test::glb_json(dir / "q.glb");
   const Json& channels = doc["animations"][0]["channels"];
-  ASSERT_EQ(channels.size(), 3u);
-  const std::vector<float>* baked[3] = {&ramp, &glow, &metal};
-  const size_t components[3] = {4, 3, 1};
+  ASSERT_EQ(channels.size(), 4u);
+  const std::vector<float>* baked[4] = {&ramp, &glow, &metal, &slide};
+  const size_t components[4] = {4, 3, 1, 2};
   std::vector<size_t> kept;
-  for (size_t c = 0; c < 3; ++c) {
+  for (size_t c = 0; c < 4; ++c) {
     SCOPED_TRACE(pointers[c]);
     EXPECT_EQ(channels[c]["target"]["extensions"]["KHR_animation_pointer"]["pointer"], pointers[c]);
     const Json& sampler = doc["animations"][0]["samplers"][channels[c]["sampler"].get<size_t>()];
@@ -1520,6 +1528,9 @@ TEST(GltfAnimationPointer, QuantizeReducesFloatPointerKeys) {
   EXPECT_EQ(kept[0], 2u);     // the ramp
   EXPECT_LT(kept[1], 300u);   // the smooth curve
   EXPECT_EQ(kept[2], 6u);     // where the STEP changes (t = 0, 2, 4, 6, 8) and the last
+  EXPECT_EQ(kept[3], 2u);     // the slide
+  const Json& accessor = doc["accessors"][doc["animations"][0]["samplers"][channels[3]["sampler"].get<size_t>()]["output"].get<size_t>()];
+  EXPECT_EQ(accessor["type"], "VEC2");
 }
 
 // A pointer to a mesh's own morph weights ("/meshes/M/weights") follows the mesh: renumbered when
