@@ -681,6 +681,23 @@ class Document {
     return out;
   }
 
+  // An animation sampler's output, `components` (1 to 4) floats an element, flattened. Integer
+  // animation outputs are normalized by definition.
+  std::vector<float> decode_animation_output(int index, size_t components) const {
+    std::vector<float> out;
+    auto flatten = [&](const auto& typed) {
+      out.resize(typed.size() * components);
+      if (!typed.empty()) std::memcpy(out.data(), typed.data(), out.size() * sizeof(float));
+    };
+    switch (components) {
+      case 1: flatten(decode_floats<float>(index, true)); break;
+      case 2: flatten(decode_floats<float2>(index, true)); break;
+      case 3: flatten(decode_floats<float3>(index, true)); break;
+      default: flatten(decode_floats<float4>(index, true)); break;
+    }
+    return out;
+  }
+
   std::vector<uint32_t> decode_indices(int index) const {
     std::vector<uint32_t> out(accessor(index).count);
     read_elements<1>(index, [&](size_t i, const auto* raw) { out[i] = uint32_t(raw[0]); });
@@ -1157,21 +1174,6 @@ class SceneBuilder {
     }
   }
 
-  std::vector<float> decode_flat(int index, size_t components) const {
-    std::vector<float> out;
-    auto flatten = [&](const auto& typed) {
-      out.resize(typed.size() * components);
-      if (!typed.empty()) std::memcpy(out.data(), typed.data(), out.size() * sizeof(float));
-    };
-    // Integer animation outputs are normalized by definition.
-    switch (components) {
-      case 1: flatten(doc_.decode_floats<float>(index, true)); break;
-      case 3: flatten(doc_.decode_floats<float3>(index, true)); break;
-      default: flatten(doc_.decode_floats<float4>(index, true)); break;
-    }
-    return out;
-  }
-
   void build_animations(Scene& scene) const {
     for (size_t a = 0; a < model_.animations.size(); ++a) {
       const tg::Animation& in = model_.animations[a];
@@ -1221,7 +1223,7 @@ class SceneBuilder {
             doc_.fail(where + " has " + str(output.count) + " outputs for " + str(keys) + " keys");
         }
         ch.times = doc_.decode_floats<float>(sampler.input);
-        ch.values = decode_flat(sampler.output, type_components(output_type));
+        ch.values = doc_.decode_animation_output(sampler.output, type_components(output_type));
         out.channels.push_back(std::move(ch));
       }
       scene.animations.push_back(std::move(out));
@@ -2907,16 +2909,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
             acc.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT || acc.type != type)
           continue;
         SamplerKeys out{a, k, source.decode_floats<float>(sampler.input), {}, components, type, rotation, false};
-        const auto flatten = [&](const auto& typed) {
-          out.values.resize(typed.size() * type_components(type));
-          if (!typed.empty()) std::memcpy(out.values.data(), typed.data(), out.values.size() * sizeof(float));
-        };
-        switch (type) {
-          case TINYGLTF_TYPE_SCALAR: out.values = source.decode_floats<float>(sampler.output); break;
-          case TINYGLTF_TYPE_VEC2: flatten(source.decode_floats<float2>(sampler.output)); break;
-          case TINYGLTF_TYPE_VEC3: flatten(source.decode_floats<float3>(sampler.output)); break;
-          default: flatten(source.decode_floats<float4>(sampler.output)); break;
-        }
+        out.values = source.decode_animation_output(sampler.output, type_components(type));  // (float: as stored)
         const size_t n = out.times.size();
         if (out.values.size() != n * components * (cubic ? 3 : 1)) continue;  // (the reader refuses such files)
         // The keys: floats, or shorts (rotations in range) for the values.
