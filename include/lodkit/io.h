@@ -211,6 +211,9 @@ struct Scene {
   std::vector<Node> nodes;
   std::vector<int32_t> roots;  // root nodes of the default scene
   std::vector<Skin> skins;
+  // Node channels. From glTF, a mesh's weights animated by KHR_animation_pointer appear as the
+  // weights channel of each node drawing the mesh without weights of its own (after the clip's
+  // node channels); the writer keeps the source's channels, pointers included.
   std::vector<Animation> animations;
   std::vector<std::string> material_names;  // by glTF material index
   uint32_t image_count = 0;

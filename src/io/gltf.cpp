@@ -1174,60 +1174,77 @@ class SceneBuilder {
     }
   }
 
+  // Each clip's node channels; a KHR_animation_pointer to a mesh's weights ("/meshes/M/weights")
+  // as well, as the weights channel of each node drawing M without weights of its own (what a
+  // viewer shows: a node's weights override its mesh's), after the clip's core channels so that a
+  // node's own channel comes first (weights_channel). Other pointers are kept in the source only.
   void build_animations(Scene& scene) const {
     for (size_t a = 0; a < model_.animations.size(); ++a) {
       const tg::Animation& in = model_.animations[a];
       Animation out;
       out.name = in.name;
+      std::vector<AnimationChannel> mesh_weights;
       for (size_t c = 0; c < in.channels.size(); ++c) {
         const tg::AnimationChannel& channel = in.channels[c];
-        const tg::AnimationSampler& sampler = in.samplers[size_t(channel.sampler)];
         const std::string where = "animations[" + str(a) + "].channels[" + str(c) + "]";
-        if (channel.target_node < 0) continue;  // KHR_animation_pointer's and the like: kept in the source only
-        AnimationChannel ch;
-        ch.node = channel.target_node;
-        int output_type = TINYGLTF_TYPE_VEC3;
-        if (channel.target_path == "translation") {
-          ch.path = AnimationPath::translation;
-        } else if (channel.target_path == "rotation") {
-          ch.path = AnimationPath::rotation;
-          output_type = TINYGLTF_TYPE_VEC4;
-        } else if (channel.target_path == "scale") {
-          ch.path = AnimationPath::scale;
-        } else if (channel.target_path == "weights") {
-          ch.path = AnimationPath::weights;
-          output_type = TINYGLTF_TYPE_SCALAR;
-        } else {
-          continue;  // an extension's target (e.g. KHR_animation_pointer): kept in the source only
+        if (channel.target_node >= 0) {
+          static const std::map<std::string, AnimationPath, std::less<>> paths = {
+              {"translation", AnimationPath::translation},
+              {"rotation", AnimationPath::rotation},
+              {"scale", AnimationPath::scale},
+              {"weights", AnimationPath::weights}};
+          const auto path = paths.find(channel.target_path);
+          if (path == paths.end()) continue;  // an extension's target: kept in the source only
+          out.channels.push_back(decode_channel(in.samplers[size_t(channel.sampler)], path->second, where));
+          out.channels.back().node = channel.target_node;
+          continue;
         }
-        if (sampler.interpolation == "LINEAR")
-          ch.interpolation = Interpolation::linear;
-        else if (sampler.interpolation == "STEP")
-          ch.interpolation = Interpolation::step;
-        else if (sampler.interpolation == "CUBICSPLINE")
-          ch.interpolation = Interpolation::cubic_spline;
-        else
-          doc_.fail(where + " has unknown interpolation '" + sampler.interpolation + "'");
-        const tg::Accessor& input = expect(sampler.input, {TINYGLTF_TYPE_SCALAR}, where + " sampler input");
-        if (input.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) doc_.fail(where + " sampler input must be float");
-        const tg::Accessor& output = expect(sampler.output, {output_type}, where + " sampler output");
-        const size_t per_key = ch.interpolation == Interpolation::cubic_spline ? 3 : 1;
-        const size_t keys = input.count;
-        if (ch.path == AnimationPath::weights) {
-          if (keys == 0 || output.count % (keys * per_key) != 0)
-            doc_.fail(where + " has " + str(output.count) + " weight outputs for " + str(keys) + " keys");
-          ch.components = uint32_t(output.count / (keys * per_key));
-        } else {
-          ch.components = output_type == TINYGLTF_TYPE_VEC4 ? 4 : 3;
-          if (output.count != keys * per_key)
-            doc_.fail(where + " has " + str(output.count) + " outputs for " + str(keys) + " keys");
+        const ChannelTarget t = channel_target(channel);
+        if (t.list != "meshes" || t.property != "weights") continue;
+        std::optional<AnimationChannel> keys;  // decoded once a node draws the mesh
+        for (size_t n = 0; n < model_.nodes.size(); ++n) {
+          if (model_.nodes[n].mesh != t.index || !model_.nodes[n].weights.empty()) continue;
+          if (!keys) keys = decode_channel(in.samplers[size_t(channel.sampler)], AnimationPath::weights, where);
+          mesh_weights.push_back(*keys);
+          mesh_weights.back().node = int32_t(n);
         }
-        ch.times = doc_.decode_floats<float>(sampler.input);
-        ch.values = doc_.decode_animation_output(sampler.output, type_components(output_type));
-        out.channels.push_back(std::move(ch));
       }
+      out.channels.insert(out.channels.end(), std::make_move_iterator(mesh_weights.begin()), std::make_move_iterator(mesh_weights.end()));
       scene.animations.push_back(std::move(out));
     }
+  }
+
+  // A sampler's keys as a channel of `path` (its node left for the caller).
+  AnimationChannel decode_channel(const tg::AnimationSampler& sampler, AnimationPath path, const std::string& where) const {
+    AnimationChannel ch;
+    ch.path = path;
+    const int output_type = path == AnimationPath::rotation  ? TINYGLTF_TYPE_VEC4
+                            : path == AnimationPath::weights ? TINYGLTF_TYPE_SCALAR
+                                                             : TINYGLTF_TYPE_VEC3;
+    if (sampler.interpolation == "LINEAR")
+      ch.interpolation = Interpolation::linear;
+    else if (sampler.interpolation == "STEP")
+      ch.interpolation = Interpolation::step;
+    else if (sampler.interpolation == "CUBICSPLINE")
+      ch.interpolation = Interpolation::cubic_spline;
+    else
+      doc_.fail(where + " has unknown interpolation '" + sampler.interpolation + "'");
+    const tg::Accessor& input = expect(sampler.input, {TINYGLTF_TYPE_SCALAR}, where + " sampler input");
+    if (input.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) doc_.fail(where + " sampler input must be float");
+    const tg::Accessor& output = expect(sampler.output, {output_type}, where + " sampler output");
+    const size_t per_key = ch.interpolation == Interpolation::cubic_spline ? 3 : 1;
+    const size_t keys = input.count;
+    if (path == AnimationPath::weights) {
+      if (keys == 0 || output.count % (keys * per_key) != 0)
+        doc_.fail(where + " has " + str(output.count) + " weight outputs for " + str(keys) + " keys");
+      ch.components = uint32_t(output.count / (keys * per_key));
+    } else {
+      ch.components = output_type == TINYGLTF_TYPE_VEC4 ? 4 : 3;
+      if (output.count != keys * per_key) doc_.fail(where + " has " + str(output.count) + " outputs for " + str(keys) + " keys");
+    }
+    ch.times = doc_.decode_floats<float>(sampler.input);
+    ch.values = doc_.decode_animation_output(sampler.output, type_components(output_type));
+    return ch;
   }
 
   const Document& doc_;
@@ -3413,15 +3430,23 @@ void take_morph_weights(tg::Model& model, const Scene& scene, const std::vector<
   if (of.size() == 1) {
     const tg::Node& other = model.nodes[size_t(of[0])];
     node.weights = !other.weights.empty() || other.mesh < 0 ? other.weights : model.meshes[size_t(other.mesh)].weights;
-    // The clips that drive the other node's weights drive this one's too (the same samplers).
+    // The clips that drive the other node's weights drive this one's too (the same samplers): its
+    // own channels, and its mesh's (a KHR_animation_pointer "/meshes/M/weights", float keys) where
+    // it has no weights of its own, as core channels.
     for (tg::Animation& anim : model.animations) {
       const size_t channels = anim.channels.size();
-      for (size_t c = 0; c < channels; ++c)
-        if (anim.channels[c].target_path == "weights" && anim.channels[c].target_node == of[0]) {
-          tg::AnimationChannel copy = anim.channels[c];
-          copy.target_node = int(i);
-          anim.channels.push_back(std::move(copy));
-        }
+      for (size_t c = 0; c < channels; ++c) {
+        const tg::AnimationChannel& ch = anim.channels[c];
+        const ChannelTarget t = channel_target(ch);
+        const bool own = ch.target_node == of[0] && ch.target_path == "weights";
+        const bool mesh = t.list == "meshes" && t.property == "weights" && t.index == other.mesh && other.weights.empty();
+        if (!own && !mesh) continue;
+        tg::AnimationChannel copy = ch;  // (its extras too)
+        copy.target_node = int(i);
+        copy.target_path = "weights";
+        copy.target_extensions.erase(animation_pointer);
+        anim.channels.push_back(std::move(copy));
+      }
     }
     return;
   }

@@ -715,6 +715,117 @@ TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
   }
 }
 
+// `from` with the weights and weights channel of `nodes` (which draw one mesh, driven alike) made
+// the mesh's: the first node's channel a KHR_animation_pointer "/meshes/M/weights", the others'
+// channels gone. The same animation, as the nodes have no weights of their own.
+void weights_to_mesh_pointer(const std::filesystem::path& from, const std::filesystem::path& to, const std::vector<size_t>& nodes) {
+  test::Glb glb = test::read_glb(from);
+  nlohmann::json& doc = glb.doc;
+  const size_t mesh = doc["nodes"][nodes[0]]["mesh"];
+  if (doc["nodes"][nodes[0]].contains("weights")) doc["meshes"][mesh]["weights"] = doc["nodes"][nodes[0]]["weights"];
+  for (const size_t n : nodes) {
+    ASSERT_EQ(doc["nodes"][n]["mesh"], mesh);
+    doc["nodes"][n].erase("weights");
+  }
+  nlohmann::json& channels = doc["animations"][0]["channels"];
+  const auto drives = [&](const nlohmann::json& channel, size_t n) {
+    return channel["target"]["path"] == "weights" && channel["target"]["node"] == n;
+  };
+  for (size_t k = 1; k < nodes.size(); ++k)
+    channels.erase(std::remove_if(channels.begin(), channels.end(), [&](const nlohmann::json& c) { return drives(c, nodes[k]); }),
+                   channels.end());
+  size_t pointers = 0;
+  for (nlohmann::json& channel : channels)
+    if (drives(channel, nodes[0])) {
+      channel["target"] = {{"path", "pointer"},
+                           {"extensions", {{"KHR_animation_pointer", {{"pointer", "/meshes/" + std::to_string(mesh) + "/weights"}}}}}};
+      ++pointers;
+    }
+  ASSERT_EQ(pointers, 1u);
+  doc["extensionsUsed"].push_back("KHR_animation_pointer");
+  test::write_bytes(to, test::glb_bytes(glb));
+  test::expect_valid_gltf({to});
+}
+
+// A mesh's weights animated through KHR_animation_pointer drive the levels as the nodes' channels
+// do: a static chain with geomorphs of one node, and one of two nodes drawing the mesh (whose
+// levels take both nodes' weights in turn, merged), come out byte for byte as from the nodes'
+// channels (the source mesh goes, its pointer with it); a level's pointer loses the weight of a
+// geomorph lodkit simplify drops; a skinned character's levels each take a core channel with the
+// clip's keys (the source mesh stays, and its pointer).
+TEST(CliLod, LevelsFollowAMeshWeightsPointer) {
+  test::TempDir dir;
+  Scene two = one_morphing_node();
+  two.nodes.push_back(two.nodes[0]);
+  two.nodes[1].translation = {5, 0, 0};
+  two.roots.push_back(1);
+  two.animations[0].channels.push_back(two.animations[0].channels[0]);
+  two.animations[0].channels[1].node = 1;
+  const std::vector<std::pair<Scene, std::vector<size_t>>> inputs = {{one_morphing_node(), {0}}, {two, {0, 1}}};
+  for (const auto& [scene, nodes] : inputs) {
+    SCOPED_TRACE(nodes.size());
+    write_scene(scene, dir / "node.glb");
+    weights_to_mesh_pointer(dir / "node.glb", dir / "pointer.glb", nodes);
+    for (const char* name : {"node", "pointer"})
+      ASSERT_EQ(test::run_cli({"lod", (dir / (std::string(name) + ".glb")).string(), "-o", (dir / (std::string(name) + "-lod.glb")).string(),
+                               "--ratios", "1,0.5,0.2", "--morph"}).exit_code, 0) << name;
+    const test::Glb from_node = test::read_glb(dir / "node-lod.glb"), from_pointer = test::read_glb(dir / "pointer-lod.glb");
+    EXPECT_EQ(from_pointer.doc, from_node.doc);
+    EXPECT_TRUE(from_pointer.bin == from_node.bin);
+    EXPECT_EQ(weight_channels(from_pointer.doc, 0, level_nodes(from_pointer.doc)[0]), 1u);
+  }
+  // The one node's chain with level 0's weights made its mesh's: lodkit simplify drops that level's
+  // geomorph (as in StaticLevelsKeepOneNodesMorphTargets), so the mesh's weights (when it has any)
+  // and each of the pointer's keys lose their second weight.
+  write_scene(one_morphing_node(), dir / "node.glb");
+  ASSERT_EQ(test::run_cli({"lod", (dir / "node.glb").string(), "-o", (dir / "geomorph.glb").string(), "--ratios", "1,0.5", "--morph"}).exit_code, 0);
+  const size_t fine = level_nodes(glb_json(dir / "geomorph.glb"))[0];
+  weights_to_mesh_pointer(dir / "geomorph.glb", dir / "geomorph-pointer.glb", {fine});
+  ASSERT_EQ(test::run_cli({"simplify", (dir / "geomorph-pointer.glb").string(), "-o", (dir / "again.glb").string(), "--ratio", "0.5"}).exit_code, 0);
+  test::expect_valid_gltf({dir / "again.glb"});
+  {
+    const nlohmann::json doc = glb_json(dir / "again.glb");
+    const size_t mesh = doc["nodes"][fine]["mesh"];
+    EXPECT_EQ(doc["meshes"][mesh].value("weights", nlohmann::json::array({0.0})), nlohmann::json::array({0.0}));
+    size_t pointers = 0;
+    for (const auto& channel : doc["animations"][0]["channels"])
+      if (channel["target"]["path"] == "pointer") {
+        EXPECT_EQ(channel["target"]["extensions"]["KHR_animation_pointer"]["pointer"], "/meshes/" + std::to_string(mesh) + "/weights");
+        const nlohmann::json& sampler = doc["animations"][0]["samplers"][channel["sampler"].get<size_t>()];
+        EXPECT_EQ(test::glb_floats(dir / "again.glb", sampler["output"]), (std::vector<float>{0, 1}));
+        ++pointers;
+      }
+    EXPECT_EQ(pointers, 1u);
+  }
+
+  const Scene humanoid = humanoid_with_blend_shape();
+  const uint32_t skinned = skinned_primitives(humanoid).at(0).node;
+  write_scene(humanoid, dir / "humanoid.glb");
+  weights_to_mesh_pointer(dir / "humanoid.glb", dir / "humanoid-pointer.glb", {skinned});
+  ASSERT_EQ(test::run_cli({"lod", (dir / "humanoid-pointer.glb").string(), "-o", (dir / "skinned-lod.glb").string(),
+                           "--ratios", "1,0.4", "--poses", "4"}).exit_code, 0);
+  test::expect_valid_gltf({dir / "skinned-lod.glb"});
+  const nlohmann::json doc = glb_json(dir / "skinned-lod.glb");
+  const nlohmann::json& lod_ids = doc["nodes"][skinned]["extensions"]["MSFT_lod"]["ids"];
+  ASSERT_EQ(lod_ids.size(), 1u);
+  const size_t level = lod_ids[0];
+  size_t pointers = 0, channels = 0;
+  for (const auto& channel : doc["animations"][0]["channels"]) {
+    if (channel["target"]["path"] == "pointer") {
+      EXPECT_EQ(channel["target"]["extensions"]["KHR_animation_pointer"]["pointer"],
+                "/meshes/" + std::to_string(doc["nodes"][skinned]["mesh"].get<size_t>()) + "/weights");
+      ++pointers;
+    }
+    if (channel["target"]["path"] != "weights" || channel["target"]["node"] != level) continue;
+    ++channels;
+    const nlohmann::json& sampler = doc["animations"][0]["samplers"][channel["sampler"].get<size_t>()];
+    EXPECT_EQ(test::glb_floats(dir / "skinned-lod.glb", sampler["input"]), (std::vector<float>{0, 1, 2}));
+    EXPECT_EQ(test::glb_floats(dir / "skinned-lod.glb", sampler["output"]), (std::vector<float>{0, 1, 0}));
+  }
+  EXPECT_EQ(pointers, 1u);
+  EXPECT_EQ(channels, 1u);
+}
+
 // The morphing torus drawn by two nodes (the second moved to x = 5): every level has both nodes'
 // targets in turn, each zero on the other's vertices and on the torus where it moves, and one
 // weights channel per clip, keyed at the union of the two nodes' keys: node 0's curve (0 at 0 s, 1

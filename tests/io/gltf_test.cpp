@@ -1583,5 +1583,56 @@ TEST(GltfAnimationPointer, MeshWeightsFollowTheirMesh) {
   }
 }
 
+// The reader takes a mesh's weights pointer ("/meshes/M/weights") as the weights channel of each node
+// drawing M without weights of its own (node 0 and 2 here; node 1's own weights override the
+// mesh's), after the clip's core channels, so that node 2's own channel is the one that drives it.
+// A pointer to a mesh no node draws stays in the source; a malformed one is refused.
+TEST(GltfAnimationPointer, MeshWeightsDriveTheNodesWithoutWeightsOfTheirOwn) {
+  const auto document = [](const std::string& output_type) {
+    HandBuilt f;
+    const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const int target = f.positions({0, 0, 1, 0, 0, 1, 0, 0, 1});
+    const Json mesh = {{"primitives", {{{"attributes", {{"POSITION", pos}}}, {"targets", {{{"POSITION", target}}}}}}}};
+    f.doc["meshes"] = Json::array({mesh, mesh});
+    f.doc["nodes"] = Json::array({{{"mesh", 0}}, {{"mesh", 0}, {"weights", {0.5}}}, {{"mesh", 0}}});
+    f.doc["scenes"] = Json::array({{{"nodes", {0, 1, 2}}}});
+    const int in = f.accessor(std::vector<float>{0, 1}, kFloat, "SCALAR", 1, 0, {{"min", {0}}, {"max", {1}}});
+    const int mesh_keys = output_type == "SCALAR" ? f.accessor(std::vector<float>{0.25f, 0.75f}, kFloat, "SCALAR", 1)
+                                                  : f.accessor(std::vector<float>{0, 0, 0, 1, 1, 1}, kFloat, "VEC3", 3);
+    const int node_keys = f.accessor(std::vector<float>{1, 0}, kFloat, "SCALAR", 1);
+    const auto pointer = [](int sampler, const std::string& to) {
+      return Json{{"sampler", sampler}, {"target", {{"path", "pointer"}, {"extensions", {{"KHR_animation_pointer", {{"pointer", to}}}}}}}};
+    };
+    f.doc["animations"] = Json::array({{{"samplers", {{{"input", in}, {"output", mesh_keys}}, {{"input", in}, {"output", node_keys}}}},
+                                        {"channels", {pointer(0, "/meshes/0/weights"), {{"sampler", 1}, {"target", {{"node", 2}, {"path", "weights"}}}},
+                                                      pointer(0, "/meshes/1/weights")}}}});
+    f.doc["extensionsUsed"] = {"KHR_animation_pointer"};
+    return f.glb();
+  };
+  TempDir dir;
+  test::write_bytes(dir / "in.glb", document("SCALAR"));
+  test::expect_valid_gltf({dir / "in.glb"});
+  const Scene scene = read_scene(dir / "in.glb");
+  ASSERT_EQ(scene.animations.size(), 1u);
+  const Animation& clip = scene.animations[0];
+  ASSERT_EQ(clip.channels.size(), 3u);
+  const int32_t nodes[3] = {2, 0, 2};
+  const std::vector<float> values[3] = {{1, 0}, {0.25f, 0.75f}, {0.25f, 0.75f}};
+  for (size_t c = 0; c < 3; ++c) {
+    SCOPED_TRACE(c);
+    EXPECT_EQ(clip.channels[c].node, nodes[c]);
+    EXPECT_EQ(clip.channels[c].path, AnimationPath::weights);
+    EXPECT_EQ(clip.channels[c].components, 1u);
+    EXPECT_EQ(clip.channels[c].times, (std::vector<float>{0, 1}));
+    EXPECT_EQ(clip.channels[c].values, values[c]);
+  }
+  EXPECT_EQ(weights_channel(clip, 1), nullptr);
+  EXPECT_EQ(weights_channel(clip, 2)->values, values[0]);
+  // Written back, the channels are as they were.
+  write_scene(scene, dir / "out.glb");
+  EXPECT_EQ(test::glb_json(dir / "out.glb")["animations"][0]["channels"], test::glb_json(dir / "in.glb")["animations"][0]["channels"]);
+  expect_bad_input(document("VEC3"), "vec3.glb", "animations[0].channels[0] sampler output");
+}
+
 }  // namespace
 }  // namespace lod
