@@ -831,17 +831,20 @@ TEST(CliLod, LevelsFollowAMeshWeightsPointer) {
 // weights channel per clip, keyed at the union of the two nodes' keys: node 0's curve (0 at 0 s, 1
 // at 1 s), node 1's (1 at 0.5 s, 0 at 2 s), both linear and held outside their keys. With a step
 // curve against a linear one no channel holds both exactly: the targets are dropped and said so,
-// the weights' channels go, a clip left empty goes, and the translation's channel stays.
+// the weights' channels go, a clip left empty goes, and a translation's channel (of a third node,
+// which draws nothing) stays.
 TEST(CliLod, StaticLevelsMergeSeveralNodesMorphTargets) {
   test::TempDir dir;
   Scene input = one_morphing_node();
   Node second = input.nodes[0];
   second.translation = {5, 0, 0};
-  input.nodes.push_back(second);
-  input.roots.push_back(1);
+  Node marker;  // (moved by the clip, it draws nothing: a moving mesh would get a chain of its own)
+  marker.name = "marker";
+  input.nodes.insert(input.nodes.end(), {second, marker});
+  input.roots.insert(input.roots.end(), {1, 2});
   const Animation weights_only = input.animations[0];
   input.animations[0].channels.push_back(
-      {.node = 1, .path = AnimationPath::translation, .times = {0, 1}, .values = {5, 0, 0, 6, 0, 0}, .components = 3});
+      {.node = 2, .path = AnimationPath::translation, .times = {0, 1}, .values = {5, 0, 0, 6, 0, 0}, .components = 3});
   input.animations[0].channels.push_back({.node = 1, .path = AnimationPath::weights, .times = {0.5f, 2}, .values = {1, 0}, .components = 1});
   input.animations.push_back(weights_only);
   write_scene(input, dir / "two.glb");
@@ -1187,6 +1190,82 @@ TEST(CliLod, AMeshDrawnByManyNodesGetsOneChain) {
   const Mesh before = flatten(read_scene(dir / "many.glb")), after = flatten(out);
   EXPECT_EQ(after.triangle_count(), before.triangle_count());
   EXPECT_EQ(points_off(after, before, 1e-4), 0u);
+}
+
+// `scene` (its nodes' transforms) as clip 0 poses it at `time`, flattened (coarser levels left out).
+Mesh posed(Scene scene, float time) {
+  Pose pose = rest_pose(scene);
+  sample_animation(scene, 0, time, pose);
+  for (size_t n = 0; n < scene.nodes.size(); ++n) {
+    Node& node = scene.nodes[n];
+    node.lod_ids.clear();
+    if (!node.has_matrix) node.translation = pose.translation[n], node.rotation = pose.rotation[n], node.scale = pose.scale[n];
+  }
+  return flatten(scene);
+}
+
+// A torus spun by a clip ("spinner"), a sphere on an arm below it ("arm", moved by its parent's
+// motion only) and a static sphere ("base"): the two moving meshes each get a chain of their own
+// under their node, so the clip still moves them (level 0 draws the input as the clip poses it,
+// at any time); the base gets the static chain. Baked into the static chain at rest, they would
+// stand still.
+TEST(CliLod, AnimatedNodesKeepTheirMotion) {
+  test::TempDir dir;
+  Scene input;
+  const Mesh torus = shapes::torus(1.0f, 0.3f, 32, 16), ball = shapes::icosphere(2), base = shapes::icosphere(1);
+  for (const Mesh* m : {&torus, &ball, &base}) {
+    Primitive p;
+    p.mesh = *m, p.gltf_mesh = uint32_t(input.primitives.size());
+    input.primitives.push_back(std::move(p));
+  }
+  Node spinner, arm, stand;
+  spinner.name = "spinner", spinner.mesh = 0, spinner.translation = {0, 0, 2}, spinner.children = {1};
+  arm.name = "arm", arm.mesh = 1, arm.translation = {3, 0, 0}, arm.scale = {0.5f, 0.5f, 0.5f};
+  stand.name = "base", stand.mesh = 2, stand.translation = {0, 0, -3};
+  input.nodes = {spinner, arm, stand};
+  input.roots = {0, 2};
+  Animation spin;
+  spin.name = "spin";
+  // A quarter turn about z per second, keyed every quarter second (linear slerp between close keys).
+  AnimationChannel turn{.node = 0, .path = AnimationPath::rotation, .times = {}, .values = {}, .components = 4};
+  for (int k = 0; k <= 8; ++k) {
+    const float angle = float(M_PI) / 8 * float(k) / 2;
+    turn.times.push_back(float(k) / 4);
+    turn.values.insert(turn.values.end(), {0, 0, std::sin(angle / 2), std::cos(angle / 2)});
+  }
+  spin.channels.push_back(turn);
+  input.animations.push_back(spin);
+  write_scene(input, dir / "spin.glb");
+
+  const test::RunResult r = test::run_cli({"lod", (dir / "spin.glb").string(), "-o", (dir / "lod.glb").string(), "--ratios", "1,0.3", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  test::expect_valid_gltf({dir / "lod.glb"});
+  const nlohmann::json report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["levels"][0]["triangles"], base.triangle_count());  // the static chain: the base alone
+  EXPECT_FALSE(report.contains("instanced"));
+  ASSERT_EQ(report["animated"].size(), 2u);
+  EXPECT_EQ(report["animated"][0]["node"], "spinner");
+  EXPECT_EQ(report["animated"][0]["levels"][0]["triangles"], torus.triangle_count());
+  EXPECT_EQ(report["animated"][1]["node"], "arm");
+  EXPECT_EQ(report["animated"][1]["levels"][0]["triangles"], ball.triangle_count());
+  EXPECT_LT(report["animated"][1]["levels"][1]["triangles"].get<size_t>(), ball.triangle_count());
+
+  const Scene in = read_scene(dir / "spin.glb"), out = read_scene(dir / "lod.glb");
+  for (size_t n = 0; n < 2; ++n) {
+    EXPECT_EQ(out.nodes[n].mesh, -1) << n;
+    ASSERT_FALSE(out.nodes[n].children.empty()) << n;
+    const Node& lod0 = out.nodes[size_t(out.nodes[n].children.back())];
+    EXPECT_EQ(lod0.name, input.nodes[n].name + "_LOD0");
+    EXPECT_EQ(lod0.lod_ids.size(), 1u) << n;
+  }
+  for (const float time : {0.0f, 0.6f, 2.0f}) {
+    SCOPED_TRACE(time);
+    const Mesh before = posed(in, time), after = posed(out, time);
+    EXPECT_EQ(after.triangle_count(), before.triangle_count());
+    EXPECT_EQ(points_off(after, before, 1e-4), 0u);
+  }
+  // The moving sphere has moved: posed at 2 s, the input's arm is not where it stands at rest.
+  EXPECT_GT(points_off(posed(in, 2.0f), posed(in, 0.0f), 1e-2), ball.vertex_count() / 2);
 }
 
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {

@@ -154,8 +154,9 @@ MorphTarget shared_geomorph(const LodChain& chain, size_t i) {
 }
 
 struct ChainReport {
-  std::string node;  // the skinned or instanced node's name; empty for a static mesh
-  size_t instances = 0;  // the instanced node's (EXT_mesh_gpu_instancing); 0 otherwise
+  std::string node;  // the skinned node's name, or those of the nodes drawing a separate mesh; empty for the static chain
+  size_t instances = 0;  // a separate mesh's when instanced (EXT_mesh_gpu_instancing); 0 otherwise
+  bool animated = false;  // a separate mesh that a node in motion draws
   LodChain chain;
   std::vector<double> distances, coverage;
 };
@@ -523,44 +524,55 @@ StaticChain build_static(Mesh mesh, const Scene* scene, LodOptions options, cons
   return out;
 }
 
-// A glTF mesh that gets a chain of its own, in its own space: one that an instanced node draws
-// (EXT_mesh_gpu_instancing), with triangles and no skin. Baking its instances into the static
-// chain would multiply its triangles by the instance count. `nodes`: the nodes that draw it (from
-// the scene's roots), instanced or not, each of which gets the chain's levels.
-struct InstancedMesh {
+// A glTF mesh that gets a chain of its own, in its own space: one with triangles and no skin that
+// an instanced node draws (EXT_mesh_gpu_instancing: baking its instances into the static chain
+// would multiply its triangles by the instance count), or that a node in motion draws (a clip
+// moves it or one of its ancestors: baked into the static chain at rest, the mesh would no longer
+// follow). `nodes`: the nodes that draw it (from the scene's roots), each of which gets the chain's
+// levels under it.
+struct SeparateMesh {
   int32_t mesh = -1;
   std::vector<int32_t> nodes;
   size_t instances = 0;  // drawn, over those nodes
+  bool instanced = false, animated = false;
 };
 
-std::vector<InstancedMesh> instanced_meshes(const Scene& scene) {
-  std::vector<bool> reached(scene.nodes.size(), false);
-  std::vector<int32_t> stack = scene.roots;
+std::vector<SeparateMesh> separate_meshes(const Scene& scene) {
+  std::vector<bool> animated(scene.nodes.size(), false);
+  for (const Animation& clip : scene.animations)
+    for (const AnimationChannel& ch : clip.channels)
+      if (ch.path != AnimationPath::weights && ch.node >= 0 && size_t(ch.node) < animated.size()) animated[size_t(ch.node)] = true;
+  // Reached from the roots, and in motion: animated, or below a node that is.
+  std::vector<bool> reached(scene.nodes.size(), false), moving(scene.nodes.size(), false);
+  std::vector<std::pair<int32_t, bool>> stack;
+  for (const int32_t r : scene.roots) stack.emplace_back(r, false);
   while (!stack.empty()) {
-    const int32_t n = stack.back();
+    const auto [n, parent_moving] = stack.back();
     stack.pop_back();
     if (n < 0 || size_t(n) >= scene.nodes.size() || reached[size_t(n)]) continue;
     reached[size_t(n)] = true;
-    for (const int32_t c : scene.nodes[size_t(n)].children) stack.push_back(c);
+    moving[size_t(n)] = parent_moving || animated[size_t(n)];
+    for (const int32_t c : scene.nodes[size_t(n)].children) stack.emplace_back(c, moving[size_t(n)]);
   }
-  std::map<int32_t, InstancedMesh> meshes;  // by glTF mesh: deterministic order
-  std::set<int32_t> instanced, skinned;
+  std::map<int32_t, SeparateMesh> meshes;  // by glTF mesh: deterministic order
+  std::set<int32_t> skinned;
   for (size_t n = 0; n < scene.nodes.size(); ++n) {
     const Node& node = scene.nodes[n];
     if (!reached[n] || node.mesh < 0) continue;
-    InstancedMesh& m = meshes[node.mesh];
+    SeparateMesh& m = meshes[node.mesh];
     m.mesh = node.mesh;
     m.nodes.push_back(int32_t(n));
     m.instances += std::max<size_t>(1, node.gpu_instances.size());
-    if (!node.gpu_instances.empty()) instanced.insert(node.mesh);
+    m.instanced = m.instanced || !node.gpu_instances.empty();
+    m.animated = m.animated || moving[n];
     if (node.skin >= 0) skinned.insert(node.mesh);
   }
-  std::vector<InstancedMesh> out;
+  std::vector<SeparateMesh> out;
   for (auto& [mesh, m] : meshes) {
     const bool has_triangles = std::any_of(scene.primitives.begin(), scene.primitives.end(), [&, mesh = mesh](const Primitive& p) {
       return int32_t(p.gltf_mesh) == mesh && p.mesh.triangle_count() > 0;
     });
-    if (instanced.count(mesh) && !skinned.count(mesh) && has_triangles) out.push_back(std::move(m));
+    if ((m.instanced || m.animated) && !skinned.count(mesh) && has_triangles) out.push_back(std::move(m));
   }
   return out;
 }
@@ -617,8 +629,8 @@ Command register_lod(CLI::App& root) {
             if (!o->attributes.empty()) parse_attributes(o->attributes, options.simplify);
 
             auto start = std::chrono::steady_clock::now();
-            // glTF input is read as a scene: a skinned character keeps its skeleton and clips, and
-            // an instanced mesh (EXT_mesh_gpu_instancing) its instances.
+            // glTF input is read as a scene: a skinned character keeps its skeleton and clips, an
+            // instanced mesh (EXT_mesh_gpu_instancing) its instances and an animated node its motion.
             const FileFormat in_format = format_from_path(o->input);
             Scene scene;
             Mesh mesh;
@@ -628,8 +640,8 @@ Command register_lod(CLI::App& root) {
               else mesh = read_mesh(o->input, bar.read_options());
             }
             const std::vector<SkinnedPrimitive> skinned = scene.source ? skinned_primitives(scene) : std::vector<SkinnedPrimitive>{};
-            const std::vector<InstancedMesh> instanced =
-                scene.source && skinned.empty() ? instanced_meshes(scene) : std::vector<InstancedMesh>{};
+            const std::vector<SeparateMesh> separate =
+                scene.source && skinned.empty() ? separate_meshes(scene) : std::vector<SeparateMesh>{};
             // The scenes flattened below differ from the input in their nodes and roots only: each
             // borrows it with those swapped in (a copy of the primitives would double a large
             // input's memory).
@@ -638,17 +650,17 @@ Command register_lod(CLI::App& root) {
               use(static_cast<const Scene&>(scene));
               std::swap(scene.nodes, nodes), std::swap(scene.roots, roots);
             };
-            std::vector<Node> static_nodes;  // the input's, without the instanced meshes
+            std::vector<Node> static_nodes;  // the input's, without the separate meshes
             if (scene.source && skinned.empty()) {
               static_nodes = scene.nodes;
-              for (const InstancedMesh& m : instanced)
+              for (const SeparateMesh& m : separate)
                 for (const int32_t n : m.nodes) static_nodes[size_t(n)].mesh = -1;
               with_nodes(static_nodes, scene.roots, [&](const Scene& view) { mesh = flatten(view); });
             }
             const double load_seconds = seconds_since(start);
 
             std::vector<ChainReport> reports;
-            std::vector<StaticChain> chains;  // the static chain (if any geometry is not instanced), then one per instanced mesh
+            std::vector<StaticChain> chains;  // the static chain (if any geometry is not separate), then one per separate mesh
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
               if (o->morph) throw_usage("--morph: skinned input morphs at run time (lod::SkinnedGeomorph), not as glTF morph targets");
@@ -663,7 +675,7 @@ Command register_lod(CLI::App& root) {
               ProgressBar bar("building skinned LODs");
               reports = build_skinned(scene, skinned, mode, o->poses, options, [&](double f) { bar.update(f); });
             } else {
-              if (instanced.empty() || mesh.triangle_count() > 0) {
+              if (separate.empty() || mesh.triangle_count() > 0) {
                 validate(mesh, o->input);
                 if (scene.source)
                   with_nodes(static_nodes, scene.roots, [&](const Scene& view) {
@@ -672,11 +684,11 @@ Command register_lod(CLI::App& root) {
                 else
                   chains.push_back(build_static(std::move(mesh), nullptr, options, *o, "building LODs"));
               }
-              // Each instanced mesh: its own chain in its own space (drawn once by its first node,
+              // Each separate mesh: its own chain in its own space (drawn once by its first node,
               // untransformed, and nothing else).
               std::vector<Node> solo = scene.nodes;
               for (Node& node : solo) node.mesh = -1;
-              for (const InstancedMesh& m : instanced) {
+              for (const SeparateMesh& m : separate) {
                 const int32_t n = m.nodes[0];
                 Node& node = solo[size_t(n)];
                 node.mesh = m.mesh, node.gpu_instances.clear();
@@ -689,11 +701,13 @@ Command register_lod(CLI::App& root) {
                   chains.push_back(build_static(flatten(view), &view, options, *o, fmt::format("building LODs of '{}'", name)));
                 });
                 chains.back().report.node = name;
-                chains.back().report.instances = m.instances;
+                chains.back().report.instances = m.instanced ? m.instances : 0;
+                chains.back().report.animated = m.animated;
                 node = scene.nodes[size_t(n)], node.mesh = -1;
               }
-              if (!o->lpm.empty() && (chains.empty() || chains[0].report.instances))
-                throw_usage("--lpm: all of the input's geometry is instanced (EXT_mesh_gpu_instancing)");
+              if (!o->lpm.empty() && chains.size() == separate.size())
+                throw_usage("--lpm: all of the input's geometry is instanced (EXT_mesh_gpu_instancing) or animated, "
+                            "each mesh with a chain of its own");
               for (StaticChain& c : chains) reports.push_back(std::move(c.report));
             }
             const double build_seconds = seconds_since(start);
@@ -711,12 +725,12 @@ Command register_lod(CLI::App& root) {
               written = write_scene(skinned_scene(std::move(scene), skinned, reports), o->output, o->gltf);
             } else {
               Scene out = chain_document(scene.source ? &scene : nullptr, reports[0].chain.levels.front().mesh.material_names);
-              const size_t first_instanced = chains.size() - instanced.size();
-              for (size_t c = 0; c < first_instanced; ++c) add_chain(out, reports[c], chains[c].targets, {});
-              for (size_t c = first_instanced; c < chains.size(); ++c) {
+              const size_t first_separate = chains.size() - separate.size();
+              for (size_t c = 0; c < first_separate; ++c) add_chain(out, reports[c], chains[c].targets, {});
+              for (size_t c = first_separate; c < chains.size(); ++c) {
                 // Every node that drew the mesh draws the chain: its own level nodes, under it.
                 std::optional<uint32_t> meshes;
-                for (const int32_t n : instanced[c - first_instanced].nodes) {
+                for (const int32_t n : separate[c - first_separate].nodes) {
                   const Node& node = scene.nodes[size_t(n)];
                   const std::string name = node.name.empty() ? fmt::format("node {}", n) : node.name;
                   meshes = add_chain(out, reports[c], chains[c].targets, {name + "_", n, node.gpu_instances, n, meshes});
@@ -738,11 +752,14 @@ Command register_lod(CLI::App& root) {
             const StaticChain& head = chains.empty() ? none : chains[0];
             const size_t morph_targets = head.targets.levels.empty() ? 0 : head.targets.levels[0].size();
             if (o->json) {
-              nlohmann::json listed = nlohmann::json::array();
+              // The skinned chains; the separate meshes' under "instanced" (with "animated" when a
+              // node in motion draws them too) or else "animated".
+              nlohmann::json listed = nlohmann::json::array(), instanced = listed, animated = listed;
               for (const ChainReport& r : reports) {
                 nlohmann::json c = {{"node", r.node}, {"diagonal", r.chain.diagonal}, {"levels", levels_json(r)}};
                 if (r.instances) c["instances"] = r.instances;
-                if (!skinned.empty() || r.instances) listed.push_back(std::move(c));
+                if (r.instances && r.animated) c["animated"] = true;
+                (r.instances ? instanced : r.animated ? animated : listed).push_back(std::move(c));
               }
               nlohmann::json j = {{"input", o->input}, {"output", o->output}, {"diagonal", reports[0].chain.diagonal},
                                   {"levels", levels_json(reports[0])}, {"load_seconds", load_seconds},
@@ -750,12 +767,14 @@ Command register_lod(CLI::App& root) {
                                   {"flat_shaded", head.form.flat_shaded}, {"double_sided", head.form.double_sided},
                                   {"morph_targets", morph_targets}, {"morph_targets_dropped", !head.targets_dropped.empty()}};
               if (!skinned.empty()) j["skinned"] = {{"mode", o->skin_mode}, {"poses", o->poses}, {"chains", listed}};
-              if (!instanced.empty()) j["instanced"] = listed;
+              if (!instanced.empty()) j["instanced"] = instanced;
+              if (!animated.empty()) j["animated"] = animated;
               add_write_report(j, written, o->gltf);
               fmt::print("{}\n", j.dump(2));
             } else {
               for (const ChainReport& r : reports) {
-                if (r.instances) fmt::print("instanced mesh of '{}' ({} instances)\n", r.node, r.instances);
+                if (r.instances) fmt::print("instanced mesh of '{}' ({} instances{})\n", r.node, r.instances, r.animated ? ", animated" : "");
+                else if (r.animated) fmt::print("animated mesh of '{}'\n", r.node);
                 else if (!r.node.empty()) fmt::print("skinned node '{}' ({} mode, {} poses)\n", r.node, o->skin_mode, o->poses);
                 else if (reports.size() > 1) fmt::print("the rest of the scene\n");
                 fmt::print("{:<6}{:>12}{:>12}{:>14}{:>11}{:>14}{:>14}\n", "level", "triangles", "vertices", "error", "% diag",
