@@ -1268,6 +1268,63 @@ TEST(CliLod, AnimatedNodesKeepTheirMotion) {
   EXPECT_GT(points_off(posed(in, 2.0f), posed(in, 0.0f), 1e-2), ball.vertex_count() / 2);
 }
 
+// A skinned character's props get chains too: a rock on the ground (the static chain) and a ball in
+// its right hand (a node below the wrist joint, which the walk moves: a chain of its own, under
+// it). The character's chain is the one it gets alone; posed by the walk, level 0 draws the input's
+// props where they are.
+TEST(CliLod, SkinnedCharactersPropsGetChainsToo) {
+  test::TempDir dir;
+  const Scene humanoid = fixtures::humanoid_scene();
+  Scene input = humanoid;
+  const Mesh rock = shapes::icosphere(2), ball = shapes::torus(0.08f, 0.03f, 24, 12);
+  const uint32_t meshes = uint32_t(input.primitives.size());
+  for (const Mesh* m : {&rock, &ball}) {
+    Primitive p;
+    p.mesh = *m, p.gltf_mesh = meshes + uint32_t(m == &ball);
+    input.primitives.push_back(std::move(p));
+  }
+  int32_t wrist = -1;
+  for (size_t n = 0; n < input.nodes.size(); ++n)
+    if (input.nodes[n].name == "wrist_r") wrist = int32_t(n);
+  ASSERT_GE(wrist, 0);
+  Node stone, held;
+  stone.name = "rock", stone.mesh = int32_t(meshes), stone.translation = {1.5f, 0, 0}, stone.scale = {0.3f, 0.3f, 0.3f};
+  held.name = "ball", held.mesh = int32_t(meshes + 1), held.translation = {0, -0.1f, 0};
+  input.nodes.insert(input.nodes.end(), {stone, held});
+  input.roots.push_back(int32_t(input.nodes.size() - 2));
+  input.nodes[size_t(wrist)].children.push_back(int32_t(input.nodes.size() - 1));
+  write_scene(humanoid, dir / "alone.glb");
+  write_scene(input, dir / "props.glb");
+
+  const auto lod = [&](const char* in, const char* out) {
+    const test::RunResult r = test::run_cli({"lod", (dir / in).string(), "-o", (dir / out).string(), "--ratios", "1,0.4", "--poses", "4", "--json"});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    test::expect_valid_gltf({dir / out});
+    return nlohmann::json::parse(r.out);
+  };
+  const nlohmann::json alone = lod("alone.glb", "alone-lod.glb"), report = lod("props.glb", "props-lod.glb");
+  EXPECT_FALSE(alone.contains("static"));
+  ASSERT_EQ(report["skinned"]["chains"].size(), 1u);
+  EXPECT_EQ(report["skinned"]["chains"], alone["skinned"]["chains"]);
+  EXPECT_EQ(report["static"]["levels"][0]["triangles"], rock.triangle_count());
+  EXPECT_LT(report["static"]["levels"][1]["triangles"].get<size_t>(), rock.triangle_count());
+  ASSERT_EQ(report["animated"].size(), 1u);
+  EXPECT_EQ(report["animated"][0]["node"], "ball");
+  EXPECT_EQ(report["animated"][0]["levels"][0]["triangles"], ball.triangle_count());
+
+  const Scene in = read_scene(dir / "props.glb"), out = read_scene(dir / "props-lod.glb");
+  const size_t ball_node = input.nodes.size() - 1;
+  EXPECT_EQ(out.nodes[ball_node].mesh, -1);
+  ASSERT_EQ(out.nodes[ball_node].children.size(), 1u);
+  EXPECT_EQ(out.nodes[size_t(out.nodes[ball_node].children[0])].name, "ball_LOD0");
+  for (const float time : {0.0f, 0.3f, 0.7f}) {
+    SCOPED_TRACE(time);
+    const Mesh before = posed(in, time), after = posed(out, time);
+    EXPECT_EQ(after.triangle_count(), before.triangle_count());
+    EXPECT_EQ(points_off(after, before, 1e-4), 0u);
+  }
+}
+
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {
   test::TempDir dir;
   write_scene(fixtures::humanoid_scene(), dir / "humanoid.glb");

@@ -178,6 +178,20 @@ nlohmann::json level_facts(const ChainReport& r, size_t i) {
 // material id k + 1 is its material k) without its triangles, so that materials, textures and
 // everything else stay and its nodes remain, without those meshes; or a new document with the
 // input's material names.
+// Drops the triangles of the source's meshes that chains replace: all but `kept` (a skinned
+// character's, which its chains left in place; meshes past the source's are new levels).
+void drop_chained_meshes(Scene& scene, const std::set<int32_t>& kept) {
+  const auto chained = [&](int32_t mesh) { return mesh >= 0 && uint32_t(mesh) < scene.gltf_mesh_count && !kept.count(mesh); };
+  std::erase_if(scene.primitives, [&](const Primitive& p) { return chained(int32_t(p.gltf_mesh)); });
+  // Their nodes no longer draw their triangles (an earlier chain's levels among them): what lodkit
+  // said about them, and an earlier chain's MSFT_lod, would describe what is gone.
+  for (Node& node : scene.nodes)
+    if (chained(node.mesh)) {
+      node.lod_ids.clear();
+      erase_extras(node, {"lodkit", "LODKIT_geomorph", "MSFT_screencoverage"});
+    }
+}
+
 Scene chain_document(const Scene* source, const std::vector<std::string>& material_names) {
   Scene scene;
   if (!source) {
@@ -185,14 +199,7 @@ Scene chain_document(const Scene* source, const std::vector<std::string>& materi
     return scene;
   }
   scene = *source;
-  scene.primitives.clear();
-  // Its nodes no longer draw their triangles (an earlier chain's levels among them): what lodkit
-  // said about them, and an earlier chain's MSFT_lod, would describe what is gone.
-  for (Node& node : scene.nodes)
-    if (node.mesh >= 0) {
-      node.lod_ids.clear();
-      erase_extras(node, {"lodkit", "LODKIT_geomorph", "MSFT_screencoverage"});
-    }
+  drop_chained_meshes(scene, {});
   return scene;
 }
 
@@ -640,8 +647,10 @@ Command register_lod(CLI::App& root) {
               else mesh = read_mesh(o->input, bar.read_options());
             }
             const std::vector<SkinnedPrimitive> skinned = scene.source ? skinned_primitives(scene) : std::vector<SkinnedPrimitive>{};
-            const std::vector<SeparateMesh> separate =
-                scene.source && skinned.empty() ? separate_meshes(scene) : std::vector<SeparateMesh>{};
+            const std::vector<SeparateMesh> separate = scene.source ? separate_meshes(scene) : std::vector<SeparateMesh>{};
+            // The meshes skinned nodes draw: the skinned chains' (in place in the document).
+            std::set<int32_t> skinned_meshes;
+            for (const SkinnedPrimitive& sp : skinned) skinned_meshes.insert(int32_t(scene.primitives[sp.primitive].gltf_mesh));
             // The scenes flattened below differ from the input in their nodes and roots only: each
             // borrows it with those swapped in (a copy of the primitives would double a large
             // input's memory).
@@ -650,17 +659,21 @@ Command register_lod(CLI::App& root) {
               use(static_cast<const Scene&>(scene));
               std::swap(scene.nodes, nodes), std::swap(scene.roots, roots);
             };
-            std::vector<Node> static_nodes;  // the input's, without the separate meshes
-            if (scene.source && skinned.empty()) {
+            std::vector<Node> static_nodes;  // the input's, without the separate and skinned meshes
+            if (scene.source) {
               static_nodes = scene.nodes;
               for (const SeparateMesh& m : separate)
                 for (const int32_t n : m.nodes) static_nodes[size_t(n)].mesh = -1;
+              for (Node& node : static_nodes)
+                if (skinned_meshes.count(node.mesh)) node.mesh = -1;
               with_nodes(static_nodes, scene.roots, [&](const Scene& view) { mesh = flatten(view); });
             }
             const double load_seconds = seconds_since(start);
 
+            // The skinned chains, then the static chain (if any geometry is neither skinned nor
+            // separate), then one per separate mesh.
             std::vector<ChainReport> reports;
-            std::vector<StaticChain> chains;  // the static chain (if any geometry is not separate), then one per separate mesh
+            std::vector<StaticChain> chains;  // the static and separate ones
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
               if (o->morph) throw_usage("--morph: skinned input morphs at run time (lod::SkinnedGeomorph), not as glTF morph targets");
@@ -674,76 +687,78 @@ Command register_lod(CLI::App& root) {
                 throw_usage(fmt::format("--lpm: the input has {} skinned meshes, and a .lpm file holds one", primitives.size()));
               ProgressBar bar("building skinned LODs");
               reports = build_skinned(scene, skinned, mode, o->poses, options, [&](double f) { bar.update(f); });
-            } else {
-              if (separate.empty() || mesh.triangle_count() > 0) {
-                validate(mesh, o->input);
-                if (scene.source)
-                  with_nodes(static_nodes, scene.roots, [&](const Scene& view) {
-                    chains.push_back(build_static(std::move(mesh), &view, options, *o, "building LODs"));
-                  });
-                else
-                  chains.push_back(build_static(std::move(mesh), nullptr, options, *o, "building LODs"));
-              }
-              // Each separate mesh: its own chain in its own space (drawn once by its first node,
-              // untransformed, and nothing else).
-              std::vector<Node> solo = scene.nodes;
-              for (Node& node : solo) node.mesh = -1;
-              for (const SeparateMesh& m : separate) {
-                const int32_t n = m.nodes[0];
-                Node& node = solo[size_t(n)];
-                node.mesh = m.mesh, node.gpu_instances.clear();
-                node.has_matrix = false, node.translation = {}, node.rotation = {0, 0, 0, 1}, node.scale = {1, 1, 1};
-                std::vector<std::string> names;
-                for (const int32_t k : m.nodes)
-                  names.push_back(scene.nodes[size_t(k)].name.empty() ? fmt::format("node {}", k) : scene.nodes[size_t(k)].name);
-                const std::string name = fmt::format("{}", fmt::join(names, ", "));
-                with_nodes(solo, {n}, [&](const Scene& view) {
-                  chains.push_back(build_static(flatten(view), &view, options, *o, fmt::format("building LODs of '{}'", name)));
-                });
-                chains.back().report.node = name;
-                chains.back().report.instances = m.instanced ? m.instances : 0;
-                chains.back().report.animated = m.animated;
-                node = scene.nodes[size_t(n)], node.mesh = -1;
-              }
-              if (!o->lpm.empty() && chains.size() == separate.size())
-                throw_usage("--lpm: all of the input's geometry is instanced (EXT_mesh_gpu_instancing) or animated, "
-                            "each mesh with a chain of its own");
-              for (StaticChain& c : chains) reports.push_back(std::move(c.report));
             }
+            const size_t first_chain = reports.size();
+            // A skinned character's props: a chain when there are triangles (the character alone
+            // needs none); without skins, the input must have some.
+            if (skinned.empty() ? separate.empty() || mesh.triangle_count() > 0 : mesh.triangle_count() > 0) {
+              validate(mesh, o->input);
+              if (scene.source)
+                with_nodes(static_nodes, scene.roots, [&](const Scene& view) {
+                  chains.push_back(build_static(std::move(mesh), &view, options, *o, "building LODs"));
+                });
+              else
+                chains.push_back(build_static(std::move(mesh), nullptr, options, *o, "building LODs"));
+            }
+            // Each separate mesh: its own chain in its own space (drawn once by its first node,
+            // untransformed, and nothing else).
+            std::vector<Node> solo = scene.nodes;
+            for (Node& node : solo) node.mesh = -1;
+            for (const SeparateMesh& m : separate) {
+              const int32_t n = m.nodes[0];
+              Node& node = solo[size_t(n)];
+              node.mesh = m.mesh, node.gpu_instances.clear();
+              node.has_matrix = false, node.translation = {}, node.rotation = {0, 0, 0, 1}, node.scale = {1, 1, 1};
+              std::vector<std::string> names;
+              for (const int32_t k : m.nodes)
+                names.push_back(scene.nodes[size_t(k)].name.empty() ? fmt::format("node {}", k) : scene.nodes[size_t(k)].name);
+              const std::string name = fmt::format("{}", fmt::join(names, ", "));
+              with_nodes(solo, {n}, [&](const Scene& view) {
+                chains.push_back(build_static(flatten(view), &view, options, *o, fmt::format("building LODs of '{}'", name)));
+              });
+              chains.back().report.node = name;
+              chains.back().report.instances = m.instanced ? m.instances : 0;
+              chains.back().report.animated = m.animated;
+              node = scene.nodes[size_t(n)], node.mesh = -1;
+            }
+            if (!o->lpm.empty() && skinned.empty() && chains.size() == separate.size())
+              throw_usage("--lpm: all of the input's geometry is instanced (EXT_mesh_gpu_instancing) or animated, "
+                          "each mesh with a chain of its own");
+            for (StaticChain& c : chains) reports.push_back(std::move(c.report));
             const double build_seconds = seconds_since(start);
             for (ChainReport& r : reports) set_switching(r, *o);
 
             start = std::chrono::steady_clock::now();
             WriteReport written;
+            // The progressive mesh spans the input down to the coarsest level's size.
+            if (!skinned.empty() && !o->lpm.empty())
+              write_progressive_mesh(skinned_progressive_mesh(scene, skinned[0], parse_skin_mode(o->skin_mode), o->poses,
+                                                              options.simplify, reports[0].chain.levels.back().mesh.triangle_count()),
+                                     o->lpm);
+            Scene out;
             if (!skinned.empty()) {
-              // The progressive mesh spans the input down to the coarsest level's size.
-              if (!o->lpm.empty())
-                write_progressive_mesh(skinned_progressive_mesh(scene, skinned[0], parse_skin_mode(o->skin_mode), o->poses,
-                                                                options.simplify,
-                                                                reports[0].chain.levels.back().mesh.triangle_count()),
-                                       o->lpm);
-              written = write_scene(skinned_scene(std::move(scene), skinned, reports), o->output, o->gltf);
+              out = skinned_scene(std::move(scene), skinned, reports);
+              if (!chains.empty()) drop_chained_meshes(out, skinned_meshes);
             } else {
-              Scene out = chain_document(scene.source ? &scene : nullptr, reports[0].chain.levels.front().mesh.material_names);
-              const size_t first_separate = chains.size() - separate.size();
-              for (size_t c = 0; c < first_separate; ++c) add_chain(out, reports[c], chains[c].targets, {});
-              for (size_t c = first_separate; c < chains.size(); ++c) {
-                // Every node that drew the mesh draws the chain: its own level nodes, under it.
-                std::optional<uint32_t> meshes;
-                for (const int32_t n : separate[c - first_separate].nodes) {
-                  const Node& node = scene.nodes[size_t(n)];
-                  const std::string name = node.name.empty() ? fmt::format("node {}", n) : node.name;
-                  meshes = add_chain(out, reports[c], chains[c].targets, {name + "_", n, node.gpu_instances, n, meshes});
-                }
+              out = chain_document(scene.source ? &scene : nullptr, reports[0].chain.levels.front().mesh.material_names);
+            }
+            const size_t first_separate = chains.size() - separate.size();
+            for (size_t c = 0; c < first_separate; ++c) add_chain(out, reports[first_chain + c], chains[c].targets, {});
+            for (size_t c = first_separate; c < chains.size(); ++c) {
+              // Every node that drew the mesh draws the chain: its own level nodes, under it.
+              std::optional<uint32_t> meshes;
+              for (const int32_t n : separate[c - first_separate].nodes) {
+                const Node node = out.nodes[size_t(n)];  // (a copy: add_chain adds nodes)
+                const std::string name = node.name.empty() ? fmt::format("node {}", n) : node.name;
+                meshes = add_chain(out, reports[first_chain + c], chains[c].targets, {name + "_", n, node.gpu_instances, n, meshes});
               }
-              written = write_scene(out, o->output, o->gltf);
-              if (!o->lpm.empty()) {
-                // The progressive mesh spans the input down to the coarsest level's size.
-                SimplifyOptions so = options.simplify;
-                so.target_triangles = std::max<uint64_t>(1, reports[0].chain.levels.back().mesh.triangle_count());
-                SimplifyResult r = simplify(chains[0].input, so);
-                write_progressive_mesh(ProgressiveMesh(chains[0].input, std::move(r.record)), o->lpm);
-              }
+            }
+            written = write_scene(out, o->output, o->gltf);
+            if (skinned.empty() && !o->lpm.empty()) {
+              SimplifyOptions so = options.simplify;
+              so.target_triangles = std::max<uint64_t>(1, reports[0].chain.levels.back().mesh.triangle_count());
+              SimplifyResult r = simplify(chains[0].input, so);
+              write_progressive_mesh(ProgressiveMesh(chains[0].input, std::move(r.record)), o->lpm);
             }
             const double write_seconds = seconds_since(start);
 
@@ -753,13 +768,18 @@ Command register_lod(CLI::App& root) {
             const size_t morph_targets = head.targets.levels.empty() ? 0 : head.targets.levels[0].size();
             if (o->json) {
               // The skinned chains; the separate meshes' under "instanced" (with "animated" when a
-              // node in motion draws them too) or else "animated".
-              nlohmann::json listed = nlohmann::json::array(), instanced = listed, animated = listed;
-              for (const ChainReport& r : reports) {
+              // node in motion draws them too) or else "animated"; beside skinned ones, the static
+              // chain as "static".
+              nlohmann::json listed = nlohmann::json::array(), instanced = listed, animated = listed, still;
+              for (size_t k = 0; k < reports.size(); ++k) {
+                const ChainReport& r = reports[k];
                 nlohmann::json c = {{"node", r.node}, {"diagonal", r.chain.diagonal}, {"levels", levels_json(r)}};
                 if (r.instances) c["instances"] = r.instances;
                 if (r.instances && r.animated) c["animated"] = true;
-                (r.instances ? instanced : r.animated ? animated : listed).push_back(std::move(c));
+                if (k < first_chain) listed.push_back(std::move(c));
+                else if (r.instances) instanced.push_back(std::move(c));
+                else if (r.animated) animated.push_back(std::move(c));
+                else still = {{"diagonal", r.chain.diagonal}, {"levels", levels_json(r)}};
               }
               nlohmann::json j = {{"input", o->input}, {"output", o->output}, {"diagonal", reports[0].chain.diagonal},
                                   {"levels", levels_json(reports[0])}, {"load_seconds", load_seconds},
@@ -767,6 +787,7 @@ Command register_lod(CLI::App& root) {
                                   {"flat_shaded", head.form.flat_shaded}, {"double_sided", head.form.double_sided},
                                   {"morph_targets", morph_targets}, {"morph_targets_dropped", !head.targets_dropped.empty()}};
               if (!skinned.empty()) j["skinned"] = {{"mode", o->skin_mode}, {"poses", o->poses}, {"chains", listed}};
+              if (!skinned.empty() && !still.is_null()) j["static"] = still;
               if (!instanced.empty()) j["instanced"] = instanced;
               if (!animated.empty()) j["animated"] = animated;
               add_write_report(j, written, o->gltf);
