@@ -13,9 +13,11 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <new>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <type_traits>
 #include <unordered_map>
 
@@ -486,10 +488,12 @@ std::vector<ViewUse> view_uses(const Json& doc) {
     const Json& view = views[accessor["bufferView"].get<size_t>()];
     const uint64_t element = element_size(accessor), count = accessor.value("count", uint64_t(0));
     if (indices[k] != 0) {
-      // TRIANGLES mode: the whole view is the list, 16- or 32-bit.
       u.indices = true;
-      u.excluded |= indices[k] != 1 || !(element == 2 || element == 4) || accessor.value("byteOffset", 0) != 0 || view.contains("byteStride") ||
-                    count % 3 != 0 || count * element != view.value("byteLength", uint64_t(0)) || (u.stride && u.stride != element);
+      // TRIANGLES mode: the whole view is one list (merge_views may have put several accessors'
+      // lists in it), 16- or 32-bit, each accessor on whole triangles.
+      u.excluded |= indices[k] != 1 || !(element == 2 || element == 4) || accessor.value("byteOffset", uint64_t(0)) % (3 * element) != 0 ||
+                    view.contains("byteStride") || count % 3 != 0 || view.value("byteLength", uint64_t(0)) % (3 * element) != 0 ||
+                    (u.stride && u.stride != element);
       u.stride = element;
     } else {
       u.attributes = true;
@@ -571,6 +575,144 @@ std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const Vie
   return out;
 }
 
+// What each accessor holds, for merge_views: a mesh attribute or a morph target's by name (without
+// its set number), indices, inverse bind matrices, a sampler's times, its keys by the path they
+// animate, an instancing attribute; "" for anything else.
+std::vector<std::string> accessor_roles(const Json& doc) {
+  std::vector<std::string> role(doc.value("accessors", Json::array()).size());
+  const auto set = [&](const Json& index, const std::string& what) {
+    if (!index.is_number_unsigned() || index.get<size_t>() >= role.size()) return;
+    std::string& r = role[index.get<size_t>()];
+    r = r.empty() || r == what ? what : "mixed";
+  };
+  const auto base = [](const std::string& name) { return name.substr(0, name.find_last_not_of("0123456789") + 1); };
+  for (const Json& mesh : doc.value("meshes", Json::array()))
+    for (const Json& primitive : mesh.value("primitives", Json::array())) {
+      const Json attributes = primitive.value("attributes", Json::object());
+      for (const auto& [name, index] : attributes.items()) set(index, "attribute " + base(name));
+      if (primitive.contains("indices")) set(primitive["indices"], "indices");
+      for (const Json& target : primitive.value("targets", Json::array()))
+        for (const auto& [name, index] : target.items()) set(index, "target " + base(name));
+    }
+  for (const Json& skin : doc.value("skins", Json::array()))
+    if (skin.contains("inverseBindMatrices")) set(skin["inverseBindMatrices"], "inverse bind matrices");
+  for (const Json& animation : doc.value("animations", Json::array())) {
+    const Json samplers = animation.value("samplers", Json::array());
+    for (const Json& sampler : samplers)
+      if (sampler.contains("input")) set(sampler["input"], "times");
+    for (const Json& channel : animation.value("channels", Json::array())) {
+      const size_t sampler = channel.value("sampler", samplers.size());
+      if (sampler < samplers.size() && samplers[sampler].contains("output"))
+        set(samplers[sampler]["output"], "keys " + channel.value("target", Json::object()).value("path", std::string()));
+    }
+  }
+  for (const Json& node : doc.value("nodes", Json::array()))
+    if (node.contains("extensions") && node["extensions"].contains("EXT_mesh_gpu_instancing"))
+      for (const Json attributes = node["extensions"]["EXT_mesh_gpu_instancing"].value("attributes", Json::object());
+           const auto& [name, index] : attributes.items())
+        set(index, "instances " + name);
+  for (std::string& r : role)
+    if (r == "mixed") r.clear();
+  return role;
+}
+
+// Calls f on every "bufferView" index in `json` (an accessor's, its sparse parts', an image's, an
+// extension's).
+template <class F>
+void for_each_view_reference(Json& json, F&& f) {
+  if (json.is_array()) {
+    for (Json& item : json) for_each_view_reference(item, f);
+    return;
+  }
+  if (!json.is_object()) return;
+  for (auto& [key, value] : json.items()) {
+    if (key == "bufferView" && value.is_number_unsigned()) f(value);
+    else for_each_view_reference(value, f);
+  }
+}
+
+// Merges the views that hold the same kind of data (one vertex stream, indices, a sampler's times,
+// one path's keys: accessor_roles), with one stride and filter, into one view each, as gltfpack
+// lays them out: every compressed view costs a header, a tail and its JSON (a LOD chain's or a
+// clip's dozens of small views), and meshopt codes the concatenation in about the parts' bytes.
+// Views that something other than an accessor uses, or that carry extensions or extras, stay.
+void merge_views(Json& doc, std::vector<uint8_t>& bin, const std::vector<ViewUse>& use, const std::vector<ViewFilter>& filters) {
+  Json& views = doc["bufferViews"];
+  Json& accessors = doc["accessors"];
+  const std::vector<std::string> roles = accessor_roles(doc);
+  std::vector<std::string> kind(views.size());  // one role per view, "" when it cannot merge
+  std::vector<bool> shared(views.size(), false);
+  for (size_t a = 0; a < accessors.size(); ++a) {
+    if (!accessors[a].contains("bufferView")) continue;
+    const size_t v = accessors[a]["bufferView"].get<size_t>();
+    if (v >= views.size()) return;
+    if (!kind[v].empty() && kind[v] != roles[a]) shared[v] = true;
+    kind[v] = roles[a];
+  }
+  // Views something else uses (a sparse accessor's parts, an image, an extension) stay as they are.
+  const auto hold = [&](const Json& index) {
+    if (index.get<size_t>() < shared.size()) shared[index.get<size_t>()] = true;
+  };
+  for (Json& accessor : accessors)
+    if (accessor.contains("sparse")) for_each_view_reference(accessor["sparse"], hold);
+  for (auto& [key, value] : doc.items())
+    if (key != "accessors" && key != "bufferViews") for_each_view_reference(value, hold);
+  // Groups in order of their first view; a view that cannot merge is a group of its own.
+  std::map<std::tuple<bool, uint64_t, int, std::string, int>, size_t> group_of;
+  std::vector<std::vector<size_t>> groups;
+  std::vector<size_t> group(views.size());
+  for (size_t v = 0; v < views.size(); ++v) {
+    const ViewUse& u = use[v];
+    const uint64_t length = views[v]["byteLength"].get<uint64_t>();
+    const bool can = !shared[v] && !kind[v].empty() && !u.excluded && u.stride != 0 && !(u.indices && u.attributes) &&
+                     length % u.stride == 0 && views[v].value("buffer", 0) == 0 && !views[v].contains("extensions") &&
+                     !views[v].contains("extras") && !views[v].contains("name");
+    if (can) {
+      const auto key = std::tuple{u.indices, u.stride, int(filters[v]), kind[v], views[v].value("target", 0)};
+      const auto [at, fresh] = group_of.try_emplace(key, groups.size());
+      if (!fresh) {
+        group[v] = at->second;
+        groups[at->second].push_back(v);
+        continue;
+      }
+    }
+    group[v] = groups.size();
+    groups.push_back({v});
+  }
+  if (groups.size() == views.size()) return;
+  // The new buffer: each group's views one after another (whole elements: strides of attributes
+  // are multiples of 4, index lists whole triangles), groups 4-aligned.
+  std::vector<uint8_t> packed;
+  std::vector<uint64_t> moved(views.size());  // a view's offset within its group's view
+  Json merged = Json::array();
+  for (const std::vector<size_t>& members : groups) {
+    packed.resize((packed.size() + 3) & ~size_t(3), 0);
+    Json view = views[members[0]];
+    const uint64_t start = packed.size();
+    for (const size_t v : members) {
+      const uint64_t offset = views[v].value("byteOffset", uint64_t(0)), length = views[v]["byteLength"].get<uint64_t>();
+      moved[v] = packed.size() - start;
+      packed.insert(packed.end(), bin.begin() + ptrdiff_t(offset), bin.begin() + ptrdiff_t(offset + length));
+    }
+    view["byteOffset"] = start;
+    view["byteLength"] = packed.size() - start;
+    // A view several vertex attributes share must give its stride (glTF).
+    if (members.size() > 1 && (kind[members[0]].starts_with("attribute ") || kind[members[0]].starts_with("target ")))
+      view["byteStride"] = use[members[0]].stride;
+    merged.push_back(std::move(view));
+  }
+  for (Json& accessor : accessors)
+    if (accessor.contains("bufferView")) {
+      const size_t v = accessor["bufferView"].get<size_t>();
+      if (moved[v]) accessor["byteOffset"] = accessor.value("byteOffset", uint64_t(0)) + moved[v];
+    }
+  for (auto& [key, value] : doc.items())
+    if (key != "bufferViews") for_each_view_reference(value, [&](Json& index) { index = group[index.get<size_t>()]; });
+  views = std::move(merged);
+  bin = std::move(packed);
+  doc["buffers"][0]["byteLength"] = bin.size();
+}
+
 }  // namespace
 
 void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& options) {
@@ -578,8 +720,7 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& 
   const char* const extension = meshopt_names[khr ? 1 : 0];
   if (bin.empty() || !doc.contains("bufferViews") || doc["buffers"].size() != 1) return;
   Json& views = doc["bufferViews"];
-  const std::vector<ViewUse> use = view_uses(doc);
-  std::vector<std::vector<uint8_t>> encoded(views.size());
+  std::vector<ViewUse> use = view_uses(doc);
   // Under -q (lossy already), views of translation and scale keys only go through the exponential
   // filter, as gltfpack -c does: 16-bit mantissas, one exponent per key; views of rotation keys only
   // through the quaternion filter (gltfpack -c leaves them plain: it codes them in 61% of the
@@ -593,6 +734,11 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& 
     if (u.directions && u.stride == 4 && options.compress_more) return ViewFilter::octahedral;
     return ViewFilter::none;
   };
+  std::vector<ViewFilter> filters(views.size());
+  for (size_t v = 0; v < views.size(); ++v) filters[v] = filter(v);
+  merge_views(doc, bin, use, filters);
+  use = view_uses(doc);
+  std::vector<std::vector<uint8_t>> encoded(views.size());
   bool any = false;
   for (size_t v = 0; v < views.size(); ++v) {
     const ViewUse& u = use[v];

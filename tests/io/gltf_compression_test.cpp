@@ -946,6 +946,53 @@ TEST(GltfCompression, ASecondReaderDecodesWhatLodkitReads) {
   }
 }
 
+// Views that hold the same kind of data become one compressed view, as gltfpack lays them out:
+// three meshes' indices one TRIANGLES view, their positions one ATTRIBUTES view (with the stride
+// glTF asks of a shared vertex view), and so on; each mesh reads back exactly, by lodkit and by a
+// second reader, and the file is smaller than with a view per accessor would be (the parts' sizes
+// summed from one-mesh files).
+TEST(GltfCompression, MeshoptPutsOneKindOfDataInOneView) {
+  TempDir dir;
+  Scene scene;
+  const std::vector<Mesh> meshes = {shapes::torus(1.0f, 0.25f, 48, 24), shapes::icosphere(3), shapes::torus(2.0f, 0.5f, 24, 12)};
+  size_t apart = 0;  // the meshes' compressed files, one each (a file's own overhead included)
+  for (size_t m = 0; m < meshes.size(); ++m) {
+    Primitive p;
+    p.mesh = meshes[m], p.gltf_mesh = uint32_t(m);
+    scene.primitives.push_back(p);
+    Node node;
+    node.mesh = int32_t(m), node.translation = {3.0f * float(m), 0, 0};
+    scene.nodes.push_back(node);
+    scene.roots.push_back(int32_t(m));
+    write_scene(scene_from_mesh(meshes[m]), dir / "one.glb", {.meshopt_compression = true});
+    apart += std::filesystem::file_size(dir / "one.glb");
+  }
+  write_scene(scene, dir / "plain.glb");
+  write_scene(scene, dir / "c.glb", {.meshopt_compression = true});
+  test::expect_valid_gltf({dir / "c.glb"});
+  EXPECT_LT(std::filesystem::file_size(dir / "c.glb"), apart);
+
+  const Json doc = test::glb_json(dir / "c.glb");
+  size_t triangles = 0;
+  for (const Json& view : doc["bufferViews"]) triangles += view["extensions"][kMeshopt]["mode"] == "TRIANGLES";
+  EXPECT_EQ(triangles, 1u);
+  std::set<std::string> streams;
+  for (const Json& mesh : doc["meshes"])
+    for (const auto& [name, index] : mesh["primitives"][0]["attributes"].items()) streams.insert(name);
+  EXPECT_EQ(doc["bufferViews"].size(), streams.size() + 1);  // a view per stream, and the indices'
+  std::set<size_t> position_views;
+  for (const Json& mesh : doc["meshes"])
+    position_views.insert(doc["accessors"][mesh["primitives"][0]["attributes"]["POSITION"].get<size_t>()]["bufferView"].get<size_t>());
+  ASSERT_EQ(position_views.size(), 1u);
+  EXPECT_EQ(doc["bufferViews"][*position_views.begin()]["byteStride"], 12);
+
+  const Scene plain = read_scene(dir / "plain.glb"), packed = read_scene(dir / "c.glb");
+  ASSERT_EQ(packed.primitives.size(), meshes.size());
+  for (size_t m = 0; m < meshes.size(); ++m)
+    EXPECT_EQ(difference_but_rotations(plain.primitives[m].mesh, packed.primitives[m].mesh), "") << m;
+  if (test::second_reader_available()) expect_second_reader_agrees(dir / "c.glb");
+}
+
 // A skinned, animated character: joint indices exact, weights within a 12-bit step, positions within
 // a 14-bit one; skin and clips as they were.
 TEST(GltfCompression, DracoOutputOfASkinnedCharacter) {

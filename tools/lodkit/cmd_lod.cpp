@@ -174,10 +174,6 @@ nlohmann::json level_facts(const ChainReport& r, size_t i) {
   return facts;
 }
 
-// The document static chains go into: the glTF `source` (flattened into the chains' inputs, so
-// material id k + 1 is its material k) without its triangles, so that materials, textures and
-// everything else stay and its nodes remain, without those meshes; or a new document with the
-// input's material names.
 // Drops the triangles of the source's meshes that chains replace: all but `kept` (a skinned
 // character's, which its chains left in place; meshes past the source's are new levels).
 void drop_chained_meshes(Scene& scene, const std::set<int32_t>& kept) {
@@ -192,6 +188,10 @@ void drop_chained_meshes(Scene& scene, const std::set<int32_t>& kept) {
     }
 }
 
+// The document static chains go into: the glTF `source` (flattened into the chains' inputs, so
+// material id k + 1 is its material k) without its triangles, so that materials, textures and
+// everything else stay and its nodes remain, without those meshes; or a new document with the
+// input's material names.
 Scene chain_document(const Scene* source, const std::vector<std::string>& material_names) {
   Scene scene;
   if (!source) {
