@@ -162,6 +162,15 @@ void retarget_channel(tg::AnimationChannel& ch, std::string_view list, int index
   ch.target_extensions[animation_pointer].Get<tg::Value::Object>()["pointer"] = tg::Value(pointer);
 }
 
+// A node channel's glTF path, and the accessor type its keys take.
+const char* path_name(AnimationPath path) {
+  constexpr const char* names[] = {"translation", "rotation", "scale", "weights"};  // (AnimationPath's order)
+  return names[int(path)];
+}
+int path_output_type(AnimationPath path) {
+  return path == AnimationPath::rotation ? TINYGLTF_TYPE_VEC4 : path == AnimationPath::weights ? TINYGLTF_TYPE_SCALAR : TINYGLTF_TYPE_VEC3;
+}
+
 // tinygltf 2.7 drops a channel whose target has no node: KHR_animation_pointer's, and a core one
 // left to an extension. A pointer to a node's translation, rotation, scale or weights is the same
 // animation as a core channel (the extension's README gives the pair) and becomes one, so the grid,
@@ -1188,16 +1197,12 @@ class SceneBuilder {
         const tg::AnimationChannel& channel = in.channels[c];
         const std::string where = "animations[" + str(a) + "].channels[" + str(c) + "]";
         if (channel.target_node >= 0) {
-          static const std::map<std::string, AnimationPath, std::less<>> paths = {
-              {"translation", AnimationPath::translation},
-              {"rotation", AnimationPath::rotation},
-              {"scale", AnimationPath::scale},
-              {"weights", AnimationPath::weights}};
-          const auto path = paths.find(channel.target_path);
-          if (path == paths.end()) continue;  // an extension's target: kept in the source only
-          out.channels.push_back(decode_channel(in.samplers[size_t(channel.sampler)], path->second, where));
-          out.channels.back().node = channel.target_node;
-          continue;
+          for (const AnimationPath path : {AnimationPath::translation, AnimationPath::rotation, AnimationPath::scale, AnimationPath::weights})
+            if (channel.target_path == path_name(path)) {
+              out.channels.push_back(decode_channel(in.samplers[size_t(channel.sampler)], path, where));
+              out.channels.back().node = channel.target_node;
+            }
+          continue;  // (any other path: an extension's target, kept in the source only)
         }
         const ChannelTarget t = channel_target(channel);
         if (t.list != "meshes" || t.property != "weights") continue;
@@ -1218,9 +1223,7 @@ class SceneBuilder {
   AnimationChannel decode_channel(const tg::AnimationSampler& sampler, AnimationPath path, const std::string& where) const {
     AnimationChannel ch;
     ch.path = path;
-    const int output_type = path == AnimationPath::rotation  ? TINYGLTF_TYPE_VEC4
-                            : path == AnimationPath::weights ? TINYGLTF_TYPE_SCALAR
-                                                             : TINYGLTF_TYPE_VEC3;
+    const int output_type = path_output_type(path);
     if (sampler.interpolation == "LINEAR")
       ch.interpolation = Interpolation::linear;
     else if (sampler.interpolation == "STEP")
@@ -3308,19 +3311,13 @@ class SkinAnimationWriter {
         }
         tg::AnimationSampler sampler;
         sampler.input = input;
-        const int type = ch.path == AnimationPath::rotation ? TINYGLTF_TYPE_VEC4
-                         : ch.path == AnimationPath::weights ? TINYGLTF_TYPE_SCALAR
-                                                              : TINYGLTF_TYPE_VEC3;
-        sampler.output = add_accessor(ch.values, type);
+        sampler.output = add_accessor(ch.values, path_output_type(ch.path));
         sampler.interpolation = interpolation_name(ch.interpolation);
         anim.samplers.push_back(std::move(sampler));
         tg::AnimationChannel channel;
         channel.sampler = int(anim.samplers.size() - 1);
         channel.target_node = ch.node;
-        channel.target_path = ch.path == AnimationPath::translation ? "translation"
-                              : ch.path == AnimationPath::rotation  ? "rotation"
-                              : ch.path == AnimationPath::scale     ? "scale"
-                                                                    : "weights";
+        channel.target_path = path_name(ch.path);
         anim.channels.push_back(std::move(channel));
       }
       if (anim.channels.empty()) throw_usage("cannot write glTF: animations[" + str(a) + "] has no channels");

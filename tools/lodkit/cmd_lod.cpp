@@ -153,6 +153,11 @@ MorphTarget shared_geomorph(const LodChain& chain, size_t i) {
   return t;
 }
 
+// A node's name in reports and level names: its own, or "node N".
+std::string node_label(const std::vector<Node>& nodes, size_t n) {
+  return nodes[n].name.empty() ? fmt::format("node {}", n) : nodes[n].name;
+}
+
 struct ChainReport {
   std::string node;  // the skinned node's name, or those of the nodes drawing a separate mesh; empty for the static chain
   size_t instances = 0;  // a separate mesh's when instanced (EXT_mesh_gpu_instancing); 0 otherwise
@@ -399,7 +404,7 @@ std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<Ski
     const Mesh& mesh = scene.primitives[sp.primitive].mesh;
     validate(mesh, scene.name);
     ChainReport r;
-    r.node = scene.nodes[sp.node].name.empty() ? "node " + std::to_string(sp.node) : scene.nodes[sp.node].name;
+    r.node = node_label(scene.nodes, sp.node);
     r.chain = build_lod_chain(mesh, options);
     reports.push_back(std::move(r));
   }
@@ -711,7 +716,7 @@ Command register_lod(CLI::App& root) {
               node.has_matrix = false, node.translation = {}, node.rotation = {0, 0, 0, 1}, node.scale = {1, 1, 1};
               std::vector<std::string> names;
               for (const int32_t k : m.nodes)
-                names.push_back(scene.nodes[size_t(k)].name.empty() ? fmt::format("node {}", k) : scene.nodes[size_t(k)].name);
+                names.push_back(node_label(scene.nodes, size_t(k)));
               const std::string name = fmt::format("{}", fmt::join(names, ", "));
               with_nodes(solo, {n}, [&](const Scene& view) {
                 chains.push_back(build_static(flatten(view), &view, options, *o, fmt::format("building LODs of '{}'", name)));
@@ -748,9 +753,8 @@ Command register_lod(CLI::App& root) {
               // Every node that drew the mesh draws the chain: its own level nodes, under it.
               std::optional<uint32_t> meshes;
               for (const int32_t n : separate[c - first_separate].nodes) {
-                const Node node = out.nodes[size_t(n)];  // (a copy: add_chain adds nodes)
-                const std::string name = node.name.empty() ? fmt::format("node {}", n) : node.name;
-                meshes = add_chain(out, reports[first_chain + c], chains[c].targets, {name + "_", n, node.gpu_instances, n, meshes});
+                const std::vector<Node::GpuInstance> instances = out.nodes[size_t(n)].gpu_instances;  // (a copy: add_chain adds nodes)
+                meshes = add_chain(out, reports[first_chain + c], chains[c].targets, {node_label(out.nodes, size_t(n)) + "_", n, instances, n, meshes});
               }
             }
             written = write_scene(out, o->output, o->gltf);
