@@ -640,13 +640,14 @@ void merge_views(Json& doc, std::vector<uint8_t>& bin, const std::vector<ViewUse
   Json& views = doc["bufferViews"];
   Json& accessors = doc["accessors"];
   const std::vector<std::string> roles = accessor_roles(doc);
-  std::vector<std::string> kind(views.size());  // one role per view, "" when it cannot merge
-  std::vector<bool> shared(views.size(), false);
+  std::vector<std::string> kind(views.size());  // its accessors' one role ("" for none or unknown)
+  std::vector<bool> shared(views.size(), false), used(views.size(), false);
   for (size_t a = 0; a < accessors.size(); ++a) {
     if (!accessors[a].contains("bufferView")) continue;
     const size_t v = accessors[a]["bufferView"].get<size_t>();
     if (v >= views.size()) return;
-    if (!kind[v].empty() && kind[v] != roles[a]) shared[v] = true;
+    if (used[v] && kind[v] != roles[a]) shared[v] = true;  // accessors of two roles: it stays
+    used[v] = true;
     kind[v] = roles[a];
   }
   // Views something else uses (a sparse accessor's parts, an image, an extension) stay as they are.
