@@ -1205,35 +1205,41 @@ Mesh posed(Scene scene, float time) {
 }
 
 // A torus spun by a clip ("spinner"), a sphere on an arm below it ("arm", moved by its parent's
-// motion only) and a static sphere ("base"): the two moving meshes each get a chain of their own
-// under their node, so the clip still moves them (level 0 draws the input as the clip poses it,
-// at any time); the base gets the static chain. Baked into the static chain at rest, they would
-// stand still.
+// motion only), a blade below the arm that a second channel also turns ("blade") and a static
+// sphere ("base"). The torus and the arm's sphere move together: one chain for the pair (a rigid
+// group) in the spinner's space, under it; the blade moves on its own: a chain of its own under
+// its node; the base gets the static chain. The clip still moves them all (level 0 draws the input
+// as the clip poses it, at any time); baked into the static chain at rest, they would stand still.
 TEST(CliLod, AnimatedNodesKeepTheirMotion) {
   test::TempDir dir;
   Scene input;
-  const Mesh torus = shapes::torus(1.0f, 0.3f, 32, 16), ball = shapes::icosphere(2), base = shapes::icosphere(1);
-  for (const Mesh* m : {&torus, &ball, &base}) {
+  const Mesh torus = shapes::torus(1.0f, 0.3f, 32, 16), ball = shapes::icosphere(2), base = shapes::icosphere(1),
+             blade = shapes::torus(0.4f, 0.05f, 24, 8);
+  for (const Mesh* m : {&torus, &ball, &base, &blade}) {
     Primitive p;
     p.mesh = *m, p.gltf_mesh = uint32_t(input.primitives.size());
     input.primitives.push_back(std::move(p));
   }
-  Node spinner, arm, stand;
+  Node spinner, arm, stand, fan;
   spinner.name = "spinner", spinner.mesh = 0, spinner.translation = {0, 0, 2}, spinner.children = {1};
-  arm.name = "arm", arm.mesh = 1, arm.translation = {3, 0, 0}, arm.scale = {0.5f, 0.5f, 0.5f};
+  arm.name = "arm", arm.mesh = 1, arm.translation = {3, 0, 0}, arm.scale = {0.5f, 0.5f, 0.5f}, arm.children = {3};
   stand.name = "base", stand.mesh = 2, stand.translation = {0, 0, -3};
-  input.nodes = {spinner, arm, stand};
+  fan.name = "blade", fan.mesh = 3, fan.translation = {0, 2, 0};
+  input.nodes = {spinner, arm, stand, fan};
   input.roots = {0, 2};
   Animation spin;
   spin.name = "spin";
-  // A quarter turn about z per second, keyed every quarter second (linear slerp between close keys).
-  AnimationChannel turn{.node = 0, .path = AnimationPath::rotation, .times = {}, .values = {}, .components = 4};
+  // A quarter turn per second, keyed every quarter second (linear slerp between close keys): the
+  // spinner about z, the blade about x.
+  AnimationChannel turn{.node = 0, .path = AnimationPath::rotation, .times = {}, .values = {}, .components = 4}, roll = turn;
+  roll.node = 3;
   for (int k = 0; k <= 8; ++k) {
     const float angle = float(M_PI) / 8 * float(k) / 2;
-    turn.times.push_back(float(k) / 4);
+    turn.times.push_back(float(k) / 4), roll.times.push_back(float(k) / 4);
     turn.values.insert(turn.values.end(), {0, 0, std::sin(angle / 2), std::cos(angle / 2)});
+    roll.values.insert(roll.values.end(), {std::sin(angle / 2), 0, 0, std::cos(angle / 2)});
   }
-  spin.channels.push_back(turn);
+  spin.channels = {turn, roll};
   input.animations.push_back(spin);
   write_scene(input, dir / "spin.glb");
 
@@ -1245,27 +1251,97 @@ TEST(CliLod, AnimatedNodesKeepTheirMotion) {
   EXPECT_FALSE(report.contains("instanced"));
   ASSERT_EQ(report["animated"].size(), 2u);
   EXPECT_EQ(report["animated"][0]["node"], "spinner");
-  EXPECT_EQ(report["animated"][0]["levels"][0]["triangles"], torus.triangle_count());
-  EXPECT_EQ(report["animated"][1]["node"], "arm");
-  EXPECT_EQ(report["animated"][1]["levels"][0]["triangles"], ball.triangle_count());
-  EXPECT_LT(report["animated"][1]["levels"][1]["triangles"].get<size_t>(), ball.triangle_count());
+  EXPECT_EQ(report["animated"][0]["group_nodes"], 2);
+  EXPECT_EQ(report["animated"][0]["levels"][0]["triangles"], torus.triangle_count() + ball.triangle_count());
+  EXPECT_LT(report["animated"][0]["levels"][1]["triangles"].get<size_t>(), torus.triangle_count());
+  EXPECT_EQ(report["animated"][1]["node"], "blade");
+  EXPECT_FALSE(report["animated"][1].contains("group_nodes"));
+  EXPECT_EQ(report["animated"][1]["levels"][0]["triangles"], blade.triangle_count());
 
   const Scene in = read_scene(dir / "spin.glb"), out = read_scene(dir / "lod.glb");
-  for (size_t n = 0; n < 2; ++n) {
-    EXPECT_EQ(out.nodes[n].mesh, -1) << n;
+  for (const size_t n : {0, 1, 3}) EXPECT_EQ(out.nodes[n].mesh, -1) << n;
+  for (const size_t n : {0, 3}) {
     ASSERT_FALSE(out.nodes[n].children.empty()) << n;
     const Node& lod0 = out.nodes[size_t(out.nodes[n].children.back())];
     EXPECT_EQ(lod0.name, input.nodes[n].name + "_LOD0");
     EXPECT_EQ(lod0.lod_ids.size(), 1u) << n;
   }
+  EXPECT_EQ(out.nodes[1].children, input.nodes[1].children);  // the arm's sphere is the spinner's chain's
   for (const float time : {0.0f, 0.6f, 2.0f}) {
     SCOPED_TRACE(time);
     const Mesh before = posed(in, time), after = posed(out, time);
     EXPECT_EQ(after.triangle_count(), before.triangle_count());
     EXPECT_EQ(points_off(after, before, 1e-4), 0u);
   }
-  // The moving sphere has moved: posed at 2 s, the input's arm is not where it stands at rest.
-  EXPECT_GT(points_off(posed(in, 2.0f), posed(in, 0.0f), 1e-2), ball.vertex_count() / 2);
+  // The moving meshes have moved: posed at 2 s, the input's arm and blade are not where they stand at rest.
+  EXPECT_GT(points_off(posed(in, 2.0f), posed(in, 0.0f), 1e-2), (ball.vertex_count() + blade.vertex_count()) / 2);
+}
+
+// A turntable: a clip spins the root, and 12 static parts below it (three meshes, one of them drawn
+// by ten nodes) move with it. One chain for the lot (a rigid group), not one per mesh, in the
+// root's space: the chain the same parts get at rest (no clip, the root at the origin) in the static
+// chain, level for level. The clip still moves every level-0 point with the root.
+TEST(CliLod, ARigidGroupGetsOneChain) {
+  test::TempDir dir;
+  Scene input;
+  const Mesh plate = shapes::icosphere(3), post = shapes::torus(0.2f, 0.05f, 16, 8), top = shapes::icosphere(2);
+  for (const Mesh* m : {&plate, &post, &top}) {
+    Primitive p;
+    p.mesh = *m, p.gltf_mesh = uint32_t(input.primitives.size());
+    input.primitives.push_back(std::move(p));
+  }
+  Node table;
+  table.name = "table";
+  input.nodes.push_back(table);
+  const auto add = [&](int32_t mesh, float3 at, float size) {
+    Node n;
+    n.mesh = mesh, n.translation = at, n.scale = {size, size, size}, n.parent = 0;
+    input.nodes[0].children.push_back(int32_t(input.nodes.size()));
+    input.nodes.push_back(n);
+  };
+  add(0, {0, 0, 0}, 2.0f);
+  for (int k = 0; k < 10; ++k) add(1, {2.5f * std::cos(0.6f * float(k)), 2.5f * std::sin(0.6f * float(k)), 0.5f}, 1.0f);
+  add(2, {0, 0, 2.5f}, 0.5f);
+  input.roots = {0};
+  write_scene(input, dir / "still.glb");
+  input.nodes[0].translation = {1, 2, 3};
+  Animation spin;
+  spin.name = "spin";
+  AnimationChannel turn{.node = 0, .path = AnimationPath::rotation, .times = {0, 1, 2}, .values = {}, .components = 4};
+  for (const float angle : {0.0f, 1.0f, 2.0f}) turn.values.insert(turn.values.end(), {0, 0, std::sin(angle / 2), std::cos(angle / 2)});
+  spin.channels.push_back(turn);
+  input.animations.push_back(spin);
+  write_scene(input, dir / "spin.glb");
+
+  const auto lod = [&](const char* in, const char* out) {
+    const test::RunResult r = test::run_cli({"lod", (dir / in).string(), "-o", (dir / out).string(), "--ratios", "1,0.1,0.01", "--json"});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    test::expect_valid_gltf({dir / out});
+    return nlohmann::json::parse(r.out);
+  };
+  const nlohmann::json still = lod("still.glb", "still-lod.glb"), report = lod("spin.glb", "spin-lod.glb");
+  ASSERT_EQ(report["animated"].size(), 1u);
+  const nlohmann::json& group = report["animated"][0];
+  EXPECT_EQ(group["node"], "table");
+  EXPECT_EQ(group["group_nodes"], 12);
+  EXPECT_EQ(group["levels"][0]["triangles"], plate.triangle_count() + 10 * post.triangle_count() + top.triangle_count());
+  EXPECT_FALSE(still.contains("animated"));
+  EXPECT_EQ(group["levels"], still["levels"]);
+  EXPECT_LT(group["levels"][2]["triangles"].get<size_t>(), group["levels"][1]["triangles"].get<size_t>());
+
+  const Scene in = read_scene(dir / "spin.glb"), out = read_scene(dir / "spin-lod.glb");
+  for (size_t n = 1; n < in.nodes.size(); ++n) {
+    EXPECT_EQ(out.nodes[n].mesh, -1) << n;
+    EXPECT_TRUE(out.nodes[n].children.empty()) << n;
+  }
+  ASSERT_EQ(out.nodes[0].children.size(), 13u);
+  EXPECT_EQ(out.nodes[size_t(out.nodes[0].children.back())].name, "table_LOD0");
+  for (const float time : {0.0f, 0.7f, 2.0f}) {
+    SCOPED_TRACE(time);
+    const Mesh before = posed(in, time), after = posed(out, time);
+    EXPECT_EQ(after.triangle_count(), before.triangle_count());
+    EXPECT_EQ(points_off(after, before, 1e-4), 0u);
+  }
 }
 
 // A skinned character's props get chains too: a rock on the ground (the static chain) and a ball in

@@ -161,7 +161,8 @@ std::string node_label(const std::vector<Node>& nodes, size_t n) {
 struct ChainReport {
   std::string node;  // the skinned node's name, or those of the nodes drawing a separate mesh; empty for the static chain
   size_t instances = 0;  // a separate mesh's when instanced (EXT_mesh_gpu_instancing); 0 otherwise
-  bool animated = false;  // a separate mesh that a node in motion draws
+  bool animated = false;  // a separate mesh that a node in motion draws, or a rigid group
+  size_t group_meshes = 0;  // a rigid group's: the nodes drawing its meshes (`node` names its frame)
   LodChain chain;
   std::vector<double> distances, coverage;
 };
@@ -536,56 +537,83 @@ StaticChain build_static(Mesh mesh, const Scene* scene, LodOptions options, cons
   return out;
 }
 
-// A glTF mesh that gets a chain of its own, in its own space: one with triangles and no skin that
-// an instanced node draws (EXT_mesh_gpu_instancing: baking its instances into the static chain
-// would multiply its triangles by the instance count), or that a node in motion draws (a clip
-// moves it or one of its ancestors: baked into the static chain at rest, the mesh would no longer
-// follow). `nodes`: the nodes that draw it (from the scene's roots), each of which gets the chain's
-// levels under it.
-struct SeparateMesh {
-  int32_t mesh = -1;
-  std::vector<int32_t> nodes;
-  size_t instances = 0;  // drawn, over those nodes
+// A part of a glTF scene that gets a chain of its own, in its own space rather than the static
+// chain's:
+// - a mesh with triangles and no skin that an instanced node draws (EXT_mesh_gpu_instancing: baking
+//   its instances into the static chain would multiply its triangles by the instance count), or
+//   that nodes in motion draw (a clip moves them or an ancestor: baked into the static chain at
+//   rest, the mesh would no longer follow), each of which gets the chain's levels under it;
+// - a rigid group: the meshes a clip moves together, all drawn below one animated node (the
+//   `frame`: a car's body and doors under the root a clip drives) and by no node elsewhere, in
+//   the frame's space. One chain for the lot, under the frame, rather than one per mesh: levels
+//   as coarse as the group allows, and one switch.
+struct SeparatePart {
+  std::vector<int32_t> meshes;  // glTF meshes: one, or a rigid group's
+  std::vector<int32_t> nodes;   // the nodes that draw them (from the scene's roots)
+  int32_t frame = -1;           // a rigid group's animated node
+  size_t instances = 0;         // drawn, over those nodes
   bool instanced = false, animated = false;
 };
 
-std::vector<SeparateMesh> separate_meshes(const Scene& scene) {
+std::vector<SeparatePart> separate_parts(const Scene& scene) {
   std::vector<bool> animated(scene.nodes.size(), false);
   for (const Animation& clip : scene.animations)
     for (const AnimationChannel& ch : clip.channels)
       if (ch.path != AnimationPath::weights && ch.node >= 0 && size_t(ch.node) < animated.size()) animated[size_t(ch.node)] = true;
-  // Reached from the roots, and in motion: animated, or below a node that is.
-  std::vector<bool> reached(scene.nodes.size(), false), moving(scene.nodes.size(), false);
-  std::vector<std::pair<int32_t, bool>> stack;
-  for (const int32_t r : scene.roots) stack.emplace_back(r, false);
+  // Reached from the roots, and the frame each moves with: the nearest animated node at or above
+  // it (-1: at rest).
+  std::vector<bool> reached(scene.nodes.size(), false);
+  std::vector<int32_t> frame(scene.nodes.size(), -1);
+  std::vector<std::pair<int32_t, int32_t>> stack;
+  for (const int32_t r : scene.roots) stack.emplace_back(r, -1);
   while (!stack.empty()) {
-    const auto [n, parent_moving] = stack.back();
+    const auto [n, parent_frame] = stack.back();
     stack.pop_back();
     if (n < 0 || size_t(n) >= scene.nodes.size() || reached[size_t(n)]) continue;
     reached[size_t(n)] = true;
-    moving[size_t(n)] = parent_moving || animated[size_t(n)];
-    for (const int32_t c : scene.nodes[size_t(n)].children) stack.emplace_back(c, moving[size_t(n)]);
+    frame[size_t(n)] = animated[size_t(n)] ? n : parent_frame;
+    for (const int32_t c : scene.nodes[size_t(n)].children) stack.emplace_back(c, frame[size_t(n)]);
   }
-  std::map<int32_t, SeparateMesh> meshes;  // by glTF mesh: deterministic order
+  std::map<int32_t, SeparatePart> meshes;  // by glTF mesh: deterministic order
+  std::map<int32_t, std::set<int32_t>> frames;  // per mesh: those of the nodes drawing it
   std::set<int32_t> skinned;
   for (size_t n = 0; n < scene.nodes.size(); ++n) {
     const Node& node = scene.nodes[n];
     if (!reached[n] || node.mesh < 0) continue;
-    SeparateMesh& m = meshes[node.mesh];
-    m.mesh = node.mesh;
+    SeparatePart& m = meshes[node.mesh];
+    m.meshes = {node.mesh};
     m.nodes.push_back(int32_t(n));
     m.instances += std::max<size_t>(1, node.gpu_instances.size());
     m.instanced = m.instanced || !node.gpu_instances.empty();
-    m.animated = m.animated || moving[n];
+    m.animated = m.animated || frame[n] >= 0;
+    frames[node.mesh].insert(frame[n]);
     if (node.skin >= 0) skinned.insert(node.mesh);
   }
-  std::vector<SeparateMesh> out;
+  std::vector<SeparatePart> out;
+  std::map<int32_t, SeparatePart> groups;  // by frame
   for (auto& [mesh, m] : meshes) {
     const bool has_triangles = std::any_of(scene.primitives.begin(), scene.primitives.end(), [&, mesh = mesh](const Primitive& p) {
       return int32_t(p.gltf_mesh) == mesh && p.mesh.triangle_count() > 0;
     });
-    if ((m.instanced || m.animated) && !skinned.count(mesh) && has_triangles) out.push_back(std::move(m));
+    if (!(m.instanced || m.animated) || skinned.count(mesh) || !has_triangles) continue;
+    const std::set<int32_t>& f = frames[mesh];
+    if (m.instanced || f.size() > 1) {
+      out.push_back(std::move(m));
+      continue;
+    }
+    SeparatePart& g = groups[*f.begin()];
+    g.frame = *f.begin(), g.animated = true;
+    g.meshes.push_back(mesh);
+    g.nodes.insert(g.nodes.end(), m.nodes.begin(), m.nodes.end());
+    g.instances += m.instances;
   }
+  // A group of one mesh is that mesh: a chain in its own space under each node drawing it (the
+  // levels shared).
+  for (auto& [f, g] : groups) {
+    if (g.meshes.size() == 1) g.frame = -1;
+    out.push_back(std::move(g));
+  }
+  std::sort(out.begin(), out.end(), [](const SeparatePart& a, const SeparatePart& b) { return a.meshes[0] < b.meshes[0]; });
   return out;
 }
 
@@ -652,7 +680,7 @@ Command register_lod(CLI::App& root) {
               else mesh = read_mesh(o->input, bar.read_options());
             }
             const std::vector<SkinnedPrimitive> skinned = scene.source ? skinned_primitives(scene) : std::vector<SkinnedPrimitive>{};
-            const std::vector<SeparateMesh> separate = scene.source ? separate_meshes(scene) : std::vector<SeparateMesh>{};
+            const std::vector<SeparatePart> separate = scene.source ? separate_parts(scene) : std::vector<SeparatePart>{};
             // The meshes skinned nodes draw: the skinned chains' (in place in the document).
             std::set<int32_t> skinned_meshes;
             for (const SkinnedPrimitive& sp : skinned) skinned_meshes.insert(int32_t(scene.primitives[sp.primitive].gltf_mesh));
@@ -667,7 +695,7 @@ Command register_lod(CLI::App& root) {
             std::vector<Node> static_nodes;  // the input's, without the separate and skinned meshes
             if (scene.source) {
               static_nodes = scene.nodes;
-              for (const SeparateMesh& m : separate)
+              for (const SeparatePart& m : separate)
                 for (const int32_t n : m.nodes) static_nodes[size_t(n)].mesh = -1;
               for (Node& node : static_nodes)
                 if (skinned_meshes.count(node.mesh)) node.mesh = -1;
@@ -705,26 +733,30 @@ Command register_lod(CLI::App& root) {
               else
                 chains.push_back(build_static(std::move(mesh), nullptr, options, *o, "building LODs"));
             }
-            // Each separate mesh: its own chain in its own space (drawn once by its first node,
-            // untransformed, and nothing else).
+            // Each separate part: its own chain in its own space (a mesh drawn once by its first
+            // node, untransformed; a rigid group drawn by its nodes below its frame, untransformed),
+            // and nothing else.
             std::vector<Node> solo = scene.nodes;
             for (Node& node : solo) node.mesh = -1;
-            for (const SeparateMesh& m : separate) {
-              const int32_t n = m.nodes[0];
-              Node& node = solo[size_t(n)];
-              node.mesh = m.mesh, node.gpu_instances.clear();
+            for (const SeparatePart& m : separate) {
+              const int32_t top = m.frame >= 0 ? m.frame : m.nodes[0];
+              const std::vector<int32_t> drawing = m.frame >= 0 ? m.nodes : std::vector<int32_t>{top};
+              for (const int32_t n : drawing) solo[size_t(n)].mesh = scene.nodes[size_t(n)].mesh;
+              Node& node = solo[size_t(top)];
+              node.gpu_instances.clear();
               node.has_matrix = false, node.translation = {}, node.rotation = {0, 0, 0, 1}, node.scale = {1, 1, 1};
               std::vector<std::string> names;
-              for (const int32_t k : m.nodes)
-                names.push_back(node_label(scene.nodes, size_t(k)));
+              for (const int32_t k : m.frame >= 0 ? std::vector<int32_t>{m.frame} : m.nodes) names.push_back(node_label(scene.nodes, size_t(k)));
               const std::string name = fmt::format("{}", fmt::join(names, ", "));
-              with_nodes(solo, {n}, [&](const Scene& view) {
+              with_nodes(solo, {top}, [&](const Scene& view) {
                 chains.push_back(build_static(flatten(view), &view, options, *o, fmt::format("building LODs of '{}'", name)));
               });
               chains.back().report.node = name;
               chains.back().report.instances = m.instanced ? m.instances : 0;
               chains.back().report.animated = m.animated;
-              node = scene.nodes[size_t(n)], node.mesh = -1;
+              chains.back().report.group_meshes = m.frame >= 0 ? m.nodes.size() : 0;
+              node = scene.nodes[size_t(top)], node.mesh = -1;
+              for (const int32_t n : drawing) solo[size_t(n)].mesh = -1;
             }
             if (!o->lpm.empty() && skinned.empty() && chains.size() == separate.size())
               throw_usage("--lpm: all of the input's geometry is instanced (EXT_mesh_gpu_instancing) or animated, "
@@ -750,9 +782,15 @@ Command register_lod(CLI::App& root) {
             const size_t first_separate = chains.size() - separate.size();
             for (size_t c = 0; c < first_separate; ++c) add_chain(out, reports[first_chain + c], chains[c].targets, {});
             for (size_t c = first_separate; c < chains.size(); ++c) {
+              const SeparatePart& part = separate[c - first_separate];
+              if (part.frame >= 0) {
+                // A rigid group's levels under its frame, with its nodes' morph weights in turn.
+                add_chain(out, reports[first_chain + c], chains[c].targets, {node_label(out.nodes, size_t(part.frame)) + "_", part.frame});
+                continue;
+              }
               // Every node that drew the mesh draws the chain: its own level nodes, under it.
               std::optional<uint32_t> meshes;
-              for (const int32_t n : separate[c - first_separate].nodes) {
+              for (const int32_t n : part.nodes) {
                 const std::vector<Node::GpuInstance> instances = out.nodes[size_t(n)].gpu_instances;  // (a copy: add_chain adds nodes)
                 meshes = add_chain(out, reports[first_chain + c], chains[c].targets, {node_label(out.nodes, size_t(n)) + "_", n, instances, n, meshes});
               }
@@ -772,14 +810,15 @@ Command register_lod(CLI::App& root) {
             const size_t morph_targets = head.targets.levels.empty() ? 0 : head.targets.levels[0].size();
             if (o->json) {
               // The skinned chains; the separate meshes' under "instanced" (with "animated" when a
-              // node in motion draws them too) or else "animated"; beside skinned ones, the static
-              // chain as "static".
+              // node in motion draws them too) or else "animated", as are rigid groups (named after
+              // their frame, with "group_nodes"); beside skinned ones, the static chain as "static".
               nlohmann::json listed = nlohmann::json::array(), instanced = listed, animated = listed, still;
               for (size_t k = 0; k < reports.size(); ++k) {
                 const ChainReport& r = reports[k];
                 nlohmann::json c = {{"node", r.node}, {"diagonal", r.chain.diagonal}, {"levels", levels_json(r)}};
                 if (r.instances) c["instances"] = r.instances;
                 if (r.instances && r.animated) c["animated"] = true;
+                if (r.group_meshes) c["group_nodes"] = r.group_meshes;
                 if (k < first_chain) listed.push_back(std::move(c));
                 else if (r.instances) instanced.push_back(std::move(c));
                 else if (r.animated) animated.push_back(std::move(c));
@@ -799,6 +838,7 @@ Command register_lod(CLI::App& root) {
             } else {
               for (const ChainReport& r : reports) {
                 if (r.instances) fmt::print("instanced mesh of '{}' ({} instances{})\n", r.node, r.instances, r.animated ? ", animated" : "");
+                else if (r.group_meshes) fmt::print("animated group below '{}' ({} mesh nodes)\n", r.node, r.group_meshes);
                 else if (r.animated) fmt::print("animated mesh of '{}'\n", r.node);
                 else if (!r.node.empty()) fmt::print("skinned node '{}' ({} mode, {} poses)\n", r.node, o->skin_mode, o->poses);
                 else if (reports.size() > 1) fmt::print("the rest of the scene\n");
