@@ -11,6 +11,7 @@
 #   scripts/bench.sh render [RUNS=5]
 #   scripts/bench.sh compress [RUNS=5]
 #   scripts/bench.sh instanced [RUNS=3]
+#   scripts/bench.sh turntable [RUNS=3]
 #
 # io: loads a binary PLY and an OBJ of >= 3M triangles (bunny00.off subdivided 1->4) with lodkit and
 # with Assimp, each loader in its own process under /usr/bin/time -v; prints a markdown table of
@@ -60,6 +61,12 @@
 # median time, peak RSS, output size, level triangles, and level 0 against the input
 # (bench/lod/instanced.py); writes bench/results/instanced.json.
 #
+# turntable: lodkit lod on six corpus meshes in a ring below one animated node (a rigid group: one
+# chain in the node's space) against each mesh's own static chain: per level, the group's triangles
+# and measured error against the per-mesh chains' summed triangles and largest error; median time
+# and peak RSS; output sizes plain and with -c -q (bench/lod/turntable.py); writes
+# bench/results/turntable.json.
+#
 # The build is the release preset (build/release); LODKIT_BENCH_BUILD=DIR uses another configured
 # build directory instead.
 set -euo pipefail
@@ -67,7 +74,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 usage() {
-  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5] | compress [RUNS=5] | morphs [RUNS=3] | instanced [RUNS=3]" >&2
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5] | compress [RUNS=5] | morphs [RUNS=3] | instanced [RUNS=3] | turntable [RUNS=3]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -310,6 +317,23 @@ area_instanced() {
   echo "whole run: $((SECONDS - started)) s"
 }
 
+# ---- turntable: lod on meshes below one animated node, one group chain against one per mesh ------
+area_turntable() {
+  [ $# -le 1 ] || usage
+  local runs=${1:-3} started=$SECONDS
+  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  configure
+  build_targets lodkit_cli
+  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
+  echo
+  machine_line
+  echo
+  mkdir -p bench/results
+  python3 bench/lod/turntable.py "$build/lodkit" bench/results/turntable.json --runs "$runs"
+  echo
+  echo "whole run: $((SECONDS - started)) s"
+}
+
 # ---- morphs: a blend shape carried through simplify (lod::vertex_blends), plain and through the forms
 area_morphs() {
   [ $# -le 1 ] || usage
@@ -416,5 +440,6 @@ case $area in
   compress) area_compress "$@" ;;
   morphs) area_morphs "$@" ;;
   instanced) area_instanced "$@" ;;
+  turntable) area_turntable "$@" ;;
   *) usage ;;
 esac
