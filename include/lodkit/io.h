@@ -157,6 +157,10 @@ struct Node {
   // same samplers); several nodes' become one channel per clip (lod::concatenate_weights). Targets
   // past theirs (a geomorph) take weight 0. Empty (or negative ids): none.
   std::vector<int32_t> morph_weights_of;
+  // KHR_node_visibility: the node has it (shown or hidden) or a clip toggles it (a
+  // KHR_animation_pointer to ".../KHR_node_visibility/visible"), so what is below it shows or hides
+  // with it. The reader fills it and the writer keeps the source's; flatten() draws hidden nodes too.
+  bool has_visibility = false;
 };
 
 struct Skin {

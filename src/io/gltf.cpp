@@ -73,6 +73,7 @@ using io::type_components;
 using io::type_name;
 
 constexpr const char* gpu_instancing = "EXT_mesh_gpu_instancing";
+constexpr const char* node_visibility = "KHR_node_visibility";
 
 // tinygltf::Value -> nlohmann::json (a node's extras, read into Node::extras_json). tinygltf has
 // already dropped nulls and empty objects and arrays; binary values do not occur in JSON.
@@ -1060,6 +1061,7 @@ class SceneBuilder {
       for (size_t k = 0; k < lod_ids.ArrayLen(); ++k) out.lod_ids.push_back(lod_ids.Get(int(k)).Get<int>());
       if (in.extras.Type() != tg::NULL_TYPE) out.extras_json = value_to_json(in.extras).dump();
       read_gpu_instances(in, out, where);
+      out.has_visibility = in.extensions.count(node_visibility) > 0;
       for (int child : in.children) {
         if (size_t(child) == i) doc_.fail(where + " is its own child");
         if (scene.nodes[size_t(child)].parent != -1)
@@ -1205,6 +1207,9 @@ class SceneBuilder {
           continue;  // (any other path: an extension's target, kept in the source only)
         }
         const ChannelTarget t = channel_target(channel);
+        if (t.list == "nodes" && t.property.starts_with(std::string("extensions/") + node_visibility + "/") &&
+            size_t(t.index) < scene.nodes.size())
+          scene.nodes[size_t(t.index)].has_visibility = true;
         if (t.list != "meshes" || t.property != "weights") continue;
         std::optional<AnimationChannel> keys;  // decoded once a node draws the mesh
         for (size_t n = 0; n < model_.nodes.size(); ++n) {

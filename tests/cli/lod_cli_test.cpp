@@ -1344,6 +1344,87 @@ TEST(CliLod, ARigidGroupGetsOneChain) {
   }
 }
 
+// KHR_node_visibility: a torus its node hides ("hidden"), and a lamp and a bulb below a node a clip
+// switches off after a second (a KHR_animation_pointer, step keys; the node carries no extension
+// of its own), beside a shown sphere. In the static chain the hidden torus would show, and the
+// switch would turn nothing off: the torus gets a chain of its own under its node, the lamp and
+// bulb a rigid group's under the switch, and the static chain is the sphere's alone. Level 0 still
+// draws every input point where it was (flatten() draws hidden nodes too).
+TEST(CliLod, VisibilitySwitchesKeepTheirMeshesBelowThem) {
+  test::TempDir dir;
+  Scene input;
+  const Mesh sphere = shapes::icosphere(2), torus = shapes::torus(1.0f, 0.3f, 32, 16), lamp = shapes::icosphere(1),
+             bulb = shapes::torus(0.3f, 0.1f, 16, 8);
+  for (const Mesh* m : {&sphere, &torus, &lamp, &bulb}) {
+    Primitive p;
+    p.mesh = *m, p.gltf_mesh = uint32_t(input.primitives.size());
+    input.primitives.push_back(std::move(p));
+  }
+  Node shown, hidden, blinker, lamp_node, bulb_node;
+  shown.name = "shown", shown.mesh = 0;
+  hidden.name = "hidden", hidden.mesh = 1, hidden.translation = {4, 0, 0};
+  blinker.name = "blinker", blinker.translation = {0, 4, 0}, blinker.children = {3, 4};
+  lamp_node.name = "lamp", lamp_node.mesh = 2, lamp_node.parent = 2;
+  bulb_node.name = "bulb", bulb_node.mesh = 3, bulb_node.parent = 2, bulb_node.translation = {0, 1.5f, 0};
+  input.nodes = {shown, hidden, blinker, lamp_node, bulb_node};
+  input.roots = {0, 1, 2};
+  write_scene(input, dir / "plain.glb");
+  test::Glb glb = test::read_glb(dir / "plain.glb");
+  nlohmann::json& doc = glb.doc;
+  doc["nodes"][1]["extensions"] = {{"KHR_node_visibility", {{"visible", false}}}};
+  // Keys at 0 and 1 s (floats), then on (1) and off (0) as unsigned bytes.
+  const size_t at = glb.bin.size(), views = doc["bufferViews"].size(), accessors = doc["accessors"].size();
+  const std::array<float, 2> times = {0, 1};
+  const auto* time_bytes = reinterpret_cast<const uint8_t*>(times.data());
+  glb.bin.insert(glb.bin.end(), time_bytes, time_bytes + sizeof(times));
+  glb.bin.insert(glb.bin.end(), {1, 0, 0, 0});
+  doc["buffers"][0]["byteLength"] = glb.bin.size();
+  doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", at}, {"byteLength", 8}});
+  doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", at + 8}, {"byteLength", 2}});
+  doc["accessors"].push_back({{"bufferView", views}, {"componentType", 5126}, {"count", 2}, {"type", "SCALAR"}, {"min", {0}}, {"max", {1}}});
+  doc["accessors"].push_back({{"bufferView", views + 1}, {"componentType", 5121}, {"count", 2}, {"type", "SCALAR"}});
+  const nlohmann::json target = {{"path", "pointer"},
+                                 {"extensions", {{"KHR_animation_pointer", {{"pointer", "/nodes/2/extensions/KHR_node_visibility/visible"}}}}}};
+  doc["animations"] = {{{"name", "blink"},
+                        {"samplers", {{{"input", accessors}, {"output", accessors + 1}, {"interpolation", "STEP"}}}},
+                        {"channels", {{{"sampler", 0}, {"target", target}}}}}};
+  doc["extensionsUsed"] = {"KHR_node_visibility", "KHR_animation_pointer"};
+  test::write_bytes(dir / "switch.glb", test::glb_bytes(glb));
+  test::expect_valid_gltf({dir / "switch.glb"});
+  const Scene in = read_scene(dir / "switch.glb");
+  EXPECT_FALSE(in.nodes[0].has_visibility);
+  EXPECT_TRUE(in.nodes[1].has_visibility);
+  EXPECT_TRUE(in.nodes[2].has_visibility);
+  EXPECT_FALSE(in.nodes[3].has_visibility);
+
+  const test::RunResult r = test::run_cli({"lod", (dir / "switch.glb").string(), "-o", (dir / "lod.glb").string(), "--ratios", "1,0.3", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  test::expect_valid_gltf({dir / "lod.glb"});
+  const nlohmann::json report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["levels"][0]["triangles"], sphere.triangle_count());
+  EXPECT_FALSE(report.contains("animated"));
+  ASSERT_EQ(report["visibility"].size(), 2u);
+  EXPECT_EQ(report["visibility"][0]["node"], "hidden");
+  EXPECT_EQ(report["visibility"][0]["levels"][0]["triangles"], torus.triangle_count());
+  EXPECT_EQ(report["visibility"][1]["node"], "blinker");
+  EXPECT_EQ(report["visibility"][1]["group_nodes"], 2);
+  EXPECT_EQ(report["visibility"][1]["levels"][0]["triangles"], lamp.triangle_count() + bulb.triangle_count());
+
+  const nlohmann::json out = glb_json(dir / "lod.glb");
+  EXPECT_EQ(out["nodes"][1]["extensions"]["KHR_node_visibility"], doc["nodes"][1]["extensions"]["KHR_node_visibility"]);
+  EXPECT_EQ(out["animations"][0]["channels"][0]["target"], target);
+  for (const size_t n : {1, 2, 3, 4}) EXPECT_FALSE(out["nodes"][n].contains("mesh")) << n;
+  for (const auto& [n, name] : {std::pair{1, "hidden_LOD0"}, std::pair{2, "blinker_LOD0"}}) {
+    ASSERT_TRUE(out["nodes"][n].contains("children")) << n;
+    EXPECT_EQ(out["nodes"][out["nodes"][n]["children"].back().get<size_t>()]["name"], name);
+  }
+  Scene first = read_scene(dir / "lod.glb");
+  for (Node& node : first.nodes) node.lod_ids.clear();
+  const Mesh before = flatten(in), after = flatten(first);
+  EXPECT_EQ(after.triangle_count(), before.triangle_count());
+  EXPECT_EQ(points_off(after, before, 1e-4), 0u);
+}
+
 // A skinned character's props get chains too: a rock on the ground (the static chain) and a ball in
 // its right hand (a node below the wrist joint, which the walk moves: a chain of its own, under
 // it). The character's chain is the one it gets alone; posed by the walk, level 0 draws the input's

@@ -161,7 +161,8 @@ std::string node_label(const std::vector<Node>& nodes, size_t n) {
 struct ChainReport {
   std::string node;  // the skinned node's name, or those of the nodes drawing a separate mesh; empty for the static chain
   size_t instances = 0;  // a separate mesh's when instanced (EXT_mesh_gpu_instancing); 0 otherwise
-  bool animated = false;  // a separate mesh that a node in motion draws, or a rigid group
+  bool animated = false;  // a separate mesh that a node in motion draws, or a rigid group in motion
+  bool switched = false;  // one below a visibility switch (KHR_node_visibility)
   size_t group_meshes = 0;  // a rigid group's: the nodes drawing its meshes (`node` names its frame)
   LodChain chain;
   std::vector<double> distances, coverage;
@@ -542,17 +543,18 @@ StaticChain build_static(Mesh mesh, const Scene* scene, LodOptions options, cons
 // - a mesh with triangles and no skin that an instanced node draws (EXT_mesh_gpu_instancing: baking
 //   its instances into the static chain would multiply its triangles by the instance count), or
 //   that nodes in motion draw (a clip moves them or an ancestor: baked into the static chain at
-//   rest, the mesh would no longer follow), each of which gets the chain's levels under it;
-// - a rigid group: the meshes a clip moves together, all drawn below one animated node (the
-//   `frame`: a car's body and doors under the root a clip drives) and by no node elsewhere, in
-//   the frame's space. One chain for the lot, under the frame, rather than one per mesh: levels
-//   as coarse as the group allows, and one switch.
+//   rest, the mesh would no longer follow) or nodes below a visibility switch (KHR_node_visibility:
+//   in the static chain, a hidden mesh would show), each of which gets the chain's levels under it;
+// - a rigid group: the meshes drawn below one such animated or switching node (the `frame`: a
+//   car's body and doors under the root a clip drives) and by no node elsewhere, in the frame's
+//   space. One chain for the lot, under the frame, rather than one per mesh: levels as coarse as
+//   the group allows, and one switch.
 struct SeparatePart {
   std::vector<int32_t> meshes;  // glTF meshes: one, or a rigid group's
   std::vector<int32_t> nodes;   // the nodes that draw them (from the scene's roots)
-  int32_t frame = -1;           // a rigid group's animated node
+  int32_t frame = -1;           // a rigid group's animated or switching node
   size_t instances = 0;         // drawn, over those nodes
-  bool instanced = false, animated = false;
+  bool instanced = false, animated = false, switched = false;
 };
 
 std::vector<SeparatePart> separate_parts(const Scene& scene) {
@@ -560,19 +562,25 @@ std::vector<SeparatePart> separate_parts(const Scene& scene) {
   for (const Animation& clip : scene.animations)
     for (const AnimationChannel& ch : clip.channels)
       if (ch.path != AnimationPath::weights && ch.node >= 0 && size_t(ch.node) < animated.size()) animated[size_t(ch.node)] = true;
-  // Reached from the roots, and the frame each moves with: the nearest animated node at or above
-  // it (-1: at rest).
+  // Reached from the roots; the frame each goes with: the nearest animated or switching node at or
+  // above it (-1: none); in motion (an animated node at or above it) and switched (a switching one).
+  struct Reach {
+    int32_t frame = -1;
+    bool moving = false, switched = false;
+  };
   std::vector<bool> reached(scene.nodes.size(), false);
-  std::vector<int32_t> frame(scene.nodes.size(), -1);
-  std::vector<std::pair<int32_t, int32_t>> stack;
-  for (const int32_t r : scene.roots) stack.emplace_back(r, -1);
+  std::vector<Reach> reach(scene.nodes.size());
+  std::vector<std::pair<int32_t, Reach>> stack;
+  for (const int32_t r : scene.roots) stack.emplace_back(r, Reach{});
   while (!stack.empty()) {
-    const auto [n, parent_frame] = stack.back();
+    const auto [n, above] = stack.back();
     stack.pop_back();
     if (n < 0 || size_t(n) >= scene.nodes.size() || reached[size_t(n)]) continue;
     reached[size_t(n)] = true;
-    frame[size_t(n)] = animated[size_t(n)] ? n : parent_frame;
-    for (const int32_t c : scene.nodes[size_t(n)].children) stack.emplace_back(c, frame[size_t(n)]);
+    const bool moves = animated[size_t(n)], switches = scene.nodes[size_t(n)].has_visibility;
+    Reach& r = reach[size_t(n)];
+    r = {moves || switches ? n : above.frame, above.moving || moves, above.switched || switches};
+    for (const int32_t c : scene.nodes[size_t(n)].children) stack.emplace_back(c, r);
   }
   std::map<int32_t, SeparatePart> meshes;  // by glTF mesh: deterministic order
   std::map<int32_t, std::set<int32_t>> frames;  // per mesh: those of the nodes drawing it
@@ -585,8 +593,9 @@ std::vector<SeparatePart> separate_parts(const Scene& scene) {
     m.nodes.push_back(int32_t(n));
     m.instances += std::max<size_t>(1, node.gpu_instances.size());
     m.instanced = m.instanced || !node.gpu_instances.empty();
-    m.animated = m.animated || frame[n] >= 0;
-    frames[node.mesh].insert(frame[n]);
+    m.animated = m.animated || reach[n].moving;
+    m.switched = m.switched || reach[n].switched;
+    frames[node.mesh].insert(reach[n].frame);
     if (node.skin >= 0) skinned.insert(node.mesh);
   }
   std::vector<SeparatePart> out;
@@ -595,14 +604,15 @@ std::vector<SeparatePart> separate_parts(const Scene& scene) {
     const bool has_triangles = std::any_of(scene.primitives.begin(), scene.primitives.end(), [&, mesh = mesh](const Primitive& p) {
       return int32_t(p.gltf_mesh) == mesh && p.mesh.triangle_count() > 0;
     });
-    if (!(m.instanced || m.animated) || skinned.count(mesh) || !has_triangles) continue;
+    if (!(m.instanced || m.animated || m.switched) || skinned.count(mesh) || !has_triangles) continue;
     const std::set<int32_t>& f = frames[mesh];
     if (m.instanced || f.size() > 1) {
       out.push_back(std::move(m));
       continue;
     }
     SeparatePart& g = groups[*f.begin()];
-    g.frame = *f.begin(), g.animated = true;
+    g.frame = *f.begin();
+    g.animated = g.animated || m.animated, g.switched = g.switched || m.switched;
     g.meshes.push_back(mesh);
     g.nodes.insert(g.nodes.end(), m.nodes.begin(), m.nodes.end());
     g.instances += m.instances;
@@ -754,6 +764,7 @@ Command register_lod(CLI::App& root) {
               chains.back().report.node = name;
               chains.back().report.instances = m.instanced ? m.instances : 0;
               chains.back().report.animated = m.animated;
+              chains.back().report.switched = m.switched;
               chains.back().report.group_meshes = m.frame >= 0 ? m.nodes.size() : 0;
               node = scene.nodes[size_t(top)], node.mesh = -1;
               for (const int32_t n : drawing) solo[size_t(n)].mesh = -1;
@@ -810,18 +821,22 @@ Command register_lod(CLI::App& root) {
             const size_t morph_targets = head.targets.levels.empty() ? 0 : head.targets.levels[0].size();
             if (o->json) {
               // The skinned chains; the separate meshes' under "instanced" (with "animated" when a
-              // node in motion draws them too) or else "animated", as are rigid groups (named after
-              // their frame, with "group_nodes"); beside skinned ones, the static chain as "static".
-              nlohmann::json listed = nlohmann::json::array(), instanced = listed, animated = listed, still;
+              // node in motion draws them too), or else "animated" or "visibility" (below a
+              // visibility switch only; "visibility" true in the others when also), as are rigid
+              // groups (named after their frame, with "group_nodes"); beside skinned ones, the static
+              // chain as "static".
+              nlohmann::json listed = nlohmann::json::array(), instanced = listed, animated = listed, switched = listed, still;
               for (size_t k = 0; k < reports.size(); ++k) {
                 const ChainReport& r = reports[k];
                 nlohmann::json c = {{"node", r.node}, {"diagonal", r.chain.diagonal}, {"levels", levels_json(r)}};
                 if (r.instances) c["instances"] = r.instances;
                 if (r.instances && r.animated) c["animated"] = true;
+                if ((r.instances || r.animated) && r.switched) c["visibility"] = true;
                 if (r.group_meshes) c["group_nodes"] = r.group_meshes;
                 if (k < first_chain) listed.push_back(std::move(c));
                 else if (r.instances) instanced.push_back(std::move(c));
                 else if (r.animated) animated.push_back(std::move(c));
+                else if (r.switched) switched.push_back(std::move(c));
                 else still = {{"diagonal", r.chain.diagonal}, {"levels", levels_json(r)}};
               }
               nlohmann::json j = {{"input", o->input}, {"output", o->output}, {"diagonal", reports[0].chain.diagonal},
@@ -833,13 +848,19 @@ Command register_lod(CLI::App& root) {
               if (!skinned.empty() && !still.is_null()) j["static"] = still;
               if (!instanced.empty()) j["instanced"] = instanced;
               if (!animated.empty()) j["animated"] = animated;
+              if (!switched.empty()) j["visibility"] = switched;
               add_write_report(j, written, o->gltf);
               fmt::print("{}\n", j.dump(2));
             } else {
               for (const ChainReport& r : reports) {
-                if (r.instances) fmt::print("instanced mesh of '{}' ({} instances{})\n", r.node, r.instances, r.animated ? ", animated" : "");
-                else if (r.group_meshes) fmt::print("animated group below '{}' ({} mesh nodes)\n", r.node, r.group_meshes);
-                else if (r.animated) fmt::print("animated mesh of '{}'\n", r.node);
+                const std::string how = r.animated && r.switched ? "animated, below a visibility switch"
+                                        : r.animated                ? "animated"
+                                                                    : "below a visibility switch";
+                if (r.instances)
+                  fmt::print("instanced mesh of '{}' ({} instances{}{})\n", r.node, r.instances, r.animated || r.switched ? ", " : "",
+                             r.animated || r.switched ? how : "");
+                else if (r.group_meshes) fmt::print("group below '{}' ({} mesh nodes, {})\n", r.node, r.group_meshes, how);
+                else if (r.animated || r.switched) fmt::print("mesh of '{}' ({})\n", r.node, how);
                 else if (!r.node.empty()) fmt::print("skinned node '{}' ({} mode, {} poses)\n", r.node, o->skin_mode, o->poses);
                 else if (reports.size() > 1) fmt::print("the rest of the scene\n");
                 fmt::print("{:<6}{:>12}{:>12}{:>14}{:>11}{:>14}{:>14}\n", "level", "triangles", "vertices", "error", "% diag",
