@@ -301,35 +301,23 @@ area_compress() {
   echo "whole run: $((SECONDS - started)) s"
 }
 
-# ---- instanced: lod on a forest, GPU instances against plain nodes ---------------------------------
-area_instanced() {
+# ---- instanced and turntable: lod on a scene a Python script writes ------------------------------
+# instanced: a forest, GPU instances against plain nodes (bench/lod/instanced.py); turntable: meshes
+# below one animated node, one group chain against one per mesh (bench/lod/turntable.py, corpus meshes).
+area_lod_scene() {
+  local name=$1
+  shift
   [ $# -le 1 ] || usage
   local runs=${1:-3} started=$SECONDS
   [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
   configure
   build_targets lodkit_cli
+  [ "$name" != turntable ] || [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
   echo
   machine_line
   echo
   mkdir -p bench/results
-  python3 bench/lod/instanced.py "$build/lodkit" bench/results/instanced.json --runs "$runs"
-  echo
-  echo "whole run: $((SECONDS - started)) s"
-}
-
-# ---- turntable: lod on meshes below one animated node, one group chain against one per mesh ------
-area_turntable() {
-  [ $# -le 1 ] || usage
-  local runs=${1:-3} started=$SECONDS
-  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
-  configure
-  build_targets lodkit_cli
-  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
-  echo
-  machine_line
-  echo
-  mkdir -p bench/results
-  python3 bench/lod/turntable.py "$build/lodkit" bench/results/turntable.json --runs "$runs"
+  python3 "bench/lod/$name.py" "$build/lodkit" "bench/results/$name.json" --runs "$runs"
   echo
   echo "whole run: $((SECONDS - started)) s"
 }
@@ -439,7 +427,7 @@ case $area in
   render) area_render "$@" ;;
   compress) area_compress "$@" ;;
   morphs) area_morphs "$@" ;;
-  instanced) area_instanced "$@" ;;
-  turntable) area_turntable "$@" ;;
+  instanced) area_lod_scene instanced "$@" ;;
+  turntable) area_lod_scene turntable "$@" ;;
   *) usage ;;
 esac

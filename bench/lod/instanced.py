@@ -24,6 +24,8 @@ import sys
 import tempfile
 import time
 
+from glb_builder import GlbBuilder
+
 
 def torus(segments=64, sides=32, major=1.0, minor=0.3):
     positions, indices = [], []
@@ -51,25 +53,8 @@ def write_glb(path, instanced, trees):
         angle = 0.37 * k
         places.append((((k % side) * 3.0, (k // side) * 3.0, 0.0),
                        (0.0, 0.0, math.sin(angle / 2), math.cos(angle / 2)), 1.0 + 0.002 * (k % 50)))
-    chunks = []
-
-    def view(data, target=None):
-        offset = sum(len(c) for c in chunks)
-        chunks.append(data + b"\0" * (-len(data) % 4))
-        v = {"buffer": 0, "byteOffset": offset, "byteLength": len(data)}
-        if target:
-            v["target"] = target
-        return v
-
-    views, accessors = [], []
-
-    def accessor(data, count, kind, component, target=None, bounds=None):
-        views.append(view(data, target))
-        a = {"bufferView": len(views) - 1, "componentType": component, "count": count, "type": kind}
-        if bounds:
-            a["min"], a["max"] = bounds
-        accessors.append(a)
-        return len(accessors) - 1
+    glb = GlbBuilder()
+    accessor = glb.accessor
 
     lo = [min(p[c] for p in positions) for c in range(3)]
     hi = [max(p[c] for p in positions) for c in range(3)]
@@ -89,15 +74,7 @@ def write_glb(path, instanced, trees):
                          "scale": [p[2]] * 3} for k, p in enumerate(places)]
     doc["scenes"] = [{"nodes": list(range(len(doc["nodes"])))}]
     doc["scene"] = 0
-    doc["bufferViews"], doc["accessors"] = views, accessors
-    binary = b"".join(chunks)
-    doc["buffers"] = [{"byteLength": len(binary)}]
-    text = json.dumps(doc, separators=(",", ":")).encode()
-    text += b" " * (-len(text) % 4)
-    with open(path, "wb") as f:
-        f.write(struct.pack("<III", 0x46546C67, 2, 12 + 8 + len(text) + 8 + len(binary)))
-        f.write(struct.pack("<II", len(text), 0x4E4F534A) + text)
-        f.write(struct.pack("<II", len(binary), 0x004E4942) + binary)
+    glb.write(path, doc)
 
 
 def lod(lodkit, src, out):

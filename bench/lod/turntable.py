@@ -30,6 +30,8 @@ import sys
 import tempfile
 import time
 
+from glb_builder import GlbBuilder
+
 RATIOS = "1,0.1,0.01,0.002"
 MODELS = ["bunny00", "cow", "elephant", "camel", "bull", "armadillo"]
 RADIUS = 2.0
@@ -79,20 +81,8 @@ def unit_box(positions):
 def write_glb(path, meshes, turntable):
     """meshes: [(name, positions, triangles)]. turntable: the ring below an animated root; else the
     first mesh alone at the origin, without animation."""
-    chunks, views, accessors = [], [], []
-
-    def accessor(data, count, kind, component, target=None, bounds=None):
-        offset = sum(len(c) for c in chunks)
-        chunks.append(data + b"\0" * (-len(data) % 4))
-        v = {"buffer": 0, "byteOffset": offset, "byteLength": len(data)}
-        if target:
-            v["target"] = target
-        views.append(v)
-        a = {"bufferView": len(views) - 1, "componentType": component, "count": count, "type": kind}
-        if bounds:
-            a["min"], a["max"] = bounds
-        accessors.append(a)
-        return len(accessors) - 1
+    glb = GlbBuilder()
+    accessor = glb.accessor
 
     doc = {"asset": {"version": "2.0", "generator": "bench/lod/turntable.py"}, "meshes": []}
     for name, positions, triangles in meshes:
@@ -115,15 +105,7 @@ def write_glb(path, meshes, turntable):
         doc["nodes"] = [{"name": meshes[0][0], "mesh": 0}]
     doc["scenes"] = [{"nodes": [0]}]
     doc["scene"] = 0
-    doc["bufferViews"], doc["accessors"] = views, accessors
-    binary = b"".join(chunks)
-    doc["buffers"] = [{"byteLength": len(binary)}]
-    text = json.dumps(doc, separators=(",", ":")).encode()
-    text += b" " * (-len(text) % 4)
-    with open(path, "wb") as f:
-        f.write(struct.pack("<III", 0x46546C67, 2, 12 + 8 + len(text) + 8 + len(binary)))
-        f.write(struct.pack("<II", len(text), 0x4E4F534A) + text)
-        f.write(struct.pack("<II", len(binary), 0x004E4942) + binary)
+    glb.write(path, doc)
 
 
 def glb_facts(path):

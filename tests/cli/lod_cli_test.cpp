@@ -1204,6 +1204,25 @@ Mesh posed(Scene scene, float time) {
   return flatten(scene);
 }
 
+// Level 0 of `out` draws `in`'s points where `in` has them, as clip 0 poses both at each of `times`.
+void expect_posed_alike(const Scene& in, const Scene& out, std::initializer_list<float> times) {
+  for (const float time : times) {
+    SCOPED_TRACE(time);
+    const Mesh before = posed(in, time), after = posed(out, time);
+    EXPECT_EQ(after.triangle_count(), before.triangle_count());
+    EXPECT_EQ(points_off(after, before, 1e-4), 0u);
+  }
+}
+
+// Appends a glTF mesh per given mesh, one primitive each, numbered on from the scene's primitives.
+void add_meshes(Scene& scene, std::initializer_list<const Mesh*> meshes) {
+  for (const Mesh* m : meshes) {
+    Primitive p;
+    p.mesh = *m, p.gltf_mesh = uint32_t(scene.primitives.size());
+    scene.primitives.push_back(std::move(p));
+  }
+}
+
 // A torus spun by a clip ("spinner"), a sphere on an arm below it ("arm", moved by its parent's
 // motion only), a blade below the arm that a second channel also turns ("blade") and a static
 // sphere ("base"). The torus and the arm's sphere move together: one chain for the pair (a rigid
@@ -1215,11 +1234,7 @@ TEST(CliLod, AnimatedNodesKeepTheirMotion) {
   Scene input;
   const Mesh torus = shapes::torus(1.0f, 0.3f, 32, 16), ball = shapes::icosphere(2), base = shapes::icosphere(1),
              blade = shapes::torus(0.4f, 0.05f, 24, 8);
-  for (const Mesh* m : {&torus, &ball, &base, &blade}) {
-    Primitive p;
-    p.mesh = *m, p.gltf_mesh = uint32_t(input.primitives.size());
-    input.primitives.push_back(std::move(p));
-  }
+  add_meshes(input, {&torus, &ball, &base, &blade});
   Node spinner, arm, stand, fan;
   spinner.name = "spinner", spinner.mesh = 0, spinner.translation = {0, 0, 2}, spinner.children = {1};
   arm.name = "arm", arm.mesh = 1, arm.translation = {3, 0, 0}, arm.scale = {0.5f, 0.5f, 0.5f}, arm.children = {3};
@@ -1267,12 +1282,7 @@ TEST(CliLod, AnimatedNodesKeepTheirMotion) {
     EXPECT_EQ(lod0.lod_ids.size(), 1u) << n;
   }
   EXPECT_EQ(out.nodes[1].children, input.nodes[1].children);  // the arm's sphere is the spinner's chain's
-  for (const float time : {0.0f, 0.6f, 2.0f}) {
-    SCOPED_TRACE(time);
-    const Mesh before = posed(in, time), after = posed(out, time);
-    EXPECT_EQ(after.triangle_count(), before.triangle_count());
-    EXPECT_EQ(points_off(after, before, 1e-4), 0u);
-  }
+  expect_posed_alike(in, out, {0.0f, 0.6f, 2.0f});
   // The moving meshes have moved: posed at 2 s, the input's arm and blade are not where they stand at rest.
   EXPECT_GT(points_off(posed(in, 2.0f), posed(in, 0.0f), 1e-2), (ball.vertex_count() + blade.vertex_count()) / 2);
 }
@@ -1285,11 +1295,7 @@ TEST(CliLod, ARigidGroupGetsOneChain) {
   test::TempDir dir;
   Scene input;
   const Mesh plate = shapes::icosphere(3), post = shapes::torus(0.2f, 0.05f, 16, 8), top = shapes::icosphere(2);
-  for (const Mesh* m : {&plate, &post, &top}) {
-    Primitive p;
-    p.mesh = *m, p.gltf_mesh = uint32_t(input.primitives.size());
-    input.primitives.push_back(std::move(p));
-  }
+  add_meshes(input, {&plate, &post, &top});
   Node table;
   table.name = "table";
   input.nodes.push_back(table);
@@ -1336,12 +1342,7 @@ TEST(CliLod, ARigidGroupGetsOneChain) {
   }
   ASSERT_EQ(out.nodes[0].children.size(), 13u);
   EXPECT_EQ(out.nodes[size_t(out.nodes[0].children.back())].name, "table_LOD0");
-  for (const float time : {0.0f, 0.7f, 2.0f}) {
-    SCOPED_TRACE(time);
-    const Mesh before = posed(in, time), after = posed(out, time);
-    EXPECT_EQ(after.triangle_count(), before.triangle_count());
-    EXPECT_EQ(points_off(after, before, 1e-4), 0u);
-  }
+  expect_posed_alike(in, out, {0.0f, 0.7f, 2.0f});
 }
 
 // KHR_node_visibility: a torus its node hides ("hidden"), and a lamp and a bulb below a node a clip
@@ -1355,11 +1356,7 @@ TEST(CliLod, VisibilitySwitchesKeepTheirMeshesBelowThem) {
   Scene input;
   const Mesh sphere = shapes::icosphere(2), torus = shapes::torus(1.0f, 0.3f, 32, 16), lamp = shapes::icosphere(1),
              bulb = shapes::torus(0.3f, 0.1f, 16, 8);
-  for (const Mesh* m : {&sphere, &torus, &lamp, &bulb}) {
-    Primitive p;
-    p.mesh = *m, p.gltf_mesh = uint32_t(input.primitives.size());
-    input.primitives.push_back(std::move(p));
-  }
+  add_meshes(input, {&sphere, &torus, &lamp, &bulb});
   Node shown, hidden, blinker, lamp_node, bulb_node;
   shown.name = "shown", shown.mesh = 0;
   hidden.name = "hidden", hidden.mesh = 1, hidden.translation = {4, 0, 0};
@@ -1474,12 +1471,7 @@ TEST(CliLod, SkinnedCharactersPropsGetChainsToo) {
   EXPECT_EQ(out.nodes[ball_node].mesh, -1);
   ASSERT_EQ(out.nodes[ball_node].children.size(), 1u);
   EXPECT_EQ(out.nodes[size_t(out.nodes[ball_node].children[0])].name, "ball_LOD0");
-  for (const float time : {0.0f, 0.3f, 0.7f}) {
-    SCOPED_TRACE(time);
-    const Mesh before = posed(in, time), after = posed(out, time);
-    EXPECT_EQ(after.triangle_count(), before.triangle_count());
-    EXPECT_EQ(points_off(after, before, 1e-4), 0u);
-  }
+  expect_posed_alike(in, out, {0.0f, 0.3f, 0.7f});
 }
 
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {
