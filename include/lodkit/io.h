@@ -157,9 +157,11 @@ struct Node {
   // same samplers); several nodes' become one channel per clip (lod::concatenate_weights). Targets
   // past theirs (a geomorph) take weight 0. Empty (or negative ids): none.
   std::vector<int32_t> morph_weights_of;
-  // KHR_node_visibility: the node has it (shown or hidden) or a clip toggles it (a
-  // KHR_animation_pointer to ".../KHR_node_visibility/visible"), so what is below it shows or hides
-  // with it. The reader fills it and the writer keeps the source's; flatten() draws hidden nodes too.
+  // KHR_node_visibility. `visible` false hides the node and everything below it: flatten() leaves
+  // them out, as a viewer does. `has_visibility`: the node has the extension (shown or hidden) or a
+  // clip switches it (a KHR_animation_pointer to ".../KHR_node_visibility/visible"), so what is
+  // below it shows and hides with it. The reader fills both; the writer keeps the source's.
+  bool visible = true;
   bool has_visibility = false;
 };
 
@@ -253,7 +255,7 @@ struct WriteReport {
 WriteReport write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& options = {});
 WriteReport write_scene(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options = {});
 
-// Every primitive instance of the default scene, in world space, merged into one mesh.
+// Every primitive instance of the default scene that is shown (Node::visible), in world space, merged into one mesh.
 // Material ids are glTF material indices (+1, so 0 means "no material"); names follow. A skinned
 // mesh is in its bind pose, in its own space, unless every joint carries the same matrix at rest
 // (world times inverse bind matrix: the skeleton moved after binding, or a quantized file's grid,

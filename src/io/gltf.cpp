@@ -1061,7 +1061,15 @@ class SceneBuilder {
       for (size_t k = 0; k < lod_ids.ArrayLen(); ++k) out.lod_ids.push_back(lod_ids.Get(int(k)).Get<int>());
       if (in.extras.Type() != tg::NULL_TYPE) out.extras_json = value_to_json(in.extras).dump();
       read_gpu_instances(in, out, where);
-      out.has_visibility = in.extensions.count(node_visibility) > 0;
+      if (const auto ext = in.extensions.find(node_visibility); ext != in.extensions.end()) {
+        out.has_visibility = true;
+        if (!ext->second.IsObject()) doc_.fail(where + ".extensions." + node_visibility + " must be an object");
+        if (ext->second.Has("visible")) {
+          const tg::Value& visible = ext->second.Get("visible");
+          if (!visible.IsBool()) doc_.fail(where + ".extensions." + node_visibility + ".visible must be true or false");
+          out.visible = visible.Get<bool>();
+        }
+      }
       for (int child : in.children) {
         if (size_t(child) == i) doc_.fail(where + " is its own child");
         if (scene.nodes[size_t(child)].parent != -1)

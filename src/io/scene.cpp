@@ -133,7 +133,8 @@ Matrix skinned_placement(const Scene& scene, const Node& node, const std::vector
   return same(joint[0], identity_matrix) ? identity_matrix : joint[0];
 }
 
-// Every (primitive, world matrix) pair of the default scene, in depth-first node order.
+// Every (primitive, world matrix) pair of the default scene, in depth-first node order; hidden
+// nodes (Node::visible) and those below them left out.
 std::vector<Instance> collect_instances(const Scene& scene) {
   std::vector<Instance> instances;
   if (scene.nodes.empty() || scene.roots.empty()) {
@@ -156,6 +157,7 @@ std::vector<Instance> collect_instances(const Scene& scene) {
     if (index < 0 || size_t(index) >= scene.nodes.size() || visited[size_t(index)]) continue;
     visited[size_t(index)] = true;
     const Node& node = scene.nodes[size_t(index)];
+    if (!node.visible) continue;  // (KHR_node_visibility: nor anything below it)
     const Matrix world = multiply(parent_world, local_matrix(node));
     if (node.mesh >= 0) {
       auto found = primitives_of_mesh.find(node.mesh);

@@ -1349,8 +1349,9 @@ TEST(CliLod, ARigidGroupGetsOneChain) {
 // switches off after a second (a KHR_animation_pointer, step keys; the node carries no extension
 // of its own), beside a shown sphere. In the static chain the hidden torus would show, and the
 // switch would turn nothing off: the torus gets a chain of its own under its node, the lamp and
-// bulb a rigid group's under the switch, and the static chain is the sphere's alone. Level 0 still
-// draws every input point where it was (flatten() draws hidden nodes too).
+// bulb a rigid group's under the switch, and the static chain is the sphere's alone. Level 0 draws
+// what the input does (flatten() leaves the hidden torus out of both), and, every node shown, every
+// input point where it was.
 TEST(CliLod, VisibilitySwitchesKeepTheirMeshesBelowThem) {
   test::TempDir dir;
   Scene input;
@@ -1388,11 +1389,13 @@ TEST(CliLod, VisibilitySwitchesKeepTheirMeshesBelowThem) {
   doc["extensionsUsed"] = {"KHR_node_visibility", "KHR_animation_pointer"};
   test::write_bytes(dir / "switch.glb", test::glb_bytes(glb));
   test::expect_valid_gltf({dir / "switch.glb"});
-  const Scene in = read_scene(dir / "switch.glb");
+  Scene in = read_scene(dir / "switch.glb");
   EXPECT_FALSE(in.nodes[0].has_visibility);
   EXPECT_TRUE(in.nodes[1].has_visibility);
   EXPECT_TRUE(in.nodes[2].has_visibility);
   EXPECT_FALSE(in.nodes[3].has_visibility);
+  for (size_t n = 0; n < in.nodes.size(); ++n) EXPECT_EQ(in.nodes[n].visible, n != 1) << n;
+  EXPECT_EQ(flatten(in).triangle_count(), sphere.triangle_count() + lamp.triangle_count() + bulb.triangle_count());
 
   const test::RunResult r = test::run_cli({"lod", (dir / "switch.glb").string(), "-o", (dir / "lod.glb").string(), "--ratios", "1,0.3", "--json"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -1417,9 +1420,16 @@ TEST(CliLod, VisibilitySwitchesKeepTheirMeshesBelowThem) {
   }
   Scene first = read_scene(dir / "lod.glb");
   for (Node& node : first.nodes) node.lod_ids.clear();
-  const Mesh before = flatten(in), after = flatten(first);
-  EXPECT_EQ(after.triangle_count(), before.triangle_count());
-  EXPECT_EQ(points_off(after, before, 1e-4), 0u);
+  for (const bool all_shown : {false, true}) {
+    SCOPED_TRACE(all_shown);
+    if (all_shown)
+      for (Scene* scene : {&in, &first})
+        for (Node& node : scene->nodes) node.visible = true;
+    const Mesh before = flatten(in), after = flatten(first);
+    EXPECT_EQ(after.triangle_count(), before.triangle_count());
+    EXPECT_EQ(points_off(after, before, 1e-4), 0u);
+  }
+  EXPECT_EQ(flatten(in).triangle_count(), sphere.triangle_count() + torus.triangle_count() + lamp.triangle_count() + bulb.triangle_count());
 }
 
 // A skinned character's props get chains too: a rock on the ground (the static chain) and a ball in

@@ -639,6 +639,41 @@ TEST(GltfInstancing, EveryInstanceIsReadPlacedAndKept) {
   EXPECT_EQ(back.primitives[0].mesh.positions[2].y, 2.0f);
 }
 
+// KHR_node_visibility: a triangle drawn by a root and by its child (moved up by 2). Hidden, the
+// child leaves the root's triangle to flatten(); the root hidden takes both. The extension
+// survives a write; a `visible` that is not a boolean is refused, naming the node.
+TEST(GltfRead, NodeVisibilityHidesTheNodeAndWhatIsBelowIt) {
+  TempDir dir;
+  const auto file = [](const Json& root_visibility, const Json& child_visibility) {
+    HandBuilt f;
+    const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", pos}}}}}}}});
+    f.doc["nodes"] = Json::array({{{"mesh", 0}, {"children", {1}}}, {{"mesh", 0}, {"translation", {0, 0, 2}}}});
+    for (const auto& [n, visible] : {std::pair{0, root_visibility}, std::pair{1, child_visibility}})
+      if (!visible.is_null()) f.doc["nodes"][n]["extensions"] = {{"KHR_node_visibility", {{"visible", visible}}}};
+    f.doc["scenes"] = Json::array({{{"nodes", {0}}}});
+    f.doc["extensionsUsed"] = {"KHR_node_visibility"};
+    return f.glb();
+  };
+  const auto triangles = [&](const Json& root, const Json& child) {
+    test::write_bytes(dir / "in.glb", file(root, child));
+    return flatten(read_scene(dir / "in.glb")).triangle_count();
+  };
+  EXPECT_EQ(triangles(nullptr, nullptr), 2u);
+  EXPECT_EQ(triangles(true, true), 2u);
+  EXPECT_EQ(triangles(true, false), 1u);
+  EXPECT_EQ(triangles(false, true), 0u);  // (a shown child of a hidden node stays hidden)
+  test::write_bytes(dir / "in.glb", file(true, false));
+  test::expect_valid_gltf({dir / "in.glb"});
+  const Scene scene = read_scene(dir / "in.glb");
+  EXPECT_TRUE(scene.nodes[0].has_visibility && scene.nodes[0].visible);
+  EXPECT_TRUE(scene.nodes[1].has_visibility && !scene.nodes[1].visible);
+  EXPECT_EQ(flatten(scene).positions[2].z, 0.0f);  // the root's
+  write_scene(scene, dir / "out.glb");
+  EXPECT_EQ(test::glb_json(dir / "out.glb")["nodes"][1]["extensions"], test::glb_json(dir / "in.glb")["nodes"][1]["extensions"]);
+  expect_bad_input(file(nullptr, "no"), "visible.glb", "nodes[1].extensions.KHR_node_visibility.visible must be true or false");
+}
+
 // Quantized (-q), the instanced mesh goes on the grid and each instance takes the grid in its own
 // transform (T + R (S o), S s): every instance lands within the step (times its scale, 2) of the
 // float file's, the node keeps its transform, and the old instance accessors are gone.

@@ -753,7 +753,7 @@ Command register_lod(CLI::App& root) {
               const std::vector<int32_t> drawing = m.frame >= 0 ? m.nodes : std::vector<int32_t>{top};
               for (const int32_t n : drawing) solo[size_t(n)].mesh = scene.nodes[size_t(n)].mesh;
               Node& node = solo[size_t(top)];
-              node.gpu_instances.clear();
+              node.gpu_instances.clear(), node.visible = true;  // (levels go below it: hidden when it is)
               node.has_matrix = false, node.translation = {}, node.rotation = {0, 0, 0, 1}, node.scale = {1, 1, 1};
               std::vector<std::string> names;
               for (const int32_t k : m.frame >= 0 ? std::vector<int32_t>{m.frame} : m.nodes) names.push_back(node_label(scene.nodes, size_t(k)));
