@@ -1345,6 +1345,72 @@ TEST(CliLod, ARigidGroupGetsOneChain) {
   expect_posed_alike(in, out, {0.0f, 0.7f, 2.0f});
 }
 
+// Two morphing tori (two meshes, their weights driven by the clip) below a carrier that the clip
+// also moves: a rigid group, whose levels carry both nodes' targets and their weights merged into
+// one channel per level, as the static chain of the same file without the carrier's motion does:
+// the same levels, targets and weight keys, the group's under the carrier.
+TEST(CliLod, ARigidGroupMergesItsNodesMorphTargets) {
+  test::TempDir dir;
+  Scene input = one_morphing_node();
+  Node second = input.nodes[0], carrier;
+  input.primitives.push_back(input.primitives[0]);  // (a mesh of its own: one drawn twice keeps its own chain)
+  input.primitives.back().gltf_mesh = 1;
+  second.mesh = 1, second.translation = {5, 0, 0};
+  carrier.name = "carrier", carrier.children = {0, 1};
+  input.nodes.insert(input.nodes.end(), {second, carrier});
+  input.nodes[0].parent = input.nodes[1].parent = 2;
+  input.roots = {2};
+  input.animations[0].channels.push_back({.node = 1, .path = AnimationPath::weights, .times = {0.5f, 2}, .values = {1, 0}, .components = 1});
+  write_scene(input, dir / "still.glb");
+  input.animations[0].channels.push_back(
+      {.node = 2, .path = AnimationPath::translation, .times = {0, 1}, .values = {0, 0, 0, 0, 3, 0}, .components = 3});
+  write_scene(input, dir / "carried.glb");
+  const auto lod = [&](const char* in, const char* out) {
+    const test::RunResult r = test::run_cli({"lod", (dir / in).string(), "-o", (dir / out).string(), "--ratios", "1,0.5", "--json"});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    test::expect_valid_gltf({dir / out});
+    return nlohmann::json::parse(r.out);
+  };
+  const nlohmann::json still = lod("still.glb", "still-lod.glb"), carried = lod("carried.glb", "carried-lod.glb");
+  EXPECT_EQ(still["morph_targets"], 2);
+  EXPECT_EQ(carried["morph_targets"], 2);
+  ASSERT_EQ(carried["animated"].size(), 1u);
+  EXPECT_EQ(carried["animated"][0]["node"], "carrier");
+  EXPECT_EQ(carried["animated"][0]["group_nodes"], 2);
+  EXPECT_EQ(carried["animated"][0]["levels"], still["levels"]);
+
+  const nlohmann::json a = glb_json(dir / "still-lod.glb"), b = glb_json(dir / "carried-lod.glb");
+  const std::vector<size_t> la = level_nodes(a), lb = level_nodes(b);
+  ASSERT_EQ(la.size(), 2u);
+  ASSERT_EQ(lb.size(), 2u);
+  EXPECT_EQ(b["nodes"][2]["children"].back(), lb[0]);
+  // The weights channel of clip 0 driving node n of `doc`: its sampler's keys and values.
+  const auto weight_keys = [&](const std::filesystem::path& file, const nlohmann::json& doc, size_t n) {
+    std::vector<std::vector<float>> keys;
+    for (const auto& channel : doc["animations"][0]["channels"])
+      if (channel["target"]["path"] == "weights" && channel["target"]["node"] == n) {
+        const nlohmann::json& sampler = doc["animations"][0]["samplers"][channel["sampler"].get<size_t>()];
+        keys.push_back(test::glb_floats(file, sampler["input"]));
+        keys.push_back(test::glb_floats(file, sampler["output"]));
+      }
+    return keys;
+  };
+  for (size_t i = 0; i < 2; ++i) {
+    SCOPED_TRACE(i);
+    const size_t ma = a["nodes"][la[i]]["mesh"], mb = b["nodes"][lb[i]]["mesh"];
+    for (size_t k = 0; k < 2; ++k) {
+      const std::vector<float3> ta = test::glb_morph_positions(dir / "still-lod.glb", ma, 0, k),
+                                tb = test::glb_morph_positions(dir / "carried-lod.glb", mb, 0, k);
+      ASSERT_FALSE(ta.empty()) << k;
+      EXPECT_TRUE(ta == tb) << k;
+    }
+    const std::vector<std::vector<float>> ka = weight_keys(dir / "still-lod.glb", a, la[i]), kb = weight_keys(dir / "carried-lod.glb", b, lb[i]);
+    ASSERT_EQ(ka.size(), 2u);  // one channel
+    EXPECT_EQ(ka, kb);
+    EXPECT_EQ(ka[1].size(), 2 * ka[0].size());  // two weights a key: both nodes'
+  }
+}
+
 // KHR_node_visibility: a torus its node hides ("hidden"), and a lamp and a bulb below a node a clip
 // switches off after a second (a KHR_animation_pointer, step keys; the node carries no extension
 // of its own), beside a shown sphere. In the static chain the hidden torus would show, and the
