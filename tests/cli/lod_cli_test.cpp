@@ -1342,6 +1342,12 @@ TEST(CliLod, ARigidGroupGetsOneChain) {
   }
   ASSERT_EQ(out.nodes[0].children.size(), 13u);
   EXPECT_EQ(out.nodes[size_t(out.nodes[0].children.back())].name, "table_LOD0");
+  // No static chain: nothing for a progressive mesh (.lpm) of the input.
+  const test::RunResult lpm = test::run_cli({"lod", (dir / "spin.glb").string(), "-o", (dir / "o.glb").string(), "--lpm",
+                                             (dir / "o.lpm").string()});
+  EXPECT_EQ(lpm.exit_code, 1);  // (a usage error)
+  EXPECT_NE(lpm.err.find("with chains of its own"), std::string::npos) << lpm.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "o.glb"));
   expect_posed_alike(in, out, {0.0f, 0.7f, 2.0f});
 }
 

@@ -712,6 +712,10 @@ Command register_lod(CLI::App& root) {
               with_nodes(static_nodes, scene.roots, [&](const Scene& view) { mesh = flatten(view); });
             }
             const double load_seconds = seconds_since(start);
+            // (Before any chain is built: the progressive mesh is the static chain's.)
+            if (!o->lpm.empty() && skinned.empty() && !separate.empty() && mesh.triangle_count() == 0)
+              throw_usage("--lpm: all of the input's geometry is instanced (EXT_mesh_gpu_instancing), animated or below a "
+                          "visibility switch (KHR_node_visibility), with chains of its own");
 
             // The skinned chains, then the static chain (if any geometry is neither skinned nor
             // separate), then one per separate mesh.
@@ -769,9 +773,6 @@ Command register_lod(CLI::App& root) {
               node = scene.nodes[size_t(top)], node.mesh = -1;
               for (const int32_t n : drawing) solo[size_t(n)].mesh = -1;
             }
-            if (!o->lpm.empty() && skinned.empty() && chains.size() == separate.size())
-              throw_usage("--lpm: all of the input's geometry is instanced (EXT_mesh_gpu_instancing) or animated, "
-                          "each mesh with a chain of its own");
             for (StaticChain& c : chains) reports.push_back(std::move(c.report));
             const double build_seconds = seconds_since(start);
             for (ChainReport& r : reports) set_switching(r, *o);
