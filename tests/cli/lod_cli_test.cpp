@@ -1214,6 +1214,17 @@ void expect_posed_alike(const Scene& in, const Scene& out, std::initializer_list
   }
 }
 
+// `lodkit lod DIR/IN -o DIR/OUT --json` with `options`: its report, after checking that it
+// succeeded and wrote valid glTF.
+nlohmann::json lod_report(const std::filesystem::path& dir, const char* in, const char* out, std::vector<std::string> options) {
+  std::vector<std::string> args = {"lod", (dir / in).string(), "-o", (dir / out).string(), "--json"};
+  args.insert(args.end(), options.begin(), options.end());
+  const test::RunResult r = test::run_cli(args);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  test::expect_valid_gltf({dir / out});
+  return nlohmann::json::parse(r.out);
+}
+
 // Appends a glTF mesh per given mesh, one primitive each, numbered on from the scene's primitives.
 void add_meshes(Scene& scene, std::initializer_list<const Mesh*> meshes) {
   for (const Mesh* m : meshes) {
@@ -1319,12 +1330,7 @@ TEST(CliLod, ARigidGroupGetsOneChain) {
   input.animations.push_back(spin);
   write_scene(input, dir / "spin.glb");
 
-  const auto lod = [&](const char* in, const char* out) {
-    const test::RunResult r = test::run_cli({"lod", (dir / in).string(), "-o", (dir / out).string(), "--ratios", "1,0.1,0.01", "--json"});
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    test::expect_valid_gltf({dir / out});
-    return nlohmann::json::parse(r.out);
-  };
+  const auto lod = [&](const char* in, const char* out) { return lod_report(dir.path, in, out, {"--ratios", "1,0.1,0.01"}); };
   const nlohmann::json still = lod("still.glb", "still-lod.glb"), report = lod("spin.glb", "spin-lod.glb");
   ASSERT_EQ(report["animated"].size(), 1u);
   const nlohmann::json& group = report["animated"][0];
@@ -1371,12 +1377,7 @@ TEST(CliLod, ARigidGroupMergesItsNodesMorphTargets) {
   input.animations[0].channels.push_back(
       {.node = 2, .path = AnimationPath::translation, .times = {0, 1}, .values = {0, 0, 0, 0, 3, 0}, .components = 3});
   write_scene(input, dir / "carried.glb");
-  const auto lod = [&](const char* in, const char* out) {
-    const test::RunResult r = test::run_cli({"lod", (dir / in).string(), "-o", (dir / out).string(), "--ratios", "1,0.5", "--json"});
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    test::expect_valid_gltf({dir / out});
-    return nlohmann::json::parse(r.out);
-  };
+  const auto lod = [&](const char* in, const char* out) { return lod_report(dir.path, in, out, {"--ratios", "1,0.5"}); };
   const nlohmann::json still = lod("still.glb", "still-lod.glb"), carried = lod("carried.glb", "carried-lod.glb");
   EXPECT_EQ(still["morph_targets"], 2);
   EXPECT_EQ(carried["morph_targets"], 2);
@@ -1532,12 +1533,7 @@ TEST(CliLod, SkinnedCharactersPropsGetChainsToo) {
   write_scene(humanoid, dir / "alone.glb");
   write_scene(input, dir / "props.glb");
 
-  const auto lod = [&](const char* in, const char* out) {
-    const test::RunResult r = test::run_cli({"lod", (dir / in).string(), "-o", (dir / out).string(), "--ratios", "1,0.4", "--poses", "4", "--json"});
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    test::expect_valid_gltf({dir / out});
-    return nlohmann::json::parse(r.out);
-  };
+  const auto lod = [&](const char* in, const char* out) { return lod_report(dir.path, in, out, {"--ratios", "1,0.4", "--poses", "4"}); };
   const nlohmann::json alone = lod("alone.glb", "alone-lod.glb"), report = lod("props.glb", "props-lod.glb");
   EXPECT_FALSE(alone.contains("static"));
   ASSERT_EQ(report["skinned"]["chains"].size(), 1u);
