@@ -22,9 +22,8 @@ import struct
 import subprocess
 import sys
 import tempfile
-import time
 
-from glb_builder import GlbBuilder
+from common import GlbBuilder, run_lod
 
 
 def torus(segments=64, sides=32, major=1.0, minor=0.3):
@@ -78,13 +77,7 @@ def write_glb(path, instanced, trees):
 
 
 def lod(lodkit, src, out):
-    start = time.monotonic()
-    r = subprocess.run(["/usr/bin/time", "-v", lodkit, "lod", src, "-o", out, "--json"], capture_output=True, text=True)
-    wall = time.monotonic() - start
-    if r.returncode != 0:
-        raise RuntimeError(f"lodkit lod {src}: {r.stderr.strip()[-300:]}")
-    rss = next(int(l.split(":")[1]) for l in r.stderr.splitlines() if "Maximum resident set size" in l)
-    return wall, rss / 1024, json.loads(r.stdout)
+    return run_lod(lodkit, src, out)
 
 
 def main():

@@ -25,12 +25,10 @@ import math
 import os
 import statistics
 import struct
-import subprocess
 import sys
 import tempfile
-import time
 
-from glb_builder import GlbBuilder
+from common import GlbBuilder, run_lod
 
 RATIOS = "1,0.1,0.01,0.002"
 MODELS = ["bunny00", "cow", "elephant", "camel", "bull", "armadillo"]
@@ -121,14 +119,7 @@ def glb_facts(path):
 
 
 def lod(lodkit, src, out, extra=()):
-    start = time.monotonic()
-    r = subprocess.run(["/usr/bin/time", "-v", lodkit, "lod", src, "-o", out, "--ratios", RATIOS, "--json", *extra],
-                       capture_output=True, text=True)
-    wall = time.monotonic() - start
-    if r.returncode != 0:
-        raise RuntimeError(f"lodkit lod {src}: {r.stderr.strip()[-300:]}")
-    rss = next(int(l.split(":")[1]) for l in r.stderr.splitlines() if "Maximum resident set size" in l)
-    return wall, rss / 1024, json.loads(r.stdout)
+    return run_lod(lodkit, src, out, ("--ratios", RATIOS, *extra))
 
 
 def count_types(types):

@@ -1,10 +1,25 @@
-"""A .glb written by hand (no lodkit, no glTF library): the bench scripts' inputs.
+"""What the lod bench scripts share: their inputs as .glb written by hand (no lodkit, no glTF
+library), and a timed `lodkit lod` run.
 
-Accessors go into one buffer, each in a view of its own (4-byte aligned); write() adds the views,
-accessors and buffer to the given glTF JSON and writes the GLB container.
+GlbBuilder: accessors go into one buffer, each in a view of its own (4-byte aligned); write() adds
+the views, accessors and buffer to the given glTF JSON and writes the GLB container.
 """
 import json
 import struct
+import subprocess
+import time
+
+
+def run_lod(lodkit, src, out, extra=()):
+    """`lodkit lod SRC -o OUT --json EXTRA...` under /usr/bin/time -v: wall seconds, peak RSS in
+    MiB and the parsed report. Raises on failure."""
+    start = time.monotonic()
+    r = subprocess.run(["/usr/bin/time", "-v", lodkit, "lod", src, "-o", out, "--json", *extra], capture_output=True, text=True)
+    wall = time.monotonic() - start
+    if r.returncode != 0:
+        raise RuntimeError(f"lodkit lod {src}: {r.stderr.strip()[-300:]}")
+    rss = next(int(l.split(":")[1]) for l in r.stderr.splitlines() if "Maximum resident set size" in l)
+    return wall, rss / 1024, json.loads(r.stdout)
 
 
 class GlbBuilder:
