@@ -582,30 +582,37 @@ std::vector<SeparatePart> separate_parts(const Scene& scene) {
     r = {moves || switches ? n : above.frame, above.moving || moves, above.switched || switches};
     for (const int32_t c : scene.nodes[size_t(n)].children) stack.emplace_back(c, r);
   }
-  std::map<int32_t, SeparatePart> meshes;  // by glTF mesh: deterministic order
-  std::map<int32_t, std::set<int32_t>> frames;  // per mesh: those of the nodes drawing it
-  std::set<int32_t> skinned;
+  // Per glTF mesh (a map: deterministic order), as its own part, with the frames of the nodes
+  // drawing it and whether one of them skins it.
+  struct Drawn {
+    SeparatePart part;
+    std::set<int32_t> frames;
+    bool skinned = false;
+  };
+  std::map<int32_t, Drawn> meshes;
   for (size_t n = 0; n < scene.nodes.size(); ++n) {
     const Node& node = scene.nodes[n];
     if (!reached[n] || node.mesh < 0) continue;
-    SeparatePart& m = meshes[node.mesh];
+    Drawn& d = meshes[node.mesh];
+    SeparatePart& m = d.part;
     m.meshes = {node.mesh};
     m.nodes.push_back(int32_t(n));
     m.instances += std::max<size_t>(1, node.gpu_instances.size());
     m.instanced = m.instanced || !node.gpu_instances.empty();
     m.animated = m.animated || reach[n].moving;
     m.switched = m.switched || reach[n].switched;
-    frames[node.mesh].insert(reach[n].frame);
-    if (node.skin >= 0) skinned.insert(node.mesh);
+    d.frames.insert(reach[n].frame);
+    d.skinned = d.skinned || node.skin >= 0;
   }
+  std::set<int32_t> with_triangles;
+  for (const Primitive& p : scene.primitives)
+    if (p.mesh.triangle_count() > 0) with_triangles.insert(int32_t(p.gltf_mesh));
   std::vector<SeparatePart> out;
   std::map<int32_t, SeparatePart> groups;  // by frame
-  for (auto& [mesh, m] : meshes) {
-    const bool has_triangles = std::any_of(scene.primitives.begin(), scene.primitives.end(), [&, mesh = mesh](const Primitive& p) {
-      return int32_t(p.gltf_mesh) == mesh && p.mesh.triangle_count() > 0;
-    });
-    if (!(m.instanced || m.animated || m.switched) || skinned.count(mesh) || !has_triangles) continue;
-    const std::set<int32_t>& f = frames[mesh];
+  for (auto& [mesh, d] : meshes) {
+    SeparatePart& m = d.part;
+    if (!(m.instanced || m.animated || m.switched) || d.skinned || !with_triangles.count(mesh)) continue;
+    const std::set<int32_t>& f = d.frames;
     if (m.instanced || f.size() > 1) {
       out.push_back(std::move(m));
       continue;
