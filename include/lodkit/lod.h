@@ -114,6 +114,13 @@ struct LodChain {
 // Throws lod::Error (usage) on invalid options.
 LodChain build_lod_chain(const Mesh& mesh, const LodOptions& options = {});
 
+// One chain per mesh, each exactly build_lod_chain(*meshes[i], options): the meshes of a scene, say.
+// Small meshes (under 32,768 triangles) are built side by side, one thread each, larger ones one at
+// a time on options.simplify.threads; options.simplifier, if set, is then called from several
+// threads at once. Pointers, so that meshes held elsewhere need not be copied; progress covers the
+// whole batch.
+std::vector<LodChain> build_lod_chains(std::span<const Mesh* const> meshes, const LodOptions& options = {});
+
 // ---- popping --------------------------------------------------------------------------------------
 
 // A camera flies past a LOD chain (with geomorph tables) along a straight line, from where the

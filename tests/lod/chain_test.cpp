@@ -162,6 +162,39 @@ TEST(LodChain, SharedVerticesArePrefixes) {
   }
 }
 
+// A batch gives each mesh the chain build_lod_chain gives it alone, whichever of its meshes are
+// built side by side (the small ones) and on how many threads; progress rises to 1.
+TEST(LodChain, ABatchBuildsEachMeshsOwnChain) {
+  const Mesh large = shapes::torus(1.0f, 0.3f, 200, 90);  // 36,000 triangles: built alone
+  ASSERT_GE(large.triangle_count(), 32768u);
+  const std::vector<Mesh> meshes = {shapes::icosphere(3), large, shapes::torus(1.0f, 0.4f, 24, 12),
+                                    shapes::cylinder(20, 1.5f), shapes::cube()};
+  const std::vector<const Mesh*> pointers = {&meshes[0], &meshes[1], &meshes[2], &meshes[3], &meshes[4]};
+  std::vector<LodChain> alone;
+  for (const Mesh& mesh : meshes) alone.push_back(build_lod_chain(mesh, {.levels = 3, .simplify = {.threads = 1}}));
+  for (const unsigned threads : {1u, 2u}) {
+    std::vector<double> progress;
+    LodOptions options{.levels = 3, .simplify = {.threads = threads}};
+    options.progress = [&](double f) { progress.push_back(f); };
+    const std::vector<LodChain> chains = build_lod_chains(pointers, options);
+    ASSERT_EQ(chains.size(), meshes.size());
+    for (size_t i = 0; i < meshes.size(); ++i) {
+      ASSERT_EQ(chains[i].levels.size(), alone[i].levels.size()) << "mesh " << i << ", " << threads << " threads";
+      for (size_t l = 0; l < alone[i].levels.size(); ++l) {
+        EXPECT_EQ(chains[i].levels[l].mesh, alone[i].levels[l].mesh) << "mesh " << i << " level " << l;
+        EXPECT_EQ(chains[i].levels[l].error_bound, alone[i].levels[l].error_bound) << "mesh " << i << " level " << l;
+        EXPECT_EQ(chains[i].levels[l].vertex_successor, alone[i].levels[l].vertex_successor);
+      }
+    }
+    ASSERT_FALSE(progress.empty());
+    EXPECT_TRUE(std::is_sorted(progress.begin(), progress.end()));
+    EXPECT_EQ(progress.back(), 1.0);
+  }
+  EXPECT_TRUE(build_lod_chains({}, {}).empty());
+  const std::vector<const Mesh*> with_null = {&meshes[0], nullptr};
+  EXPECT_THROW(build_lod_chains(with_null, {}), Error);
+}
+
 TEST(LodChain, BadOptionsAreUsageErrors) {
   const Mesh mesh = shapes::icosphere(1);
   EXPECT_THROW(build_lod_chain(mesh, {.ratios = {0.5f, 0.7f}}), Error);

@@ -494,48 +494,55 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, c
 
 // A static chain: a mesh (a flattened glTF scene, `scene`, or another file's) simplified level by
 // level in its surface form, with the morph targets the scene's nodes drive at each level's vertices.
+// prepare_static readies it (in the scene's current view), lod::build_lod_chains builds all of a
+// run's chains at once (small ones side by side), finish_static puts the levels in their form.
 struct StaticChain {
   ChainReport report;
   LevelTargets targets;
   SurfaceForm form;             // built on the fronts, or without face normals (reported)
   std::string targets_dropped;  // why the input's morph targets are not on the levels, if they are not
-  Mesh input;                   // as simplified: the progressive mesh's input
+  Mesh input;                   // as read (welded where morph targets allow)
+  FlatMorphTargets morph;       // the targets to carry to the levels
+  const Mesh& to_simplify() const { return form.to_simplify(input); }
 };
 
-StaticChain build_static(Mesh mesh, const Scene* scene, LodOptions options, const LodCommand& o, const std::string& label) {
+StaticChain prepare_static(Mesh mesh, const Scene* scene, const LodCommand& o) {
   StaticChain out;
   // Morph targets go to every level, interpolated where the vertices moved (with geomorphs, before
   // each level's geomorph target).
-  FlatMorphTargets morph;
-  if (scene) morph = flatten_morph_targets(*scene);
-  if (morph.nodes.size() > 1) out.targets_dropped = unmergeable_weights(*scene, morph);
-  if (!out.targets_dropped.empty()) morph.targets.clear();
+  if (scene) out.morph = flatten_morph_targets(*scene);
+  if (out.morph.nodes.size() > 1) out.targets_dropped = unmergeable_weights(*scene, out.morph);
+  if (!out.targets_dropped.empty()) out.morph.targets.clear();
   // The chain replaces the input's geometry: only the morph targets to carry, so vertices whose
   // displacements differ stay apart.
-  const std::vector<uint32_t> first = weld_duplicates(mesh, displacement_classes(morph.targets));
+  const std::vector<uint32_t> first = weld_duplicates(mesh, displacement_classes(out.morph.targets));
   if (!first.empty())
-    for (MorphTarget& t : morph.targets) t = renumbered(t, first);
+    for (MorphTarget& t : out.morph.targets) t = renumbered(t, first);
   // Flat-shaded: the chain is built without the normals, then each level faceted again (not with
   // geomorphs or one vertex buffer, whose tables follow the vertices). Double-sided likewise: the
   // chain is built on the fronts, and each level gets its backs.
   if (!o.morph && !o.shared) out.form = surface_form(mesh);
-  const Mesh& built_on = out.form.to_simplify(mesh);
-  ProgressBar bar(label);
-  options.progress = [&](double f) { bar.update(f); };
-  out.report.chain = build_lod_chain(built_on, options);
+  out.input = std::move(mesh);
+  return out;
+}
+
+void finish_static(StaticChain& out, LodChain built) {
+  out.report.chain = std::move(built);
   const LodChain& chain = out.report.chain;
+  const std::vector<MorphTarget>& targets = out.morph.targets;
   for (LodLevel& level : out.report.chain.levels) {
     if (out.form.changed()) level.vertex_origin.clear(), restore_form(out.form, level.mesh, level.vertex_successor);
-    if (!morph.targets.empty() && chain.shared.indices.empty())
-      out.targets.levels.push_back(blended_targets(morph.targets, vertex_blends(mesh, level.vertex_successor, level.mesh)));
+    if (!targets.empty() && chain.shared.indices.empty())
+      out.targets.levels.push_back(blended_targets(targets, vertex_blends(out.input, level.vertex_successor, level.mesh)));
   }
-  if (!morph.targets.empty() && !chain.shared.indices.empty()) {
+  if (!targets.empty() && !chain.shared.indices.empty()) {
     out.targets.levels.emplace_back();
-    for (const MorphTarget& t : morph.targets) out.targets.levels[0].push_back(renumbered(t, chain.shared.vertex_origin));
+    for (const MorphTarget& t : targets) out.targets.levels[0].push_back(renumbered(t, chain.shared.vertex_origin));
   }
-  out.targets.nodes = morph.nodes;
-  out.input = out.form.changed() ? std::move(out.form.mesh) : std::move(mesh);
-  return out;
+  out.targets.nodes = std::move(out.morph.nodes);
+  out.morph = {};
+  // The progressive mesh's input: the mesh as simplified.
+  if (out.form.changed()) out.input = std::move(out.form.mesh);
 }
 
 // A part of a glTF scene that gets a chain of its own, in its own space rather than the static
@@ -748,11 +755,9 @@ Command register_lod(CLI::App& root) {
             if (skinned.empty() ? separate.empty() || mesh.triangle_count() > 0 : mesh.triangle_count() > 0) {
               validate(mesh, o->input);
               if (scene.source)
-                with_nodes(static_nodes, scene.roots, [&](const Scene& view) {
-                  chains.push_back(build_static(std::move(mesh), &view, options, *o, "building LODs"));
-                });
+                with_nodes(static_nodes, scene.roots, [&](const Scene& view) { chains.push_back(prepare_static(std::move(mesh), &view, *o)); });
               else
-                chains.push_back(build_static(std::move(mesh), nullptr, options, *o, "building LODs"));
+                chains.push_back(prepare_static(std::move(mesh), nullptr, *o));
             }
             // Each separate part: its own chain in its own space (a mesh drawn once by its first
             // node, untransformed; a rigid group drawn by its nodes below its frame, untransformed),
@@ -769,9 +774,7 @@ Command register_lod(CLI::App& root) {
               std::vector<std::string> names;
               for (const int32_t k : m.frame >= 0 ? std::vector<int32_t>{m.frame} : m.nodes) names.push_back(node_label(scene.nodes, size_t(k)));
               const std::string name = fmt::format("{}", fmt::join(names, ", "));
-              with_nodes(solo, {top}, [&](const Scene& view) {
-                chains.push_back(build_static(flatten(view), &view, options, *o, fmt::format("building LODs of '{}'", name)));
-              });
+              with_nodes(solo, {top}, [&](const Scene& view) { chains.push_back(prepare_static(flatten(view), &view, *o)); });
               chains.back().report.node = name;
               chains.back().report.instances = m.instanced ? m.instances : 0;
               chains.back().report.animated = m.animated;
@@ -779,6 +782,15 @@ Command register_lod(CLI::App& root) {
               chains.back().report.group_meshes = m.frame >= 0 ? m.nodes.size() : 0;
               node = scene.nodes[size_t(top)], node.mesh = -1;
               for (const int32_t n : drawing) solo[size_t(n)].mesh = -1;
+            }
+            {
+              std::vector<const Mesh*> inputs;
+              for (const StaticChain& c : chains) inputs.push_back(&c.to_simplify());
+              ProgressBar bar(chains.size() > 1 ? fmt::format("building LODs ({} chains)", chains.size()) : "building LODs");
+              options.progress = [&](double f) { bar.update(f); };
+              std::vector<LodChain> built = build_lod_chains(inputs, options);
+              options.progress = nullptr;
+              for (size_t i = 0; i < chains.size(); ++i) finish_static(chains[i], std::move(built[i]));
             }
             for (StaticChain& c : chains) reports.push_back(std::move(c.report));
             const double build_seconds = seconds_since(start);
