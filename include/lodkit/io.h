@@ -160,7 +160,8 @@ struct Node {
   // KHR_node_visibility. `visible` false hides the node and everything below it: flatten() leaves
   // them out, as a viewer does. `has_visibility`: the node has the extension (shown or hidden) or a
   // clip switches it (a KHR_animation_pointer to ".../KHR_node_visibility/visible"), so what is
-  // below it shows and hides with it. The reader fills both; the writer keeps the source's.
+  // below it shows and hides with it. The reader fills both; the writer writes `visible` false (and
+  // true where the source node was hidden), the extension declared in extensionsUsed.
   bool visible = true;
   bool has_visibility = false;
 };

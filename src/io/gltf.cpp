@@ -97,6 +97,11 @@ Json value_to_json(const tg::Value& v) {
   }
 }
 
+// Declares `ext` in `list` (extensionsUsed or extensionsRequired) once.
+void declare_extension(std::vector<std::string>& list, const std::string& ext) {
+  if (std::find(list.begin(), list.end(), ext) == list.end()) list.push_back(ext);
+}
+
 // The MSFT_lod extension of a node: its ids array (null when the node has none, or an empty one).
 const tg::Value& msft_lod_ids(const tg::Node& node) {
   static const tg::Value none;
@@ -3205,8 +3210,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
   for (const auto& [used, ext] : {std::pair{writer.used_draco(), io::draco_extension}, std::pair{writer.used_quantization(), "KHR_mesh_quantization"},
                                   std::pair{used_uv_boxes, texture_transform}})
     if (used)
-      for (std::vector<std::string>* list : {&model.extensionsUsed, &model.extensionsRequired})
-        if (std::find(list->begin(), list->end(), ext) == list->end()) list->push_back(ext);
+      for (std::vector<std::string>* list : {&model.extensionsUsed, &model.extensionsRequired}) declare_extension(*list, ext);
   report = writer.report();
   return bin;
 }
@@ -3369,7 +3373,9 @@ class SkinAnimationWriter {
 // node read and written keeps its own): none removes a source node's MSFT_lod, whose levels may no
 // longer exist; other members of its MSFT_lod object are kept. Empty extras leave the node's as
 // they were.
-void set_lod_and_extras(tg::Model& model, const Node& in, tg::Node& node) {
+// A node's own extensions and extras as the Scene has them: MSFT_lod ids, KHR_node_visibility (a
+// hidden node says so, a node shown again says that; other keys of the extension stay), extras.
+void set_node_extensions(tg::Model& model, const Node& in, tg::Node& node) {
   if (in.lod_ids.empty()) {
     node.extensions.erase("MSFT_lod");
   } else {
@@ -3380,8 +3386,18 @@ void set_lod_and_extras(tg::Model& model, const Node& in, tg::Node& node) {
                                                                                      : tg::Value::Object{};
     lod["ids"] = tg::Value(std::move(ids));
     node.extensions["MSFT_lod"] = tg::Value(std::move(lod));
-    if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), "MSFT_lod") == model.extensionsUsed.end())
-      model.extensionsUsed.push_back("MSFT_lod");
+    declare_extension(model.extensionsUsed, "MSFT_lod");
+  }
+  const auto shown = node.extensions.find(node_visibility);
+  const bool hidden_now = shown != node.extensions.end() && shown->second.IsObject() && shown->second.Has("visible") &&
+                          shown->second.Get("visible").IsBool() && !shown->second.Get("visible").Get<bool>();
+  if (!in.visible || hidden_now) {
+    tg::Value::Object visibility = shown != node.extensions.end() && shown->second.IsObject()
+                                       ? shown->second.Get<tg::Value::Object>()
+                                       : tg::Value::Object{};
+    visibility["visible"] = tg::Value(in.visible);
+    node.extensions[node_visibility] = tg::Value(std::move(visibility));
+    declare_extension(model.extensionsUsed, node_visibility);
   }
   if (in.extras_json.empty()) return;
   const nlohmann::json extras = nlohmann::json::parse(in.extras_json);
@@ -3419,8 +3435,7 @@ void add_gpu_instances(tg::Model& model, tg::Buffer& data, const Node& in, tg::N
   tg::Value::Object ext;
   ext["attributes"] = tg::Value(std::move(attributes));
   node.extensions[gpu_instancing] = tg::Value(std::move(ext));
-  if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), gpu_instancing) == model.extensionsUsed.end())
-    model.extensionsUsed.push_back(gpu_instancing);
+  declare_extension(model.extensionsUsed, gpu_instancing);
 }
 
 // New node `i`'s morph weights, from the source nodes whose targets its mesh has in turn
@@ -3502,9 +3517,10 @@ void take_morph_weights(tg::Model& model, const Scene& scene, const std::vector<
 
 // A scene read from glTF may grow (lodkit lod on a skinned character adds a mesh and a node per
 // level): primitives past the source's meshes become new meshes (with the source's materials),
-// nodes past the source's nodes are appended (name, transform, mesh, skin, GPU instances, MSFT_lod and extras; a
-// child of its parent, in the default scene if Scene::roots lists it), and MSFT_lod ids and extras
-// set on the source's own nodes are applied. Everything else of the source stays as it was.
+// nodes past the source's nodes are appended (name, transform, mesh, skin, GPU instances, MSFT_lod,
+// visibility and extras; a child of its parent, in the default scene if Scene::roots lists it), and
+// MSFT_lod ids, visibility and extras set on the source's own nodes are applied. Everything else of
+// the source stays as it was.
 void add_to_source(tg::Model& model, const Scene& scene) {
   const size_t source_meshes = model.meshes.size();
   for (size_t i = 0; i < scene.primitives.size(); ++i) {
@@ -3531,7 +3547,7 @@ void add_to_source(tg::Model& model, const Scene& scene) {
   for (size_t i = 0; i < scene.nodes.size(); ++i) {
     const Node& in = scene.nodes[i];
     if (i < source_nodes) {
-      set_lod_and_extras(model, in, model.nodes[i]);
+      set_node_extensions(model, in, model.nodes[i]);
       continue;
     }
     tg::Node node;
@@ -3546,7 +3562,7 @@ void add_to_source(tg::Model& model, const Scene& scene) {
     }
     take_morph_weights(model, scene, in.morph_weights_of, i, source_nodes, node, new_data, merged_samplers);
     add_gpu_instances(model, new_data, in, node);
-    set_lod_and_extras(model, in, node);
+    set_node_extensions(model, in, node);
     set_transform(in, node);
     model.nodes.push_back(std::move(node));
     if (in.parent >= 0 && size_t(in.parent) < i) model.nodes[size_t(in.parent)].children.push_back(int(i));
@@ -3620,7 +3636,7 @@ tg::Model model_from_scene(const Scene& scene, std::vector<Slot>& slots) {
       }
       for (int32_t child : in.children)
         if (child >= 0 && size_t(child) < scene.nodes.size()) node.children.push_back(child);
-      set_lod_and_extras(model, in, node);
+      set_node_extensions(model, in, node);
       set_transform(in, node);
       model.nodes.push_back(std::move(node));
     }

@@ -674,6 +674,49 @@ TEST(GltfRead, NodeVisibilityHidesTheNodeAndWhatIsBelowIt) {
   expect_bad_input(file(nullptr, "no"), "visible.glb", "nodes[1].extensions.KHR_node_visibility.visible must be true or false");
 }
 
+// Visibility set in code is written: a hidden node of a Scene built without a source, a source node
+// hidden or shown again, and a hidden node added to a source all read back as set, and the
+// extension is declared where it is used.
+TEST(GltfWrite, NodeVisibilitySetInCodeIsWritten) {
+  TempDir dir;
+  Scene built;
+  Primitive prim;
+  prim.mesh = shapes::icosphere(1);
+  built.primitives.push_back(std::move(prim));
+  built.nodes.resize(2);
+  built.nodes[0].mesh = 0, built.nodes[0].children = {1};
+  built.nodes[1].mesh = 0, built.nodes[1].parent = 0, built.nodes[1].visible = false;
+  built.roots = {0};
+  write_scene(built, dir / "built.glb");
+  test::expect_valid_gltf({dir / "built.glb"});
+  Json doc = test::glb_json(dir / "built.glb");
+  EXPECT_FALSE(doc["nodes"][0].contains("extensions"));
+  EXPECT_EQ(doc["nodes"][1]["extensions"]["KHR_node_visibility"]["visible"], false);
+  EXPECT_EQ(doc["extensionsUsed"], Json::array({"KHR_node_visibility"}));
+  Scene scene = read_scene(dir / "built.glb");
+  EXPECT_TRUE(scene.nodes[0].visible);
+  EXPECT_FALSE(scene.nodes[1].visible);
+  EXPECT_EQ(flatten(scene).triangle_count(), built.primitives[0].mesh.triangle_count());
+
+  // From that source: node 1 shown again, node 0 hidden, a new hidden node under node 0.
+  scene.nodes[1].visible = true;
+  scene.nodes[0].visible = false;
+  Node added;
+  added.mesh = 0, added.parent = 0, added.visible = false;
+  scene.nodes.push_back(added);
+  write_scene(scene, dir / "source.glb");
+  test::expect_valid_gltf({dir / "source.glb"});
+  doc = test::glb_json(dir / "source.glb");
+  EXPECT_EQ(doc["extensionsUsed"], Json::array({"KHR_node_visibility"}));
+  const Scene back = read_scene(dir / "source.glb");
+  ASSERT_EQ(back.nodes.size(), 3u);
+  EXPECT_FALSE(back.nodes[0].visible);
+  EXPECT_TRUE(back.nodes[1].visible && back.nodes[1].has_visibility);
+  EXPECT_FALSE(back.nodes[2].visible);
+  EXPECT_EQ(back.nodes[2].parent, 0);
+  EXPECT_EQ(flatten(back).triangle_count(), 0u);
+}
+
 // Quantized (-q), the instanced mesh goes on the grid and each instance takes the grid in its own
 // transform (T + R (S o), S s): every instance lands within the step (times its scale, 2) of the
 // float file's, the node keeps its transform, and the old instance accessors are gone.
