@@ -3,8 +3,9 @@
 // buffers: an accepted document whose buffers name an external URI is a bug (it read a file, or
 // silently dropped a buffer). Then every primitive must validate, flatten() must give a valid mesh,
 // and write_gltf (.glb in a per-process temporary folder) -> read_gltf must give back the same
-// primitives (minus those without a triangle, which the writer drops), positions bit for bit; so
-// must the same scene with every primitive's vertices renumbered (Primitive::source_vertices),
+// primitives (minus those without a triangle, which the writer drops), positions bit for bit, and
+// every node shown or hidden as it was; so must the same scene with every primitive's vertices
+// renumbered (Primitive::source_vertices) and every node's visibility flipped,
 // written with EXT_meshopt_compression (triangles up to the codec's rotations; the scene itself also
 // with KHR_meshopt_compression at vertex codec version 1), and both must give
 // the same vertex classes (source_vertex_classes) and morph targets (source_morph_targets). Written
@@ -140,6 +141,11 @@ void check_round_trip(const Scene& scene, const std::string& stage, const WriteO
   std::filesystem::remove(file, ec);
   const std::optional<Scene> again =
       run_step(stage + ": read back", false, [&] { return read_gltf(*bytes, "round-trip.glb", {}, checked_read_options(stage)); });
+  // Every node comes back, shown or hidden as it was (KHR_node_visibility).
+  if (again->nodes.size() != scene.nodes.size())
+    fail(stage, "node count changed from " + std::to_string(scene.nodes.size()) + " to " + std::to_string(again->nodes.size()));
+  for (size_t n = 0; n < scene.nodes.size(); ++n)
+    if (again->nodes[n].visible != scene.nodes[n].visible) fail(stage, "node " + std::to_string(n) + "'s visibility changed");
   // The writer drops triangle primitives left without a triangle (glTF forbids empty accessors);
   // every other primitive must come back, in order.
   std::vector<size_t> kept;
@@ -192,8 +198,10 @@ void check_round_trip(const Scene& scene, const std::string& stage, const WriteO
 
 // Every primitive's vertices in reverse order, Primitive::source_vertices saying so: the writer then
 // gathers the streams lodkit does not model (morph targets, other attributes) from the source's
-// accessors, whatever their types, strides and sparse parts.
+// accessors, whatever their types, strides and sparse parts. Every node's visibility is flipped too,
+// for the writer to hide shown nodes and show hidden ones.
 Scene reversed(Scene scene) {
+  for (Node& node : scene.nodes) node.visible = !node.visible;
   for (Primitive& p : scene.primitives) {
     const size_t n = p.mesh.vertex_count();
     std::vector<uint32_t> remap(n);
