@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstddef>
 #include <exception>
+#include <functional>
 #include <latch>
 #include <thread>
 #include <vector>
@@ -64,6 +65,45 @@ void parallel_for(size_t count, unsigned threads, Fn&& fn, size_t block_size = 4
   });
 }
 
+// A batch of independent jobs of `sizes[i]` units of work each (meshes, by triangles): run(i,
+// job_threads, job_progress) for every i. Jobs under `side_by_side_below` units gain little from a
+// second thread, so they run side by side, one thread each (job_progress empty); larger ones first,
+// one at a time on all `threads` (job_progress their fraction done). `progress` (may be empty) gets
+// the batch's fraction, by units, from the calling thread only. Each job must give the same result
+// on any thread count; the batch then does too.
+template <class Run>
+void parallel_jobs(const std::vector<uint64_t>& sizes, uint64_t side_by_side_below, unsigned threads,
+                   const std::function<void(double)>& progress, Run&& run) {
+  const unsigned all = thread_count(threads);
+  std::vector<size_t> large, small;
+  for (size_t i = 0; i < sizes.size(); ++i) (all > 1 && sizes[i] < side_by_side_below ? small : large).push_back(i);
+  if (small.size() == 1) large.insert(std::upper_bound(large.begin(), large.end(), small[0]), small[0]), small.clear();
+  uint64_t total = 0;
+  for (const uint64_t size : sizes) total += std::max<uint64_t>(1, size);
+  const auto share = [&](size_t i) { return double(std::max<uint64_t>(1, sizes[i])) / double(total); };
+  std::atomic<uint64_t> small_done{0};  // units of the side-by-side jobs finished
+  double large_done = 0, reported = 0;
+  const std::thread::id caller = std::this_thread::get_id();
+  const auto report = [&](double fraction) {
+    if (!progress || std::this_thread::get_id() != caller) return;
+    reported = std::max(reported, std::min(1.0, fraction));
+    progress(reported);
+  };
+  for (const size_t i : large) {
+    const std::function<void(double)> job_progress = [&](double f) {
+      report(large_done + f * share(i) + double(small_done.load()) / double(total));
+    };
+    run(i, threads, job_progress);
+    large_done += share(i);
+  }
+  parallel_for(small.size(), threads, [&](size_t k) {
+    const size_t i = small[k];
+    run(i, 1u, std::function<void(double)>{});
+    small_done += std::max<uint64_t>(1, sizes[i]);
+    report(large_done + double(small_done.load()) / double(total));
+  }, 1);
+  if (progress && !sizes.empty()) progress(1.0);
+}
 // std::sort on up to `threads` threads. Elements that compare equal may end up in any order, so the
 // result is the same on any thread count only when they are identical (such as distinct keys).
 template <class It>

@@ -1,10 +1,8 @@
 // Discrete LOD chains: levels by ratio or error, simplified from the previous level or the input,
 // with certified error bounds, geomorph tables and an optional shared vertex buffer.
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <numeric>
-#include <thread>
 
 #include "core/parallel.h"
 #include "lod/internal.h"
@@ -185,51 +183,22 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
 
 std::vector<LodChain> build_lod_chains(std::span<const Mesh* const> meshes, const LodOptions& o) {
   check_options(o);
-  for (const Mesh* mesh : meshes)
+  std::vector<uint64_t> sizes;
+  for (const Mesh* mesh : meshes) {
     if (!mesh) throw_usage("lod: build_lod_chains needs a mesh behind every pointer");
-  // Below this many triangles a chain gains little from a second thread (lodkit lod --threads 1
-  // against 2: 1.0x on elephant's 5.6k, 1.2-1.3x on fandisk's 13k and camel's 20k, 1.5-1.6x on
-  // armadillo's 52k and bunny00's 75k), so such chains are built side by side, one thread each;
-  // larger ones one at a time on all threads. Each chain is the same on any thread count, so the
-  // split changes no output.
-  constexpr uint64_t side_by_side_triangles = uint64_t(1) << 15;
-  const unsigned threads = core::thread_count(o.simplify.threads);
-  std::vector<size_t> large, small;
-  for (size_t i = 0; i < meshes.size(); ++i)
-    (threads > 1 && meshes[i]->triangle_count() < side_by_side_triangles ? small : large).push_back(i);
-  if (small.size() == 1) large.insert(std::upper_bound(large.begin(), large.end(), small[0]), small[0]), small.clear();
-
-  // Progress: the finished chains' share of the triangles (+ the current large chain's fraction),
-  // reported from the calling thread only.
-  uint64_t total = 0;
-  for (const Mesh* mesh : meshes) total += std::max<uint64_t>(1, mesh->triangle_count());
-  const auto share = [&](size_t i) { return double(std::max<uint64_t>(1, meshes[i]->triangle_count())) / double(total); };
-  std::atomic<uint64_t> done_small{0};  // triangles of the small chains finished
-  double done_large = 0, reported = 0;
-  const std::thread::id caller = std::this_thread::get_id();
-  const auto report = [&](double fraction) {
-    if (!o.progress || std::this_thread::get_id() != caller) return;
-    reported = std::max(reported, std::min(1.0, fraction));
-    o.progress(reported);
-  };
-
-  std::vector<LodChain> chains(meshes.size());
-  for (const size_t i : large) {
-    LodOptions one = o;
-    one.progress = [&](double f) { report(done_large + f * share(i) + double(done_small.load()) / double(total)); };
-    chains[i] = build_lod_chain(*meshes[i], one);
-    done_large += share(i);
+    sizes.push_back(mesh->triangle_count());
   }
-  core::parallel_for(small.size(), threads, [&](size_t k) {
-    const size_t i = small[k];
-    LodOptions one = o;
-    one.simplify.threads = 1;
-    one.progress = nullptr;
-    chains[i] = build_lod_chain(*meshes[i], one);
-    done_small += std::max<uint64_t>(1, meshes[i]->triangle_count());
-    report(done_large + double(done_small.load()) / double(total));
-  }, 1);
-  if (o.progress && !meshes.empty()) o.progress(1.0);
+  // Below 2^15 triangles a chain gains little from a second thread (lodkit lod --threads 1 against
+  // 2: 1.0x on elephant's 5.6k, 1.2-1.3x on fandisk's 13k and camel's 20k, 1.5-1.6x on armadillo's
+  // 52k and bunny00's 75k).
+  std::vector<LodChain> chains(meshes.size());
+  core::parallel_jobs(sizes, uint64_t(1) << 15, o.simplify.threads, o.progress,
+                      [&](size_t i, unsigned threads, const std::function<void(double)>& progress) {
+                        LodOptions one = o;
+                        one.simplify.threads = threads;
+                        one.progress = progress;
+                        chains[i] = build_lod_chain(*meshes[i], one);
+                      });
   return chains;
 }
 
