@@ -12,6 +12,7 @@
 #   scripts/bench.sh compress [RUNS=5]
 #   scripts/bench.sh instanced [RUNS=3]
 #   scripts/bench.sh turntable [RUNS=3]
+#   scripts/bench.sh parts [RUNS=3]
 #
 # io: loads a binary PLY and an OBJ of >= 3M triangles (bunny00.off subdivided 1->4) with lodkit and
 # with Assimp, each loader in its own process under /usr/bin/time -v; prints a markdown table of
@@ -67,6 +68,12 @@
 # and peak RSS; output sizes plain and with -c -q (bench/lod/turntable.py); writes
 # bench/results/turntable.json.
 #
+# parts: lodkit lod on 200 small meshes (288 triangles each), each drawn by its own animated node (one
+# chain per mesh, the small chains built side by side one thread each), with --threads 1 and --threads 0
+# (all cores): median wall time and build_seconds, peak RSS, output size, the one-thread / all-threads
+# ratio; both settings must write byte-identical files and the report must list 200 "animated" chains
+# (bench/lod/parts.py); writes bench/results/parts.json.
+#
 # The build is the release preset (build/release); LODKIT_BENCH_BUILD=DIR uses another configured
 # build directory instead.
 set -euo pipefail
@@ -74,7 +81,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 usage() {
-  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5] | compress [RUNS=5] | morphs [RUNS=3] | instanced [RUNS=3] | turntable [RUNS=3]" >&2
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5] | compress [RUNS=5] | morphs [RUNS=3] | instanced [RUNS=3] | turntable [RUNS=3] | parts [RUNS=3]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -301,9 +308,10 @@ area_compress() {
   echo "whole run: $((SECONDS - started)) s"
 }
 
-# ---- instanced and turntable: lod on a scene a Python script writes ------------------------------
+# ---- instanced, turntable and parts: lod on a scene a Python script writes -----------------------
 # instanced: a forest, GPU instances against plain nodes (bench/lod/instanced.py); turntable: meshes
-# below one animated node, one group chain against one per mesh (bench/lod/turntable.py, corpus meshes).
+# below one animated node, one group chain against one per mesh (bench/lod/turntable.py, corpus meshes);
+# parts: many small animated meshes, one chain each, one thread against all (bench/lod/parts.py).
 area_lod_scene() {
   local name=$1
   shift
@@ -429,5 +437,6 @@ case $area in
   morphs) area_morphs "$@" ;;
   instanced) area_lod_scene instanced "$@" ;;
   turntable) area_lod_scene turntable "$@" ;;
+  parts) area_lod_scene parts "$@" ;;
   *) usage ;;
 esac
