@@ -1,12 +1,15 @@
 """What the lod bench scripts share: their inputs as .glb written by hand (no lodkit, no glTF
-library), and a timed `lodkit lod` run.
+library), a timed `lodkit lod` run, and their command line (main).
 
 GlbBuilder: accessors go into one buffer, each in a view of its own (4-byte aligned); write() adds
 the views, accessors and buffer to the given glTF JSON and writes the GLB container.
 """
 import json
+import os
 import struct
 import subprocess
+import sys
+import tempfile
 import time
 
 
@@ -20,6 +23,26 @@ def run_lod(lodkit, src, out, extra=()):
         raise RuntimeError(f"lodkit lod {src}: {r.stderr.strip()[-300:]}")
     rss = next(int(l.split(":")[1]) for l in r.stderr.splitlines() if "Maximum resident set size" in l)
     return wall, rss / 1024, json.loads(r.stdout)
+
+
+def main(doc, run, defaults):
+    """The scripts' command line, `LODKIT OUT.json [--NAME VALUE]... [--out DIR]`: calls
+    run(lodkit, out_json, options, work_dir), options keyed by the names in `defaults`, each as its
+    default's type; work_dir is DIR (made if needed) or a temporary folder removed afterwards. Exits
+    0 when run returns true, 1 otherwise; with fewer than two arguments, prints `doc`."""
+    args = sys.argv[1:]
+    if len(args) < 2:
+        sys.exit(doc)
+    option = lambda name, default: type(default)(args[args.index(f"--{name}") + 1]) if f"--{name}" in args else default
+    options = {name: option(name, default) for name, default in defaults.items()}
+    out_dir = option("out", "")
+    if out_dir:
+        os.makedirs(out_dir, exist_ok=True)
+        ok = run(args[0], args[1], options, out_dir)
+    else:
+        with tempfile.TemporaryDirectory() as tmp:
+            ok = run(args[0], args[1], options, tmp)
+    sys.exit(0 if ok else 1)
 
 
 class GlbBuilder:

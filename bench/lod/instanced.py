@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """`lodkit lod` on a forest: one mesh drawn many times, as GPU instances against as plain nodes.
 
-usage: instanced.py LODKIT OUT.json [--runs N] [--trees N]
+usage: instanced.py LODKIT OUT.json [--runs N] [--trees N] [--out DIR]
 
 The forest is written here, without lodkit: a torus of 64 x 32 quads (4,096 triangles) on a grid of
 N trees (default 100), each turned and scaled a little. Two files describe the same scene:
@@ -20,10 +20,8 @@ import os
 import statistics
 import struct
 import subprocess
-import sys
-import tempfile
 
-from common import GlbBuilder, run_lod
+from common import GlbBuilder, main, run_lod
 
 
 def torus(segments=64, sides=32, major=1.0, minor=0.3):
@@ -80,28 +78,21 @@ def lod(lodkit, src, out):
     return run_lod(lodkit, src, out)
 
 
-def main():
-    args = sys.argv[1:]
-    if len(args) < 2:
-        sys.exit(__doc__)
-    lodkit, out_json = args[0], args[1]
-    runs = int(args[args.index("--runs") + 1]) if "--runs" in args else 3
-    trees = int(args[args.index("--trees") + 1]) if "--trees" in args else 100
+def run(lodkit, out_json, runs, trees, tmp):
     rows = {}
-    with tempfile.TemporaryDirectory() as tmp:
-        for name, instanced in (("instanced", True), ("nodes", False)):
-            src = os.path.join(tmp, f"{name}.glb")
-            out = os.path.join(tmp, f"{name}-lod.glb")
-            write_glb(src, instanced, trees)
-            results = [lod(lodkit, src, out) for _ in range(runs)]
-            report = results[-1][2]
-            chain = report["instanced"][0] if report.get("instanced") else report
-            compare = json.loads(subprocess.run([lodkit, "compare", src, out, "--json"], capture_output=True, text=True,
-                                                check=True).stdout)
-            h = max(compare["a_to_b"]["relative_hausdorff"], compare["b_to_a"]["relative_hausdorff"])
-            rows[name] = {"input_bytes": os.path.getsize(src), "seconds": statistics.median(r[0] for r in results),
-                          "peak_rss_mib": statistics.median(r[1] for r in results), "output_bytes": os.path.getsize(out),
-                          "levels": [l["triangles"] for l in chain["levels"]], "level0_hausdorff": h}
+    for name, instanced in (("instanced", True), ("nodes", False)):
+        src = os.path.join(tmp, f"{name}.glb")
+        out = os.path.join(tmp, f"{name}-lod.glb")
+        write_glb(src, instanced, trees)
+        results = [lod(lodkit, src, out) for _ in range(runs)]
+        report = results[-1][2]
+        chain = report["instanced"][0] if report.get("instanced") else report
+        compare = json.loads(subprocess.run([lodkit, "compare", src, out, "--json"], capture_output=True, text=True,
+                                            check=True).stdout)
+        h = max(compare["a_to_b"]["relative_hausdorff"], compare["b_to_a"]["relative_hausdorff"])
+        rows[name] = {"input_bytes": os.path.getsize(src), "seconds": statistics.median(r[0] for r in results),
+                      "peak_rss_mib": statistics.median(r[1] for r in results), "output_bytes": os.path.getsize(out),
+                      "levels": [l["triangles"] for l in chain["levels"]], "level0_hausdorff": h}
     print(f"## lod on a forest of {trees} tori (4,096 triangles each), medians of {runs}")
     print()
     print("| input | lodkit lod s | peak RSS MiB | output KiB | level triangles | level 0 vs input (Hausdorff / diag) |")
@@ -117,8 +108,8 @@ def main():
     ok = all(r["level0_hausdorff"] < 1e-5 for r in rows.values())
     print(f"level 0 draws the input: {'PASS' if ok else 'FAIL'}")
     json.dump({"trees": trees, "runs": runs, "rows": rows}, open(out_json, "w"), indent=2)
-    sys.exit(0 if ok else 1)
+    return ok
 
 
 if __name__ == "__main__":
-    main()
+    main(__doc__, lambda lodkit, out_json, o, tmp: run(lodkit, out_json, o["runs"], o["trees"], tmp), {"runs": 3, "trees": 100})

@@ -23,9 +23,8 @@ import os
 import statistics
 import struct
 import sys
-import tempfile
 
-from common import GlbBuilder, run_lod
+from common import GlbBuilder, main, run_lod
 
 GRID = 12  # quads per side
 ROW = 20  # nodes per row
@@ -132,23 +131,6 @@ def run(lodkit, out_json, runs, meshes, tmp):
     return identical and chains_ok and level0_ok
 
 
-def main():
-    args = sys.argv[1:]
-    if len(args) < 2:
-        sys.exit(__doc__)
-    lodkit, out_json = args[0], args[1]
-    option = lambda name, default: args[args.index(name) + 1] if name in args else default
-    runs = int(option("--runs", 3))
-    meshes = int(option("--meshes", 200))
-    out_dir = option("--out", None)
-    if out_dir:
-        os.makedirs(out_dir, exist_ok=True)
-        ok = run(lodkit, out_json, runs, meshes, out_dir)
-    else:
-        with tempfile.TemporaryDirectory() as tmp:
-            ok = run(lodkit, out_json, runs, meshes, tmp)
-    sys.exit(0 if ok else 1)
-
-
 if __name__ == "__main__":
-    main()
+    main(__doc__, lambda lodkit, out_json, o, tmp: run(lodkit, out_json, o["runs"], o["meshes"], tmp),
+         {"runs": 3, "meshes": 200})

@@ -26,9 +26,8 @@ import os
 import statistics
 import struct
 import sys
-import tempfile
 
-from common import GlbBuilder, run_lod
+from common import GlbBuilder, main, run_lod
 
 RATIOS = "1,0.1,0.01,0.002"
 MODELS = ["bunny00", "cow", "elephant", "camel", "bull", "armadillo"]
@@ -219,24 +218,7 @@ def run(lodkit, out_json, runs, corpus, models, tmp):
     return level0_ok
 
 
-def main():
-    args = sys.argv[1:]
-    if len(args) < 2:
-        sys.exit(__doc__)
-    lodkit, out_json = args[0], args[1]
-    option = lambda name, default: args[args.index(name) + 1] if name in args else default
-    runs = int(option("--runs", 3))
-    corpus = option("--corpus", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "data", "corpus"))
-    models = option("--models", ",".join(MODELS)).split(",")
-    out_dir = option("--out", None)
-    if out_dir:
-        os.makedirs(out_dir, exist_ok=True)
-        ok = run(lodkit, out_json, runs, corpus, models, out_dir)
-    else:
-        with tempfile.TemporaryDirectory() as tmp:
-            ok = run(lodkit, out_json, runs, corpus, models, tmp)
-    sys.exit(0 if ok else 1)
-
-
 if __name__ == "__main__":
-    main()
+    main(__doc__, lambda lodkit, out_json, o, tmp: run(lodkit, out_json, o["runs"], o["corpus"], o["models"].split(","), tmp),
+         {"runs": 3, "corpus": os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "data", "corpus"),
+          "models": ",".join(MODELS)})
