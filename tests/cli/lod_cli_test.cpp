@@ -1550,14 +1550,37 @@ TEST(CliLod, SkinnedCharactersPropsGetChainsToo) {
   ASSERT_EQ(out.nodes[ball_node].children.size(), 1u);
   EXPECT_EQ(out.nodes[size_t(out.nodes[ball_node].children[0])].name, "ball_LOD0");
   expect_posed_alike(in, out, {0.0f, 0.3f, 0.7f});
+
+  // --morph: the props' chains get geomorphs (a morph target on each level but the last, named in
+  // its node's extras); the character's chain stays as it was (it morphs at run time, a glTF morph
+  // target could not move its joint weights). Level 0 still draws the input in every pose.
+  const nlohmann::json morphed = lod_report(dir.path, "props.glb", "props-morph.glb", {"--ratios", "1,0.4", "--poses", "4", "--morph"});
+  EXPECT_EQ(morphed["skinned"]["chains"], alone["skinned"]["chains"]);
+  EXPECT_EQ(morphed["static"]["geomorphs"], true);
+  EXPECT_EQ(morphed["animated"][0]["geomorphs"], true);
+  EXPECT_FALSE(morphed["skinned"]["chains"][0].contains("geomorphs"));
+  const nlohmann::json doc = test::glb_json(dir / "props-morph.glb");
+  std::vector<std::string> morphing;
+  for (const nlohmann::json& node : doc["nodes"]) {
+    if (!node.contains("extras") || !node["extras"].contains("LODKIT_geomorph")) continue;
+    morphing.push_back(node.value("name", ""));
+    EXPECT_FALSE(node.contains("skin")) << morphing.back();
+    EXPECT_EQ(doc["meshes"][node["mesh"].get<size_t>()]["primitives"][0]["targets"].size(), 1u) << morphing.back();
+  }
+  std::sort(morphing.begin(), morphing.end());
+  EXPECT_EQ(morphing, (std::vector<std::string>{"LOD0", "ball_LOD0"}));
+  expect_posed_alike(in, read_scene(dir / "props-morph.glb"), {0.0f, 0.3f, 0.7f});
 }
 
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {
   test::TempDir dir;
   write_scene(fixtures::humanoid_scene(), dir / "humanoid.glb");
+  // A character alone has nothing for --morph to morph (props would: SkinnedCharactersPropsGetChainsToo).
   for (const char* flag : {"--morph"}) {
     const test::RunResult r = test::run_cli({"lod", (dir / "humanoid.glb").string(), "-o", (dir / "x.glb").string(), flag});
     EXPECT_EQ(r.exit_code, 1) << flag << ": " << r.err;
+    EXPECT_NE(r.err.find("nothing else to morph"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.glb"));
   }
   const test::RunResult bad = test::run_cli(
       {"lod", (dir / "humanoid.glb").string(), "-o", (dir / "x.glb").string(), "--skin-mode", "rigid"});

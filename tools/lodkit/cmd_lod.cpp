@@ -737,7 +737,12 @@ Command register_lod(CLI::App& root) {
             std::vector<StaticChain> chains;  // the static and separate ones
             start = std::chrono::steady_clock::now();
             if (!skinned.empty()) {
-              if (o->morph) throw_usage("--morph: skinned input morphs at run time (lod::SkinnedGeomorph), not as glTF morph targets");
+              // A glTF morph target moves a vertex but not its joint weights, so a skinned level's
+              // geomorph would not land on the next level in a pose: skinned chains morph at run time
+              // (lod::SkinnedGeomorph), and --morph gives only the props' chains theirs.
+              if (o->morph && mesh.triangle_count() == 0 && separate.empty())
+                throw_usage("--morph: skinned input morphs at run time (lod::SkinnedGeomorph), not as glTF morph targets, "
+                            "and this input has nothing else to morph");
               const SkinMode mode = parse_skin_mode(o->skin_mode);
               if (!o->lpm.empty() && mode == SkinMode::houle)
                 throw_usage("--lpm: --skin-mode houle simplifies in one pose, so its collapse record is not in bind "
@@ -747,7 +752,9 @@ Command register_lod(CLI::App& root) {
               if (!o->lpm.empty() && primitives.size() > 1)
                 throw_usage(fmt::format("--lpm: the input has {} skinned meshes, and a .lpm file holds one", primitives.size()));
               ProgressBar bar("building skinned LODs");
-              reports = build_skinned(scene, skinned, mode, o->poses, options, [&](double f) { bar.update(f); });
+              LodOptions skinned_options = options;
+              skinned_options.morph = false;
+              reports = build_skinned(scene, skinned, mode, o->poses, skinned_options, [&](double f) { bar.update(f); });
             }
             const size_t first_chain = reports.size();
             // A skinned character's props: a chain when there are triangles (the character alone
@@ -853,11 +860,15 @@ Command register_lod(CLI::App& root) {
                 if (r.instances && r.animated) c["animated"] = true;
                 if ((r.instances || r.animated) && r.switched) c["visibility"] = true;
                 if (r.group_meshes) c["group_nodes"] = r.group_meshes;
+                if (!r.chain.morphs.empty()) c["geomorphs"] = true;
                 if (k < first_chain) listed.push_back(std::move(c));
                 else if (r.instances) instanced.push_back(std::move(c));
                 else if (r.animated) animated.push_back(std::move(c));
                 else if (r.switched) switched.push_back(std::move(c));
-                else still = {{"diagonal", r.chain.diagonal}, {"levels", levels_json(r)}};
+                else {
+                  still = {{"diagonal", r.chain.diagonal}, {"levels", levels_json(r)}};
+                  if (!r.chain.morphs.empty()) still["geomorphs"] = true;
+                }
               }
               nlohmann::json j = {{"input", o->input}, {"output", o->output}, {"diagonal", reports[0].chain.diagonal},
                                   {"levels", levels_json(reports[0])}, {"load_seconds", load_seconds},
@@ -894,6 +905,8 @@ Command register_lod(CLI::App& root) {
               fmt::print("error: Hausdorff distance to the input (measured{}); bound: certified upper bound; switch at: the "
                          "distance where the bound is {} px ({} px screen, {} deg fov)\n",
                          skinned.empty() ? "" : ", bind pose", o->error_px, o->screen_height, o->fov_degrees);
+              if (o->morph && !skinned.empty())
+                fmt::print("geomorphs: on the other chains; the skinned ones morph at run time (lod::SkinnedGeomorph)\n");
               if (head.form.flat_shaded) fmt::print("flat-shaded: each level built without the normals, faceted again\n");
               if (head.form.double_sided) fmt::print("double-sided: each level built on the fronts, backs made again\n");
               if (morph_targets)
