@@ -865,10 +865,7 @@ Command register_lod(CLI::App& root) {
                 else if (r.instances) instanced.push_back(std::move(c));
                 else if (r.animated) animated.push_back(std::move(c));
                 else if (r.switched) switched.push_back(std::move(c));
-                else {
-                  still = {{"diagonal", r.chain.diagonal}, {"levels", levels_json(r)}};
-                  if (!r.chain.morphs.empty()) still["geomorphs"] = true;
-                }
+                else still = std::move(c), still.erase("node");  // (the static chain has none)
               }
               nlohmann::json j = {{"input", o->input}, {"output", o->output}, {"diagonal", reports[0].chain.diagonal},
                                   {"levels", levels_json(reports[0])}, {"load_seconds", load_seconds},
