@@ -1570,6 +1570,128 @@ TEST(CliLod, SkinnedCharactersPropsGetChainsToo) {
   std::sort(morphing.begin(), morphing.end());
   EXPECT_EQ(morphing, (std::vector<std::string>{"LOD0", "ball_LOD0"}));
   expect_posed_alike(in, read_scene(dir / "props-morph.glb"), {0.0f, 0.3f, 0.7f});
+
+  // The rock as glTF mesh 0, before the character's: its triangles leave the document (the static
+  // chain has them), and the character's levels still share level 0's vertex buffer.
+  Scene rock_first = input;
+  const auto swapped = [](int32_t mesh) { return mesh == 0 ? 1 : mesh == 1 ? 0 : mesh; };
+  for (Primitive& p : rock_first.primitives) p.gltf_mesh = uint32_t(swapped(int32_t(p.gltf_mesh)));
+  for (Node& n : rock_first.nodes) n.mesh = swapped(n.mesh);
+  std::rotate(rock_first.primitives.begin(), rock_first.primitives.begin() + 1, rock_first.primitives.begin() + 2);  // (the writer numbers meshes by first appearance)
+  write_scene(rock_first, dir / "rock-first.glb");
+  ASSERT_EQ(read_scene(dir / "rock-first.glb").primitives[0].mesh.triangle_count(), rock.triangle_count());
+  const nlohmann::json shared = lod_report(dir.path, "rock-first.glb", "rock-first-lod.glb", {"--ratios", "1,0.4", "--poses", "4", "--shared-vertices"});
+  ASSERT_EQ(shared["skinned"]["chains"].size(), 1u);
+  EXPECT_EQ(shared["static"]["levels"][0]["triangles"], rock.triangle_count());
+  expect_posed_alike(read_scene(dir / "rock-first.glb"), read_scene(dir / "rock-first-lod.glb"), {0.0f, 0.7f});
+}
+
+// Border edges of a mesh welded by position (exactly equal floats): its open cracks and holes.
+size_t welded_border_edges(const Mesh& m) {
+  std::map<std::tuple<float, float, float>, uint32_t> id;
+  std::vector<uint32_t> at(m.vertex_count());
+  for (size_t v = 0; v < m.vertex_count(); ++v)
+    at[v] = id.try_emplace({m.positions[v].x, m.positions[v].y, m.positions[v].z}, uint32_t(id.size())).first->second;
+  std::map<std::pair<uint32_t, uint32_t>, int> uses;
+  for (size_t t = 0; t < m.triangle_count(); ++t)
+    for (size_t c = 0; c < 3; ++c) {
+      const uint32_t a = at[m.indices[3 * t + c]], b = at[m.indices[3 * t + (c + 1) % 3]];
+      ++uses[{std::min(a, b), std::max(a, b)}];
+    }
+  return size_t(std::count_if(uses.begin(), uses.end(), [](const auto& e) { return e.second == 1; }));
+}
+
+// A skinned node drawing two primitives (materials): the humanoid (closed) split down its middle,
+// x < 0 and x >= 0 by triangle centre, each half its own vertex buffer (the vertices along the cut
+// in both). Simplified together: every level's glTF mesh has both halves with their materials,
+// level 0 draws the input in every pose, and the cut stays closed: a level's triangles, welded by
+// position, have no border edge. (Simplified apart, each half's border along the cut would move on
+// its own, and open.) With one vertex buffer, each half keeps its own, which its coarser levels
+// share. A .lpm holds the joined halves.
+TEST(CliLod, ASkinnedNodesMaterialsAreSimplifiedTogether) {
+  test::TempDir dir;
+  Scene input = fixtures::humanoid_scene();
+  const Mesh whole = input.primitives[0].mesh;
+  ASSERT_EQ(welded_border_edges(whole), 0u);
+  std::array<Mesh, 2> halves;
+  std::array<std::vector<uint32_t>, 2> remap = {std::vector<uint32_t>(whole.vertex_count(), ~0u),
+                                                std::vector<uint32_t>(whole.vertex_count(), ~0u)};
+  for (size_t t = 0; t < whole.triangle_count(); ++t) {
+    float x = 0;
+    for (size_t c = 0; c < 3; ++c) x += whole.positions[whole.indices[3 * t + c]].x;
+    const size_t h = x < 0 ? 0 : 1;
+    for (size_t c = 0; c < 3; ++c) {
+      const uint32_t v = whole.indices[3 * t + c];
+      if (remap[h][v] == ~0u) remap[h][v] = uint32_t(halves[h].vertex_count()), append_vertex(halves[h], whole, v);
+      halves[h].indices.push_back(remap[h][v]);
+    }
+  }
+  size_t cut = 0;  // vertices in both halves
+  for (size_t v = 0; v < whole.vertex_count(); ++v) cut += remap[0][v] != ~0u && remap[1][v] != ~0u;
+  ASSERT_GT(cut, 50u);
+  input.material_names = {"left", "right"};
+  input.primitives.clear();
+  for (uint32_t h = 0; h < 2; ++h) {
+    Primitive p;
+    p.mesh = halves[h], p.material = int32_t(h), p.gltf_mesh = 0, p.gltf_primitive = h;
+    input.primitives.push_back(std::move(p));
+  }
+  write_scene(input, dir / "halves.glb");
+  const Scene in = read_scene(dir / "halves.glb");
+  ASSERT_EQ(in.primitives.size(), 2u);
+  ASSERT_EQ(skinned_primitives(in).size(), 2u);
+  const size_t node = in.nodes.size() - 1;  // the skinned node (the joints come first)
+  ASSERT_EQ(in.nodes[node].skin, 0);
+
+  for (const bool shared : {false, true}) {
+    SCOPED_TRACE(shared);
+    std::vector<std::string> options = {"--ratios", "1,0.4,0.1", "--poses", "4", "--lpm", (dir / "h.lpm").string()};
+    if (shared) options.push_back("--shared-vertices");
+    const nlohmann::json report = lod_report(dir.path, "halves.glb", "lod.glb", options);
+    ASSERT_EQ(report["skinned"]["chains"].size(), 1u);
+    const nlohmann::json& levels = report["skinned"]["chains"][0]["levels"];
+    ASSERT_EQ(levels.size(), 3u);
+    EXPECT_EQ(levels[0]["triangles"], whole.triangle_count());
+    const Scene out = read_scene(dir / "lod.glb");
+    expect_posed_alike(in, out, {0.0f, 0.5f});
+    const std::vector<int32_t>& ids = out.nodes[node].lod_ids;
+    ASSERT_EQ(ids.size(), 2u);
+    std::vector<int32_t> meshes = {0};
+    for (const int32_t id : ids) {
+      EXPECT_EQ(out.nodes[size_t(id)].skin, 0);
+      meshes.push_back(out.nodes[size_t(id)].mesh);
+    }
+    std::array<int32_t, 2> level0 = {-1, -1};  // the halves' scene primitives at level 0
+    for (size_t i = 0; i < meshes.size(); ++i) {
+      SCOPED_TRACE(i);
+      Mesh level;  // both halves, as one mesh
+      std::vector<int32_t> materials;
+      for (size_t p = 0; p < out.primitives.size(); ++p) {
+        const Primitive& prim = out.primitives[p];
+        if (int32_t(prim.gltf_mesh) != meshes[i]) continue;
+        materials.push_back(prim.material);
+        if (i == 0) level0[size_t(prim.material)] = int32_t(p);
+        const uint32_t base = uint32_t(level.vertex_count());
+        for (uint32_t v = 0; v < prim.mesh.vertex_count(); ++v) append_vertex(level, prim.mesh, v);
+        for (const uint32_t index : prim.mesh.indices) level.indices.push_back(base + index);
+      }
+      EXPECT_EQ(materials, (std::vector<int32_t>{0, 1}));
+      EXPECT_EQ(level.triangle_count(), levels[i]["triangles"].get<size_t>());
+      EXPECT_EQ(welded_border_edges(level), 0u);
+    }
+    // One vertex buffer: each coarser level's halves read level 0's halves' attributes.
+    const nlohmann::json doc = glb_json(dir / "lod.glb");
+    for (size_t i = 1; i < meshes.size() && shared; ++i)
+      for (size_t h = 0; h < 2; ++h)
+        EXPECT_EQ(doc["meshes"][size_t(meshes[i])]["primitives"][h]["attributes"]["POSITION"],
+                  doc["meshes"][0]["primitives"][h]["attributes"]["POSITION"]) << i << " " << h;
+
+    ProgressiveMesh pm = read_progressive_mesh(dir / "h.lpm");
+    EXPECT_EQ(pm.input().triangle_count(), whole.triangle_count());
+    EXPECT_EQ(std::set<uint32_t>(pm.input().materials.begin(), pm.input().materials.end()), (std::set<uint32_t>{1, 2}));
+    pm.set_collapses(pm.collapse_count());
+    EXPECT_EQ(welded_border_edges(pm.mesh()), 0u);
+  }
 }
 
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {
@@ -1582,6 +1704,19 @@ TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {
     EXPECT_NE(r.err.find("nothing else to morph"), std::string::npos) << r.err;
     EXPECT_FALSE(std::filesystem::exists(dir / "x.glb"));
   }
+  // A skinned mesh's primitives are simplified together, which needs the same streams in each (a
+  // stream one lacked would be dropped from all).
+  Scene mixed = fixtures::humanoid_scene();
+  mixed.material_names = {"a", "b"};
+  mixed.primitives.push_back(mixed.primitives[0]);
+  mixed.primitives[0].material = 0;
+  mixed.primitives[1].material = 1, mixed.primitives[1].gltf_primitive = 1, mixed.primitives[1].mesh.normals.clear();
+  ASSERT_FALSE(mixed.primitives[0].mesh.normals.empty());
+  write_scene(mixed, dir / "mixed.glb");
+  const test::RunResult streams = test::run_cli({"lod", (dir / "mixed.glb").string(), "-o", (dir / "x.glb").string()});
+  EXPECT_EQ(streams.exit_code, 1);
+  EXPECT_NE(streams.err.find("different vertex streams (primitives 0 and 1 of glTF mesh 0)"), std::string::npos) << streams.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.glb"));
   const test::RunResult bad = test::run_cli(
       {"lod", (dir / "humanoid.glb").string(), "-o", (dir / "x.glb").string(), "--skin-mode", "rigid"});
   EXPECT_EQ(bad.exit_code, 1);

@@ -211,28 +211,84 @@ std::vector<uint32_t> GeometryFile::vertex_classes(size_t i) const {
   return as_scene_ ? source_vertex_classes(scene_, i) : std::vector<uint32_t>{};
 }
 
+uint32_t stream_layout(const Mesh& m) {
+  uint32_t bits = 0, bit = 1;
+  for (const bool empty : {m.normals.empty(), m.tangents.empty(), m.uvs[0].empty(), m.uvs[1].empty(), m.uvs[2].empty(),
+                           m.uvs[3].empty(), m.colors.empty(), m.joints.empty(), m.weights.empty(), m.joints1.empty(),
+                           m.weights1.empty()}) {
+    if (!empty) bits |= bit;
+    bit <<= 1;
+  }
+  return bits;
+}
+
 std::vector<std::vector<size_t>> GeometryFile::joint_groups() const {
   if (!as_scene_) return {{0}};
   // Primitives with other streams stay apart: joining them would drop or invent values (see flatten).
-  const auto layout = [](const Mesh& m) {
-    uint32_t bits = 0, bit = 1;
-    for (const bool empty : {m.normals.empty(), m.tangents.empty(), m.uvs[0].empty(), m.uvs[1].empty(),
-                               m.uvs[2].empty(), m.uvs[3].empty(), m.colors.empty(), m.joints.empty(),
-                               m.weights.empty(), m.joints1.empty(), m.weights1.empty()}) {
-      if (!empty) bits |= bit;
-      bit <<= 1;
-    }
-    return bits;
-  };
   std::vector<std::vector<size_t>> groups;
   std::map<std::pair<uint32_t, uint32_t>, size_t> group_of;  // (glTF mesh, layout) -> group
   for (size_t i = 0; i < scene_.primitives.size(); ++i) {
     const Primitive& p = scene_.primitives[i];
-    const auto [it, added] = group_of.try_emplace({p.gltf_mesh, layout(p.mesh)}, groups.size());
+    const auto [it, added] = group_of.try_emplace({p.gltf_mesh, stream_layout(p.mesh)}, groups.size());
     if (added) groups.emplace_back();
     groups[it->second].push_back(i);
   }
   return groups;
+}
+
+Joined join_members(std::span<const Mesh* const> members) {
+  Joined j;
+  j.offsets = {0};
+  if (members.size() == 1) {
+    j.alone = members[0];
+    j.offsets.push_back(uint32_t(members[0]->vertex_count()));
+    return j;
+  }
+  Scene scene;  // no nodes: flatten takes each primitive once, untransformed, in order
+  for (size_t k = 0; k < members.size(); ++k) {
+    Primitive p;
+    p.mesh = *members[k];
+    p.material = int32_t(k);
+    j.offsets.push_back(j.offsets.back() + uint32_t(p.mesh.vertex_count()));
+    scene.primitives.push_back(std::move(p));
+  }
+  j.joined = flatten(scene);
+  return j;
+}
+
+std::vector<Member> split_members(const std::vector<uint32_t>& offsets, Mesh mesh, std::vector<uint32_t> origin,
+                                  std::vector<uint32_t> successor) {
+  if (offsets.size() < 2) throw_internal("split_members: no members");
+  std::vector<Member> members(offsets.size() - 1);
+  if (members.size() == 1) {
+    members[0] = {std::move(mesh), std::move(origin), std::move(successor)};
+    return members;
+  }
+  std::vector<uint32_t> index(mesh.vertex_count(), ~0u);   // joined vertex -> its member's
+  std::vector<uint32_t> member(mesh.vertex_count(), ~0u);  // joined vertex -> its member
+  for (MaterialPart& part : split_by_material(mesh)) {
+    const size_t k = size_t(part.material) - 1;
+    if (part.material == 0 || k >= members.size())
+      throw_internal("split_members: a joined mesh's part has material id " + std::to_string(part.material));
+    members[k].mesh = std::move(part.mesh);
+    for (uint32_t i = 0; i < part.vertices.size(); ++i) {
+      const uint32_t v = part.vertices[i];
+      index[v] = i, member[v] = uint32_t(k);
+      if (origin.empty()) continue;
+      // Wedges continue within their material, so a member's vertex comes from its own input.
+      const uint32_t from = origin[v];
+      if (from < offsets[k] || from >= offsets[k + 1]) throw_internal("split_members: a joined mesh's vertex continues another member's");
+      members[k].origin.push_back(from - offsets[k]);
+    }
+  }
+  for (size_t k = 0; k < members.size() && !successor.empty(); ++k) {
+    for (uint32_t v = offsets[k]; v < offsets[k + 1]; ++v) {
+      const uint32_t to = successor[v];
+      // Its own member's vertex (a wedge relinked across a material border would not be).
+      members[k].successor.push_back(to != ~0u && member[to] == k ? index[to] : ~0u);
+    }
+  }
+  return members;
 }
 
 Command register_convert(CLI::App& root) {

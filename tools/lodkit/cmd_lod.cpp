@@ -185,6 +185,13 @@ nlohmann::json level_facts(const ChainReport& r, size_t i) {
 // character's, which its chains left in place; meshes past the source's are new levels).
 void drop_chained_meshes(Scene& scene, const std::set<int32_t>& kept) {
   const auto chained = [&](int32_t mesh) { return mesh >= 0 && uint32_t(mesh) < scene.gltf_mesh_count && !kept.count(mesh); };
+  // Those left keep the primitives whose vertices they share, renumbered.
+  std::vector<int32_t> index(scene.primitives.size(), -1);
+  int32_t kept_count = 0;
+  for (size_t i = 0; i < scene.primitives.size(); ++i)
+    if (!chained(int32_t(scene.primitives[i].gltf_mesh))) index[i] = kept_count++;
+  for (Primitive& p : scene.primitives)
+    if (p.shares_vertices_with >= 0) p.shares_vertices_with = index[size_t(p.shares_vertices_with)];
   std::erase_if(scene.primitives, [&](const Primitive& p) { return chained(int32_t(p.gltf_mesh)); });
   // Their nodes no longer draw their triangles (an earlier chain's levels among them): what lodkit
   // said about them, and an earlier chain's MSFT_lod, would describe what is gone.
@@ -355,139 +362,208 @@ SkinMode parse_skin_mode(const std::string& name) {
   throw_usage("--skin-mode: '" + name + "' is not houle, subset or multipose");
 }
 
-// One chain per skinned glTF mesh instance: its primitives (all with the node's skin) simplified
-// together level by level, so that level i of every primitive goes into the same new glTF mesh.
-// Each primitive's chain is built separately; the node's errors are the largest of its primitives'.
-// The skinned simplifier's options for one primitive: its skin's poses as the mode needs them.
-SkinSimplifyOptions skin_options(const Scene& scene, const SkinnedPrimitive& sp, SkinMode mode, uint32_t pose_count) {
+// A skinned glTF mesh instance: the primitives a skinned node draws (one per material, all with
+// its skin), simplified together as one mesh (join_members: member k is material id k + 1), so that
+// the borders between their materials stay closed; level i of each goes into one new glTF mesh. A
+// glTF mesh drawn by several skinned nodes gets one chain, the first node's.
+struct SkinnedGroup {
+  uint32_t node = 0, skin = 0;
+  std::vector<uint32_t> primitives;  // into Scene::primitives, in order
+  std::vector<uint32_t> offsets;     // Joined::offsets
+};
+
+std::vector<SkinnedGroup> skinned_groups(const Scene& scene, const std::vector<SkinnedPrimitive>& skinned) {
+  std::vector<SkinnedGroup> groups;
+  std::map<uint32_t, size_t> group_of;  // glTF mesh -> its group
+  for (const SkinnedPrimitive& sp : skinned) {
+    const Primitive& p = scene.primitives[sp.primitive];
+    const auto [it, added] = group_of.try_emplace(p.gltf_mesh, groups.size());
+    if (added) groups.push_back({sp.node, sp.skin, {}, {0}});
+    SkinnedGroup& g = groups[it->second];
+    if (g.node != sp.node) continue;  // (another node drawing the same glTF mesh)
+    const Primitive& first = scene.primitives[g.primitives.empty() ? sp.primitive : g.primitives[0]];
+    // Joined, a stream one member lacks would be dropped from all (see flatten).
+    if (stream_layout(p.mesh) != stream_layout(first.mesh))
+      throw_usage(fmt::format("skinned node '{}' draws primitives with different vertex streams (primitives {} and {} of "
+                              "glTF mesh {}); lodkit lod simplifies a skinned mesh's primitives together, which needs the "
+                              "same streams (normals, tangents, UV sets, colours, influences) in each",
+                              node_label(scene.nodes, sp.node), first.gltf_primitive, p.gltf_primitive, p.gltf_mesh));
+    g.primitives.push_back(sp.primitive);
+    g.offsets.push_back(g.offsets.back() + uint32_t(p.mesh.vertex_count()));
+  }
+  return groups;
+}
+
+// A group's members joined (a copy, or the one primitive's mesh itself).
+Joined join_group(const Scene& scene, const SkinnedGroup& g) {
+  std::vector<const Mesh*> members;
+  for (const uint32_t p : g.primitives) members.push_back(&scene.primitives[p].mesh);
+  return join_members(members);
+}
+
+// The skinned simplifier's options for a skin: its poses as the mode needs them.
+SkinSimplifyOptions skin_options(const Scene& scene, uint32_t skin, SkinMode mode, uint32_t pose_count) {
   SkinSimplifyOptions so;
   so.mode = mode;
   if (mode == SkinMode::houle) {
-    so.poses = {joint_matrices(scene, sp.skin, world_matrices(scene, mid_range_pose(scene)))};
+    so.poses = {joint_matrices(scene, skin, world_matrices(scene, mid_range_pose(scene)))};
   } else if (mode == SkinMode::multipose) {
-    so.poses = sample_poses(scene, sp.skin, pose_count);
+    so.poses = sample_poses(scene, skin, pose_count);
   }
   return so;
 }
 
-// The progressive mesh of a skinned primitive, from its input down to `triangles`. A multi-pose
-// record replays on the input with its weights normalised (lod::simplify_skinned), a subset one on
-// the input itself.
-ProgressiveMesh skinned_progressive_mesh(const Scene& scene, const SkinnedPrimitive& sp, SkinMode mode,
-                                         uint32_t pose_count, SimplifyOptions simplify, uint64_t triangles) {
-  SkinSimplifyOptions so = skin_options(scene, sp, mode, pose_count);
+// The progressive mesh of a skinned group, from its input down to `triangles`. A multi-pose record
+// replays on the input with its weights normalised (lod::simplify_skinned), a subset one on the
+// input itself.
+ProgressiveMesh skinned_progressive_mesh(const Scene& scene, const SkinnedGroup& g, SkinMode mode, uint32_t pose_count,
+                                         SimplifyOptions simplify, uint64_t triangles) {
+  SkinSimplifyOptions so = skin_options(scene, g.skin, mode, pose_count);
   so.simplify = std::move(simplify);
   so.simplify.target_triangles = std::max<uint64_t>(1, triangles);
   so.simplify.record = true;
-  Mesh input = scene.primitives[sp.primitive].mesh;
+  Mesh input = join_group(scene, g).mesh();
   SimplifyResult r = simplify_skinned(input, so);
   if (mode == SkinMode::multipose) normalize_influences(input);
   return ProgressiveMesh(std::move(input), std::move(r.record));
 }
 
-std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<SkinnedPrimitive>& skinned, SkinMode mode,
+std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<SkinnedGroup>& groups, SkinMode mode,
                                        uint32_t pose_count, const LodOptions& base,
                                        const std::function<void(double)>& progress) {
   if (pose_count == 0) throw_usage("--poses must be at least 1");
   std::vector<ChainReport> reports;
-  std::vector<bool> done(scene.primitives.size(), false);
-  for (size_t k = 1; k < skinned.size(); ++k)
-    for (size_t j = 0; j < k; ++j)
-      if (skinned[j].node == skinned[k].node)
-        throw_usage("skinned node " + std::to_string(skinned[k].node) +
-                    " draws several primitives (materials); lodkit lod handles one primitive per skinned mesh for now");
-  for (size_t k = 0; k < skinned.size(); ++k) {
-    const SkinnedPrimitive& sp = skinned[k];
-    if (done[sp.primitive]) continue;  // a primitive instanced twice gets one chain
-    done[sp.primitive] = true;
+  for (size_t k = 0; k < groups.size(); ++k) {
+    const SkinnedGroup& g = groups[k];
     LodOptions options = base;
-    options.simplifier = skinned_simplifier(skin_options(scene, sp, mode, pose_count));
-    options.progress = [&](double f) { progress((double(k) + f) / double(skinned.size())); };
-    const Mesh& mesh = scene.primitives[sp.primitive].mesh;
-    validate(mesh, scene.name);
+    options.simplifier = skinned_simplifier(skin_options(scene, g.skin, mode, pose_count));
+    options.progress = [&](double f) { progress((double(k) + f) / double(groups.size())); };
+    for (const uint32_t p : g.primitives) validate(scene.primitives[p].mesh, scene.name);
     ChainReport r;
-    r.node = node_label(scene.nodes, sp.node);
-    r.chain = build_lod_chain(mesh, options);
+    r.node = node_label(scene.nodes, g.node);
+    r.chain = build_lod_chain(join_group(scene, g).mesh(), options);
     reports.push_back(std::move(r));
   }
   return reports;
 }
 
-// The input scene with each skinned primitive's levels: level 0 replaces the primitive's geometry,
-// level i > 0 becomes primitive 0 of a new glTF mesh drawn by a new node with the same skin, listed
-// in the skinned node's MSFT_lod. Skeleton, skins, animations, materials and everything else of the
-// source are written back unchanged.
-Scene skinned_scene(Scene scene, const std::vector<SkinnedPrimitive>& skinned, const std::vector<ChainReport>& reports) {
-  uint32_t next_mesh = scene.gltf_mesh_count;  // new meshes come after the source's
-  std::vector<bool> done(scene.primitives.size(), false);
-  size_t report = 0;
-  for (const SkinnedPrimitive& sp : skinned) {
-    if (done[sp.primitive]) continue;
-    done[sp.primitive] = true;
-    const ChainReport& r = reports[report++];
-    const Primitive source = scene.primitives[sp.primitive];
-    // The source's morph targets go to every level, interpolated where the vertices moved
-    // (lod::vertex_blends), and each level's node takes the skinned node's morph weights and clips.
-    const std::vector<MorphTarget> targets = source_morph_targets(scene, sp.primitive);
-    const auto blends = [&](const LodLevel& level) { return vertex_blends(source.mesh, level.vertex_successor, level.mesh); };
-    // With one vertex buffer (subset placement), every level draws the source's vertices the buffer
-    // holds: the source's streams and morph targets at them, exact, written once.
-    const SharedVertices& buffer = r.chain.shared;
-    const bool shared = !buffer.indices.empty();
-    const auto level_mesh = [&](size_t i) {
-      if (!shared) return r.chain.levels[i].mesh;
-      Mesh m = buffer.vertices;
-      m.indices = buffer.indices[i];
-      return m;
-    };
-    std::vector<MorphTarget> buffer_targets;
-    if (shared)
-      for (const MorphTarget& t : targets) buffer_targets.push_back(renumbered(t, buffer.vertex_origin));
-    // Level 0 is the source's vertices reordered for the vertex cache, unless it was simplified: its
-    // morph targets and other streams follow a reordering, and are interpolated where it moved them.
-    Primitive& first = scene.primitives[sp.primitive];
-    if (shared) {
-      first.source_vertices = buffer.vertex_origin, first.source_weights.clear();
-      first.targets = buffer_targets;  // (the source's own are gathered; the levels' match them)
-    } else if (r.chain.levels[0].mesh.vertex_count() == source.mesh.vertex_count()) {
-      first.source_vertices = r.chain.levels[0].vertex_origin;
-    } else {
-      blend_sources(first, blends(r.chain.levels[0]));
+// A skinned chain's levels in its group's members: levels[i][k] is level i's primitive of member k
+// (its mesh, the source streams it gathers, its morph targets; the caller places it). Level 0's
+// start as the members' source primitives, the others with their materials only.
+std::vector<std::vector<Primitive>> member_levels(const Scene& scene, const SkinnedGroup& g, const LodChain& chain) {
+  const size_t members = g.primitives.size();
+  std::vector<std::vector<MorphTarget>> targets(members);
+  std::vector<std::vector<Primitive>> levels(chain.levels.size(), std::vector<Primitive>(members));
+  for (size_t k = 0; k < members; ++k) {
+    const Primitive& source = scene.primitives[g.primitives[k]];
+    targets[k] = source_morph_targets(scene, g.primitives[k]);
+    levels[0][k] = source;
+    for (size_t i = 1; i < levels.size(); ++i) levels[i][k].material = source.material;
+  }
+  const SharedVertices& buffer = chain.shared;
+  if (!buffer.indices.empty()) {
+    // One vertex buffer (subset placement). Member k's: the buffer's vertices from its own input, in
+    // the buffer's order, so that each level still uses a prefix of it; the source's streams and
+    // morph targets at them, exact, written once (every level shares level 0's).
+    std::vector<Mesh> own(members);
+    std::vector<std::vector<uint32_t>> origin(members);
+    std::vector<uint32_t> member(buffer.vertex_origin.size()), local(buffer.vertex_origin.size());
+    if (members == 1) own[0] = buffer.vertices, own[0].indices.clear();
+    for (uint32_t b = 0; b < buffer.vertex_origin.size(); ++b) {
+      const uint32_t from = buffer.vertex_origin[b];
+      const size_t k = size_t(std::upper_bound(g.offsets.begin(), g.offsets.end(), from) - g.offsets.begin()) - 1;
+      if (k >= members) throw_internal("lod: a skinned buffer vertex comes from no member");
+      member[b] = uint32_t(k), local[b] = uint32_t(origin[k].size());
+      origin[k].push_back(from - g.offsets[k]);
+      if (members > 1) append_vertex(own[k], buffer.vertices, b);
     }
-    first.mesh = level_mesh(0);
-    const std::string owner = scene.nodes[sp.node].name;  // a copy: scene.nodes grows below
+    for (size_t i = 0; i < levels.size(); ++i) {
+      const Mesh& level = chain.levels[i].mesh;
+      for (size_t k = 0; k < members; ++k) levels[i][k].mesh = own[k];
+      for (size_t t = 0; t < level.triangle_count(); ++t) {
+        // Wedges continue within their material: a triangle of member k draws its vertices.
+        const size_t k = members == 1 ? 0 : size_t(level.material(t)) - 1;
+        for (size_t c = 0; c < 3; ++c) {
+          const uint32_t b = buffer.indices[i][3 * t + c];
+          if (k >= members || member[b] != k) throw_internal("lod: a skinned level's triangle draws another member's vertex");
+          levels[i][k].mesh.indices.push_back(local[b]);
+        }
+      }
+      for (size_t k = 0; k < members; ++k) {
+        Primitive& prim = levels[i][k];
+        prim.targets.clear();
+        for (const MorphTarget& t : targets[k]) prim.targets.push_back(renumbered(t, origin[k]));
+        if (i == 0) prim.source_vertices = origin[k], prim.source_weights.clear();
+        else prim.shares_vertices_with = int32_t(g.primitives[k]);
+      }
+    }
+    return levels;
+  }
+  for (size_t i = 0; i < levels.size(); ++i) {
+    const LodLevel& level = chain.levels[i];
+    std::vector<Member> parts = split_members(g.offsets, level.mesh, level.vertex_origin, level.vertex_successor);
+    for (size_t k = 0; k < members; ++k) {
+      const Mesh& source = scene.primitives[g.primitives[k]].mesh;
+      Primitive& prim = levels[i][k];
+      // The source's morph targets go to every level, interpolated where the vertices moved
+      // (lod::vertex_blends). Level 0 is the source's vertices reordered for the vertex cache,
+      // unless it was simplified: its morph targets and other streams follow a reordering, and are
+      // interpolated where it moved them.
+      const auto blends = [&] { return vertex_blends(source, parts[k].successor, parts[k].mesh); };
+      if (i == 0 && parts[k].mesh.vertex_count() == source.vertex_count()) prim.source_vertices = std::move(parts[k].origin);
+      else if (i == 0) blend_sources(prim, blends());
+      else if (!targets[k].empty()) prim.targets = blended_targets(targets[k], blends());
+      prim.mesh = std::move(parts[k].mesh);
+    }
+  }
+  return levels;
+}
+
+// The input scene with each skinned group's levels: level 0 replaces its primitives' geometry,
+// level i > 0 becomes a new glTF mesh (a primitive per member) drawn by a new node with the same
+// skin, listed in the skinned node's MSFT_lod. Skeleton, skins, animations, materials and
+// everything else of the source are written back unchanged.
+Scene skinned_scene(Scene scene, const std::vector<SkinnedGroup>& groups, const std::vector<ChainReport>& reports) {
+  uint32_t next_mesh = scene.gltf_mesh_count;  // new meshes come after the source's
+  for (size_t gi = 0; gi < groups.size(); ++gi) {
+    const SkinnedGroup& g = groups[gi];
+    const ChainReport& r = reports[gi];
+    std::vector<std::vector<Primitive>> levels = member_levels(scene, g, r.chain);
+    // Each level's node takes the skinned node's morph weights and clips (glTF: every primitive of
+    // a mesh has the same targets).
+    const bool morphs = !source_morph_targets(scene, g.primitives[0]).empty();
+    for (size_t k = 0; k < g.primitives.size(); ++k) scene.primitives[g.primitives[k]] = std::move(levels[0][k]);
+    const std::string owner = scene.nodes[g.node].name;  // a copy: scene.nodes grows below
     // The source node's own extras are kept; its MSFT_lod (an earlier chain's) gives way to this one.
-    const std::string& old_extras = scene.nodes[sp.node].extras_json;
+    const std::string& old_extras = scene.nodes[g.node].extras_json;
     nlohmann::json extras = old_extras.empty() ? nlohmann::json::object() : nlohmann::json::parse(old_extras);
     if (!extras.is_object()) extras = nlohmann::json::object();
-    scene.nodes[sp.node].lod_ids.clear();
+    scene.nodes[g.node].lod_ids.clear();
     extras["MSFT_screencoverage"] = r.coverage;
     for (size_t i = 0; i < r.chain.levels.size(); ++i) {
       // Each level's node says what it is, as in a static chain (lodkit render --sheet reads it).
-      const LodLevel& level = r.chain.levels[i];
       const nlohmann::json about = level_facts(r, i);
       if (i == 0) {
         extras["lodkit"] = about;
         continue;
       }
-      Primitive prim;
-      prim.mesh = level_mesh(i);
-      prim.material = source.material;
-      if (shared) prim.shares_vertices_with = int32_t(sp.primitive), prim.targets = buffer_targets;
-      else if (!targets.empty()) prim.targets = blended_targets(targets, blends(level));
-      prim.gltf_mesh = next_mesh++;
-      prim.gltf_primitive = 0;
-      scene.primitives.push_back(std::move(prim));
+      const uint32_t mesh = next_mesh++;
+      uint32_t next_primitive = 0;
+      for (Primitive& prim : levels[i]) {
+        if (prim.mesh.indices.empty()) continue;  // (a member collapsed away)
+        prim.gltf_mesh = mesh, prim.gltf_primitive = next_primitive++;
+        scene.primitives.push_back(std::move(prim));
+      }
       Node node;
       node.name = fmt::format("{}_LOD{}", owner, i);
-      node.mesh = int32_t(scene.primitives.back().gltf_mesh);
-      node.skin = int32_t(sp.skin);
-      if (!targets.empty()) node.morph_weights_of = {int32_t(sp.node)};
+      node.mesh = int32_t(mesh);
+      node.skin = int32_t(g.skin);
+      if (morphs) node.morph_weights_of = {int32_t(g.node)};
       node.extras_json = nlohmann::json{{"lodkit", about}}.dump();
       scene.nodes.push_back(std::move(node));
-      scene.nodes[sp.node].lod_ids.push_back(int32_t(scene.nodes.size() - 1));
+      scene.nodes[g.node].lod_ids.push_back(int32_t(scene.nodes.size() - 1));
     }
-    scene.nodes[sp.node].extras_json = extras.dump();
+    scene.nodes[g.node].extras_json = extras.dump();
   }
   return scene;
 }
@@ -704,6 +780,7 @@ Command register_lod(CLI::App& root) {
               else mesh = read_mesh(o->input, bar.read_options());
             }
             const std::vector<SkinnedPrimitive> skinned = scene.source ? skinned_primitives(scene) : std::vector<SkinnedPrimitive>{};
+            const std::vector<SkinnedGroup> groups = skinned_groups(scene, skinned);
             const std::vector<SeparatePart> separate = scene.source ? separate_parts(scene) : std::vector<SeparatePart>{};
             // The meshes skinned nodes draw: the skinned chains' (in place in the document).
             std::set<int32_t> skinned_meshes;
@@ -747,14 +824,12 @@ Command register_lod(CLI::App& root) {
               if (!o->lpm.empty() && mode == SkinMode::houle)
                 throw_usage("--lpm: --skin-mode houle simplifies in one pose, so its collapse record is not in bind "
                             "space; use multipose or subset");
-              std::set<uint32_t> primitives;
-              for (const SkinnedPrimitive& sp : skinned) primitives.insert(sp.primitive);
-              if (!o->lpm.empty() && primitives.size() > 1)
-                throw_usage(fmt::format("--lpm: the input has {} skinned meshes, and a .lpm file holds one", primitives.size()));
+              if (!o->lpm.empty() && groups.size() > 1)
+                throw_usage(fmt::format("--lpm: the input has {} skinned meshes, and a .lpm file holds one", groups.size()));
               ProgressBar bar("building skinned LODs");
               LodOptions skinned_options = options;
               skinned_options.morph = false;
-              reports = build_skinned(scene, skinned, mode, o->poses, skinned_options, [&](double f) { bar.update(f); });
+              reports = build_skinned(scene, groups, mode, o->poses, skinned_options, [&](double f) { bar.update(f); });
             }
             const size_t first_chain = reports.size();
             // A skinned character's props: a chain when there are triangles (the character alone
@@ -807,12 +882,12 @@ Command register_lod(CLI::App& root) {
             WriteReport written;
             // The progressive mesh spans the input down to the coarsest level's size.
             if (!skinned.empty() && !o->lpm.empty())
-              write_progressive_mesh(skinned_progressive_mesh(scene, skinned[0], parse_skin_mode(o->skin_mode), o->poses,
+              write_progressive_mesh(skinned_progressive_mesh(scene, groups[0], parse_skin_mode(o->skin_mode), o->poses,
                                                               options.simplify, reports[0].chain.levels.back().mesh.triangle_count()),
                                      o->lpm);
             Scene out;
             if (!skinned.empty()) {
-              out = skinned_scene(std::move(scene), skinned, reports);
+              out = skinned_scene(std::move(scene), groups, reports);
               if (!chains.empty()) drop_chained_meshes(out, skinned_meshes);
             } else {
               out = chain_document(scene.source ? &scene : nullptr, reports[0].chain.levels.front().mesh.material_names);

@@ -34,81 +34,6 @@ struct SimplifyCommand {
   float guard = SimplifyOptions{}.distance_guard;
 };
 
-// A group of meshes (GeometryFile::joint_groups) as one mesh for the simplifier: member k is
-// material id k + 1 (flatten's numbering) and its vertices start at offsets[k]. A group of one is
-// the mesh itself, not a copy.
-struct Joined {
-  const Mesh& mesh() const { return alone ? *alone : joined; }
-  const Mesh* alone = nullptr;
-  Mesh joined;
-  std::vector<uint32_t> offsets;
-};
-
-Joined join(const std::vector<Mesh*>& meshes, const std::vector<size_t>& group) {
-  Joined j;
-  if (group.size() == 1) {
-    j.alone = meshes[group[0]];
-    j.offsets = {0};
-    return j;
-  }
-  Scene scene;  // no nodes: flatten takes each primitive once, untransformed, in order
-  uint32_t offset = 0;
-  for (size_t k = 0; k < group.size(); ++k) {
-    Primitive p;
-    p.mesh = *meshes[group[k]];
-    p.material = int32_t(k);
-    j.offsets.push_back(offset);
-    offset += uint32_t(p.mesh.vertex_count());
-    scene.primitives.push_back(std::move(p));
-  }
-  j.joined = flatten(scene);
-  return j;
-}
-
-// The simplified group back in its members, each with its output vertices' input vertices among
-// its own (origin, when the result has SimplifyResult::vertex_origin: not a restored form's) and its
-// input vertices' output vertices (successor, SimplifyResult's vertex_successor; ~0u for none). A
-// member whose triangles all collapsed is left empty (the glTF writer drops it).
-struct Member {
-  Mesh mesh;
-  std::vector<uint32_t> origin, successor;
-};
-std::vector<Member> unjoin(const Joined& j, SimplifyResult& r) {
-  std::vector<Member> members(j.offsets.size());
-  if (j.alone) {
-    members[0].mesh = std::move(r.mesh);
-    members[0].origin = std::move(r.vertex_origin), members[0].successor = std::move(r.vertex_successor);
-    return members;
-  }
-  const bool origins = !r.vertex_origin.empty();
-  std::vector<uint32_t> index(r.mesh.vertex_count(), ~0u);  // joined output vertex -> its member's
-  std::vector<uint32_t> member(r.mesh.vertex_count(), ~0u);  // joined output vertex -> its member
-  const auto end_of = [&](size_t k) { return k + 1 < j.offsets.size() ? j.offsets[k + 1] : uint32_t(j.joined.vertex_count()); };
-  for (MaterialPart& part : split_by_material(r.mesh)) {
-    const size_t k = size_t(part.material) - 1;
-    if (part.material == 0 || k >= members.size()) throw_internal("simplify: a joined mesh's part has material id " + std::to_string(part.material));
-    members[k].mesh = std::move(part.mesh);
-    const uint32_t begin = j.offsets[k], end = end_of(k);
-    for (uint32_t i = 0; i < part.vertices.size(); ++i) {
-      const uint32_t v = part.vertices[i];
-      index[v] = i, member[v] = uint32_t(k);
-      if (!origins) continue;
-      // Wedges continue within their material, so a member's vertex comes from its own input.
-      const uint32_t from = r.vertex_origin[v];
-      if (from < begin || from >= end) throw_internal("simplify: a joined mesh's vertex continues another member's");
-      members[k].origin.push_back(from - begin);
-    }
-  }
-  for (size_t k = 0; k < members.size() && !r.vertex_successor.empty(); ++k) {
-    for (uint32_t v = j.offsets[k]; v < end_of(k); ++v) {
-      const uint32_t to = r.vertex_successor[v];
-      // Its own member's vertex (a wedge relinked across a material border would not be).
-      members[k].successor.push_back(to != ~0u && member[to] == k ? index[to] : ~0u);
-    }
-  }
-  return members;
-}
-
 }  // namespace
 
 Metric parse_metric(const std::string& name) {
@@ -240,7 +165,9 @@ Command register_simplify(CLI::App& root) {
               uint64_t done = 0;
               changed.assign(meshes.size(), false);
               for (const std::vector<size_t>& group : file.joint_groups()) {
-                const Joined joined = join(meshes, group);
+                std::vector<const Mesh*> members;
+                for (const size_t i : group) members.push_back(meshes[i]);
+                const Joined joined = join_members(members);
                 // Double-sided: the fronts simplified, the backs made again. Flat-shaded: simplified
                 // without its normals, then faceted again. Neither with input vertices only (the
                 // new backs and face normals make new vertices).
@@ -282,10 +209,11 @@ Command register_simplify(CLI::App& root) {
                 relative_error = std::max(relative_error, r.relative_error);
                 // Input vertices, unmoved: with --keep-vertices, or when nothing collapsed.
                 const bool unmoved = o->keep_vertices || (r.collapses == 0 && !form.changed());
-                std::vector<Member> members = unjoin(joined, r);
+                std::vector<Member> parts =
+                    split_members(joined.offsets, std::move(r.mesh), std::move(r.vertex_origin), std::move(r.vertex_successor));
                 for (size_t k = 0; k < group.size(); ++k) {
                   const size_t i = group[k];
-                  Member& out = members[k];
+                  Member& out = parts[k];
                   changed[i] = out.mesh.positions != meshes[i]->positions || out.mesh.indices != meshes[i]->indices;
                   // The glTF streams lodkit does not model (morph targets, other attributes). Unmoved:
                   // each survivor is its origin, so they stay exact for it. Moved, or a restored form's

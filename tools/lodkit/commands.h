@@ -67,6 +67,31 @@ class GeometryFile {
   Mesh mesh_;
 };
 
+// Which vertex streams a mesh has (normals, tangents, UV sets, colours, influences), as bits: meshes
+// with the same layout join without dropping or inventing values (see flatten).
+uint32_t stream_layout(const Mesh& mesh);
+
+// Meshes simplified as one (GeometryFile::joint_groups, a skinned node's primitives), so that the
+// borders between them stay closed like seams: member k is material id k + 1 (flatten's numbering)
+// and its vertices are offsets[k] to offsets[k + 1]. A group of one is the mesh itself, not a copy.
+struct Joined {
+  const Mesh& mesh() const { return alone ? *alone : joined; }
+  const Mesh* alone = nullptr;
+  Mesh joined;
+  std::vector<uint32_t> offsets;  // members + 1
+};
+Joined join_members(std::span<const Mesh* const> members);
+
+// A result of the joined mesh (a simplification, a LOD level) back in its members, each with its
+// vertices' input vertices among its own (origin, when given) and its input vertices' vertices
+// (successor, when given; ~0u for none). A member whose triangles all collapsed is left empty.
+struct Member {
+  Mesh mesh;
+  std::vector<uint32_t> origin, successor;
+};
+std::vector<Member> split_members(const std::vector<uint32_t>& offsets, Mesh mesh, std::vector<uint32_t> origin,
+                                  std::vector<uint32_t> successor);
+
 // Removes these members from a node's extras: lodkit's facts about what it draws (extras "lodkit",
 // "LODKIT_geomorph", "MSFT_screencoverage") once they no longer hold.
 bool erase_extras(Node& node, std::initializer_list<const char*> members);  // whether any was there
