@@ -1631,9 +1631,14 @@ TEST(CliLod, ASkinnedNodesMaterialsAreSimplifiedTogether) {
   ASSERT_GT(cut, 50u);
   input.material_names = {"left", "right"};
   input.primitives.clear();
+  // A blend shape on both halves whose displacement is linear in the position, so that wherever a
+  // level's vertex lies, its displacement is known.
+  const auto displacement = [](float3 p) { return float3{0.01f * p.y, 0.02f * p.x, 0}; };
   for (uint32_t h = 0; h < 2; ++h) {
     Primitive p;
     p.mesh = halves[h], p.material = int32_t(h), p.gltf_mesh = 0, p.gltf_primitive = h;
+    p.targets.emplace_back();
+    for (const float3& at : p.mesh.positions) p.targets[0].positions.push_back(displacement(at));
     input.primitives.push_back(std::move(p));
   }
   write_scene(input, dir / "halves.glb");
@@ -1676,6 +1681,24 @@ TEST(CliLod, ASkinnedNodesMaterialsAreSimplifiedTogether) {
         for (const uint32_t index : prim.mesh.indices) level.indices.push_back(base + index);
       }
       EXPECT_EQ(materials, (std::vector<int32_t>{0, 1}));
+      // Each half's blend shape on every level: exact at input vertices (level 0 and with one
+      // buffer), else interpolated where the vertex moved: off by 0.02 times the move, which stays
+      // under 1% of the diagonal (2.48). Interpolated within each half alone, two vertices by the
+      // cut were off by 1.2e-3: their patch of the input lay mostly over the other half.
+      for (size_t p = 0; p < out.primitives.size(); ++p) {
+        if (int32_t(out.primitives[p].gltf_mesh) != meshes[i]) continue;
+        const Mesh& m = out.primitives[p].mesh;
+        const std::vector<MorphTarget> targets = source_morph_targets(out, p);
+        ASSERT_EQ(targets.size(), 1u);
+        ASSERT_EQ(targets[0].positions.size(), m.vertex_count());
+        const float tolerance = i == 0 || shared ? 1e-7f : 5e-4f;
+        for (size_t v = 0; v < m.vertex_count(); ++v) {
+          const float3 d = targets[0].positions[v], e = displacement(m.positions[v]);
+          ASSERT_NEAR(d.x, e.x, tolerance) << p << " " << v;
+          ASSERT_NEAR(d.y, e.y, tolerance) << p << " " << v;
+          ASSERT_EQ(d.z, 0.0f);
+        }
+      }
       EXPECT_EQ(level.triangle_count(), levels[i]["triangles"].get<size_t>());
       EXPECT_EQ(welded_border_edges(level), 0u);
     }

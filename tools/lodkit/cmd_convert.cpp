@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
@@ -261,7 +262,9 @@ std::vector<Member> split_members(const std::vector<uint32_t>& offsets, Mesh mes
   if (offsets.size() < 2) throw_internal("split_members: no members");
   std::vector<Member> members(offsets.size() - 1);
   if (members.size() == 1) {
-    members[0] = {std::move(mesh), std::move(origin), std::move(successor)};
+    members[0] = {std::move(mesh), std::move(origin), std::move(successor), {}};
+    members[0].vertices.resize(members[0].mesh.vertex_count());
+    std::iota(members[0].vertices.begin(), members[0].vertices.end(), 0u);
     return members;
   }
   std::vector<uint32_t> index(mesh.vertex_count(), ~0u);   // joined vertex -> its member's
@@ -271,6 +274,7 @@ std::vector<Member> split_members(const std::vector<uint32_t>& offsets, Mesh mes
     if (part.material == 0 || k >= members.size())
       throw_internal("split_members: a joined mesh's part has material id " + std::to_string(part.material));
     members[k].mesh = std::move(part.mesh);
+    members[k].vertices = part.vertices;
     for (uint32_t i = 0; i < part.vertices.size(); ++i) {
       const uint32_t v = part.vertices[i];
       index[v] = i, member[v] = uint32_t(k);

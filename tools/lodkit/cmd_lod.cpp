@@ -499,20 +499,42 @@ std::vector<std::vector<Primitive>> member_levels(const Scene& scene, const Skin
     }
     return levels;
   }
+  // The coarser levels' morph targets: blended on the joined input, from the members' targets
+  // joined (a level's vertex near a material border may lie over the other material's triangles;
+  // a stream a member's target lacks displaces nothing there).
+  const Joined joined = join_group(scene, g);
+  std::vector<MorphTarget> joined_targets(targets[0].size());
+  for (size_t t = 0; t < joined_targets.size(); ++t)
+    for (const auto stream : morph_streams) {
+      bool any = false;
+      for (size_t k = 0; k < members; ++k) any = any || (t < targets[k].size() && !(targets[k][t].*stream).empty());
+      for (size_t k = 0; k < members && any; ++k) {
+        const size_t count = g.offsets[k + 1] - g.offsets[k];
+        const bool has = t < targets[k].size() && !(targets[k][t].*stream).empty();
+        if (has) (joined_targets[t].*stream).insert((joined_targets[t].*stream).end(), (targets[k][t].*stream).begin(), (targets[k][t].*stream).end());
+        else (joined_targets[t].*stream).resize((joined_targets[t].*stream).size() + count, float3{});
+      }
+    }
   for (size_t i = 0; i < levels.size(); ++i) {
     const LodLevel& level = chain.levels[i];
+    std::vector<MorphTarget> level_targets;
+    if (i > 0 && !joined_targets.empty())
+      level_targets = blended_targets(joined_targets, vertex_blends(joined.mesh(), level.vertex_successor, level.mesh));
     std::vector<Member> parts = split_members(g.offsets, level.mesh, level.vertex_origin, level.vertex_successor);
     for (size_t k = 0; k < members; ++k) {
       const Mesh& source = scene.primitives[g.primitives[k]].mesh;
       Primitive& prim = levels[i][k];
-      // The source's morph targets go to every level, interpolated where the vertices moved
-      // (lod::vertex_blends). Level 0 is the source's vertices reordered for the vertex cache,
-      // unless it was simplified: its morph targets and other streams follow a reordering, and are
-      // interpolated where it moved them.
-      const auto blends = [&] { return vertex_blends(source, parts[k].successor, parts[k].mesh); };
+      // Level 0 is the source's vertices reordered for the vertex cache, unless it was simplified:
+      // its morph targets and other streams follow a reordering, and are interpolated where it
+      // moved them (lod::vertex_blends, within the member: they are gathered from its source).
       if (i == 0 && parts[k].mesh.vertex_count() == source.vertex_count()) prim.source_vertices = std::move(parts[k].origin);
-      else if (i == 0) blend_sources(prim, blends());
-      else if (!targets[k].empty()) prim.targets = blended_targets(targets[k], blends());
+      else if (i == 0) blend_sources(prim, vertex_blends(source, parts[k].successor, parts[k].mesh));
+      // The coarser levels': the member's streams of the joined level's.
+      for (size_t t = 0; t < level_targets.size() && t < targets[k].size(); ++t) {
+        MorphTarget& out = prim.targets.emplace_back(renumbered(level_targets[t], parts[k].vertices));
+        for (const auto stream : morph_streams)
+          if ((targets[k][t].*stream).empty()) (out.*stream).clear();
+      }
       prim.mesh = std::move(parts[k].mesh);
     }
   }

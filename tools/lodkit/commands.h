@@ -84,10 +84,11 @@ Joined join_members(std::span<const Mesh* const> members);
 
 // A result of the joined mesh (a simplification, a LOD level) back in its members, each with its
 // vertices' input vertices among its own (origin, when given) and its input vertices' vertices
-// (successor, when given; ~0u for none). A member whose triangles all collapsed is left empty.
+// (successor, when given; ~0u for none), and the joined result's vertex each of its vertices is
+// (vertices). A member whose triangles all collapsed is left empty.
 struct Member {
   Mesh mesh;
-  std::vector<uint32_t> origin, successor;
+  std::vector<uint32_t> origin, successor, vertices;
 };
 std::vector<Member> split_members(const std::vector<uint32_t>& offsets, Mesh mesh, std::vector<uint32_t> origin,
                                   std::vector<uint32_t> successor);
