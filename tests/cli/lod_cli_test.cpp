@@ -1613,22 +1613,9 @@ TEST(CliLod, ASkinnedNodesMaterialsAreSimplifiedTogether) {
   Scene input = fixtures::humanoid_scene();
   const Mesh whole = input.primitives[0].mesh;
   ASSERT_EQ(welded_border_edges(whole), 0u);
-  std::array<Mesh, 2> halves;
-  std::array<std::vector<uint32_t>, 2> remap = {std::vector<uint32_t>(whole.vertex_count(), ~0u),
-                                                std::vector<uint32_t>(whole.vertex_count(), ~0u)};
-  for (size_t t = 0; t < whole.triangle_count(); ++t) {
-    float x = 0;
-    for (size_t c = 0; c < 3; ++c) x += whole.positions[whole.indices[3 * t + c]].x;
-    const size_t h = x < 0 ? 0 : 1;
-    for (size_t c = 0; c < 3; ++c) {
-      const uint32_t v = whole.indices[3 * t + c];
-      if (remap[h][v] == ~0u) remap[h][v] = uint32_t(halves[h].vertex_count()), append_vertex(halves[h], whole, v);
-      halves[h].indices.push_back(remap[h][v]);
-    }
-  }
-  size_t cut = 0;  // vertices in both halves
-  for (size_t v = 0; v < whole.vertex_count(); ++v) cut += remap[0][v] != ~0u && remap[1][v] != ~0u;
-  ASSERT_GT(cut, 50u);
+  const std::array<Mesh, 2> halves = fixtures::halves_by_x(whole);
+  ASSERT_EQ(halves[0].triangle_count() + halves[1].triangle_count(), whole.triangle_count());
+  ASSERT_GT(halves[0].vertex_count() + halves[1].vertex_count(), whole.vertex_count() + 50);  // the cut's copies
   input.material_names = {"left", "right"};
   input.primitives.clear();
   // A blend shape on both halves whose displacement is linear in the position, so that wherever a

@@ -182,7 +182,8 @@ TEST(RenderCli, SheetPicksOneOfSeveralChains) {
 
 // A skinned chain posed mid-animation: both panels draw the same skinned mesh (LOD1 is a copy of
 // LOD0, so no simplifier runs under this suite's leak checker), so the two halves match pixel for
-// pixel, and the posed character covers other pixels than the one in its bind pose.
+// pixel, and the posed character covers other pixels than the one in its bind pose. LOD1's copy is
+// in two primitives (materials, fixtures::halves_by_x), each posed.
 TEST(RenderCli, SkinnedSheetIsPosedByTheClip) {
   test::TempDir dir;
   Scene scene = fixtures::humanoid_scene();
@@ -191,7 +192,11 @@ TEST(RenderCli, SkinnedSheetIsPosedByTheClip) {
   Primitive copy = scene.primitives[skinned[0].primitive];
   copy.gltf_mesh = 1;
   for (const Primitive& p : scene.primitives) copy.gltf_mesh = std::max(copy.gltf_mesh, p.gltf_mesh + 1);
-  scene.primitives.push_back(copy);
+  const std::array<Mesh, 2> halves = fixtures::halves_by_x(copy.mesh);
+  for (uint32_t h = 0; h < 2; ++h) {
+    copy.mesh = halves[h], copy.gltf_primitive = h;
+    scene.primitives.push_back(copy);
+  }
   Node lod1;
   lod1.name = "LOD1";
   lod1.mesh = int32_t(copy.gltf_mesh);

@@ -487,6 +487,23 @@ Scene humanoid_scene() {
   return rigged_scene("humanoid", humanoid_mesh(), humanoid_rig, std::move(clips));
 }
 
+std::array<Mesh, 2> halves_by_x(const Mesh& mesh) {
+  std::array<Mesh, 2> halves;
+  std::array<std::vector<uint32_t>, 2> remap;
+  for (std::vector<uint32_t>& r : remap) r.assign(mesh.vertex_count(), ~0u);
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    float x = 0;
+    for (size_t c = 0; c < 3; ++c) x += mesh.positions[mesh.indices[3 * t + c]].x;
+    const size_t h = x < 0 ? 0 : 1;
+    for (size_t c = 0; c < 3; ++c) {
+      const uint32_t v = mesh.indices[3 * t + c];
+      if (remap[h][v] == ~0u) remap[h][v] = uint32_t(halves[h].vertex_count()), append_vertex(halves[h], mesh, v);
+      halves[h].indices.push_back(remap[h][v]);
+    }
+  }
+  return halves;
+}
+
 Scene humanoid_baked_scene() {
   Scene scene = humanoid_scene();
   const Pose rest = rest_pose(scene);

@@ -54,6 +54,10 @@ Scene humanoid_scene();
 // bob; two joints in three swing about their x axis (8.5-20 degrees, 0.4-1.2 Hz), the third stays
 // still; translations and scales hold the rest values but the hips'. For the compress benchmark.
 Scene humanoid_baked_scene();
+// A mesh's triangles split by the sign of their centre's x (x < 0 first), each half with only the
+// vertices it uses, in order: two materials of one skinned mesh. Along the cut both have copies of
+// the same vertices.
+std::array<Mesh, 2> halves_by_x(const Mesh& mesh);
 inline constexpr uint32_t humanoid_triangles = 7520;
 inline constexpr uint32_t humanoid_vertices = 3774;
 

@@ -125,12 +125,22 @@ std::vector<ChainLevel> read_chain(const std::string& path, const std::string& c
     ChainLevel out{flatten(level), ""};
     if (!clip.empty()) {
       if (node.skin < 0) throw_usage(fmt::format("--clip: LOD node {} is not skinned", order[i]));
-      if (level.primitives.size() != 1) throw_usage("--clip: a skinned level must have one primitive");
-      SkinnedVertices posed;
-      skin_vertices(level.primitives[0].mesh, clip_pose(scene, clip, time, uint32_t(node.skin)), posed);
-      out.mesh = level.primitives[0].mesh;
-      out.mesh.positions = std::move(posed.positions);
-      out.mesh.normals = std::move(posed.normals);
+      // Each primitive (material) posed; skinned, they are in the skeleton's space, where glTF
+      // ignores the node's transform.
+      const std::vector<mat4> pose = clip_pose(scene, clip, time, uint32_t(node.skin));
+      for (Primitive& prim : level.primitives) {
+        SkinnedVertices posed;
+        skin_vertices(prim.mesh, pose, posed);
+        prim.mesh.positions = std::move(posed.positions);
+        prim.mesh.normals = std::move(posed.normals);
+      }
+      if (level.primitives.size() == 1) {
+        out.mesh = std::move(level.primitives[0].mesh);
+      } else {
+        Node& at = level.nodes[0];
+        at.skin = -1, at.has_matrix = false, at.translation = {}, at.rotation = {0, 0, 0, 1}, at.scale = {1, 1, 1};
+        out.mesh = flatten(level);
+      }
     }
     const nlohmann::json extras = nlohmann::json::parse(node.extras_json.empty() ? "{}" : node.extras_json);
     const nlohmann::json lodkit = extras.is_object() ? extras.value("lodkit", nlohmann::json::object()) : nlohmann::json();
