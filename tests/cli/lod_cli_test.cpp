@@ -1704,6 +1704,57 @@ TEST(CliLod, ASkinnedNodesMaterialsAreSimplifiedTogether) {
   }
 }
 
+// The halves with different streams: the left with normals and no UVs, the right with UVs (its
+// x, y) and no normals. Joined, each gets the other's stream for the simplification (a stream one
+// lacked would otherwise be dropped from both); every level gives each half its own streams back,
+// and the cut stays closed.
+TEST(CliLod, ASkinnedNodesMaterialsMayHaveOtherStreams) {
+  test::TempDir dir;
+  Scene input = fixtures::humanoid_scene();
+  std::array<Mesh, 2> halves = fixtures::halves_by_x(input.primitives[0].mesh);
+  halves[1].normals.clear();
+  for (const float3& p : halves[1].positions) halves[1].uvs[0].push_back({p.x, p.y});
+  input.material_names = {"left", "right"};
+  input.primitives.clear();
+  for (uint32_t h = 0; h < 2; ++h) {
+    Primitive p;
+    p.mesh = halves[h], p.material = int32_t(h), p.gltf_mesh = 0, p.gltf_primitive = h;
+    input.primitives.push_back(std::move(p));
+  }
+  write_scene(input, dir / "mixed.glb");
+  for (const bool shared : {false, true}) {
+    SCOPED_TRACE(shared);
+    std::vector<std::string> options = {"--ratios", "1,0.4,0.1", "--poses", "4"};
+    if (shared) options.push_back("--shared-vertices");
+    const nlohmann::json report = lod_report(dir.path, "mixed.glb", "lod.glb", options);
+    const Scene out = read_scene(dir / "lod.glb");
+    expect_posed_alike(read_scene(dir / "mixed.glb"), out, {0.0f, 0.5f});
+    const size_t node = out.nodes.size() - 3;  // the skinned node, before its two level nodes
+    ASSERT_EQ(out.nodes[node].lod_ids.size(), 2u);
+    std::vector<int32_t> meshes = {out.nodes[node].mesh};
+    for (const int32_t id : out.nodes[node].lod_ids) meshes.push_back(out.nodes[size_t(id)].mesh);
+    for (size_t i = 0; i < meshes.size(); ++i) {
+      SCOPED_TRACE(i);
+      Mesh level;
+      size_t seen = 0;
+      for (const Primitive& prim : out.primitives) {
+        if (int32_t(prim.gltf_mesh) != meshes[i]) continue;
+        ++seen;
+        const bool left = prim.material == 0;
+        EXPECT_EQ(prim.mesh.normals.empty(), !left);
+        EXPECT_EQ(prim.mesh.uvs[0].empty(), left);
+        EXPECT_FALSE(prim.mesh.joints.empty());
+        const uint32_t base = uint32_t(level.vertex_count());
+        for (const float3& p : prim.mesh.positions) level.positions.push_back(p);
+        for (const uint32_t index : prim.mesh.indices) level.indices.push_back(base + index);
+      }
+      EXPECT_EQ(seen, 2u);
+      EXPECT_EQ(level.triangle_count(), report["skinned"]["chains"][0]["levels"][i]["triangles"].get<size_t>());
+      EXPECT_EQ(welded_border_edges(level), 0u);
+    }
+  }
+}
+
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {
   test::TempDir dir;
   write_scene(fixtures::humanoid_scene(), dir / "humanoid.glb");
@@ -1714,19 +1765,6 @@ TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {
     EXPECT_NE(r.err.find("nothing else to morph"), std::string::npos) << r.err;
     EXPECT_FALSE(std::filesystem::exists(dir / "x.glb"));
   }
-  // A skinned mesh's primitives are simplified together, which needs the same streams in each (a
-  // stream one lacked would be dropped from all).
-  Scene mixed = fixtures::humanoid_scene();
-  mixed.material_names = {"a", "b"};
-  mixed.primitives.push_back(mixed.primitives[0]);
-  mixed.primitives[0].material = 0;
-  mixed.primitives[1].material = 1, mixed.primitives[1].gltf_primitive = 1, mixed.primitives[1].mesh.normals.clear();
-  ASSERT_FALSE(mixed.primitives[0].mesh.normals.empty());
-  write_scene(mixed, dir / "mixed.glb");
-  const test::RunResult streams = test::run_cli({"lod", (dir / "mixed.glb").string(), "-o", (dir / "x.glb").string()});
-  EXPECT_EQ(streams.exit_code, 1);
-  EXPECT_NE(streams.err.find("different vertex streams (primitives 0 and 1 of glTF mesh 0)"), std::string::npos) << streams.err;
-  EXPECT_FALSE(std::filesystem::exists(dir / "x.glb"));
   const test::RunResult bad = test::run_cli(
       {"lod", (dir / "humanoid.glb").string(), "-o", (dir / "x.glb").string(), "--skin-mode", "rigid"});
   EXPECT_EQ(bad.exit_code, 1);

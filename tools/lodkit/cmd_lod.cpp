@@ -381,23 +381,30 @@ std::vector<SkinnedGroup> skinned_groups(const Scene& scene, const std::vector<S
     if (added) groups.push_back({sp.node, sp.skin, {}, {0}});
     SkinnedGroup& g = groups[it->second];
     if (g.node != sp.node) continue;  // (another node drawing the same glTF mesh)
-    const Primitive& first = scene.primitives[g.primitives.empty() ? sp.primitive : g.primitives[0]];
-    // Joined, a stream one member lacks would be dropped from all (see flatten).
-    if (stream_layout(p.mesh) != stream_layout(first.mesh))
-      throw_usage(fmt::format("skinned node '{}' draws primitives with different vertex streams (primitives {} and {} of "
-                              "glTF mesh {}); lodkit lod simplifies a skinned mesh's primitives together, which needs the "
-                              "same streams (normals, tangents, UV sets, colours, influences) in each",
-                              node_label(scene.nodes, sp.node), first.gltf_primitive, p.gltf_primitive, p.gltf_mesh));
     g.primitives.push_back(sp.primitive);
     g.offsets.push_back(g.offsets.back() + uint32_t(p.mesh.vertex_count()));
   }
   return groups;
 }
 
-// A group's members joined (a copy, or the one primitive's mesh itself).
+// A group's members joined (a copy, or the one primitive's mesh itself). Joined, a stream one
+// member lacks would be dropped from all (see flatten): such a member gets it for the join
+// (fill_streams), and its levels lose it again (member_levels).
 Joined join_group(const Scene& scene, const SkinnedGroup& g) {
+  uint32_t all = 0;
+  for (const uint32_t p : g.primitives) all |= stream_layout(scene.primitives[p].mesh);
+  std::vector<Mesh> filled(g.primitives.size());
   std::vector<const Mesh*> members;
-  for (const uint32_t p : g.primitives) members.push_back(&scene.primitives[p].mesh);
+  for (size_t k = 0; k < g.primitives.size(); ++k) {
+    const Mesh& mesh = scene.primitives[g.primitives[k]].mesh;
+    if (stream_layout(mesh) == all) {
+      members.push_back(&mesh);
+      continue;
+    }
+    filled[k] = mesh;
+    fill_streams(filled[k], all);
+    members.push_back(&filled[k]);
+  }
   return join_members(members);
 }
 
@@ -477,6 +484,7 @@ std::vector<std::vector<Primitive>> member_levels(const Scene& scene, const Skin
       origin[k].push_back(from - g.offsets[k]);
       if (members > 1) append_vertex(own[k], buffer.vertices, b);
     }
+    for (size_t k = 0; k < members; ++k) keep_streams(own[k], stream_layout(scene.primitives[g.primitives[k]].mesh));
     for (size_t i = 0; i < levels.size(); ++i) {
       const Mesh& level = chain.levels[i].mesh;
       for (size_t k = 0; k < members; ++k) levels[i][k].mesh = own[k];
@@ -536,6 +544,7 @@ std::vector<std::vector<Primitive>> member_levels(const Scene& scene, const Skin
           if ((targets[k][t].*stream).empty()) (out.*stream).clear();
       }
       prim.mesh = std::move(parts[k].mesh);
+      keep_streams(prim.mesh, stream_layout(source));
     }
   }
   return levels;

@@ -70,6 +70,12 @@ class GeometryFile {
 // Which vertex streams a mesh has (normals, tangents, UV sets, colours, influences), as bits: meshes
 // with the same layout join without dropping or inventing values (see flatten).
 uint32_t stream_layout(const Mesh& mesh);
+// Gives `mesh` the streams of `layout` it lacks, with neutral values: smooth normals, tangents along
+// +x, UVs of 0, white, no second influences (weights 0). For a join: constant values cost nothing
+// in the simplifier, and keep_streams drops them again.
+void fill_streams(Mesh& mesh, uint32_t layout);
+// Drops the streams `layout` does not have.
+void keep_streams(Mesh& mesh, uint32_t layout);
 
 // Meshes simplified as one (GeometryFile::joint_groups, a skinned node's primitives), so that the
 // borders between them stay closed like seams: member k is material id k + 1 (flatten's numbering)
