@@ -1505,6 +1505,65 @@ TEST(CliLod, VisibilitySwitchesKeepTheirMeshesBelowThem) {
   EXPECT_EQ(flatten(in).triangle_count(), sphere.triangle_count() + torus.triangle_count() + lamp.triangle_count() + bulb.triangle_count());
 }
 
+// A textured sphere (UVs: its x, y) beside a plain torus (no UVs): the static chain keeps each
+// material's streams. (Flattened as they are, the sphere's UVs would be dropped: the torus has none.)
+// Level 0 has the sphere's UVs exactly; the coarser levels near the sphere's x, y. With one vertex
+// buffer, the materials share it, UVs included (the torus's are 0).
+TEST(CliLod, EachMaterialKeepsItsOwnStreams) {
+  test::TempDir dir;
+  Mesh sphere = shapes::icosphere(3);
+  Mesh torus = shapes::torus(1.0f, 0.3f, 32, 16);
+  torus.uvs[0].clear();
+  for (const float3& p : sphere.positions) sphere.uvs[0].push_back({p.x, p.y});
+  ASSERT_TRUE(sphere.uvs[1].empty());
+  Scene input;
+  add_meshes(input, {&sphere, &torus});
+  input.material_names = {"textured", "plain"};
+  input.primitives[0].material = 0, input.primitives[1].material = 1;
+  Node a, b;
+  a.name = "sphere", a.mesh = 0;
+  b.name = "torus", b.mesh = 1, b.translation = {3, 0, 0};
+  input.nodes = {a, b};
+  input.roots = {0, 1};
+  write_scene(input, dir / "mixed.glb");
+  for (const bool shared : {false, true}) {
+    SCOPED_TRACE(shared);
+    std::vector<std::string> options = {"--ratios", "1,0.5,0.2"};
+    if (shared) options.push_back("--shared-vertices");
+    const nlohmann::json report = lod_report(dir.path, "mixed.glb", "lod.glb", options);
+    const Scene out = read_scene(dir / "lod.glb");
+    size_t first = out.nodes.size();  // the chain's LOD0 node
+    for (size_t n = 0; n < out.nodes.size(); ++n)
+      if (!out.nodes[n].lod_ids.empty()) first = std::min(first, n);
+    ASSERT_LT(first, out.nodes.size());
+    ASSERT_EQ(out.nodes[first].lod_ids.size(), 2u);
+    std::vector<int32_t> meshes = {out.nodes[first].mesh};
+    for (const int32_t id : out.nodes[first].lod_ids) meshes.push_back(out.nodes[size_t(id)].mesh);
+    for (size_t i = 0; i < meshes.size(); ++i) {
+      SCOPED_TRACE(i);
+      size_t seen = 0;
+      for (const Primitive& prim : out.primitives) {
+        if (int32_t(prim.gltf_mesh) != meshes[i]) continue;
+        ++seen;
+        const Mesh& m = prim.mesh;
+        EXPECT_FALSE(m.normals.empty());
+        if (prim.material == 1) {
+          EXPECT_EQ(m.uvs[0].empty(), !shared);
+          continue;
+        }
+        ASSERT_EQ(m.uvs[0].size(), m.vertex_count());
+        std::set<uint32_t> used(m.indices.begin(), m.indices.end());
+        for (const uint32_t v : used) {
+          const float tolerance = i == 0 || shared ? 0.0f : 0.05f;
+          ASSERT_NEAR(m.uvs[0][v].x, m.positions[v].x, tolerance) << v;
+          ASSERT_NEAR(m.uvs[0][v].y, m.positions[v].y, tolerance) << v;
+        }
+      }
+      EXPECT_EQ(seen, 2u);
+    }
+  }
+}
+
 // A skinned character's props get chains too: a rock on the ground (the static chain) and a ball in
 // its right hand (a node below the wrist joint, which the walk moves: a chain of its own, under
 // it). The character's chain is the one it gets alone; posed by the walk, level 0 draws the input's

@@ -231,8 +231,10 @@ struct ChainPlace {
 
 // Appends a chain to a chain_document: one new glTF mesh per level with a primitive per material
 // (unless `place.meshes` names them), and one node per level, the first listing the others
-// (MSFT_lod). Returns the first level's glTF mesh.
-uint32_t add_chain(Scene& scene, const ChainReport& r, const LevelTargets& targets, const ChainPlace& place) {
+// (MSFT_lod). Each material's primitives keep the vertex streams `streams` gives its id (all when
+// it has none; with one vertex buffer, all: the materials share it). Returns the first level's glTF mesh.
+uint32_t add_chain(Scene& scene, const ChainReport& r, const LevelTargets& targets, const std::vector<uint32_t>& streams,
+                   const ChainPlace& place) {
   const LodChain& chain = r.chain;
   uint32_t mesh_base = scene.source ? scene.gltf_mesh_count : 0;
   for (const Primitive& p : scene.primitives) mesh_base = std::max(mesh_base, p.gltf_mesh + 1);
@@ -275,6 +277,7 @@ uint32_t add_chain(Scene& scene, const ChainReport& r, const LevelTargets& targe
     for (MaterialPart& part : split_by_material(level)) {
       Primitive prim;
       prim.mesh = std::move(part.mesh);
+      if (part.material < streams.size()) keep_streams(prim.mesh, streams[part.material]);
       for (const MorphTarget& t : targets.at(i)) prim.targets.push_back(renumbered(t, part.vertices));
       if (i < chain.morphs.size()) {
         // The geomorph as a glTF morph target, after the input's: weight t gives (1 - t) P + t P_target,
@@ -610,8 +613,37 @@ struct StaticChain {
   std::string targets_dropped;  // why the input's morph targets are not on the levels, if they are not
   Mesh input;                   // as read (welded where morph targets allow)
   FlatMorphTargets morph;       // the targets to carry to the levels
+  std::vector<uint32_t> streams;  // per material id, the vertex streams its levels keep (flatten_streams)
   const Mesh& to_simplify() const { return form.to_simplify(input); }
 };
+
+// flatten(scene) keeping every vertex stream a primitive it draws has (flatten keeps only the
+// streams all have, so a textured mesh beside a plain one would lose its UVs): the others get
+// neutral values for the flattening (fill_streams), then their own streams back. Influences are not
+// made up. `streams` gets, per material id (flatten's numbering: the glTF material + 1), the streams
+// all its primitives have: what its levels keep (add_chain).
+Mesh flatten_streams(Scene& scene, std::vector<uint32_t>& streams) {
+  std::set<int32_t> drawn;
+  for (const Node& node : scene.nodes)
+    if (node.mesh >= 0) drawn.insert(node.mesh);
+  uint32_t all = 0;
+  std::vector<uint32_t> own(scene.primitives.size());
+  for (size_t p = 0; p < scene.primitives.size(); ++p) {
+    own[p] = stream_layout(scene.primitives[p].mesh);
+    if (drawn.count(int32_t(scene.primitives[p].gltf_mesh))) all |= own[p] & ~influence_streams;
+  }
+  streams.clear();
+  for (size_t p = 0; p < scene.primitives.size(); ++p) {
+    if (!drawn.count(int32_t(scene.primitives[p].gltf_mesh))) continue;
+    const size_t id = size_t(std::max(scene.primitives[p].material, -1) + 1);
+    if (streams.size() <= id) streams.resize(id + 1, ~0u);
+    streams[id] &= own[p];
+    if ((own[p] | all) != own[p]) fill_streams(scene.primitives[p].mesh, own[p] | all);
+  }
+  Mesh out = flatten(scene);
+  for (size_t p = 0; p < scene.primitives.size(); ++p) keep_streams(scene.primitives[p].mesh, own[p]);
+  return out;
+}
 
 StaticChain prepare_static(Mesh mesh, const Scene* scene, const LodCommand& o) {
   StaticChain out;
@@ -825,13 +857,15 @@ Command register_lod(CLI::App& root) {
               std::swap(scene.nodes, nodes), std::swap(scene.roots, roots);
             };
             std::vector<Node> static_nodes;  // the input's, without the separate and skinned meshes
+            std::vector<uint32_t> static_streams;  // the static chain's per material (flatten_streams)
             if (scene.source) {
               static_nodes = scene.nodes;
               for (const SeparatePart& m : separate)
                 for (const int32_t n : m.nodes) static_nodes[size_t(n)].mesh = -1;
               for (Node& node : static_nodes)
                 if (skinned_meshes.count(node.mesh)) node.mesh = -1;
-              with_nodes(static_nodes, scene.roots, [&](const Scene& view) { mesh = flatten(view); });
+              // (`view` is `scene` with those nodes: flatten_streams takes it as such.)
+              with_nodes(static_nodes, scene.roots, [&](const Scene&) { mesh = flatten_streams(scene, static_streams); });
             }
             const double load_seconds = seconds_since(start);
             // (Before any chain is built: the progressive mesh is the static chain's.)
@@ -871,6 +905,7 @@ Command register_lod(CLI::App& root) {
                 with_nodes(static_nodes, scene.roots, [&](const Scene& view) { chains.push_back(prepare_static(std::move(mesh), &view, *o)); });
               else
                 chains.push_back(prepare_static(std::move(mesh), nullptr, *o));
+              chains.back().streams = std::move(static_streams);
             }
             // Each separate part: its own chain in its own space (a mesh drawn once by its first
             // node, untransformed; a rigid group drawn by its nodes below its frame, untransformed),
@@ -887,7 +922,11 @@ Command register_lod(CLI::App& root) {
               std::vector<std::string> names;
               for (const int32_t k : m.frame >= 0 ? std::vector<int32_t>{m.frame} : m.nodes) names.push_back(node_label(scene.nodes, size_t(k)));
               const std::string name = fmt::format("{}", fmt::join(names, ", "));
-              with_nodes(solo, {top}, [&](const Scene& view) { chains.push_back(prepare_static(flatten(view), &view, *o)); });
+              with_nodes(solo, {top}, [&](const Scene& view) {
+                std::vector<uint32_t> streams;
+                chains.push_back(prepare_static(flatten_streams(scene, streams), &view, *o));
+                chains.back().streams = std::move(streams);
+              });
               chains.back().report.node = name;
               chains.back().report.instances = m.instanced ? m.instances : 0;
               chains.back().report.animated = m.animated;
@@ -924,19 +963,20 @@ Command register_lod(CLI::App& root) {
               out = chain_document(scene.source ? &scene : nullptr, reports[0].chain.levels.front().mesh.material_names);
             }
             const size_t first_separate = chains.size() - separate.size();
-            for (size_t c = 0; c < first_separate; ++c) add_chain(out, reports[first_chain + c], chains[c].targets, {});
+            for (size_t c = 0; c < first_separate; ++c) add_chain(out, reports[first_chain + c], chains[c].targets, chains[c].streams, {});
             for (size_t c = first_separate; c < chains.size(); ++c) {
               const SeparatePart& part = separate[c - first_separate];
               if (part.frame >= 0) {
                 // A rigid group's levels under its frame, with its nodes' morph weights in turn.
-                add_chain(out, reports[first_chain + c], chains[c].targets, {node_label(out.nodes, size_t(part.frame)) + "_", part.frame});
+                add_chain(out, reports[first_chain + c], chains[c].targets, chains[c].streams, {node_label(out.nodes, size_t(part.frame)) + "_", part.frame});
                 continue;
               }
               // Every node that drew the mesh draws the chain: its own level nodes, under it.
               std::optional<uint32_t> meshes;
               for (const int32_t n : part.nodes) {
                 const std::vector<Node::GpuInstance> instances = out.nodes[size_t(n)].gpu_instances;  // (a copy: add_chain adds nodes)
-                meshes = add_chain(out, reports[first_chain + c], chains[c].targets, {node_label(out.nodes, size_t(n)) + "_", n, instances, n, meshes});
+                meshes = add_chain(out, reports[first_chain + c], chains[c].targets, chains[c].streams,
+                                   {node_label(out.nodes, size_t(n)) + "_", n, instances, n, meshes});
               }
             }
             written = write_scene(out, o->output, o->gltf);

@@ -70,6 +70,7 @@ class GeometryFile {
 // Which vertex streams a mesh has (normals, tangents, UV sets, colours, influences), as bits: meshes
 // with the same layout join without dropping or inventing values (see flatten).
 uint32_t stream_layout(const Mesh& mesh);
+inline constexpr uint32_t influence_streams = 0x780;  // stream_layout's joints, weights, joints1, weights1
 // Gives `mesh` the streams of `layout` it lacks, with neutral values: smooth normals, tangents along
 // +x, UVs of 0, white, no second influences (weights 0). For a join: constant values cost nothing
 // in the simplifier, and keep_streams drops them again.
