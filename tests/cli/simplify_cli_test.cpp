@@ -271,6 +271,7 @@ TEST(CliSimplify, FlatShadedPrimitivesOfOneMeshSimplifyTogether) {
   test::expect_valid_gltf({dir / "out.glb"});
 }
 
+// Also when one has streams the other lacks (UVs on the left only): each keeps its own.
 TEST(CliSimplify, PrimitivesOfOneMeshKeepTheirBordersClosed) {
   test::TempDir dir;
   Mesh torus = shapes::torus(1.0f, 0.3f, 40, 20);
@@ -281,13 +282,18 @@ TEST(CliSimplify, PrimitivesOfOneMeshKeepTheirBordersClosed) {
     torus.materials[t] = x > 0 ? 1 : 0;
   }
   torus.material_names = {"left", "right"};
-  const Scene in = scene_from_mesh(torus);
+  Scene in = scene_from_mesh(torus);
   ASSERT_EQ(in.primitives.size(), 2u);
+  ASSERT_FALSE(torus.uvs[0].empty());
   write_scene(in, dir / "in.glb");
+  in.primitives[1].mesh.uvs[0].clear();
+  write_scene(in, dir / "mixed.glb");
 
-  for (const bool subset : {false, true}) {
-    std::vector<std::string> args = {"simplify", (dir / "in.glb").string(), "-o", (dir / "out.glb").string(),
-                                     "--ratio", "0.1", "--force"};
+  for (const bool subset : {false, true})
+  for (const bool mixed : {false, true}) {
+    SCOPED_TRACE(mixed);
+    std::vector<std::string> args = {"simplify", (dir / (mixed ? "mixed.glb" : "in.glb")).string(), "-o",
+                                     (dir / "out.glb").string(), "--ratio", "0.1", "--force"};
     if (subset) args.push_back("--keep-vertices");
     const test::RunResult r = test::run_cli(args);
     ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -298,6 +304,8 @@ TEST(CliSimplify, PrimitivesOfOneMeshKeepTheirBordersClosed) {
       const Mesh& m = out.primitives[p].mesh;
       EXPECT_EQ(out.primitives[p].material, in.primitives[p].material) << subset;
       EXPECT_GT(m.triangle_count(), 0u) << subset;
+      EXPECT_EQ(m.uvs[0].empty(), mixed && p == 1) << subset;
+      EXPECT_FALSE(m.normals.empty()) << subset;
       if (subset) {
         const std::vector<float3>& own = in.primitives[p].mesh.positions;
         for (const float3& v : m.positions)

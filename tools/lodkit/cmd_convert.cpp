@@ -259,12 +259,13 @@ void keep_streams(Mesh& mesh, uint32_t layout) {
 
 std::vector<std::vector<size_t>> GeometryFile::joint_groups() const {
   if (!as_scene_) return {{0}};
-  // Primitives with other streams stay apart: joining them would drop or invent values (see flatten).
+  // Primitives with and without influences stay apart: a join would make some up (join_members).
   std::vector<std::vector<size_t>> groups;
-  std::map<std::pair<uint32_t, uint32_t>, size_t> group_of;  // (glTF mesh, layout) -> group
+  std::map<std::pair<uint32_t, uint32_t>, size_t> group_of;  // (glTF mesh, first influence set) -> group
   for (size_t i = 0; i < scene_.primitives.size(); ++i) {
     const Primitive& p = scene_.primitives[i];
-    const auto [it, added] = group_of.try_emplace({p.gltf_mesh, stream_layout(p.mesh)}, groups.size());
+    const uint32_t influences = p.mesh.joints.empty() && p.mesh.weights.empty() ? 0 : 1;
+    const auto [it, added] = group_of.try_emplace({p.gltf_mesh, influences}, groups.size());
     if (added) groups.emplace_back();
     groups[it->second].push_back(i);
   }
@@ -274,15 +275,20 @@ std::vector<std::vector<size_t>> GeometryFile::joint_groups() const {
 Joined join_members(std::span<const Mesh* const> members) {
   Joined j;
   j.offsets = {0};
+  for (const Mesh* m : members) j.layouts.push_back(stream_layout(*m));
   if (members.size() == 1) {
     j.alone = members[0];
     j.offsets.push_back(uint32_t(members[0]->vertex_count()));
     return j;
   }
+  uint32_t all = 0;
+  for (const uint32_t layout : j.layouts) all |= layout;
+  all &= ~influence_streams;  // (flatten pads a second set with weights of 0 itself)
   Scene scene;  // no nodes: flatten takes each primitive once, untransformed, in order
   for (size_t k = 0; k < members.size(); ++k) {
     Primitive p;
     p.mesh = *members[k];
+    fill_streams(p.mesh, j.layouts[k] | all);
     p.material = int32_t(k);
     j.offsets.push_back(j.offsets.back() + uint32_t(p.mesh.vertex_count()));
     scene.primitives.push_back(std::move(p));
@@ -291,8 +297,8 @@ Joined join_members(std::span<const Mesh* const> members) {
   return j;
 }
 
-std::vector<Member> split_members(const std::vector<uint32_t>& offsets, Mesh mesh, std::vector<uint32_t> origin,
-                                  std::vector<uint32_t> successor) {
+std::vector<Member> split_members(const Joined& j, Mesh mesh, std::vector<uint32_t> origin, std::vector<uint32_t> successor) {
+  const std::vector<uint32_t>& offsets = j.offsets;
   if (offsets.size() < 2) throw_internal("split_members: no members");
   std::vector<Member> members(offsets.size() - 1);
   if (members.size() == 1) {
@@ -308,6 +314,7 @@ std::vector<Member> split_members(const std::vector<uint32_t>& offsets, Mesh mes
     if (part.material == 0 || k >= members.size())
       throw_internal("split_members: a joined mesh's part has material id " + std::to_string(part.material));
     members[k].mesh = std::move(part.mesh);
+    keep_streams(members[k].mesh, j.layouts[k]);
     members[k].vertices = part.vertices;
     for (uint32_t i = 0; i < part.vertices.size(); ++i) {
       const uint32_t v = part.vertices[i];

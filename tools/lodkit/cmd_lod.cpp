@@ -372,7 +372,6 @@ SkinMode parse_skin_mode(const std::string& name) {
 struct SkinnedGroup {
   uint32_t node = 0, skin = 0;
   std::vector<uint32_t> primitives;  // into Scene::primitives, in order
-  std::vector<uint32_t> offsets;     // Joined::offsets
 };
 
 std::vector<SkinnedGroup> skinned_groups(const Scene& scene, const std::vector<SkinnedPrimitive>& skinned) {
@@ -381,33 +380,18 @@ std::vector<SkinnedGroup> skinned_groups(const Scene& scene, const std::vector<S
   for (const SkinnedPrimitive& sp : skinned) {
     const Primitive& p = scene.primitives[sp.primitive];
     const auto [it, added] = group_of.try_emplace(p.gltf_mesh, groups.size());
-    if (added) groups.push_back({sp.node, sp.skin, {}, {0}});
+    if (added) groups.push_back({sp.node, sp.skin, {}});
     SkinnedGroup& g = groups[it->second];
     if (g.node != sp.node) continue;  // (another node drawing the same glTF mesh)
     g.primitives.push_back(sp.primitive);
-    g.offsets.push_back(g.offsets.back() + uint32_t(p.mesh.vertex_count()));
   }
   return groups;
 }
 
-// A group's members joined (a copy, or the one primitive's mesh itself). Joined, a stream one
-// member lacks would be dropped from all (see flatten): such a member gets it for the join
-// (fill_streams), and its levels lose it again (member_levels).
+// A group's members joined (a copy, or the one primitive's mesh itself).
 Joined join_group(const Scene& scene, const SkinnedGroup& g) {
-  uint32_t all = 0;
-  for (const uint32_t p : g.primitives) all |= stream_layout(scene.primitives[p].mesh);
-  std::vector<Mesh> filled(g.primitives.size());
   std::vector<const Mesh*> members;
-  for (size_t k = 0; k < g.primitives.size(); ++k) {
-    const Mesh& mesh = scene.primitives[g.primitives[k]].mesh;
-    if (stream_layout(mesh) == all) {
-      members.push_back(&mesh);
-      continue;
-    }
-    filled[k] = mesh;
-    fill_streams(filled[k], all);
-    members.push_back(&filled[k]);
-  }
+  for (const uint32_t p : g.primitives) members.push_back(&scene.primitives[p].mesh);
   return join_members(members);
 }
 
@@ -470,6 +454,8 @@ std::vector<std::vector<Primitive>> member_levels(const Scene& scene, const Skin
     levels[0][k] = source;
     for (size_t i = 1; i < levels.size(); ++i) levels[i][k].material = source.material;
   }
+  const Joined joined = join_group(scene, g);
+  const std::vector<uint32_t>& offsets = joined.offsets;
   const SharedVertices& buffer = chain.shared;
   if (!buffer.indices.empty()) {
     // One vertex buffer (subset placement). Member k's: the buffer's vertices from its own input, in
@@ -481,13 +467,13 @@ std::vector<std::vector<Primitive>> member_levels(const Scene& scene, const Skin
     if (members == 1) own[0] = buffer.vertices, own[0].indices.clear();
     for (uint32_t b = 0; b < buffer.vertex_origin.size(); ++b) {
       const uint32_t from = buffer.vertex_origin[b];
-      const size_t k = size_t(std::upper_bound(g.offsets.begin(), g.offsets.end(), from) - g.offsets.begin()) - 1;
+      const size_t k = size_t(std::upper_bound(offsets.begin(), offsets.end(), from) - offsets.begin()) - 1;
       if (k >= members) throw_internal("lod: a skinned buffer vertex comes from no member");
       member[b] = uint32_t(k), local[b] = uint32_t(origin[k].size());
-      origin[k].push_back(from - g.offsets[k]);
+      origin[k].push_back(from - offsets[k]);
       if (members > 1) append_vertex(own[k], buffer.vertices, b);
     }
-    for (size_t k = 0; k < members; ++k) keep_streams(own[k], stream_layout(scene.primitives[g.primitives[k]].mesh));
+    for (size_t k = 0; k < members; ++k) keep_streams(own[k], joined.layouts[k]);
     for (size_t i = 0; i < levels.size(); ++i) {
       const Mesh& level = chain.levels[i].mesh;
       for (size_t k = 0; k < members; ++k) levels[i][k].mesh = own[k];
@@ -513,14 +499,13 @@ std::vector<std::vector<Primitive>> member_levels(const Scene& scene, const Skin
   // The coarser levels' morph targets: blended on the joined input, from the members' targets
   // joined (a level's vertex near a material border may lie over the other material's triangles;
   // a stream a member's target lacks displaces nothing there).
-  const Joined joined = join_group(scene, g);
   std::vector<MorphTarget> joined_targets(targets[0].size());
   for (size_t t = 0; t < joined_targets.size(); ++t)
     for (const auto stream : morph_streams) {
       bool any = false;
       for (size_t k = 0; k < members; ++k) any = any || (t < targets[k].size() && !(targets[k][t].*stream).empty());
       for (size_t k = 0; k < members && any; ++k) {
-        const size_t count = g.offsets[k + 1] - g.offsets[k];
+        const size_t count = offsets[k + 1] - offsets[k];
         const bool has = t < targets[k].size() && !(targets[k][t].*stream).empty();
         if (has) (joined_targets[t].*stream).insert((joined_targets[t].*stream).end(), (targets[k][t].*stream).begin(), (targets[k][t].*stream).end());
         else (joined_targets[t].*stream).resize((joined_targets[t].*stream).size() + count, float3{});
@@ -531,7 +516,7 @@ std::vector<std::vector<Primitive>> member_levels(const Scene& scene, const Skin
     std::vector<MorphTarget> level_targets;
     if (i > 0 && !joined_targets.empty())
       level_targets = blended_targets(joined_targets, vertex_blends(joined.mesh(), level.vertex_successor, level.mesh));
-    std::vector<Member> parts = split_members(g.offsets, level.mesh, level.vertex_origin, level.vertex_successor);
+    std::vector<Member> parts = split_members(joined, level.mesh, level.vertex_origin, level.vertex_successor);
     for (size_t k = 0; k < members; ++k) {
       const Mesh& source = scene.primitives[g.primitives[k]].mesh;
       Primitive& prim = levels[i][k];
@@ -547,7 +532,6 @@ std::vector<std::vector<Primitive>> member_levels(const Scene& scene, const Skin
           if ((targets[k][t].*stream).empty()) (out.*stream).clear();
       }
       prim.mesh = std::move(parts[k].mesh);
-      keep_streams(prim.mesh, stream_layout(source));
     }
   }
   return levels;

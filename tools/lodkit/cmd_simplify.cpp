@@ -1,7 +1,7 @@
 // lodkit simplify IN -o OUT: one simplification to a target ratio, triangle count or error.
 // A glTF written from a glTF keeps everything else (nodes, skins, animations, materials). The
-// primitives of one glTF mesh are simplified together, their material borders kept closed like
-// seams; a skinned one keeps its survivors' joints and weights. Morph targets and other streams
+// primitives of one glTF mesh are simplified together (join_members), their material borders kept
+// closed like seams, each with its own streams; a skinned one keeps its survivors' joints and weights. Morph targets and other streams
 // lodkit does not model are kept: exact with --keep-vertices, else interpolated (lod::vertex_blends).
 #include <fmt/format.h>
 
@@ -210,7 +210,7 @@ Command register_simplify(CLI::App& root) {
                 // Input vertices, unmoved: with --keep-vertices, or when nothing collapsed.
                 const bool unmoved = o->keep_vertices || (r.collapses == 0 && !form.changed());
                 std::vector<Member> parts =
-                    split_members(joined.offsets, std::move(r.mesh), std::move(r.vertex_origin), std::move(r.vertex_successor));
+                    split_members(joined, std::move(r.mesh), std::move(r.vertex_origin), std::move(r.vertex_successor));
                 for (size_t k = 0; k < group.size(); ++k) {
                   const size_t i = group[k];
                   Member& out = parts[k];

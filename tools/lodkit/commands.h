@@ -80,24 +80,28 @@ void keep_streams(Mesh& mesh, uint32_t layout);
 
 // Meshes simplified as one (GeometryFile::joint_groups, a skinned node's primitives), so that the
 // borders between them stay closed like seams: member k is material id k + 1 (flatten's numbering)
-// and its vertices are offsets[k] to offsets[k + 1]. A group of one is the mesh itself, not a copy.
+// and its vertices are offsets[k] to offsets[k + 1]. A stream some member lacks is given to it with
+// neutral values (fill_streams; flatten would drop it from all), and split_members drops it again:
+// layouts[k] is member k's own (stream_layout). Influences are not made up: the members have the
+// same first set. A group of one is the mesh itself, not a copy.
 struct Joined {
   const Mesh& mesh() const { return alone ? *alone : joined; }
   const Mesh* alone = nullptr;
   Mesh joined;
   std::vector<uint32_t> offsets;  // members + 1
+  std::vector<uint32_t> layouts;
 };
 Joined join_members(std::span<const Mesh* const> members);
 
 // A result of the joined mesh (a simplification, a LOD level) back in its members, each with its
-// vertices' input vertices among its own (origin, when given) and its input vertices' vertices
-// (successor, when given; ~0u for none), and the joined result's vertex each of its vertices is
-// (vertices). A member whose triangles all collapsed is left empty.
+// own streams, its vertices' input vertices among its own (origin, when given), its input vertices'
+// vertices (successor, when given; ~0u for none), and the joined result's vertex each of its
+// vertices is (vertices). A member whose triangles all collapsed is left empty.
 struct Member {
   Mesh mesh;
   std::vector<uint32_t> origin, successor, vertices;
 };
-std::vector<Member> split_members(const std::vector<uint32_t>& offsets, Mesh mesh, std::vector<uint32_t> origin,
+std::vector<Member> split_members(const Joined& joined, Mesh mesh, std::vector<uint32_t> origin,
                                   std::vector<uint32_t> successor);
 
 // Removes these members from a node's extras: lodkit's facts about what it draws (extras "lodkit",
