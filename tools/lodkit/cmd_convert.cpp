@@ -213,7 +213,8 @@ std::vector<uint32_t> GeometryFile::vertex_classes(size_t i) const {
 }
 
 namespace {
-// Mesh's vertex streams in stream_layout's bit order, with the value fill_streams gives a missing one.
+// Mesh's vertex streams in stream_layout's bit order (influence_streams names the last four), with
+// the value fill_streams gives a missing one.
 template <class M, class Fn>  // M: Mesh or const Mesh
 void for_each_stream(M& m, Fn&& fn) {
   fn(m.normals, [](Mesh& mesh) {
