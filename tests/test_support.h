@@ -61,6 +61,7 @@ ValidatorRun run_validator(const std::vector<std::filesystem::path>& files);
 // Every file has zero errors by the validator; skips the calling test where it is not installed.
 void expect_valid_gltf(const std::vector<std::filesystem::path>& files);
 void write_bytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes);
+std::string read_bytes(const std::filesystem::path& path);  // the whole file ("" when unreadable)
 
 // Standard base64 with '=' padding (for data: URIs in hand-written glTF files), and back (for test
 // data other programs write; characters outside the alphabet are skipped).

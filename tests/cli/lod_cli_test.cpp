@@ -1814,6 +1814,42 @@ TEST(CliLod, ASkinnedNodesMaterialsMayHaveOtherStreams) {
   }
 }
 
+// Two skinned meshes of one skin (the humanoid's halves, each its own glTF mesh and node): built in
+// one batch, side by side with two threads, each chain is the one its mesh gets alone, and the
+// output does not depend on the thread count.
+TEST(CliLod, SkinnedMeshesOfOneSkinAreBuiltTogether) {
+  test::TempDir dir;
+  const Scene humanoid = fixtures::humanoid_scene();
+  const std::array<Mesh, 2> halves = fixtures::halves_by_x(humanoid.primitives[0].mesh);
+  Scene both = humanoid;
+  both.primitives[0].mesh = halves[0];
+  Primitive right;
+  right.mesh = halves[1], right.gltf_mesh = 1;
+  both.primitives.push_back(right);
+  Node second = both.nodes.back();  // the skinned node, after the joints
+  second.name = "right", second.mesh = 1;
+  both.nodes.push_back(second);
+  both.roots.push_back(int32_t(both.nodes.size() - 1));
+  write_scene(both, dir / "both.glb");
+  Scene left = humanoid, alone_right = humanoid;
+  left.primitives[0].mesh = halves[0];
+  alone_right.primitives[0].mesh = halves[1];
+  write_scene(left, dir / "left.glb");
+  write_scene(alone_right, dir / "right.glb");
+
+  const std::vector<std::string> options = {"--ratios", "1,0.4,0.1", "--poses", "4"};
+  const nlohmann::json report = lod_report(dir.path, "both.glb", "both-lod.glb", options);
+  ASSERT_EQ(report["skinned"]["chains"].size(), 2u);
+  EXPECT_EQ(report["skinned"]["chains"][1]["node"], "right");
+  EXPECT_EQ(report["skinned"]["chains"][0]["levels"], lod_report(dir.path, "left.glb", "left-lod.glb", options)["skinned"]["chains"][0]["levels"]);
+  EXPECT_EQ(report["skinned"]["chains"][1]["levels"], lod_report(dir.path, "right.glb", "right-lod.glb", options)["skinned"]["chains"][0]["levels"]);
+  std::vector<std::string> one = options;
+  one.insert(one.end(), {"--threads", "1"});
+  lod_report(dir.path, "both.glb", "both-1.glb", one);
+  EXPECT_EQ(test::read_bytes(dir / "both-lod.glb"), test::read_bytes(dir / "both-1.glb"));
+  expect_posed_alike(read_scene(dir / "both.glb"), read_scene(dir / "both-lod.glb"), {0.0f, 0.5f});
+}
+
 TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {
   test::TempDir dir;
   write_scene(fixtures::humanoid_scene(), dir / "humanoid.glb");

@@ -23,11 +23,6 @@ namespace {
 
 using test::run_cli;
 
-std::string file_bytes(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
-
 TEST(RenderCli, WritesThePictureAtTheRequestedSize) {
   test::TempDir dir;
   write_mesh(shapes::torus(), dir / "torus.ply");
@@ -57,7 +52,7 @@ TEST(RenderCli, Deterministic) {
                             "--wire", "--flat"});
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
-  const std::string a = file_bytes(dir / "a.png"), b = file_bytes(dir / "b.png");
+  const std::string a = test::read_bytes(dir / "a.png"), b = test::read_bytes(dir / "b.png");
   EXPECT_GT(a.size(), 1000u);
   EXPECT_EQ(a, b);
 }
@@ -247,8 +242,8 @@ TEST(RenderCli, TurntableFrames) {
   r = run_cli({"render", (dir / "torus.ply").string(), "--view", "front", "-o", (dir / "front.png").string(), "--size",
                "160x120"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(file_bytes(dir / "frames" / "frame-000.png"), file_bytes(dir / "front.png"));
-  EXPECT_NE(file_bytes(dir / "frames" / "frame-000.png"), file_bytes(dir / "frames" / "frame-001.png"));
+  EXPECT_EQ(test::read_bytes(dir / "frames" / "frame-000.png"), test::read_bytes(dir / "front.png"));
+  EXPECT_NE(test::read_bytes(dir / "frames" / "frame-000.png"), test::read_bytes(dir / "frames" / "frame-001.png"));
 }
 
 TEST(RenderCli, UsageAndInputErrors) {

@@ -422,21 +422,40 @@ ProgressiveMesh skinned_progressive_mesh(const Scene& scene, const SkinnedGroup&
   return ProgressiveMesh(std::move(input), std::move(r.record));
 }
 
+// The skinned chains. The groups of one skin (a character's meshes, usually) share its simplifier,
+// so they are built in one batch (lod::build_lod_chains: small ones side by side); each chain is
+// what it would be alone.
 std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<SkinnedGroup>& groups, SkinMode mode,
                                        uint32_t pose_count, const LodOptions& base,
                                        const std::function<void(double)>& progress) {
   if (pose_count == 0) throw_usage("--poses must be at least 1");
-  std::vector<ChainReport> reports;
+  std::map<uint32_t, std::vector<size_t>> by_skin;  // skin -> its groups, in order
+  uint64_t total = 0, done = 0;                     // triangles
   for (size_t k = 0; k < groups.size(); ++k) {
-    const SkinnedGroup& g = groups[k];
+    by_skin[groups[k].skin].push_back(k);
+    for (const uint32_t p : groups[k].primitives) total += scene.primitives[p].mesh.triangle_count();
+  }
+  std::vector<ChainReport> reports(groups.size());
+  for (const auto& [skin, batch] : by_skin) {
+    std::vector<Joined> joined;
+    joined.reserve(batch.size());  // (no reallocation: the pointers below stay valid)
+    std::vector<const Mesh*> meshes;
+    uint64_t triangles = 0;
+    for (const size_t k : batch) {
+      for (const uint32_t p : groups[k].primitives) validate(scene.primitives[p].mesh, scene.name);
+      joined.push_back(join_group(scene, groups[k]));
+      meshes.push_back(&joined.back().mesh());
+      triangles += meshes.back()->triangle_count();
+    }
     LodOptions options = base;
-    options.simplifier = skinned_simplifier(skin_options(scene, g.skin, mode, pose_count));
-    options.progress = [&](double f) { progress((double(k) + f) / double(groups.size())); };
-    for (const uint32_t p : g.primitives) validate(scene.primitives[p].mesh, scene.name);
-    ChainReport r;
-    r.node = node_label(scene.nodes, g.node);
-    r.chain = build_lod_chain(join_group(scene, g).mesh(), options);
-    reports.push_back(std::move(r));
+    options.simplifier = skinned_simplifier(skin_options(scene, skin, mode, pose_count));
+    options.progress = [&](double f) { progress((double(done) + f * double(triangles)) / double(std::max<uint64_t>(1, total))); };
+    std::vector<LodChain> chains = build_lod_chains(meshes, options);
+    for (size_t i = 0; i < batch.size(); ++i) {
+      reports[batch[i]].node = node_label(scene.nodes, groups[batch[i]].node);
+      reports[batch[i]].chain = std::move(chains[i]);
+    }
+    done += triangles;
   }
   return reports;
 }
