@@ -134,13 +134,9 @@ std::vector<ChainLevel> read_chain(const std::string& path, const std::string& c
         prim.mesh.positions = std::move(posed.positions);
         prim.mesh.normals = std::move(posed.normals);
       }
-      if (level.primitives.size() == 1) {
-        out.mesh = std::move(level.primitives[0].mesh);
-      } else {
-        Node& at = level.nodes[0];
-        at.skin = -1, at.has_matrix = false, at.translation = {}, at.rotation = {0, 0, 0, 1}, at.scale = {1, 1, 1};
-        out.mesh = flatten(level);
-      }
+      Node& at = level.nodes[0];
+      at.skin = -1, at.has_matrix = false, at.translation = {}, at.rotation = {0, 0, 0, 1}, at.scale = {1, 1, 1};
+      out.mesh = flatten(level);
     }
     const nlohmann::json extras = nlohmann::json::parse(node.extras_json.empty() ? "{}" : node.extras_json);
     const nlohmann::json lodkit = extras.is_object() ? extras.value("lodkit", nlohmann::json::object()) : nlohmann::json();

@@ -1,8 +1,9 @@
 // lodkit simplify IN -o OUT: one simplification to a target ratio, triangle count or error.
 // A glTF written from a glTF keeps everything else (nodes, skins, animations, materials). The
 // primitives of one glTF mesh are simplified together (join_members), their material borders kept
-// closed like seams, each with its own streams; a skinned one keeps its survivors' joints and weights. Morph targets and other streams
-// lodkit does not model are kept: exact with --keep-vertices, else interpolated (lod::vertex_blends).
+// closed like seams, each with its own streams; a skinned one keeps its survivors' joints and
+// weights. Morph targets and other streams lodkit does not model are kept: exact with
+// --keep-vertices, else interpolated (lod::vertex_blends).
 #include <fmt/format.h>
 
 #include <chrono>
