@@ -1643,6 +1643,48 @@ TEST(CliLod, SkinnedCharactersPropsGetChainsToo) {
   ASSERT_EQ(shared["skinned"]["chains"].size(), 1u);
   EXPECT_EQ(shared["static"]["levels"][0]["triangles"], rock.triangle_count());
   expect_posed_alike(read_scene(dir / "rock-first.glb"), read_scene(dir / "rock-first-lod.glb"), {0.0f, 0.7f});
+
+  // lod on its own output: the character's earlier levels (skinned nodes in its MSFT_lod) are not
+  // characters of their own, and give way to the new levels; the rock's and ball's earlier levels
+  // go into new chains of the same sizes. As many meshes as the first output, each drawn once, and
+  // level 0 still draws the input in every pose. The character alone (no props' chain, that takes
+  // every other mesh) too.
+  const auto triangles = [](const nlohmann::json& chain) {
+    std::vector<size_t> counts;
+    for (const nlohmann::json& level : chain["levels"]) counts.push_back(level["triangles"]);
+    return counts;
+  };
+  const auto rerun = [&](const char* first, const nlohmann::json& first_report, const char* second) {
+    SCOPED_TRACE(first);
+    const nlohmann::json again = lod(first, second);
+    EXPECT_EQ(again.contains("static"), first_report.contains("static"));
+    if (first_report.contains("static")) {
+      EXPECT_EQ(triangles(again["static"]), triangles(first_report["static"]));
+      EXPECT_EQ(triangles(again["animated"][0]), triangles(first_report["animated"][0]));
+    }
+    ASSERT_EQ(again["skinned"]["chains"].size(), 1u);
+    EXPECT_EQ(triangles(again["skinned"]["chains"][0]), triangles(first_report["skinned"]["chains"][0]));
+    const nlohmann::json first_doc = test::glb_json(dir / first), again_doc = test::glb_json(dir / second);
+    EXPECT_EQ(again_doc["meshes"].size(), first_doc["meshes"].size());
+    std::set<size_t> drawn;
+    for (const nlohmann::json& node : again_doc["nodes"]) {
+      if (!node.contains("mesh")) {
+        EXPECT_FALSE(node.contains("skin")) << node.value("name", "");
+        continue;
+      }
+      EXPECT_TRUE(drawn.insert(node["mesh"].get<size_t>()).second) << node.value("name", "");
+    }
+    const Scene twice = read_scene(dir / second);
+    const uint32_t character = skinned_primitives(twice).at(0).node;
+    ASSERT_EQ(twice.nodes[character].lod_ids.size(), 1u);
+    const Node& coarser = twice.nodes[size_t(twice.nodes[character].lod_ids[0])];
+    EXPECT_EQ(coarser.name, twice.nodes[character].name + "_LOD1");
+    EXPECT_GE(coarser.mesh, 0);
+  };
+  rerun("alone-lod.glb", alone, "alone-again.glb");
+  rerun("props-lod.glb", report, "props-again.glb");
+  const Scene twice = read_scene(dir / "props-again.glb");
+  expect_posed_alike(in, twice, {0.0f, 0.3f, 0.7f});
 }
 
 // Border edges of a mesh welded by position (exactly equal floats): its open cracks and holes.

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -181,10 +182,10 @@ nlohmann::json level_facts(const ChainReport& r, size_t i) {
   return facts;
 }
 
-// Drops the triangles of the source's meshes that chains replace: all but `kept` (a skinned
-// character's, which its chains left in place; meshes past the source's are new levels).
-void drop_chained_meshes(Scene& scene, const std::set<int32_t>& kept) {
-  const auto chained = [&](int32_t mesh) { return mesh >= 0 && uint32_t(mesh) < scene.gltf_mesh_count && !kept.count(mesh); };
+// Drops the triangles of the source's meshes that chains replace, those `dropped` says (meshes past
+// the source's are new levels).
+void drop_chained_meshes(Scene& scene, const std::function<bool(uint32_t)>& dropped) {
+  const auto chained = [&](int32_t mesh) { return mesh >= 0 && uint32_t(mesh) < scene.gltf_mesh_count && dropped(uint32_t(mesh)); };
   // Those left keep the primitives whose vertices they share, renumbered.
   std::vector<int32_t> index(scene.primitives.size(), -1);
   int32_t kept_count = 0;
@@ -202,6 +203,23 @@ void drop_chained_meshes(Scene& scene, const std::set<int32_t>& kept) {
     }
 }
 
+// The skinned nodes an earlier run made coarser levels of another (listed in its MSFT_lod): not
+// characters of their own, so that lod on its own output replaces their levels rather than chaining
+// them too. Returns their glTF meshes (those no other skinned node draws) and takes their
+// primitives out of `skinned`.
+std::set<int32_t> earlier_skinned_levels(const Scene& scene, std::vector<SkinnedPrimitive>& skinned) {
+  std::set<uint32_t> levels;
+  for (const Node& node : scene.nodes)
+    for (const int32_t id : node.lod_ids)
+      if (id >= 0 && size_t(id) < scene.nodes.size()) levels.insert(uint32_t(id));
+  std::set<int32_t> meshes, characters;
+  for (const SkinnedPrimitive& sp : skinned)
+    (levels.count(sp.node) ? meshes : characters).insert(int32_t(scene.primitives[sp.primitive].gltf_mesh));
+  std::erase_if(skinned, [&](const SkinnedPrimitive& sp) { return levels.count(sp.node) > 0; });
+  std::erase_if(meshes, [&](int32_t m) { return characters.count(m) > 0; });
+  return meshes;
+}
+
 // The document static chains go into: the glTF `source` (flattened into the chains' inputs, so
 // material id k + 1 is its material k) without its triangles, so that materials, textures and
 // everything else stay and its nodes remain, without those meshes; or a new document with the
@@ -213,7 +231,7 @@ Scene chain_document(const Scene* source, const std::vector<std::string>& materi
     return scene;
   }
   scene = *source;
-  drop_chained_meshes(scene, {});
+  drop_chained_meshes(scene, [](uint32_t) { return true; });
   return scene;
 }
 
@@ -845,7 +863,8 @@ Command register_lod(CLI::App& root) {
               if (in_format == FileFormat::glb || in_format == FileFormat::gltf) scene = read_scene(o->input, bar.read_options());
               else mesh = read_mesh(o->input, bar.read_options());
             }
-            const std::vector<SkinnedPrimitive> skinned = scene.source ? skinned_primitives(scene) : std::vector<SkinnedPrimitive>{};
+            std::vector<SkinnedPrimitive> skinned = scene.source ? skinned_primitives(scene) : std::vector<SkinnedPrimitive>{};
+            const std::set<int32_t> earlier_levels = earlier_skinned_levels(scene, skinned);
             const std::vector<SkinnedGroup> groups = skinned_groups(scene, skinned);
             const std::vector<SeparatePart> separate = scene.source ? separate_parts(scene) : std::vector<SeparatePart>{};
             // The meshes skinned nodes draw: the skinned chains' (in place in the document).
@@ -866,7 +885,7 @@ Command register_lod(CLI::App& root) {
               for (const SeparatePart& m : separate)
                 for (const int32_t n : m.nodes) static_nodes[size_t(n)].mesh = -1;
               for (Node& node : static_nodes)
-                if (skinned_meshes.count(node.mesh)) node.mesh = -1;
+                if (skinned_meshes.count(node.mesh) || earlier_levels.count(node.mesh)) node.mesh = -1;
               // (`view` is `scene` with those nodes: flatten_streams takes it as such.)
               with_nodes(static_nodes, scene.roots, [&](const Scene&) { mesh = flatten_streams(scene, static_streams); });
             }
@@ -961,7 +980,10 @@ Command register_lod(CLI::App& root) {
             Scene out;
             if (!skinned.empty()) {
               out = skinned_scene(std::move(scene), groups, reports);
-              if (!chains.empty()) drop_chained_meshes(out, skinned_meshes);
+              // With props, every other source mesh went into their chain.
+              drop_chained_meshes(out, [&](uint32_t m) {
+                return earlier_levels.count(int32_t(m)) || (!chains.empty() && !skinned_meshes.count(int32_t(m)));
+              });
             } else {
               out = chain_document(scene.source ? &scene : nullptr, reports[0].chain.levels.front().mesh.material_names);
             }
