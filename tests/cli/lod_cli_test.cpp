@@ -1856,6 +1856,96 @@ TEST(CliLod, ASkinnedNodesMaterialsMayHaveOtherStreams) {
   }
 }
 
+// A crowd: the humanoid's glTF mesh drawn by a second node with a skin of its own (a copy of the
+// skeleton 1.5 to the side, walking with it: the clip's channels copied to the copy). One chain,
+// whose level meshes both nodes draw, each with its own skin, listed in its own MSFT_lod; level 0
+// draws the input. In the walk, each of the twin's levels, skinned by its skin, is the humanoid's
+// 1.5 to the side (the twin's level node with the humanoid's skin or another mesh would not be).
+// On its own output, lod replaces both nodes' levels.
+TEST(CliLod, ASkinnedMeshDrawnByTwoSkeletonsGetsOneChainForBoth) {
+  test::TempDir dir;
+  Scene input = fixtures::humanoid_scene();
+  ASSERT_EQ(input.skins.size(), 1u);
+  const uint32_t humanoid = skinned_primitives(input).at(0).node;
+  Skin twin_skin = input.skins[0];
+  twin_skin.name = "twin_skin";
+  std::map<int32_t, int32_t> copy_of;
+  // (Below a node 1.5 to the side: the clip moves the hips.)
+  Node aside;
+  aside.name = "aside", aside.translation = {1.5f, 0, 0};
+  const int32_t aside_node = int32_t(input.nodes.size());
+  input.roots.push_back(aside_node);
+  input.nodes.push_back(aside);
+  for (const int32_t j : input.skins[0].joints) copy_of[j] = int32_t(input.nodes.size() + copy_of.size());
+  for (const int32_t j : input.skins[0].joints) {
+    Node copy = input.nodes[size_t(j)];
+    copy.name = "twin_" + copy.name;
+    for (int32_t& c : copy.children) c = copy_of.at(c);
+    if (copy.parent >= 0) {
+      copy.parent = copy_of.at(copy.parent);
+    } else {
+      copy.parent = aside_node;
+      input.nodes[size_t(aside_node)].children.push_back(copy_of.at(j));
+    }
+    input.nodes.push_back(std::move(copy));
+  }
+  for (int32_t& j : twin_skin.joints) j = copy_of.at(j);
+  if (twin_skin.skeleton >= 0) twin_skin.skeleton = copy_of.at(twin_skin.skeleton);
+  input.skins.push_back(twin_skin);
+  std::vector<AnimationChannel> walking;
+  for (const AnimationChannel& ch : input.animations[0].channels)
+    if (copy_of.count(ch.node)) walking.push_back(ch), walking.back().node = copy_of.at(ch.node);
+  ASSERT_FALSE(walking.empty());
+  input.animations[0].channels.insert(input.animations[0].channels.end(), walking.begin(), walking.end());
+  Node twin;
+  twin.name = "twin", twin.mesh = input.nodes[humanoid].mesh, twin.skin = 1;
+  input.roots.push_back(int32_t(input.nodes.size()));
+  input.nodes.push_back(twin);
+  const uint32_t twin_node = uint32_t(input.nodes.size() - 1);
+  write_scene(input, dir / "crowd.glb");
+
+  const nlohmann::json report = lod_report(dir.path, "crowd.glb", "crowd-lod.glb", {"--ratios", "1,0.4,0.1", "--poses", "4"});
+  ASSERT_EQ(report["skinned"]["chains"].size(), 1u);
+  EXPECT_EQ(report["skinned"]["chains"][0]["node"], input.nodes[humanoid].name + ", twin");
+  const Scene in = read_scene(dir / "crowd.glb"), out = read_scene(dir / "crowd-lod.glb");
+  expect_posed_alike(in, out, {0.0f, 0.3f, 0.7f});
+  const Node &first = out.nodes[humanoid], &second = out.nodes[twin_node];
+  ASSERT_EQ(first.lod_ids.size(), 2u);
+  ASSERT_EQ(second.lod_ids.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    SCOPED_TRACE(i + 1);
+    const Node &a = out.nodes[size_t(first.lod_ids[i])], &b = out.nodes[size_t(second.lod_ids[i])];
+    EXPECT_EQ(b.name, "twin_LOD" + std::to_string(i + 1));
+    EXPECT_GE(a.mesh, int32_t(in.gltf_mesh_count));
+    EXPECT_EQ(b.mesh, a.mesh);
+    EXPECT_EQ(a.skin, 0);
+    EXPECT_EQ(b.skin, 1);
+    const Mesh* level = nullptr;
+    for (const Primitive& p : out.primitives)
+      if (p.gltf_mesh == uint32_t(b.mesh)) level = &p.mesh;
+    ASSERT_NE(level, nullptr);
+    EXPECT_EQ(level->triangle_count(), size_t(report["skinned"]["chains"][0]["levels"][i + 1]["triangles"]));
+    for (const float time : {0.0f, 0.3f, 0.7f}) {
+      Pose pose = rest_pose(out);
+      sample_animation(out, 0, time, pose);
+      const std::vector<mat4> world = world_matrices(out, pose);
+      SkinnedVertices left, right;
+      skin_vertices(*level, joint_matrices(out, size_t(a.skin), world), left);
+      skin_vertices(*level, joint_matrices(out, size_t(b.skin), world), right);
+      float worst = 0;
+      for (size_t v = 0; v < level->vertex_count(); ++v) {
+        const float3 p = left.positions[v], q = right.positions[v];
+        worst = std::max({worst, std::abs(q.x - p.x - 1.5f), std::abs(q.y - p.y), std::abs(q.z - p.z)});
+      }
+      EXPECT_LT(worst, 1e-4f) << "at " << time;
+    }
+  }
+
+  const nlohmann::json again = lod_report(dir.path, "crowd-lod.glb", "crowd-again.glb", {"--ratios", "1,0.4,0.1", "--poses", "4"});
+  ASSERT_EQ(again["skinned"]["chains"].size(), 1u);
+  EXPECT_EQ(test::glb_json(dir / "crowd-again.glb")["meshes"].size(), test::glb_json(dir / "crowd-lod.glb")["meshes"].size());
+}
+
 // Two skinned meshes of one skin (the humanoid's halves, each its own glTF mesh and node): built in
 // one batch, side by side with two threads, each chain is the one its mesh gets alone, and the
 // output does not depend on the thread count.

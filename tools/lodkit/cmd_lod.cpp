@@ -386,10 +386,12 @@ SkinMode parse_skin_mode(const std::string& name) {
 // A skinned glTF mesh instance: the primitives a skinned node draws (one per material, all with
 // its skin), simplified together as one mesh (join_members: member k is material id k + 1), so that
 // the borders between their materials stay closed; level i of each goes into one new glTF mesh. A
-// glTF mesh drawn by several skinned nodes gets one chain, the first node's.
+// glTF mesh drawn by several skinned nodes (a crowd's skeletons, each its own skin) gets one chain,
+// simplified in the first node's skin, whose level meshes each of them draws with its own skin.
 struct SkinnedGroup {
   uint32_t node = 0, skin = 0;
   std::vector<uint32_t> primitives;  // into Scene::primitives, in order
+  std::vector<uint32_t> also;        // the other nodes drawing the glTF mesh, in order
 };
 
 std::vector<SkinnedGroup> skinned_groups(const Scene& scene, const std::vector<SkinnedPrimitive>& skinned) {
@@ -398,10 +400,10 @@ std::vector<SkinnedGroup> skinned_groups(const Scene& scene, const std::vector<S
   for (const SkinnedPrimitive& sp : skinned) {
     const Primitive& p = scene.primitives[sp.primitive];
     const auto [it, added] = group_of.try_emplace(p.gltf_mesh, groups.size());
-    if (added) groups.push_back({sp.node, sp.skin, {}});
+    if (added) groups.push_back({sp.node, sp.skin, {}, {}});
     SkinnedGroup& g = groups[it->second];
-    if (g.node != sp.node) continue;  // (another node drawing the same glTF mesh)
-    g.primitives.push_back(sp.primitive);
+    if (g.node == sp.node) g.primitives.push_back(sp.primitive);
+    else if (std::find(g.also.begin(), g.also.end(), sp.node) == g.also.end()) g.also.push_back(sp.node);
   }
   return groups;
 }
@@ -470,7 +472,10 @@ std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<Ski
     options.progress = [&](double f) { progress((double(done) + f * double(triangles)) / double(std::max<uint64_t>(1, total))); };
     std::vector<LodChain> chains = build_lod_chains(meshes, options);
     for (size_t i = 0; i < batch.size(); ++i) {
-      reports[batch[i]].node = node_label(scene.nodes, groups[batch[i]].node);
+      const SkinnedGroup& g = groups[batch[i]];
+      std::vector<std::string> names{node_label(scene.nodes, g.node)};
+      for (const uint32_t n : g.also) names.push_back(node_label(scene.nodes, n));
+      reports[batch[i]].node = fmt::format("{}", fmt::join(names, ", "));
       reports[batch[i]].chain = std::move(chains[i]);
     }
     done += triangles;
@@ -575,8 +580,8 @@ std::vector<std::vector<Primitive>> member_levels(const Scene& scene, const Skin
 }
 
 // The input scene with each skinned group's levels: level 0 replaces its primitives' geometry,
-// level i > 0 becomes a new glTF mesh (a primitive per member) drawn by a new node with the same
-// skin, listed in the skinned node's MSFT_lod. Skeleton, skins, animations, materials and
+// level i > 0 becomes a new glTF mesh (a primitive per member), drawn for each skinned node drawing
+// the group's mesh by a new node with that node's skin, listed in its MSFT_lod. Skeleton, skins, animations, materials and
 // everything else of the source are written back unchanged.
 Scene skinned_scene(Scene scene, const std::vector<SkinnedGroup>& groups, const std::vector<ChainReport>& reports) {
   uint32_t next_mesh = scene.gltf_mesh_count;  // new meshes come after the source's
@@ -588,37 +593,40 @@ Scene skinned_scene(Scene scene, const std::vector<SkinnedGroup>& groups, const 
     // a mesh has the same targets).
     const bool morphs = !source_morph_targets(scene, g.primitives[0]).empty();
     for (size_t k = 0; k < g.primitives.size(); ++k) scene.primitives[g.primitives[k]] = std::move(levels[0][k]);
-    const std::string owner = scene.nodes[g.node].name;  // a copy: scene.nodes grows below
-    // The source node's own extras are kept; its MSFT_lod (an earlier chain's) gives way to this one.
-    const std::string& old_extras = scene.nodes[g.node].extras_json;
-    nlohmann::json extras = old_extras.empty() ? nlohmann::json::object() : nlohmann::json::parse(old_extras);
-    if (!extras.is_object()) extras = nlohmann::json::object();
-    scene.nodes[g.node].lod_ids.clear();
-    extras["MSFT_screencoverage"] = r.coverage;
-    for (size_t i = 0; i < r.chain.levels.size(); ++i) {
-      // Each level's node says what it is, as in a static chain (lodkit render --sheet reads it).
-      const nlohmann::json about = level_facts(r, i);
-      if (i == 0) {
-        extras["lodkit"] = about;
-        continue;
-      }
-      const uint32_t mesh = next_mesh++;
+    std::vector<int32_t> level_meshes(r.chain.levels.size(), -1);
+    for (size_t i = 1; i < r.chain.levels.size(); ++i) {
+      level_meshes[i] = int32_t(next_mesh++);
       uint32_t next_primitive = 0;
       for (Primitive& prim : levels[i]) {
         if (prim.mesh.indices.empty()) continue;  // (a member collapsed away)
-        prim.gltf_mesh = mesh, prim.gltf_primitive = next_primitive++;
+        prim.gltf_mesh = uint32_t(level_meshes[i]), prim.gltf_primitive = next_primitive++;
         scene.primitives.push_back(std::move(prim));
       }
-      Node node;
-      node.name = fmt::format("{}_LOD{}", owner, i);
-      node.mesh = int32_t(mesh);
-      node.skin = int32_t(g.skin);
-      if (morphs) node.morph_weights_of = {int32_t(g.node)};
-      node.extras_json = nlohmann::json{{"lodkit", about}}.dump();
-      scene.nodes.push_back(std::move(node));
-      scene.nodes[g.node].lod_ids.push_back(int32_t(scene.nodes.size() - 1));
     }
-    scene.nodes[g.node].extras_json = extras.dump();
+    std::vector<uint32_t> drawers{g.node};
+    drawers.insert(drawers.end(), g.also.begin(), g.also.end());
+    for (const uint32_t d : drawers) {
+      const std::string owner = scene.nodes[d].name;  // a copy: scene.nodes grows below
+      // The source node's own extras are kept; its MSFT_lod (an earlier chain's) gives way to this one.
+      const std::string& old_extras = scene.nodes[d].extras_json;
+      nlohmann::json extras = old_extras.empty() ? nlohmann::json::object() : nlohmann::json::parse(old_extras);
+      if (!extras.is_object()) extras = nlohmann::json::object();
+      scene.nodes[d].lod_ids.clear();
+      extras["MSFT_screencoverage"] = r.coverage;
+      // Each level's node says what it is, as in a static chain (lodkit render --sheet reads it).
+      extras["lodkit"] = level_facts(r, 0);
+      for (size_t i = 1; i < r.chain.levels.size(); ++i) {
+        Node node;
+        node.name = fmt::format("{}_LOD{}", owner, i);
+        node.mesh = level_meshes[i];
+        node.skin = scene.nodes[d].skin;
+        if (morphs) node.morph_weights_of = {int32_t(d)};
+        node.extras_json = nlohmann::json{{"lodkit", level_facts(r, i)}}.dump();
+        scene.nodes.push_back(std::move(node));
+        scene.nodes[d].lod_ids.push_back(int32_t(scene.nodes.size() - 1));
+      }
+      scene.nodes[d].extras_json = extras.dump();
+    }
   }
   return scene;
 }
