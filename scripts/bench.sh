@@ -71,8 +71,9 @@
 # parts: lodkit lod on 200 small meshes (288 triangles each), each drawn by its own animated node (one
 # chain per mesh, the small chains built side by side one thread each), with --threads 1 and --threads 0
 # (all cores): median wall time and build_seconds, peak RSS, output size, the one-thread / all-threads
-# ratio; both settings must write byte-identical files and the report must list 200 "animated" chains
-# (bench/lod/parts.py); writes bench/results/parts.json.
+# ratio; both settings must write byte-identical files and the report must list 200 "animated" chains;
+# then lodkit simplify --ratio 0.1 on the same scene the same way (lod::simplify_batch: each mesh on its
+# own, side by side) (bench/lod/parts.py); writes bench/results/parts.json.
 #
 # The build is the release preset (build/release); LODKIT_BENCH_BUILD=DIR uses another configured
 # build directory instead.
@@ -311,7 +312,7 @@ area_compress() {
 # ---- instanced, turntable and parts: lod on a scene a Python script writes -----------------------
 # instanced: a forest, GPU instances against plain nodes (bench/lod/instanced.py); turntable: meshes
 # below one animated node, one group chain against one per mesh (bench/lod/turntable.py, corpus meshes);
-# parts: many small animated meshes, one chain each, one thread against all (bench/lod/parts.py).
+# parts: many small animated meshes, one chain each (and simplified each), one thread against all (bench/lod/parts.py).
 area_lod_scene() {
   local name=$1
   shift

@@ -13,14 +13,14 @@ import tempfile
 import time
 
 
-def run_lod(lodkit, src, out, extra=()):
-    """`lodkit lod SRC -o OUT --json EXTRA...` under /usr/bin/time -v: wall seconds, peak RSS in
-    MiB and the parsed report. Raises on failure."""
+def run_lod(lodkit, src, out, extra=(), command="lod"):
+    """`lodkit COMMAND SRC -o OUT --json EXTRA...` (lod unless told) under /usr/bin/time -v: wall
+    seconds, peak RSS in MiB and the parsed report. Raises on failure."""
     start = time.monotonic()
-    r = subprocess.run(["/usr/bin/time", "-v", lodkit, "lod", src, "-o", out, "--json", *extra], capture_output=True, text=True)
+    r = subprocess.run(["/usr/bin/time", "-v", lodkit, command, src, "-o", out, "--json", *extra], capture_output=True, text=True)
     wall = time.monotonic() - start
     if r.returncode != 0:
-        raise RuntimeError(f"lodkit lod {src}: {r.stderr.strip()[-300:]}")
+        raise RuntimeError(f"lodkit {command} {src}: {r.stderr.strip()[-300:]}")
     rss = next(int(l.split(":")[1]) for l in r.stderr.splitlines() if "Maximum resident set size" in l)
     return wall, rss / 1024, json.loads(r.stdout)
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""`lodkit lod` on many small animated meshes: one chain each, built side by side, one thread against all.
+"""`lodkit lod` and `lodkit simplify` on many small animated meshes, side by side: one thread against all.
 
 usage: parts.py LODKIT OUT.json [--runs N] [--meshes N] [--out DIR]
 
@@ -16,6 +16,10 @@ the peak RSS (/usr/bin/time -v, median) and the output's size; and the ratio of 
 time to the all-threads time. Every run's output must be byte-identical to the first (so both
 settings write the same file). --out DIR keeps the input and outputs there (else a temporary
 directory).
+
+Then `lodkit simplify IN -o OUT --ratio 0.1 --json --threads T` the same way: every mesh simplified
+on its own, in one batch, side by side (lod::simplify_batch); the median wall time and
+simplify_seconds, peak RSS, output triangles, and the ratio; its outputs must be byte-identical too.
 """
 import json
 import math
@@ -70,6 +74,29 @@ def write_glb(path, meshes):
     glb.write(path, doc)
 
 
+def simplify_rows(lodkit, src, runs, tmp):
+    """`lodkit simplify SRC --ratio 0.1` RUNS times per setting, alternating: per setting, medians;
+    and whether every output is byte-identical to the first."""
+    results = {t: [] for t in SETTINGS}
+    first, identical = None, True
+    for r in range(runs):
+        for t in SETTINGS:
+            out = os.path.join(tmp, f"parts-simplified-threads{t}.glb")
+            wall, rss, report = run_lod(lodkit, src, out, ("--ratio", "0.1", "--threads", t), command="simplify")
+            data = open(out, "rb").read()
+            if first is None:
+                first = data
+            elif data != first:
+                identical = False
+                print(f"parts.py: simplify run {r + 1} with --threads {t} wrote a file unlike the first run's", file=sys.stderr)
+            results[t].append((wall, rss, report))
+    rows = {t: {"seconds": statistics.median(r[0] for r in rs),
+                "simplify_seconds": statistics.median(r[2]["simplify_seconds"] for r in rs),
+                "peak_rss_mib": statistics.median(r[1] for r in rs),
+                "output_triangles": rs[-1][2]["output_triangles"]} for t, rs in results.items()}
+    return rows, identical
+
+
 def run(lodkit, out_json, runs, meshes, tmp):
     src = os.path.join(tmp, "parts.glb")
     write_glb(src, meshes)
@@ -102,6 +129,7 @@ def run(lodkit, out_json, runs, meshes, tmp):
                    "output_bytes": os.path.getsize(os.path.join(tmp, f"parts-lod-threads{t}.glb")),
                    "animated_chains": len(animated), "level_triangles": level_sums,
                    "all_seconds": [r[0] for r in rs], "all_build_seconds": [r[2]["build_seconds"] for r in rs]}
+    simplified, simplify_identical = simplify_rows(lodkit, src, runs, tmp)
     one, every = rows["1"], rows["0"]
     chains_ok = all(r["animated_chains"] == meshes for r in rows.values())
     level0_ok = all(r["level_triangles"][:1] == [meshes * triangles] for r in rows.values())
@@ -122,13 +150,26 @@ def run(lodkit, out_json, runs, meshes, tmp):
     print(f"outputs byte-identical (every run, both settings): {'PASS' if identical else 'FAIL'}")
     print(f"{meshes} chains under \"animated\": {'PASS' if chains_ok else 'FAIL'}")
     print(f"level 0 draws the input ({meshes * triangles:,} triangles): {'PASS' if level0_ok else 'FAIL'}")
+    print()
+    print(f"## simplify --ratio 0.1 on the same scene, medians of {runs}")
+    print()
+    print("| threads | lodkit simplify s | simplify_seconds | peak RSS MiB | output triangles |")
+    print("|---|---|---|---|---|")
+    for t, label in (("1", "1"), ("0", f"0 (all: {os.cpu_count()})")):
+        r = simplified[t]
+        print(f"| {label} | {r['seconds']:.3f} | {r['simplify_seconds']:.3f} | {r['peak_rss_mib']:.0f} | {r['output_triangles']:,} |")
+    print()
+    print(f"threads 1 / all threads: wall time {simplified['1']['seconds'] / simplified['0']['seconds']:.2f}x, "
+          f"simplify_seconds {simplified['1']['simplify_seconds'] / simplified['0']['simplify_seconds']:.2f}x")
+    print(f"outputs byte-identical (every run, both settings): {'PASS' if simplify_identical else 'FAIL'}")
     json.dump({"meshes": meshes, "triangles_per_mesh": triangles, "runs": runs, "cores": os.cpu_count(),
                "rows": {f"threads_{t}": r for t, r in rows.items()},
                "ratio_seconds": one["seconds"] / every["seconds"],
                "ratio_build_seconds": one["build_seconds"] / every["build_seconds"],
-               "identical": identical, "chains_ok": chains_ok, "level0_ok": level0_ok},
+               "identical": identical, "chains_ok": chains_ok, "level0_ok": level0_ok,
+               "simplify": {"rows": {f"threads_{t}": r for t, r in simplified.items()}, "identical": simplify_identical}},
               open(out_json, "w"), indent=2)
-    return identical and chains_ok and level0_ok
+    return identical and chains_ok and level0_ok and simplify_identical
 
 
 if __name__ == "__main__":

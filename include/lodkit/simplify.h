@@ -260,6 +260,14 @@ struct SimplifyResult {
 // sphere) leave with the first collapse, among its removed faces; with no collapse they stay.
 SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options = {});
 
+// Several meshes at once (a scene's), each result exactly simplify(*meshes[i], options[i]) (so on
+// any thread count): small meshes (under 32,768 triangles) side by side, one thread each, larger
+// ones one at a time on `threads` (0: all; each options' threads is ignored). `progress` (may be
+// empty) covers the whole batch, by triangles; each options' progress is ignored. Pointers, so that
+// meshes held elsewhere need not be copied.
+std::vector<SimplifyResult> simplify_batch(std::span<const Mesh* const> meshes, std::span<const SimplifyOptions> options,
+                                           unsigned threads = 0, const std::function<void(double)>& progress = {});
+
 // Applies the first `count` collapses of `record` to `mesh` (the input of the simplify call that made
 // it) and returns the compacted result, identical to SimplifyResult::mesh when count is all of them.
 Mesh replay(const Mesh& mesh, const SimplifyRecord& record, size_t count);

@@ -188,11 +188,8 @@ std::vector<LodChain> build_lod_chains(std::span<const Mesh* const> meshes, cons
     if (!mesh) throw_usage("lod: build_lod_chains needs a mesh behind every pointer");
     sizes.push_back(mesh->triangle_count());
   }
-  // Below 2^15 triangles a chain gains little from a second thread (lodkit lod --threads 1 against
-  // 2: 1.0x on elephant's 5.6k, 1.2-1.3x on fandisk's 13k and camel's 20k, 1.5-1.6x on armadillo's
-  // 52k and bunny00's 75k).
   std::vector<LodChain> chains(meshes.size());
-  core::parallel_jobs(sizes, uint64_t(1) << 15, o.simplify.threads, o.progress,
+  core::parallel_jobs(sizes, core::small_job_triangles, o.simplify.threads, o.progress,
                       [&](size_t i, unsigned threads, const std::function<void(double)>& progress) {
                         LodOptions one = o;
                         one.simplify.threads = threads;

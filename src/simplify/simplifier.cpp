@@ -1585,4 +1585,23 @@ SimplifyResult simplify(const Mesh& mesh, const SimplifyOptions& options) {
   return collapse::simplify_with(mesh, options, nullptr);
 }
 
+std::vector<SimplifyResult> simplify_batch(std::span<const Mesh* const> meshes, std::span<const SimplifyOptions> options,
+                                           unsigned threads, const std::function<void(double)>& progress) {
+  if (options.size() != meshes.size())
+    throw_usage("simplify_batch: " + std::to_string(meshes.size()) + " meshes and " + std::to_string(options.size()) + " options");
+  std::vector<uint64_t> sizes;
+  for (const Mesh* mesh : meshes) {
+    if (!mesh) throw_usage("simplify_batch needs a mesh behind every pointer");
+    sizes.push_back(mesh->triangle_count());
+  }
+  std::vector<SimplifyResult> results(meshes.size());
+  core::parallel_jobs(sizes, core::small_job_triangles, threads, progress,
+                      [&](size_t i, unsigned job_threads, const std::function<void(double)>& job_progress) {
+                        SimplifyOptions one = options[i];
+                        one.threads = job_threads, one.progress = job_progress;
+                        results[i] = simplify(*meshes[i], one);
+                      });
+  return results;
+}
+
 }  // namespace lod

@@ -4,6 +4,7 @@
 
 #include <limits>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <tuple>
@@ -165,6 +166,48 @@ TEST(SimplifyCore, SameResultOnAnyThreadCount) {
       EXPECT_EQ(r.record.collapses[i].new_position, one.record.collapses[i].new_position);
     }
   }
+}
+
+// A batch gives each mesh, with its own options, the result simplify gives it alone, whichever of
+// its meshes go side by side (the small ones) and on how many threads; progress rises to 1.
+TEST(SimplifyCore, ABatchSimplifiesEachMeshAsAlone) {
+  const Mesh large = shapes::torus(1.0f, 0.3f, 200, 90);  // 36,000 triangles: simplified alone
+  ASSERT_GE(large.triangle_count(), 32768u);
+  const std::vector<Mesh> meshes = {shapes::icosphere(3), large, shapes::torus(1.0f, 0.4f, 24, 12),
+                                    subdivide_midpoint(subdivide_midpoint(shapes::cube()))};
+  const std::vector<SimplifyOptions> options = {{.target_ratio = 0.1f},
+                                                {.target_ratio = 0.05f},
+                                                {.target_triangles = 100, .metric = Metric::edge_length},
+                                                {.target_ratio = 0, .max_relative_error = 0.01f}};
+  const std::vector<const Mesh*> pointers = {&meshes[0], &meshes[1], &meshes[2], &meshes[3]};
+  std::vector<SimplifyResult> alone;
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    SimplifyOptions one = options[i];
+    one.threads = 1;
+    alone.push_back(simplify(meshes[i], one));
+  }
+  for (const unsigned threads : {1u, 2u}) {
+    std::vector<double> progress;
+    const std::vector<SimplifyResult> batch = simplify_batch(pointers, options, threads, [&](double f) { progress.push_back(f); });
+    ASSERT_EQ(batch.size(), meshes.size());
+    for (size_t i = 0; i < meshes.size(); ++i) {
+      SCOPED_TRACE(testing::Message() << "mesh " << i << ", " << threads << " threads");
+      EXPECT_EQ(batch[i].mesh, alone[i].mesh);
+      EXPECT_EQ(batch[i].error, alone[i].error);
+      EXPECT_EQ(batch[i].vertex_successor, alone[i].vertex_successor);
+      EXPECT_EQ(batch[i].vertex_origin, alone[i].vertex_origin);
+      EXPECT_EQ(batch[i].record.collapses.size(), alone[i].record.collapses.size());
+    }
+    EXPECT_EQ(batch[2].output_triangles, 100u);
+    EXPECT_GT(batch[3].record.collapses.size(), 0u);
+    ASSERT_FALSE(progress.empty());
+    EXPECT_TRUE(std::is_sorted(progress.begin(), progress.end()));
+    EXPECT_EQ(progress.back(), 1.0);
+  }
+  EXPECT_TRUE(simplify_batch({}, {}).empty());
+  const std::vector<const Mesh*> with_null = {&meshes[0], nullptr};
+  EXPECT_THROW(simplify_batch(with_null, std::vector<SimplifyOptions>(2)), Error);
+  EXPECT_THROW(simplify_batch(pointers, std::vector<SimplifyOptions>(3)), Error);
 }
 
 // After every collapse: genus and Euler characteristic kept, still manifold, no degenerate or

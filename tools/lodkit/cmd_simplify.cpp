@@ -163,20 +163,28 @@ Command register_simplify(CLI::App& root) {
             std::vector<bool> changed;  // per primitive: its geometry is not the input's
             {
               ProgressBar bar("simplifying");
-              uint64_t done = 0;
               changed.assign(meshes.size(), false);
-              for (const std::vector<size_t>& group : file.joint_groups()) {
+              // Each joint group joined and in the form it is simplified in; then all of them in one
+              // batch (small ones side by side, one thread each); then each result back in its members.
+              const std::vector<std::vector<size_t>> groups = file.joint_groups();
+              std::vector<Joined> joined;
+              std::vector<SurfaceForm> forms;
+              joined.reserve(groups.size()), forms.reserve(groups.size());
+              for (const std::vector<size_t>& group : groups) {
                 std::vector<const Mesh*> members;
                 for (const size_t i : group) members.push_back(meshes[i]);
-                const Joined joined = join_members(members);
+                joined.push_back(join_members(members));
                 // Double-sided: the fronts simplified, the backs made again. Flat-shaded: simplified
                 // without its normals, then faceted again. Neither with input vertices only (the
                 // new backs and face normals make new vertices).
-                const SurfaceForm form = o->keep_vertices ? SurfaceForm{} : surface_form(joined.mesh());
-                any_faceted = any_faceted || form.flat_shaded, any_two_sided = any_two_sided || form.double_sided;
-                const Mesh& m = form.to_simplify(joined.mesh());
-                SimplifyOptions each = options;
-                const uint64_t size = m.triangle_count();
+                forms.push_back(o->keep_vertices ? SurfaceForm{} : surface_form(joined.back().mesh()));
+                any_faceted = any_faceted || forms.back().flat_shaded, any_two_sided = any_two_sided || forms.back().double_sided;
+              }
+              std::vector<const Mesh*> inputs;
+              std::vector<SimplifyOptions> each(groups.size(), options);
+              for (size_t g = 0; g < groups.size(); ++g) {
+                inputs.push_back(&forms[g].to_simplify(joined[g].mesh()));
+                const uint64_t size = inputs.back()->triangle_count();
                 // A triangle budget is shared in proportion to each group's size. With a ratio
                 // too, the larger target is reached first and stops the group.
                 if (has_triangles) {
@@ -186,15 +194,18 @@ Command register_simplify(CLI::App& root) {
                                              : std::max<uint64_t>(1, uint64_t(double(o->triangles) * double(size) / double(total)));
                   const uint64_t by_ratio = has_ratio ? uint64_t(std::llround(double(o->ratio) * double(size))) : 0;
                   // 0 (--triangles 0): the library falls back on target_ratio, which gives 0 too.
-                  each.target_triangles = std::max(share, by_ratio);
+                  each[g].target_triangles = std::max(share, by_ratio);
                 }
-                each.progress = [&, size](double f) { bar.update((double(done) + f * double(size)) / double(total)); };
-                SimplifyResult r = simplify(m, each);
+              }
+              std::vector<SimplifyResult> results = simplify_batch(inputs, each, o->threads, [&](double f) { bar.update(f); });
+              for (size_t g = 0; g < groups.size(); ++g) {
+                const std::vector<size_t>& group = groups[g];
+                const SurfaceForm& form = forms[g];
+                SimplifyResult& r = results[g];
                 // Restored, the result's vertices are new: no input vertex is one's origin; the
                 // successors are mapped to them.
                 restore_form(form, r.mesh, r.vertex_successor);
                 if (form.changed()) r.vertex_origin.clear();
-                done += size;
                 in_triangles += r.input_triangles, out_triangles += r.output_triangles, out_vertices += r.mesh.vertex_count();
                 error = std::max(error, r.error);
                 passes += r.passes, collapses += r.collapses, virtual_pairs += r.virtual_pairs, pruned += r.pruned_triangles;
@@ -211,7 +222,7 @@ Command register_simplify(CLI::App& root) {
                 // Input vertices, unmoved: with --keep-vertices, or when nothing collapsed.
                 const bool unmoved = o->keep_vertices || (r.collapses == 0 && !form.changed());
                 std::vector<Member> parts =
-                    split_members(joined, std::move(r.mesh), std::move(r.vertex_origin), std::move(r.vertex_successor));
+                    split_members(joined[g], std::move(r.mesh), std::move(r.vertex_origin), std::move(r.vertex_successor));
                 for (size_t k = 0; k < group.size(); ++k) {
                   const size_t i = group[k];
                   Member& out = parts[k];
