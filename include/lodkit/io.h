@@ -260,8 +260,14 @@ WriteReport write_scene(const Scene& scene, const std::filesystem::path& path, c
 // Material ids are glTF material indices (+1, so 0 means "no material"); names follow. A skinned
 // mesh is in its bind pose, in its own space, unless every joint carries the same matrix at rest
 // (world times inverse bind matrix: the skeleton moved after binding, or a quantized file's grid,
-// -q or gltfpack's): that matrix then places it, where a viewer draws it.
-Mesh flatten(const Scene& scene);
+// -q or gltfpack's): that matrix then places it, where a viewer draws it. A vertex stream is kept
+// when every instance has it, or with fill_streams when any has it: the others then get neutral
+// values (lod::fill_streams), for a join whose result goes back to its parts, each with its own
+// streams (keep_streams). Influences are never made up.
+struct FlattenOptions {
+  bool fill_streams = false;
+};
+Mesh flatten(const Scene& scene, const FlattenOptions& options = {});
 
 // The morph targets of flatten(scene), per vertex of it: each node drawing morphing primitives
 // contributes its glTF mesh's targets (source_morph_targets' displacements), taken to world space

@@ -63,6 +63,22 @@ struct Mesh {
 // Copies vertex `from` of `src` (all streams present in `dst`) to the end of `dst`.
 void append_vertex(Mesh& dst, const Mesh& src, uint32_t from);
 
+// Which vertex streams a mesh has, as bits in this order: normals, tangents, the UV sets, colours,
+// then the influences (influence_streams: joints, weights, joints1, weights1). Meshes with the same
+// layout join without dropping or inventing values (see flatten).
+uint32_t stream_layout(const Mesh& mesh);
+inline constexpr uint32_t stream_normals = 1u << 0, stream_tangents = 1u << 1;
+inline constexpr uint32_t stream_uv0 = 1u << 2;  // UV set k: stream_uv0 << k
+inline constexpr uint32_t stream_colors = 1u << 6, stream_joints = 1u << 7, stream_weights = 1u << 8;
+inline constexpr uint32_t stream_joints1 = 1u << 9, stream_weights1 = 1u << 10;
+inline constexpr uint32_t influence_streams = stream_joints | stream_weights | stream_joints1 | stream_weights1;
+// Gives `mesh` the streams of `layout` it lacks, with neutral values: smooth normals, tangents along
+// +x, UVs of 0, white, no second influences (weights 0). For a join whose result is split again:
+// constant values cost nothing in the simplifier, and keep_streams drops them again.
+void fill_streams(Mesh& mesh, uint32_t layout);
+// Drops the streams `layout` does not have.
+void keep_streams(Mesh& mesh, uint32_t layout);
+
 // Throws lod::Error (bad_input) naming `source` if streams have mismatched sizes, indices are out of
 // range, values are not finite, weights are negative or do not sum to 1 over both influence sets
 // (within weight_tolerance), a second influence set comes without the first, or per-triangle streams

@@ -215,28 +215,28 @@ std::vector<Matrix> io::rest_world_matrices(const Scene& scene) {
   return world;
 }
 
-// Streams: a vertex stream is kept only when every flattened primitive has it. Filling the gaps with
-// made-up values (zero UVs, arbitrary normals) would look like real data to later stages, which
-// would then preserve invented seams and measure errors against them; callers that need every
-// primitive's own streams use Scene::primitives directly. (Padding a second influence set with
-// weights of 0 is not made up: those slots are unused, the skinning is the same.)
-Mesh flatten(const Scene& scene) {
+// Streams: a vertex stream is kept only when every flattened primitive has it, unless the caller
+// asks for the gaps filled. Filled with made-up values (zero UVs, arbitrary normals), they would
+// look like real data to later stages, which would then preserve invented seams and measure errors
+// against them: only a join whose result is split back into its parts, each dropping what it did not
+// have, wants them. (Padding a second influence set with weights of 0 is not made up: those slots
+// are unused, the skinning is the same.)
+Mesh flatten(const Scene& scene, const FlattenOptions& options) {
   const std::vector<Instance> instances = collect_instances(scene);
   Mesh out;
   if (instances.empty()) return out;
 
-  auto all_have = [&](auto stream_of) {
-    for (const Instance& inst : instances)
-      if (stream_of(scene.primitives[inst.primitive].mesh).empty()) return false;
-    return true;
-  };
-  const bool normals = all_have([](const Mesh& m) -> const auto& { return m.normals; });
-  const bool tangents = all_have([](const Mesh& m) -> const auto& { return m.tangents; });
+  uint32_t every = ~0u, some = 0;  // stream_layout bits every instance has, some instance has
+  for (const Instance& inst : instances) {
+    const uint32_t layout = stream_layout(scene.primitives[inst.primitive].mesh);
+    every &= layout, some |= layout;
+  }
+  const uint32_t filled = options.fill_streams ? some & ~influence_streams & ~every : 0;  // given to those without
+  const uint32_t kept = every | filled;
+  const bool normals = kept & stream_normals, tangents = kept & stream_tangents, colors = kept & stream_colors;
+  const bool joints = kept & stream_joints, weights = kept & stream_weights;
   std::array<bool, max_uv_sets> uvs{};
-  for (size_t k = 0; k < max_uv_sets; ++k) uvs[k] = all_have([k](const Mesh& m) -> const auto& { return m.uvs[k]; });
-  const bool colors = all_have([](const Mesh& m) -> const auto& { return m.colors; });
-  const bool joints = all_have([](const Mesh& m) -> const auto& { return m.joints; });
-  const bool weights = all_have([](const Mesh& m) -> const auto& { return m.weights; });
+  for (size_t k = 0; k < max_uv_sets; ++k) uvs[k] = kept & (stream_uv0 << k);
   // A second influence set if any part has one; parts with four influences get four of weight 0.
   bool second_set = false;
   for (const Instance& inst : instances) second_set = second_set || !scene.primitives[inst.primitive].mesh.joints1.empty();
@@ -259,7 +259,14 @@ Mesh flatten(const Scene& scene) {
 
   for (const Instance& inst : instances) {
     const Primitive& prim = scene.primitives[inst.primitive];
-    const Mesh& mesh = prim.mesh;
+    Mesh with_filled;  // (a copy only for an instance lacking a filled stream)
+    const Mesh* from = &prim.mesh;
+    if ((stream_layout(prim.mesh) & filled) != filled) {
+      with_filled = prim.mesh;
+      fill_streams(with_filled, filled);
+      from = &with_filled;
+    }
+    const Mesh& mesh = *from;
     const uint32_t base = uint32_t(out.positions.size());
     const Placement place(inst.world);
     const Matrix& m = inst.world;

@@ -265,6 +265,50 @@ TEST(SceneFlatten, KeepsOnlyStreamsEveryPrimitiveHas) {
   EXPECT_EQ(m.colors[3], (float4{0, 1, 0, 1}));
 }
 
+// With fill_streams, a stream some instance has is kept, the others getting neutral values (in world
+// space like their own: a smooth normal turned with its node), and influences only when all have
+// them. Values by hand: the plain triangle faces +z (its smooth normal), rotated 90 degrees about x
+// by its node it faces -y; UVs 0, white, tangent +x (turned to +x: the rotation keeps x).
+TEST(SceneFlatten, FillStreamsKeepsWhatAnyInstanceHas) {
+  Mesh textured = unit_triangle();
+  textured.uvs[1] = {{0.5f, 0}, {1, 0}, {0, 1}};
+  textured.joints.assign(3, {1, 0, 0, 0});
+  textured.weights.assign(3, {1, 0, 0, 0});
+  Mesh plain;
+  plain.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  plain.indices = {0, 1, 2};
+  plain.colors.assign(3, {0, 1, 0, 1});
+  Scene scene;
+  scene.primitives = {primitive(textured, 0), primitive(plain, 1)};
+  Node a, b;
+  a.mesh = 0, b.mesh = 1;
+  b.rotation = {std::sqrt(0.5f), 0, 0, std::sqrt(0.5f)};  // 90 degrees about +x: +z goes to -y
+  scene.nodes = {a, b};
+  scene.roots = {0, 1};
+  EXPECT_EQ(stream_layout(textured), stream_normals | stream_tangents | (stream_uv0 << 1) | stream_joints | stream_weights);
+  EXPECT_EQ(stream_layout(plain), stream_colors);
+
+  const Mesh kept = flatten(scene);
+  EXPECT_TRUE(kept.normals.empty() && kept.uvs[1].empty() && kept.colors.empty() && kept.joints.empty());
+  const Mesh m = flatten(scene, {.fill_streams = true});
+  ASSERT_EQ(m.vertex_count(), 6u);
+  EXPECT_EQ(stream_layout(m), stream_normals | stream_tangents | (stream_uv0 << 1) | stream_colors);
+  for (size_t v = 0; v < 3; ++v) {
+    expect_near(m.normals[v], {0, 0, 1});
+    expect_near(m.normals[3 + v], {0, -1, 0});
+    EXPECT_EQ(m.tangents[3 + v].w, 1.0f);
+    expect_near({m.tangents[3 + v].x, m.tangents[3 + v].y, m.tangents[3 + v].z}, {1, 0, 0});
+    EXPECT_EQ(m.uvs[1][v], textured.uvs[1][v]);
+    EXPECT_EQ(m.uvs[1][3 + v], (float2{0, 0}));
+    EXPECT_EQ(m.colors[v], (float4{1, 1, 1, 1}));
+    EXPECT_EQ(m.colors[3 + v], (float4{0, 1, 0, 1}));
+  }
+  // keep_streams takes a part back to its own streams.
+  Mesh part = m;
+  keep_streams(part, stream_layout(plain));
+  EXPECT_EQ(stream_layout(part), stream_colors);
+}
+
 TEST(SceneFromMesh, WholeMeshWhenThereIsOneMaterial) {
   const Mesh cube = shapes::cube();
   const Scene scene = scene_from_mesh(cube);

@@ -212,52 +212,6 @@ std::vector<uint32_t> GeometryFile::vertex_classes(size_t i) const {
   return as_scene_ ? source_vertex_classes(scene_, i) : std::vector<uint32_t>{};
 }
 
-namespace {
-// Mesh's vertex streams in stream_layout's bit order (influence_streams names the last four), with
-// the value fill_streams gives a missing one.
-template <class M, class Fn>  // M: Mesh or const Mesh
-void for_each_stream(M& m, Fn&& fn) {
-  fn(m.normals, [](Mesh& mesh) {
-    mesh.normals = smooth_normals(mesh);
-    for (float3& n : mesh.normals)
-      if (n.x == 0 && n.y == 0 && n.z == 0) n = {0, 0, 1};
-  });
-  fn(m.tangents, [](Mesh& mesh) { mesh.tangents.assign(mesh.vertex_count(), float4{1, 0, 0, 1}); });
-  for (size_t k = 0; k < max_uv_sets; ++k)
-    fn(m.uvs[k], [k](Mesh& mesh) { mesh.uvs[k].assign(mesh.vertex_count(), float2{}); });
-  fn(m.colors, [](Mesh& mesh) { mesh.colors.assign(mesh.vertex_count(), float4{1, 1, 1, 1}); });
-  fn(m.joints, [](Mesh& mesh) { mesh.joints.assign(mesh.vertex_count(), ushort4{}); });
-  fn(m.weights, [](Mesh& mesh) { mesh.weights.assign(mesh.vertex_count(), float4{1, 0, 0, 0}); });
-  fn(m.joints1, [](Mesh& mesh) { mesh.joints1.assign(mesh.vertex_count(), ushort4{}); });
-  fn(m.weights1, [](Mesh& mesh) { mesh.weights1.assign(mesh.vertex_count(), float4{}); });
-}
-}  // namespace
-
-uint32_t stream_layout(const Mesh& m) {
-  uint32_t bits = 0, bit = 1;
-  for_each_stream(m, [&](const auto& stream, auto&&) {
-    if (!stream.empty()) bits |= bit;
-    bit <<= 1;
-  });
-  return bits;
-}
-
-void fill_streams(Mesh& mesh, uint32_t layout) {
-  uint32_t bit = 1;
-  for_each_stream(mesh, [&](auto& stream, auto&& fill) {
-    if ((layout & bit) && stream.empty()) fill(mesh);
-    bit <<= 1;
-  });
-}
-
-void keep_streams(Mesh& mesh, uint32_t layout) {
-  uint32_t bit = 1;
-  for_each_stream(mesh, [&](auto& stream, auto&&) {
-    if (!(layout & bit)) stream.clear();
-    bit <<= 1;
-  });
-}
-
 std::vector<std::vector<size_t>> GeometryFile::joint_groups() const {
   if (!as_scene_) return {{0}};
   // Primitives with and without influences stay apart: a join would make some up (join_members).
@@ -282,19 +236,15 @@ Joined join_members(std::span<const Mesh* const> members) {
     j.offsets.push_back(uint32_t(members[0]->vertex_count()));
     return j;
   }
-  uint32_t all = 0;
-  for (const uint32_t layout : j.layouts) all |= layout;
-  all &= ~influence_streams;  // (flatten pads a second set with weights of 0 itself)
   Scene scene;  // no nodes: flatten takes each primitive once, untransformed, in order
   for (size_t k = 0; k < members.size(); ++k) {
     Primitive p;
     p.mesh = *members[k];
-    fill_streams(p.mesh, j.layouts[k] | all);
     p.material = int32_t(k);
     j.offsets.push_back(j.offsets.back() + uint32_t(p.mesh.vertex_count()));
     scene.primitives.push_back(std::move(p));
   }
-  j.joined = flatten(scene);
+  j.joined = flatten(scene, {.fill_streams = true});
   return j;
 }
 

@@ -646,32 +646,23 @@ struct StaticChain {
   const Mesh& to_simplify() const { return form.to_simplify(input); }
 };
 
-// flatten(scene) keeping every vertex stream a primitive it draws has (flatten keeps only the
+// flatten(scene) keeping every vertex stream a primitive it draws has (flatten would keep only the
 // streams all have, so a textured mesh beside a plain one would lose its UVs): the others get
-// neutral values for the flattening (fill_streams), then their own streams back. Influences are not
-// made up. `streams` gets, per material id (flatten's numbering: the glTF material + 1), the streams
-// all its primitives have: what its levels keep (add_chain).
-Mesh flatten_streams(Scene& scene, std::vector<uint32_t>& streams) {
+// neutral values (FlattenOptions::fill_streams). `streams` gets, per material id (flatten's
+// numbering: the glTF material + 1), the streams all its primitives have: what its levels keep
+// (add_chain).
+Mesh flatten_streams(const Scene& scene, std::vector<uint32_t>& streams) {
   std::set<int32_t> drawn;
   for (const Node& node : scene.nodes)
     if (node.mesh >= 0) drawn.insert(node.mesh);
-  uint32_t all = 0;
-  std::vector<uint32_t> own(scene.primitives.size());
-  for (size_t p = 0; p < scene.primitives.size(); ++p) {
-    own[p] = stream_layout(scene.primitives[p].mesh);
-    if (drawn.count(int32_t(scene.primitives[p].gltf_mesh))) all |= own[p] & ~influence_streams;
-  }
   streams.clear();
-  for (size_t p = 0; p < scene.primitives.size(); ++p) {
-    if (!drawn.count(int32_t(scene.primitives[p].gltf_mesh))) continue;
-    const size_t id = size_t(std::max(scene.primitives[p].material, -1) + 1);
+  for (const Primitive& p : scene.primitives) {
+    if (!drawn.count(int32_t(p.gltf_mesh))) continue;
+    const size_t id = size_t(std::max(p.material, -1) + 1);
     if (streams.size() <= id) streams.resize(id + 1, ~0u);
-    streams[id] &= own[p];
-    if ((own[p] | all) != own[p]) fill_streams(scene.primitives[p].mesh, own[p] | all);
+    streams[id] &= stream_layout(p.mesh);
   }
-  Mesh out = flatten(scene);
-  for (size_t p = 0; p < scene.primitives.size(); ++p) keep_streams(scene.primitives[p].mesh, own[p]);
-  return out;
+  return flatten(scene, {.fill_streams = true});
 }
 
 StaticChain prepare_static(Mesh mesh, const Scene* scene, const LodCommand& o) {
@@ -894,8 +885,7 @@ Command register_lod(CLI::App& root) {
                 for (const int32_t n : m.nodes) static_nodes[size_t(n)].mesh = -1;
               for (Node& node : static_nodes)
                 if (skinned_meshes.count(node.mesh) || earlier_levels.count(node.mesh)) node.mesh = -1;
-              // (`view` is `scene` with those nodes: flatten_streams takes it as such.)
-              with_nodes(static_nodes, scene.roots, [&](const Scene&) { mesh = flatten_streams(scene, static_streams); });
+              with_nodes(static_nodes, scene.roots, [&](const Scene& view) { mesh = flatten_streams(view, static_streams); });
             }
             const double load_seconds = seconds_since(start);
             // (Before any chain is built: the progressive mesh is the static chain's.)
@@ -954,7 +944,7 @@ Command register_lod(CLI::App& root) {
               const std::string name = fmt::format("{}", fmt::join(names, ", "));
               with_nodes(solo, {top}, [&](const Scene& view) {
                 std::vector<uint32_t> streams;
-                chains.push_back(prepare_static(flatten_streams(scene, streams), &view, *o));
+                chains.push_back(prepare_static(flatten_streams(view, streams), &view, *o));
                 chains.back().streams = std::move(streams);
               });
               chains.back().report.node = name;

@@ -67,21 +67,10 @@ class GeometryFile {
   Mesh mesh_;
 };
 
-// Which vertex streams a mesh has (normals, tangents, UV sets, colours, influences), as bits: meshes
-// with the same layout join without dropping or inventing values (see flatten).
-uint32_t stream_layout(const Mesh& mesh);
-inline constexpr uint32_t influence_streams = 0x780;  // stream_layout's joints, weights, joints1, weights1
-// Gives `mesh` the streams of `layout` it lacks, with neutral values: smooth normals, tangents along
-// +x, UVs of 0, white, no second influences (weights 0). For a join: constant values cost nothing
-// in the simplifier, and keep_streams drops them again.
-void fill_streams(Mesh& mesh, uint32_t layout);
-// Drops the streams `layout` does not have.
-void keep_streams(Mesh& mesh, uint32_t layout);
-
 // Meshes simplified as one (GeometryFile::joint_groups, a skinned node's primitives), so that the
 // borders between them stay closed like seams: member k is material id k + 1 (flatten's numbering)
 // and its vertices are offsets[k] to offsets[k + 1]. A stream some member lacks is given to it with
-// neutral values (fill_streams; flatten would drop it from all), and split_members drops it again:
+// neutral values (FlattenOptions::fill_streams), and split_members drops it again (keep_streams):
 // layouts[k] is member k's own (stream_layout). Influences are not made up: the members have the
 // same first set. A group of one is the mesh itself, not a copy.
 struct Joined {
