@@ -268,6 +268,9 @@ struct FlattenOptions {
   bool fill_streams = false;
 };
 Mesh flatten(const Scene& scene, const FlattenOptions& options = {});
+// The primitives flatten(scene) draws (indices into Scene::primitives), each once, in the order
+// they first appear in it.
+std::vector<size_t> flattened_primitives(const Scene& scene);
 
 // The morph targets of flatten(scene), per vertex of it: each node drawing morphing primitives
 // contributes its glTF mesh's targets (source_morph_targets' displacements), taken to world space

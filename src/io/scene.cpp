@@ -339,6 +339,14 @@ Mesh flatten(const Scene& scene, const FlattenOptions& options) {
   return out;
 }
 
+std::vector<size_t> flattened_primitives(const Scene& scene) {
+  std::vector<size_t> out;
+  std::vector<bool> seen(scene.primitives.size(), false);
+  for (const Instance& inst : collect_instances(scene))
+    if (!seen[inst.primitive]) seen[inst.primitive] = true, out.push_back(inst.primitive);
+  return out;
+}
+
 FlatMorphTargets flatten_morph_targets(const Scene& scene) {
   FlatMorphTargets out;
   const std::vector<Instance> instances = collect_instances(scene);

@@ -1508,22 +1508,25 @@ TEST(CliLod, VisibilitySwitchesKeepTheirMeshesBelowThem) {
 // A textured sphere (UVs: its x, y) beside a plain torus (no UVs): the static chain keeps each
 // material's streams. (Flattened as they are, the sphere's UVs would be dropped: the torus has none.)
 // Level 0 has the sphere's UVs exactly; the coarser levels near the sphere's x, y. With one vertex
-// buffer, the materials share it, UVs included (the torus's are 0).
+// buffer, the materials share it, UVs included (the torus's are 0). A node no root reaches draws a
+// plain mesh of the textured material: it is not drawn, so the material keeps its UVs.
 TEST(CliLod, EachMaterialKeepsItsOwnStreams) {
   test::TempDir dir;
   Mesh sphere = shapes::icosphere(3);
   Mesh torus = shapes::torus(1.0f, 0.3f, 32, 16);
-  torus.uvs[0].clear();
+  Mesh spare = shapes::icosphere(1);
+  torus.uvs[0].clear(), spare.uvs[0].clear();
   for (const float3& p : sphere.positions) sphere.uvs[0].push_back({p.x, p.y});
   ASSERT_TRUE(sphere.uvs[1].empty());
   Scene input;
-  add_meshes(input, {&sphere, &torus});
+  add_meshes(input, {&sphere, &torus, &spare});
   input.material_names = {"textured", "plain"};
-  input.primitives[0].material = 0, input.primitives[1].material = 1;
-  Node a, b;
+  input.primitives[0].material = 0, input.primitives[1].material = 1, input.primitives[2].material = 0;
+  Node a, b, c;
   a.name = "sphere", a.mesh = 0;
   b.name = "torus", b.mesh = 1, b.translation = {3, 0, 0};
-  input.nodes = {a, b};
+  c.name = "unreached", c.mesh = 2;
+  input.nodes = {a, b, c};
   input.roots = {0, 1};
   write_scene(input, dir / "mixed.glb");
   for (const bool shared : {false, true}) {

@@ -309,6 +309,24 @@ TEST(SceneFlatten, FillStreamsKeepsWhatAnyInstanceHas) {
   EXPECT_EQ(stream_layout(part), stream_colors);
 }
 
+// What flatten draws: reached from a root, shown, each primitive once (mesh 0 is drawn twice), in
+// order of first appearance (node 2, the first root, draws mesh 1).
+TEST(SceneFlatten, FlattenedPrimitivesAreThoseItDraws) {
+  Scene scene;
+  for (uint32_t m = 0; m < 4; ++m) scene.primitives.push_back(primitive(unit_triangle(), m));
+  scene.primitives.push_back(primitive(unit_triangle(), 1));  // mesh 1's second primitive
+  Node a, b, hidden, unreached, root;
+  a.mesh = 0, b.mesh = 0, hidden.mesh = 2, hidden.visible = false, unreached.mesh = 3, root.mesh = 1;
+  root.children = {0, 1, 3};
+  scene.nodes = {a, b, root, hidden, unreached};
+  scene.nodes[0].parent = scene.nodes[1].parent = scene.nodes[3].parent = 2;
+  scene.roots = {2};
+  EXPECT_EQ(flattened_primitives(scene), (std::vector<size_t>{1, 4, 0}));
+  EXPECT_EQ(flatten(scene).triangle_count(), 4u);
+  scene.nodes.clear(), scene.roots.clear();  // no hierarchy: every primitive once
+  EXPECT_EQ(flattened_primitives(scene), (std::vector<size_t>{0, 1, 2, 3, 4}));
+}
+
 TEST(SceneFromMesh, WholeMeshWhenThereIsOneMaterial) {
   const Mesh cube = shapes::cube();
   const Scene scene = scene_from_mesh(cube);

@@ -652,12 +652,9 @@ struct StaticChain {
 // numbering: the glTF material + 1), the streams all its primitives have: what its levels keep
 // (add_chain).
 Mesh flatten_streams(const Scene& scene, std::vector<uint32_t>& streams) {
-  std::set<int32_t> drawn;
-  for (const Node& node : scene.nodes)
-    if (node.mesh >= 0) drawn.insert(node.mesh);
   streams.clear();
-  for (const Primitive& p : scene.primitives) {
-    if (!drawn.count(int32_t(p.gltf_mesh))) continue;
+  for (const size_t drawn : flattened_primitives(scene)) {
+    const Primitive& p = scene.primitives[drawn];
     const size_t id = size_t(std::max(p.material, -1) + 1);
     if (streams.size() <= id) streams.resize(id + 1, ~0u);
     streams[id] &= stream_layout(p.mesh);
