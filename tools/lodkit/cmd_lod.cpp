@@ -581,8 +581,8 @@ std::vector<std::vector<Primitive>> member_levels(const Scene& scene, const Skin
 
 // The input scene with each skinned group's levels: level 0 replaces its primitives' geometry,
 // level i > 0 becomes a new glTF mesh (a primitive per member), drawn for each skinned node drawing
-// the group's mesh by a new node with that node's skin, listed in its MSFT_lod. Skeleton, skins, animations, materials and
-// everything else of the source are written back unchanged.
+// the group's mesh by a new node with that node's skin, listed in its MSFT_lod. Skeleton, skins,
+// animations, materials and everything else of the source are written back unchanged.
 Scene skinned_scene(Scene scene, const std::vector<SkinnedGroup>& groups, const std::vector<ChainReport>& reports) {
   uint32_t next_mesh = scene.gltf_mesh_count;  // new meshes come after the source's
   for (size_t gi = 0; gi < groups.size(); ++gi) {
