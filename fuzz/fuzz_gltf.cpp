@@ -96,6 +96,13 @@ void check_flatten(const Scene& scene) {
   // flatten may refuse a scene whose node transforms overflow float, but only as bad input.
   const std::optional<Mesh> flat = run_step("gltf flatten", true, [&] { return flatten(scene); });
   if (flat) check_mesh(*flat, "gltf flatten");
+  // With the streams some instance has filled in for the others (lod's and simplify's joins): a
+  // valid mesh too, flatten's vertices and triangles with at least its streams.
+  const std::optional<Mesh> filled = run_step("gltf flatten fill_streams", true, [&] { return flatten(scene, {.fill_streams = true}); });
+  if (filled) check_mesh(*filled, "gltf flatten fill_streams");
+  if (flat && filled &&
+      (filled->positions != flat->positions || filled->indices != flat->indices || (stream_layout(*flat) & ~stream_layout(*filled)) != 0))
+    fail("flatten fill_streams", "not flatten's vertices and triangles with at least its streams");
   // Its morph targets (the morphing nodes' in turn): one displacement per flattened vertex, each
   // node's first target in order.
   const FlatMorphTargets morph = *run_step("gltf flatten_morph_targets", false, [&] { return flatten_morph_targets(scene); });
