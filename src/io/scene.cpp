@@ -238,9 +238,7 @@ Mesh flatten(const Scene& scene, const FlattenOptions& options) {
   std::array<bool, max_uv_sets> uvs{};
   for (size_t k = 0; k < max_uv_sets; ++k) uvs[k] = kept & (stream_uv0 << k);
   // A second influence set if any part has one; parts with four influences get four of weight 0.
-  bool second_set = false;
-  for (const Instance& inst : instances) second_set = second_set || !scene.primitives[inst.primitive].mesh.joints1.empty();
-  second_set = second_set && joints && weights;
+  const bool second_set = (some & stream_joints1) && joints && weights;
   bool any_material = false;
   size_t vertices = 0, corners = 0;
   for (const Instance& inst : instances) {
