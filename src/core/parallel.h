@@ -10,6 +10,8 @@
 #include <exception>
 #include <functional>
 #include <latch>
+#include <span>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -18,6 +20,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
+
+#include "lodkit/error.h"
 
 namespace lod::core {
 
@@ -110,6 +114,20 @@ void parallel_jobs(const std::vector<uint64_t>& sizes, uint64_t side_by_side_bel
   }, 1);
   if (progress && !sizes.empty()) progress(1.0);
 }
+
+// parallel_jobs over a batch of meshes (anything with triangle_count()), by triangles: run(i,
+// job_threads, job_progress) for each. `caller` names the batch in the error a null pointer gets.
+template <class M, class Run>
+void parallel_meshes(std::span<const M* const> meshes, const char* caller, unsigned threads,
+                     const std::function<void(double)>& progress, Run&& run) {
+  std::vector<uint64_t> sizes;
+  for (const M* mesh : meshes) {
+    if (!mesh) throw_usage(std::string(caller) + " needs a mesh behind every pointer");
+    sizes.push_back(mesh->triangle_count());
+  }
+  parallel_jobs(sizes, small_job_triangles, threads, progress, std::forward<Run>(run));
+}
+
 // std::sort on up to `threads` threads. Elements that compare equal may end up in any order, so the
 // result is the same on any thread count only when they are identical (such as distinct keys).
 template <class It>

@@ -183,19 +183,14 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
 
 std::vector<LodChain> build_lod_chains(std::span<const Mesh* const> meshes, const LodOptions& o) {
   check_options(o);
-  std::vector<uint64_t> sizes;
-  for (const Mesh* mesh : meshes) {
-    if (!mesh) throw_usage("lod: build_lod_chains needs a mesh behind every pointer");
-    sizes.push_back(mesh->triangle_count());
-  }
   std::vector<LodChain> chains(meshes.size());
-  core::parallel_jobs(sizes, core::small_job_triangles, o.simplify.threads, o.progress,
-                      [&](size_t i, unsigned threads, const std::function<void(double)>& progress) {
-                        LodOptions one = o;
-                        one.simplify.threads = threads;
-                        one.progress = progress;
-                        chains[i] = build_lod_chain(*meshes[i], one);
-                      });
+  core::parallel_meshes(meshes, "lod: build_lod_chains", o.simplify.threads, o.progress,
+                        [&](size_t i, unsigned threads, const std::function<void(double)>& progress) {
+                          LodOptions one = o;
+                          one.simplify.threads = threads;
+                          one.progress = progress;
+                          chains[i] = build_lod_chain(*meshes[i], one);
+                        });
   return chains;
 }
 

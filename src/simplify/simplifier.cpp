@@ -1589,18 +1589,13 @@ std::vector<SimplifyResult> simplify_batch(std::span<const Mesh* const> meshes, 
                                            unsigned threads, const std::function<void(double)>& progress) {
   if (options.size() != meshes.size())
     throw_usage("simplify_batch: " + std::to_string(meshes.size()) + " meshes and " + std::to_string(options.size()) + " options");
-  std::vector<uint64_t> sizes;
-  for (const Mesh* mesh : meshes) {
-    if (!mesh) throw_usage("simplify_batch needs a mesh behind every pointer");
-    sizes.push_back(mesh->triangle_count());
-  }
   std::vector<SimplifyResult> results(meshes.size());
-  core::parallel_jobs(sizes, core::small_job_triangles, threads, progress,
-                      [&](size_t i, unsigned job_threads, const std::function<void(double)>& job_progress) {
-                        SimplifyOptions one = options[i];
-                        one.threads = job_threads, one.progress = job_progress;
-                        results[i] = simplify(*meshes[i], one);
-                      });
+  core::parallel_meshes(meshes, "simplify_batch", threads, progress,
+                        [&](size_t i, unsigned job_threads, const std::function<void(double)>& job_progress) {
+                          SimplifyOptions one = options[i];
+                          one.threads = job_threads, one.progress = job_progress;
+                          results[i] = simplify(*meshes[i], one);
+                        });
   return results;
 }
 
