@@ -1,9 +1,10 @@
 // libFuzzer harness for lodkit's meshopt vertex codec (src/io/meshopt_codec.cpp: decoding versions 0
-// and 1, encoding version 1) and COLOR filter. Input: one byte for the stride (4 * (1 + b % 64)),
-// two for the element count (1 to 4096), then the stream. The decoder may refuse anything, with a message; it must never read
-// or write out of bounds (ASan). What it decodes, lodkit's version 1 encoder must encode so that it
-// decodes to the same bytes. On version 0 streams the decoder is also held to Debian's
-// meshoptimizer: both accept the same streams and decode them to the same bytes, else abort().
+// and 1, encoding version 1) and its COLOR and OCTAHEDRAL filters (on whatever bytes decode).
+// Input: one byte for the stride (4 * (1 + b % 64)), two for the element count (1 to 4096), then
+// the stream. The decoder may refuse anything, with a message; it must never read or write out of
+// bounds (ASan). What it decodes, lodkit's version 1 encoder must encode so that it decodes to the
+// same bytes. On version 0 streams the decoder is also held to Debian's meshoptimizer: both accept
+// the same streams and decode them to the same bytes, else abort().
 #include <meshoptimizer.h>
 
 #include <cstdio>
@@ -29,7 +30,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       std::fprintf(stderr, "fuzz_meshopt: the version 1 encoding does not round-trip (%s)\n", again.c_str());
       std::abort();
     }
-    if (stride == 4 || stride == 8) lod::io::decode_meshopt_color_filter(mine.data(), count, stride);
+    if (stride == 4 || stride == 8) {
+      std::vector<uint8_t> octahedral = mine;
+      lod::io::decode_meshopt_octahedral_filter(octahedral.data(), count, stride);
+      lod::io::decode_meshopt_color_filter(mine.data(), count, stride);
+    }
   }
   if (!stream.empty() && stream[0] == 0xa0) {
     std::vector<uint8_t> theirs(count * stride), again(count * stride);

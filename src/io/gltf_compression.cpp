@@ -211,7 +211,7 @@ class Decoder {
         fail(bytes_where + " do not decode as " + mode + " data (meshoptimizer error " + std::to_string(rc) + ": " + why + ")");
       }
     }
-    if (filter == "OCTAHEDRAL") meshopt_decodeFilterOct(out, size_t(count), size_t(stride));
+    if (filter == "OCTAHEDRAL") decode_meshopt_octahedral_filter(out, size_t(count), size_t(stride));  // (the same on every processor)
     else if (filter == "QUATERNION") meshopt_decodeFilterQuat(out, size_t(count), size_t(stride));
     else if (filter == "EXPONENTIAL") meshopt_decodeFilterExp(out, size_t(count), size_t(stride));
     else if (filter == "COLOR") decode_meshopt_color_filter(out, size_t(count), size_t(stride));  // (newer than 0.18 too)

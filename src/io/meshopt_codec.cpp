@@ -187,6 +187,31 @@ void decode_meshopt_color_filter(uint8_t* data, size_t count, size_t stride) {
   }
 }
 
+void decode_meshopt_octahedral_filter(uint8_t* data, size_t count, size_t stride) {
+  const bool wide = stride == 8;
+  const float top = wide ? 32767.0f : 127.0f;
+  for (size_t i = 0; i < count; ++i) {
+    uint8_t* e = data + i * stride;
+    float c[3];
+    for (size_t k = 0; k < 3; ++k) c[k] = wide ? float(int16_t(uint16_t(e[2 * k] | e[2 * k + 1] << 8))) : float(int8_t(e[k]));
+    // The specification's steps, in its order and precision.
+    float x = c[0] / c[2], y = c[1] / c[2];
+    const float z = 1.0f - std::fabs(x) - std::fabs(y);
+    const float t = std::min(z, 0.0f);  // the negative hemisphere folds back
+    x -= std::copysign(t, x);
+    y -= std::copysign(t, y);
+    const float len = std::sqrt(x * x + y * y + z * z);
+    const float v[3] = {x / len, y / len, z / len};
+    for (size_t k = 0; k < 3; ++k) {
+      float q = std::round(v[k] * top);
+      q = q == q ? std::clamp(q, -top, top) : 0.0f;  // NaN and infinities only from a malformed element
+      const auto s = int16_t(q);
+      if (wide) e[2 * k] = uint8_t(uint16_t(s)), e[2 * k + 1] = uint8_t(uint16_t(s) >> 8);
+      else e[k] = uint8_t(int8_t(s));
+    }
+  }
+}
+
 namespace {
 
 uint8_t zigzag8(uint8_t v) { return uint8_t((v << 1) ^ uint8_t(0u - (v >> 7))); }

@@ -7,6 +7,8 @@
 #include <meshoptimizer.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -151,6 +153,72 @@ TEST(MeshoptCodec, ColorFilterMatchesMeshoptimizer) {
       exact += a == b;
     }
     EXPECT_GT(exact, count * 4 * 99 / 100) << what;  // off by one only at rounding ties
+  }
+}
+
+// OCTAHEDRAL, against the specification's formula worked in double precision here: every 8-bit
+// input (x, y within one = 127) and a spread of 16-bit ones (one = 2^(K-1) - 1 for K 4..16) decode
+// to the rounded unit vector, exactly where the double value is not near a rounding tie (within
+// 1e-3 units in 8 bits, 0.033 in 16: float32's rounding may go either way there), and to a unit vector within one unit everywhere;
+// the fourth component stays. Debian's meshoptimizer (whose SSE path scales by the processor's
+// approximate rsqrtps) stays within one unit of it. A zero "one" (malformed) decodes to zeros.
+TEST(MeshoptCodec, OctahedralFilterFollowsTheSpecification) {
+  for (const size_t stride : {4u, 8u}) {
+    std::vector<std::array<int32_t, 4>> inputs;
+    if (stride == 4) {
+      for (int32_t x = -127; x <= 127; ++x)
+        for (int32_t y = -127; y <= 127; ++y) inputs.push_back({x, y, 127, (x * 7 + y) & 0x7f});
+    } else {
+      std::mt19937 rng(7);
+      for (int32_t k = 4; k <= 16; ++k) {
+        const int32_t one = (1 << (k - 1)) - 1;
+        std::uniform_int_distribution<int32_t> d(-one, one);
+        for (int i = 0; i < 4000; ++i) inputs.push_back({d(rng), d(rng), one, d(rng)});
+        inputs.push_back({one, 0, one, 0}), inputs.push_back({-one, -one, one, -1}), inputs.push_back({0, one, one, 5});
+      }
+    }
+    inputs.push_back({5, -3, 0, 9});  // malformed: a zero "one"
+    const auto put = [&](std::vector<uint8_t>& bytes, size_t i, size_t k, int32_t v) {
+      if (stride == 4) bytes[i * 4 + k] = uint8_t(int8_t(v));
+      else bytes[i * 8 + 2 * k] = uint8_t(uint16_t(int16_t(v))), bytes[i * 8 + 2 * k + 1] = uint8_t(uint16_t(int16_t(v)) >> 8);
+    };
+    const auto get = [&](const std::vector<uint8_t>& bytes, size_t i, size_t k) {
+      return stride == 4 ? int32_t(int8_t(bytes[i * 4 + k])) : int32_t(int16_t(uint16_t(bytes[i * 8 + 2 * k] | bytes[i * 8 + 2 * k + 1] << 8)));
+    };
+    std::vector<uint8_t> data(inputs.size() * stride);
+    for (size_t i = 0; i < inputs.size(); ++i)
+      for (size_t k = 0; k < 4; ++k) put(data, i, k, inputs[i][k]);
+    std::vector<uint8_t> peer = data;
+    io::decode_meshopt_octahedral_filter(data.data(), inputs.size(), stride);
+    meshopt_decodeFilterOct(peer.data(), inputs.size() - 1, stride);  // (not the malformed one)
+    const double top = stride == 4 ? 127 : 32767;
+    const double near = std::max(1e-3, top * 1e-6);  // float32's error in v * top: about 2^-22 of top
+    size_t ties = 0;
+    for (size_t i = 0; i + 1 < inputs.size(); ++i) {
+      SCOPED_TRACE(testing::Message() << "stride " << stride << " input " << inputs[i][0] << ", " << inputs[i][1] << " / " << inputs[i][2]);
+      double x = double(inputs[i][0]) / inputs[i][2], y = double(inputs[i][1]) / inputs[i][2];
+      const double z = 1 - std::abs(x) - std::abs(y);
+      if (z < 0) {  // the lower hemisphere: |x|, |y| swapped for 1 - |y|, 1 - |x|, signs kept
+        const double ax = 1 - std::abs(y), ay = 1 - std::abs(x);
+        x = std::copysign(ax, x), y = std::copysign(ay, y);
+      }
+      const double len = std::sqrt(x * x + y * y + z * z), want[3] = {x / len * top, y / len * top, z / len * top};
+      double length = 0;
+      for (size_t k = 0; k < 3; ++k) {
+        const int32_t got = get(data, i, k);
+        length += double(got) * got;
+        EXPECT_LE(std::abs(got - want[k]), 0.5 + near) << "component " << k;
+        if (std::abs(std::abs(want[k] - std::trunc(want[k])) - 0.5) > near) EXPECT_EQ(got, std::lround(want[k])) << "component " << k;
+        else ++ties;
+        EXPECT_LE(std::abs(got - get(peer, i, k)), 1) << "component " << k;
+      }
+      EXPECT_NEAR(std::sqrt(length) / top, 1.0, 1.5 * std::sqrt(3.0) / top);
+      EXPECT_EQ(get(data, i, 3), inputs[i][3]);
+    }
+    EXPECT_LT(double(ties), 4 * near * 3 * double(inputs.size()));  // (about the band's share of values)
+    const size_t bad = inputs.size() - 1;
+    for (size_t k = 0; k < 3; ++k) EXPECT_EQ(get(data, bad, k), 0);
+    EXPECT_EQ(get(data, bad, 3), 9);
   }
 }
 
