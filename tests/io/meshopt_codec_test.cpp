@@ -1,6 +1,6 @@
-// lodkit's own meshopt vertex decoder (versions 0 and 1) and COLOR filter, against meshoptimizer:
-// its JavaScript encoder and decoder (tests/gltf-loader/meshopt_vectors.mjs) make the test data, and
-// Debian's libmeshoptimizer decodes the version 0 streams too.
+// lodkit's own meshopt vertex decoder (versions 0 and 1) and COLOR and OCTAHEDRAL filters, against
+// meshoptimizer: its JavaScript encoder and decoder (tests/gltf-loader/meshopt_vectors.mjs) make the
+// test data, and Debian's libmeshoptimizer decodes the version 0 streams too.
 #include "io/meshopt_codec.h"
 
 #include <gtest/gtest.h>
