@@ -159,17 +159,29 @@ std::string decode_meshopt_vertices(uint8_t* out, size_t count, size_t stride, s
   return {};
 }
 
+namespace {
+
+// Component k of a filter's element: four 8-bit components, or four 16-bit little-endian ones.
+uint32_t filter_component(const uint8_t* e, size_t k, bool wide) { return wide ? uint32_t(e[2 * k] | e[2 * k + 1] << 8) : e[k]; }
+void set_filter_component(uint8_t* e, size_t k, bool wide, uint32_t u) {
+  if (wide) e[2 * k] = uint8_t(u), e[2 * k + 1] = uint8_t(u >> 8);
+  else e[k] = uint8_t(u);
+}
+int32_t signed_filter_component(const uint8_t* e, size_t k, bool wide) {
+  const uint32_t u = filter_component(e, k, wide);
+  return wide ? int32_t(int16_t(uint16_t(u))) : int32_t(int8_t(uint8_t(u)));
+}
+
+}  // namespace
+
 void decode_meshopt_color_filter(uint8_t* data, size_t count, size_t stride) {
   const bool wide = stride == 8;
   const float top = wide ? 65535.0f : 255.0f;
   for (size_t i = 0; i < count; ++i) {
     uint8_t* e = data + i * stride;
     int32_t c[4];
-    for (size_t k = 0; k < 4; ++k) {
-      const uint32_t u = wide ? uint32_t(e[2 * k] | e[2 * k + 1] << 8) : e[k];
-      // Co and Cg are signed; luma and alpha unsigned.
-      c[k] = (k == 1 || k == 2) ? (wide ? int32_t(int16_t(u)) : int32_t(int8_t(u))) : int32_t(u);
-    }
+    // Co and Cg are signed; luma and alpha unsigned.
+    for (size_t k = 0; k < 4; ++k) c[k] = (k == 1 || k == 2) ? signed_filter_component(e, k, wide) : int32_t(filter_component(e, k, wide));
     // The alpha's highest set bit marks the precision K: its top value is 2^K - 1.
     const int k_bits = c[3] ? std::bit_width(uint32_t(c[3])) : 1;
     const int32_t full = (1 << k_bits) - 1;
@@ -180,9 +192,7 @@ void decode_meshopt_color_filter(uint8_t* data, size_t count, size_t stride) {
     const float scale = top / float(full);
     for (size_t k = 0; k < 4; ++k) {
       const float v = std::clamp(std::round(float(rgba[k]) * scale), 0.0f, top);  // (a malformed stream may leave the range)
-      const uint32_t u = uint32_t(v);
-      if (wide) e[2 * k] = uint8_t(u), e[2 * k + 1] = uint8_t(u >> 8);
-      else e[k] = uint8_t(u);
+      set_filter_component(e, k, wide, uint32_t(v));
     }
   }
 }
@@ -192,10 +202,9 @@ void decode_meshopt_octahedral_filter(uint8_t* data, size_t count, size_t stride
   const float top = wide ? 32767.0f : 127.0f;
   for (size_t i = 0; i < count; ++i) {
     uint8_t* e = data + i * stride;
-    float c[3];
-    for (size_t k = 0; k < 3; ++k) c[k] = wide ? float(int16_t(uint16_t(e[2 * k] | e[2 * k + 1] << 8))) : float(int8_t(e[k]));
     // The specification's steps, in its order and precision.
-    float x = c[0] / c[2], y = c[1] / c[2];
+    const float one = float(signed_filter_component(e, 2, wide));
+    float x = float(signed_filter_component(e, 0, wide)) / one, y = float(signed_filter_component(e, 1, wide)) / one;
     const float z = 1.0f - std::fabs(x) - std::fabs(y);
     const float t = std::min(z, 0.0f);  // the negative hemisphere folds back
     x -= std::copysign(t, x);
@@ -205,9 +214,7 @@ void decode_meshopt_octahedral_filter(uint8_t* data, size_t count, size_t stride
     for (size_t k = 0; k < 3; ++k) {
       float q = std::round(v[k] * top);
       q = q == q ? std::clamp(q, -top, top) : 0.0f;  // NaN and infinities only from a malformed element
-      const auto s = int16_t(q);
-      if (wide) e[2 * k] = uint8_t(uint16_t(s)), e[2 * k + 1] = uint8_t(uint16_t(s) >> 8);
-      else e[k] = uint8_t(int8_t(s));
+      set_filter_component(e, k, wide, uint32_t(int32_t(q)));
     }
   }
 }
