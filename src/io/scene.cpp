@@ -255,14 +255,16 @@ Mesh flatten(const Scene& scene, const FlattenOptions& options) {
   core::reserve_huge(out.positions, vertices);
   core::reserve_huge(out.indices, corners);
 
+  // A primitive lacking a filled stream is copied and filled once, however many instances draw it
+  // (a forest's trees: the smooth normals it may need are not cheap).
+  std::vector<std::optional<Mesh>> with_filled(filled ? scene.primitives.size() : 0);
   for (const Instance& inst : instances) {
     const Primitive& prim = scene.primitives[inst.primitive];
-    Mesh with_filled;  // (a copy only for an instance lacking a filled stream)
     const Mesh* from = &prim.mesh;
-    if ((stream_layout(prim.mesh) & filled) != filled) {
-      with_filled = prim.mesh;
-      fill_streams(with_filled, filled);
-      from = &with_filled;
+    if (filled && (stream_layout(prim.mesh) & filled) != filled) {
+      std::optional<Mesh>& copy = with_filled[inst.primitive];
+      if (!copy) fill_streams(copy.emplace(prim.mesh), filled);
+      from = &*copy;
     }
     const Mesh& mesh = *from;
     const uint32_t base = uint32_t(out.positions.size());

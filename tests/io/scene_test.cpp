@@ -307,6 +307,20 @@ TEST(SceneFlatten, FillStreamsKeepsWhatAnyInstanceHas) {
   Mesh part = m;
   keep_streams(part, stream_layout(plain));
   EXPECT_EQ(stream_layout(part), stream_colors);
+  // A primitive drawn twice lacking a stream gets it filled in both instances, each placed by its
+  // own node (flatten fills it once and reuses the copy).
+  Node c = b;
+  c.translation = {5, 0, 0};
+  scene.nodes.push_back(c);
+  scene.roots.push_back(2);
+  const Mesh twice = flatten(scene, {.fill_streams = true});
+  ASSERT_EQ(twice.vertex_count(), 9u);
+  for (size_t v = 0; v < 3; ++v) {
+    expect_near(twice.normals[6 + v], {0, -1, 0});
+    EXPECT_EQ(twice.uvs[1][6 + v], (float2{0, 0}));
+    EXPECT_EQ(twice.colors[6 + v], (float4{0, 1, 0, 1}));
+    EXPECT_EQ(twice.positions[6 + v].x, twice.positions[3 + v].x + 5);
+  }
 }
 
 // What flatten draws: reached from a root, shown, each primitive once (mesh 0 is drawn twice), in
