@@ -235,6 +235,20 @@ struct Scene {
   std::string name;                           // the file it was read from, for messages
 };
 
+// Takes nodes out of a scene read from glTF, with what refers to them: parents' children, the
+// default and other scenes' roots, MSFT_lod ids, and the clips' channels that move or switch them
+// (KHR_animation_pointer's too); the other nodes are renumbered there and in skins, clips and
+// Node::morph_weights_of, in the scene and in the document it writes back. Only the source's nodes
+// go; nodes added after them are renumbered (what their extras say is the caller's). lodkit lod
+// drops an earlier run's level nodes this way, which its new levels replace. A node stays where
+// something else needs it: it has a camera or an extension other than MSFT_lod,
+// KHR_node_visibility and EXT_mesh_gpu_instancing, a skin uses it, a node takes its morph weights,
+// or one of its children stays (an added node below it among them). All stay when the document
+// declares an extension that might refer to nodes by index (one lodkit does not know). The caller
+// erases only nodes whose meshes it no longer draws. Returns each node's new index, -1 for those
+// erased.
+std::vector<int32_t> erase_nodes(Scene& scene, const std::vector<bool>& erase);
+
 // ---- files --------------------------------------------------------------------------------------
 // Format follows the extension. Errors throw lod::Error: bad_input naming the file and the line or
 // byte offset; usage for unknown extensions. Directories and unreadable paths are bad_input.
@@ -304,8 +318,9 @@ std::vector<MaterialPart> split_by_material(const Mesh& mesh);
 std::vector<uint32_t> source_vertex_classes(const Scene& scene, size_t primitive);
 
 // The source glTF primitive's morph targets (POSITION, NORMAL and TANGENT displacements; other
-// semantics are not decoded), per vertex of the scene primitive (through Primitive::source_vertices). Empty when it
-// has none or its vertices are not the source's.
+// semantics are not decoded), those it keeps (Primitive::source_target_count), per vertex of the
+// scene primitive (through Primitive::source_vertices). Empty when it has none or its vertices are
+// not the source's.
 std::vector<MorphTarget> source_morph_targets(const Scene& scene, size_t primitive);
 
 // ---- per format, in memory (used by the file functions, tests and fuzzers) ----------------------

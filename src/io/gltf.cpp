@@ -3975,7 +3975,8 @@ std::vector<MorphTarget> source_morph_targets(const Scene& scene, size_t primiti
   if (!map.primitive) return {};
   const Document doc(scene.source->model, scene.name);
   std::vector<MorphTarget> targets;
-  for (size_t k = 0; k < map.primitive->targets.size(); ++k) {
+  const size_t count = std::min<size_t>(map.primitive->targets.size(), scene.primitives[primitive].source_target_count);
+  for (size_t k = 0; k < count; ++k) {
     const auto& attributes = map.primitive->targets[k];
     MorphTarget& t = targets.emplace_back();
     t.positions.assign(map.vertex.size(), float3{});
@@ -3991,6 +3992,127 @@ std::vector<MorphTarget> source_morph_targets(const Scene& scene, size_t primiti
     }
   }
   return targets;
+}
+
+namespace {
+
+// Document extensions known to refer to no node by index (or whose references erase_nodes
+// renumbers: MSFT_lod, KHR_animation_pointer). Any other might, so a document declaring one keeps
+// every node where it is.
+bool refers_to_no_node(const std::string& ext) {
+  static const std::set<std::string> known = {
+      "EXT_mesh_gpu_instancing", "EXT_meshopt_compression", "EXT_texture_avif", "EXT_texture_webp",
+      "KHR_animation_pointer", "KHR_draco_mesh_compression", "KHR_lights_punctual", "KHR_mesh_quantization",
+      "KHR_node_visibility", "KHR_texture_basisu", "KHR_texture_transform", "KHR_xmp_json_ld", "MSFT_lod",
+      "MSFT_texture_dds"};
+  return known.count(ext) > 0 || ext.starts_with("KHR_materials_");
+}
+
+// A node list renumbered: erased nodes (-1 in `remap`) leave it.
+template <typename Index>
+void renumber(std::vector<Index>& list, const std::vector<int32_t>& remap) {
+  std::erase_if(list, [&](Index n) { return n >= 0 && size_t(n) < remap.size() && remap[size_t(n)] < 0; });
+  for (Index& n : list)
+    if (n >= 0 && size_t(n) < remap.size()) n = Index(remap[size_t(n)]);
+}
+
+}  // namespace
+
+std::vector<int32_t> erase_nodes(Scene& scene, const std::vector<bool>& erase) {
+  const size_t count = scene.nodes.size();
+  std::vector<int32_t> remap(count);
+  std::iota(remap.begin(), remap.end(), 0);
+  if (!scene.source || scene.source->model.nodes.size() > count || erase.size() != count) return remap;
+  const tg::Model& model = scene.source->model;
+  const size_t sources = model.nodes.size();  // (the nodes past them are new: renumbered, never erased)
+  if (!std::all_of(model.extensionsUsed.begin(), model.extensionsUsed.end(), refers_to_no_node)) return remap;
+  // What else needs a node keeps it: a camera, another extension (a light), a skin, a node taking its
+  // morph weights, a child that stays (a new node below it among them).
+  std::vector<bool> gone(count, false);
+  for (size_t n = 0; n < sources; ++n) {
+    const tg::Node& node = model.nodes[n];
+    gone[n] = erase[n] && node.camera < 0 && std::all_of(node.extensions.begin(), node.extensions.end(), [](const auto& e) {
+      return e.first == "MSFT_lod" || e.first == node_visibility || e.first == gpu_instancing;
+    });
+  }
+  for (const tg::Skin& skin : model.skins) {
+    for (const int j : skin.joints)
+      if (j >= 0 && size_t(j) < count) gone[size_t(j)] = false;
+    if (skin.skeleton >= 0 && size_t(skin.skeleton) < count) gone[size_t(skin.skeleton)] = false;
+  }
+  for (size_t n = 0; n < count; ++n) {
+    const Node& node = scene.nodes[n];
+    for (const int32_t of : node.morph_weights_of)
+      if (of >= 0 && size_t(of) < count) gone[size_t(of)] = false;
+    if (n >= sources && node.parent >= 0 && size_t(node.parent) < count) gone[size_t(node.parent)] = false;
+  }
+  for (bool changed = true; changed;) {  // (a parent stays with its child: up the tree, one level a round)
+    changed = false;
+    for (size_t n = 0; n < sources; ++n)
+      if (gone[n] && std::any_of(model.nodes[n].children.begin(), model.nodes[n].children.end(),
+                                 [&](int c) { return c >= 0 && size_t(c) < count && !gone[size_t(c)]; }))
+        gone[n] = false, changed = true;
+  }
+  if (std::none_of(gone.begin(), gone.end(), [](bool g) { return g; })) return remap;
+  int32_t next = 0;
+  for (size_t n = 0; n < count; ++n) remap[n] = gone[n] ? -1 : next++;
+  const auto moved = [&](int32_t n) { return n >= 0 && size_t(n) < count ? remap[size_t(n)] : n; };
+
+  // The document: a copy (the scene's source is shared) without those nodes.
+  auto source = std::make_shared<GltfSource>(*scene.source);
+  tg::Model& doc = source->model;
+  std::vector<tg::Node> nodes;
+  for (size_t n = 0; n < sources; ++n)
+    if (!gone[n]) nodes.push_back(std::move(doc.nodes[n]));
+  doc.nodes = std::move(nodes);
+  for (tg::Node& node : doc.nodes) {
+    renumber(node.children, remap);
+    const auto lod = node.extensions.find("MSFT_lod");
+    if (lod == node.extensions.end() || !lod->second.IsObject() || !lod->second.Get("ids").IsArray()) continue;
+    tg::Value::Object ext = lod->second.Get<tg::Value::Object>();
+    tg::Value::Array ids;
+    for (const tg::Value& id : ext["ids"].Get<tg::Value::Array>())
+      if (!id.IsInt() || moved(id.Get<int>()) >= 0) ids.push_back(id.IsInt() ? tg::Value(int(moved(id.Get<int>()))) : id);
+    ext["ids"] = tg::Value(std::move(ids));
+    lod->second = tg::Value(std::move(ext));
+  }
+  for (tg::Scene& s : doc.scenes) renumber(s.nodes, remap);
+  for (tg::Skin& skin : doc.skins) {
+    renumber(skin.joints, remap);
+    skin.skeleton = moved(skin.skeleton);
+  }
+  // A clip's channels that move or switch a node that went go with it (the writer prunes their samplers).
+  for (tg::Animation& anim : doc.animations) {
+    std::erase_if(anim.channels, [&](const tg::AnimationChannel& ch) {
+      const ChannelTarget t = channel_target(ch);
+      return t.list == "nodes" && moved(t.index) < 0;
+    });
+    for (tg::AnimationChannel& ch : anim.channels)
+      if (const ChannelTarget t = channel_target(ch); t.list == "nodes" && moved(t.index) != t.index) retarget_channel(ch, "nodes", moved(t.index));
+  }
+  scene.source = std::move(source);
+
+  // The scene, likewise.
+  std::vector<Node> kept;
+  for (size_t n = 0; n < count; ++n)
+    if (!gone[n]) kept.push_back(std::move(scene.nodes[n]));
+  scene.nodes = std::move(kept);
+  for (Node& node : scene.nodes) {
+    node.parent = moved(node.parent);
+    renumber(node.children, remap);
+    renumber(node.lod_ids, remap);
+    renumber(node.morph_weights_of, remap);
+  }
+  renumber(scene.roots, remap);
+  for (Skin& skin : scene.skins) {
+    renumber(skin.joints, remap);
+    skin.skeleton = moved(skin.skeleton);
+  }
+  for (Animation& clip : scene.animations) {
+    std::erase_if(clip.channels, [&](const AnimationChannel& ch) { return ch.node >= 0 && moved(ch.node) < 0; });
+    for (AnimationChannel& ch : clip.channels) ch.node = moved(ch.node);
+  }
+  return remap;
 }
 
 WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options) {

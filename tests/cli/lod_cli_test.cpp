@@ -50,6 +50,20 @@ std::vector<size_t> level_nodes(const nlohmann::json& doc) {
   return out;
 }
 
+// A glTF document's node structure: per node its name, children, MSFT_lod ids, whether it draws a
+// mesh and whether it is instanced; and the default scene's roots. (What lod on its own output
+// must give as lod once gives it.)
+nlohmann::json node_structure(const nlohmann::json& doc) {
+  nlohmann::json nodes = nlohmann::json::array();
+  for (const nlohmann::json& node : doc["nodes"]) {
+    const nlohmann::json extensions = node.value("extensions", nlohmann::json::object());
+    nodes.push_back({node.value("name", ""), node.value("children", nlohmann::json::array()),
+                     extensions.contains("MSFT_lod") ? extensions["MSFT_lod"]["ids"] : nlohmann::json::array(),
+                     node.contains("mesh"), extensions.contains("EXT_mesh_gpu_instancing")});
+  }
+  return {{"nodes", nodes}, {"roots", doc["scenes"][doc.value("scene", 0)]["nodes"]}};
+}
+
 TEST(CliLod, WritesAValidMsftLodChain) {
   test::TempDir dir;
   const Mesh torus = shapes::torus(1.0f, 0.3f, 48, 24);
@@ -137,30 +151,33 @@ TEST(CliLod, TriangleSoupIsWeldedFirst) {
   EXPECT_LE(chain.primitives[2].mesh.triangle_count(), torus.triangle_count() / 4);
 }
 
-// A chain made from a chain: the new one replaces the old, whose nodes (kept, without their meshes)
-// lose their MSFT_lod and what lodkit said about them; only the new first node has MSFT_lod. The
-// new chain is built from the old first level alone (the others are not in the scene).
+// A chain made from a chain: the new one replaces the old, built from the old first level alone
+// (the others are not in the scene). The old chain's nodes go (lod::erase_nodes): its first level,
+// which lodkit made, and its coarser levels, which nothing draws any more. What is left is the new
+// chain, as lod on the torus itself would write it.
 TEST(CliLod, ChainingAChainReplacesTheOldChain) {
   test::TempDir dir;
   write_mesh(shapes::torus(1.0f, 0.3f, 32, 16), dir / "torus.ply");
   ASSERT_EQ(test::run_cli({"lod", (dir / "torus.ply").string(), "-o", (dir / "old.glb").string(), "--ratios", "1,0.4,0.1",
                            "--morph"}).exit_code, 0);
+  ASSERT_EQ(glb_json(dir / "old.glb")["nodes"].size(), 3u);
   const test::RunResult r =
       test::run_cli({"lod", (dir / "old.glb").string(), "-o", (dir / "new.glb").string(), "--ratios", "1,0.25"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json doc = glb_json(dir / "new.glb");
-  ASSERT_EQ(doc["nodes"].size(), 5u);  // the old chain's three, the new chain's two
-  for (size_t i = 0; i < 3; ++i) {
-    const nlohmann::json& node = doc["nodes"][i];
-    EXPECT_FALSE(node.contains("mesh")) << i;
-    EXPECT_FALSE(node.contains("extensions")) << i;
-    const nlohmann::json extras = node.value("extras", nlohmann::json::object());
-    for (const char* fact : {"lodkit", "LODKIT_geomorph", "MSFT_screencoverage"}) EXPECT_FALSE(extras.contains(fact)) << i << fact;
-  }
-  EXPECT_EQ(doc["nodes"][3]["extensions"]["MSFT_lod"]["ids"], nlohmann::json::array({4}));
-  EXPECT_EQ(doc["nodes"][3]["extras"]["lodkit"]["triangles"].get<uint64_t>(), 32u * 16u * 2u);
+  ASSERT_EQ(doc["nodes"].size(), 2u);
+  EXPECT_EQ(doc["scenes"][doc.value("scene", 0)]["nodes"], nlohmann::json::array({0}));
+  EXPECT_EQ(doc["nodes"][0]["extensions"]["MSFT_lod"]["ids"], nlohmann::json::array({1}));
+  EXPECT_EQ(doc["nodes"][0]["extras"]["lodkit"]["triangles"].get<uint64_t>(), 32u * 16u * 2u);
+  EXPECT_FALSE(doc["nodes"][0]["extras"].contains("LODKIT_geomorph"));  // (no --morph this time)
+  EXPECT_FALSE(doc["nodes"][1].contains("extensions"));
+  EXPECT_EQ(doc["meshes"].size(), 2u);
   EXPECT_EQ(std::count(doc["extensionsUsed"].begin(), doc["extensionsUsed"].end(), "MSFT_lod"), 1);
   test::expect_valid_gltf({dir / "new.glb"});
+  // The same ratios on the torus itself: the same nodes.
+  ASSERT_EQ(test::run_cli({"lod", (dir / "torus.ply").string(), "-o", (dir / "once.glb").string(), "--ratios", "1,0.25"}).exit_code, 0);
+  const nlohmann::json once = glb_json(dir / "once.glb");
+  EXPECT_EQ(node_structure(doc), node_structure(once));
 }
 
 // Materials: each level is one glTF mesh with a primitive per material. From OBJ the materials keep
@@ -1190,6 +1207,33 @@ TEST(CliLod, AMeshDrawnByManyNodesGetsOneChain) {
   const Mesh before = flatten(read_scene(dir / "many.glb")), after = flatten(out);
   EXPECT_EQ(after.triangle_count(), before.triangle_count());
   EXPECT_EQ(points_off(after, before, 1e-4), 0u);
+  // lod on its own output: the earlier coarser levels and the sphere's chain go. The torus morphs,
+  // and its first levels' weights drive it now (those of a, b and c went with their meshes): they
+  // stay, each the parent of the new levels. Level 0 still draws the input.
+  const auto lod_again = [&](const char* from, const char* to) {
+    const test::RunResult again =
+        test::run_cli({"lod", (dir / from).string(), "-o", (dir / to).string(), "--ratios", "1,0.25", "--json"});
+    EXPECT_EQ(again.exit_code, 0) << again.err;
+    test::expect_valid_gltf({dir / to});
+    const Mesh twice = flatten(read_scene(dir / to));
+    EXPECT_EQ(twice.triangle_count(), before.triangle_count());
+    EXPECT_EQ(points_off(twice, before, 1e-4), 0u);
+    return nlohmann::json::parse(again.out);
+  };
+  EXPECT_EQ(lod_again("lod.glb", "again.glb")["instanced"][0]["node"], "a_LOD0, b_LOD0, c_LOD0");
+  const nlohmann::json once = glb_json(dir / "lod.glb"), twice = glb_json(dir / "again.glb");
+  EXPECT_EQ(twice["nodes"].size(), once["nodes"].size() + 3);
+  std::vector<std::string> empty;  // nodes that draw nothing and have no children
+  for (const nlohmann::json& node : twice["nodes"])
+    if (!node.contains("mesh") && !node.contains("children")) empty.push_back(node["name"]);
+  EXPECT_EQ(empty, std::vector<std::string>{"ball"});
+  // Without morph targets, the new levels go below a, b and c in place of the old: the nodes lod
+  // once wrote.
+  input.primitives[0].targets.clear();
+  write_scene(input, dir / "still.glb");
+  ASSERT_EQ(test::run_cli({"lod", (dir / "still.glb").string(), "-o", (dir / "still-lod.glb").string(), "--ratios", "1,0.25"}).exit_code, 0);
+  EXPECT_EQ(lod_again("still-lod.glb", "still-again.glb")["instanced"][0]["node"], "a, b, c");
+  EXPECT_EQ(node_structure(glb_json(dir / "still-again.glb")), node_structure(glb_json(dir / "still-lod.glb")));
 }
 
 // `scene` (its nodes' transforms) as clip 0 poses it at `time`, flattened (coarser levels left out).
@@ -1296,6 +1340,11 @@ TEST(CliLod, AnimatedNodesKeepTheirMotion) {
   expect_posed_alike(in, out, {0.0f, 0.6f, 2.0f});
   // The moving meshes have moved: posed at 2 s, the input's arm and blade are not where they stand at rest.
   EXPECT_GT(points_off(posed(in, 2.0f), posed(in, 0.0f), 1e-2), (ball.vertex_count() + blade.vertex_count()) / 2);
+  // lod on its own output: the nodes lod once wrote, and the same motion.
+  ASSERT_EQ(test::run_cli({"lod", (dir / "lod.glb").string(), "-o", (dir / "again.glb").string(), "--ratios", "1,0.3"}).exit_code, 0);
+  test::expect_valid_gltf({dir / "again.glb"});
+  EXPECT_EQ(node_structure(glb_json(dir / "again.glb")), node_structure(glb_json(dir / "lod.glb")));
+  expect_posed_alike(in, read_scene(dir / "again.glb"), {0.0f, 0.6f, 2.0f});
 }
 
 // A turntable: a clip spins the root, and 12 static parts below it (three meshes, one of them drawn
@@ -1669,6 +1718,7 @@ TEST(CliLod, SkinnedCharactersPropsGetChainsToo) {
     EXPECT_EQ(triangles(again["skinned"]["chains"][0]), triangles(first_report["skinned"]["chains"][0]));
     const nlohmann::json first_doc = test::glb_json(dir / first), again_doc = test::glb_json(dir / second);
     EXPECT_EQ(again_doc["meshes"].size(), first_doc["meshes"].size());
+    EXPECT_EQ(node_structure(again_doc), node_structure(first_doc));  // (the earlier levels' nodes went)
     std::set<size_t> drawn;
     for (const nlohmann::json& node : again_doc["nodes"]) {
       if (!node.contains("mesh")) {

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -1429,6 +1430,95 @@ TEST(GltfMorphWeights, ExtraTargetsTakeZeroInWeightsAndClips) {
     else
       EXPECT_EQ(out, (std::vector<float>{0.1f, 0, 0.2f, 0, 0.3f, 0, 0.4f, 0, 0.5f, 0, 0.6f, 0}));
   }
+}
+
+// erase_nodes: asked to erase nodes 1, 2, 3, 5, 7 and 8 of ten, it erases those nothing else needs:
+// 1 (a leaf), 5 (a level of node 0's MSFT_lod) and 7 (a leaf a clip moves, by a core channel and a
+// KHR_animation_pointer: both channels go). Node 2 has a camera, node 3 a child that stays (4) and
+// node 8 is a skin's joint: they stay. By hand, the others renumber 0, 1, 2, 3, 4, 5, 6 (0, 2, 3, 4,
+// 6, 8, 9), in the scene and in the document written back: children, the scene's roots, MSFT_lod
+// ids, the skin's joints and the channels on node 9 (core and pointer). A document declaring an
+// extension lodkit does not know (it might refer to nodes) keeps every node.
+TEST(GltfWrite, EraseNodesRenumbersWhatRefersToThem) {
+  const auto document = [](bool unknown_extension) {
+    HandBuilt f;
+    const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const std::vector<uint16_t> indices = {0, 1, 2};
+    const int idx = f.accessor(indices, kUShort, "SCALAR", 1, kElementArrayBuffer);
+    f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", pos}}}, {"indices", idx}}}}}});
+    f.doc["cameras"] = Json::array({{{"type", "perspective"}, {"perspective", {{"yfov", 1.0}, {"znear", 0.1}}}}});
+    Json nodes = Json::array();
+    for (const char* name : {"root", "leaf", "camera", "parent", "child", "level", "level2", "moved", "joint", "last"})
+      nodes.push_back({{"name", name}});
+    nodes[0].update({{"mesh", 0}, {"children", {1, 2, 3}}, {"extensions", {{"MSFT_lod", {{"ids", {5, 6}}}}}}});
+    nodes[2]["camera"] = 0;
+    nodes[3]["children"] = {4};
+    for (const size_t n : {4, 5, 6, 9}) nodes[n]["mesh"] = 0;
+    f.doc["nodes"] = nodes;
+    f.doc["scenes"] = Json::array({{{"nodes", {0, 7, 8, 9}}}});
+    f.doc["skins"] = Json::array({{{"joints", {8}}}});
+    const std::vector<float> times = {0, 1}, moves = {0, 0, 0, 1, 0, 0}, turns = {0, 0, 0, 1, 0, 0.6f, 0, 0.8f};
+    const std::vector<uint8_t> steps = {0, 0, 0, 1, 2, 3, 0, 0};  // two VEC3 keys (and padding)
+    const int in = f.accessor(times, kFloat, "SCALAR", 1, 0, {{"min", {0}}, {"max", {1}}});
+    const int move = f.accessor(moves, kFloat, "VEC3", 3), turn = f.accessor(turns, kFloat, "VEC4", 4);
+    const int bytes = f.accessor(steps, kUByte, "VEC3", 3);
+    f.doc["accessors"][size_t(bytes)]["count"] = 2;
+    const auto pointer = [](int sampler, const std::string& to) {
+      return Json{{"sampler", sampler}, {"target", {{"path", "pointer"}, {"extensions", {{"KHR_animation_pointer", {{"pointer", to}}}}}}}};
+    };
+    f.doc["animations"] = Json::array(
+        {{{"samplers", {{{"input", in}, {"output", move}}, {{"input", in}, {"output", turn}}, {{"input", in}, {"output", bytes}}}},
+          {"channels",
+           {{{"sampler", 0}, {"target", {{"node", 7}, {"path", "translation"}}}},
+            {{"sampler", 1}, {"target", {{"node", 9}, {"path", "rotation"}}}}, pointer(2, "/nodes/7/translation"),
+            pointer(2, "/nodes/9/translation")}}}});
+    f.doc["extensionsUsed"] = {"MSFT_lod", "KHR_animation_pointer"};
+    if (unknown_extension) f.doc["extensionsUsed"].push_back("VENDOR_node_links");
+    return f;
+  };
+  TempDir dir;
+  test::write_bytes(dir / "in.glb", document(false).glb());
+  test::expect_valid_gltf({dir / "in.glb"});
+  Scene scene = read_scene(dir / "in.glb");
+  ASSERT_EQ(scene.nodes.size(), 10u);
+  std::vector<bool> erase(10, false);
+  for (const size_t n : {1, 2, 3, 5, 7, 8}) erase[n] = true;
+  const std::vector<int32_t> remap = erase_nodes(scene, erase);
+  EXPECT_EQ(remap, (std::vector<int32_t>{0, -1, 1, 2, 3, -1, 4, -1, 5, 6}));
+  ASSERT_EQ(scene.nodes.size(), 7u);
+  EXPECT_EQ(scene.nodes[0].children, (std::vector<int32_t>{1, 2}));
+  EXPECT_EQ(scene.nodes[0].lod_ids, (std::vector<int32_t>{4}));
+  EXPECT_EQ(scene.nodes[2].children, (std::vector<int32_t>{3}));
+  EXPECT_EQ(scene.nodes[3].parent, 2);
+  EXPECT_EQ(scene.roots, (std::vector<int32_t>{0, 5, 6}));
+  EXPECT_EQ(scene.skins[0].joints, (std::vector<int32_t>{5}));
+  ASSERT_EQ(scene.animations[0].channels.size(), 1u);  // (the pointers' bytes are the source's alone)
+  EXPECT_EQ(scene.animations[0].channels[0].node, 6);
+  write_scene(scene, dir / "out.glb");
+  test::expect_valid_gltf({dir / "out.glb"});
+  const Json doc = test::glb_json(dir / "out.glb");
+  std::vector<std::string> names;
+  for (const Json& node : doc["nodes"]) names.push_back(node["name"]);
+  EXPECT_EQ(names, (std::vector<std::string>{"root", "camera", "parent", "child", "level2", "joint", "last"}));
+  EXPECT_EQ(doc["nodes"][0]["children"], Json::array({1, 2}));
+  EXPECT_EQ(doc["nodes"][0]["extensions"]["MSFT_lod"]["ids"], Json::array({4}));
+  EXPECT_EQ(doc["nodes"][1]["camera"], 0);
+  EXPECT_EQ(doc["nodes"][2]["children"], Json::array({3}));
+  EXPECT_EQ(doc["scenes"][0]["nodes"], Json::array({0, 5, 6}));
+  EXPECT_EQ(doc["skins"][0]["joints"], Json::array({5}));
+  const Json& channels = doc["animations"][0]["channels"];
+  ASSERT_EQ(channels.size(), 2u);
+  EXPECT_EQ(channels[0]["target"], (Json{{"node", 6}, {"path", "rotation"}}));
+  EXPECT_EQ(channels[1]["target"]["extensions"]["KHR_animation_pointer"]["pointer"], "/nodes/6/translation");
+  EXPECT_EQ(doc["animations"][0]["samplers"].size(), 2u);  // (the moved node's sampler went with its channel)
+
+  test::write_bytes(dir / "unknown.glb", document(true).glb());
+  Scene kept = read_scene(dir / "unknown.glb");
+  std::vector<int32_t> identity(10);
+  std::iota(identity.begin(), identity.end(), 0);
+  EXPECT_EQ(erase_nodes(kept, erase), identity);
+  EXPECT_EQ(kept.nodes.size(), 10u);
+  EXPECT_EQ(kept.nodes[0].lod_ids, (std::vector<int32_t>{5, 6}));
 }
 
 // KHR_animation_pointer: a channel without a node passes through with its sampler's keys as they

@@ -128,27 +128,30 @@ void GeometryFile::forget_lod_facts(const std::vector<bool>& changed) {
     if (m >= stale.size()) stale.resize(size_t(m) + 1, false);
     if (changed[i]) stale[m] = true;
   }
-  // Per glTF mesh: the index of lod's geomorph among its morph targets (after the source's blend
-  // shapes), or -1.
-  std::vector<int64_t> geomorph(stale.size(), -1);
+  const auto draws_stale = [&](const Node& node) { return node.mesh >= 0 && size_t(node.mesh) < stale.size() && stale[size_t(node.mesh)]; };
   for (Node& node : scene_.nodes)
-    if (node.mesh >= 0 && size_t(node.mesh) < stale.size() && stale[size_t(node.mesh)]) {
-      erase_extras(node, {"lodkit"});
-      int64_t target = 0;  // (a malformed entry: no target survives)
-      if (!node.extras_json.empty()) {
-        const nlohmann::json extras = nlohmann::json::parse(node.extras_json);
-        if (extras.is_object() && extras.contains("LODKIT_geomorph") && extras["LODKIT_geomorph"].is_object()) {
-          const nlohmann::json& index = extras["LODKIT_geomorph"].value("target", nlohmann::json());
-          if (index.is_number_unsigned() && index.get<uint64_t>() < UINT32_MAX) target = index.get<int64_t>();
-        }
+    if (draws_stale(node)) erase_extras(node, {"lodkit"});
+  drop_geomorphs(scene_, draws_stale);
+}
+
+void drop_geomorphs(Scene& scene, const std::function<bool(const Node&)>& which) {
+  // Per glTF mesh: the index of lod's geomorph among its morph targets (after the source's blend
+  // shapes).
+  std::map<uint32_t, uint32_t> geomorph;
+  for (Node& node : scene.nodes) {
+    if (node.mesh < 0 || !which(node)) continue;
+    int64_t target = 0;  // (a malformed entry: no target survives)
+    if (!node.extras_json.empty()) {
+      const nlohmann::json extras = nlohmann::json::parse(node.extras_json);
+      if (extras.is_object() && extras.contains("LODKIT_geomorph") && extras["LODKIT_geomorph"].is_object()) {
+        const nlohmann::json& index = extras["LODKIT_geomorph"].value("target", nlohmann::json());
+        if (index.is_number_unsigned() && index.get<uint64_t>() < UINT32_MAX) target = index.get<int64_t>();
       }
-      if (erase_extras(node, {"LODKIT_geomorph"})) geomorph[size_t(node.mesh)] = target;
     }
-  // A geomorph moved the old vertices onto the next level's: interpolated at new ones it would
-  // morph towards nothing, so it goes from every primitive of the level; the blend shapes before it
-  // stay.
-  for (Primitive& p : scene_.primitives)
-    if (p.gltf_mesh < geomorph.size() && geomorph[p.gltf_mesh] >= 0) p.source_target_count = uint32_t(geomorph[p.gltf_mesh]);
+    if (erase_extras(node, {"LODKIT_geomorph"})) geomorph[uint32_t(node.mesh)] = uint32_t(target);
+  }
+  for (Primitive& p : scene.primitives)
+    if (const auto it = geomorph.find(p.gltf_mesh); it != geomorph.end()) p.source_target_count = it->second;
 }
 
 std::vector<uint32_t> weld_duplicates(Mesh& mesh, std::span<const uint32_t> classes) {

@@ -220,6 +220,36 @@ std::set<int32_t> earlier_skinned_levels(const Scene& scene, std::vector<Skinned
   return meshes;
 }
 
+// The nodes of an earlier run's chains (lod on its own output): the first levels it made (an
+// MSFT_lod and its extras) and every coarser level an MSFT_lod lists (a chain of the input's own
+// among them). New chains replace the meshes they draw; they go, rather than stay as empty nodes
+// (lod::erase_nodes).
+std::vector<bool> earlier_chain_nodes(const Scene& scene) {
+  std::vector<bool> earlier(scene.nodes.size(), false);
+  for (const Node& node : scene.nodes) {
+    for (const int32_t id : node.lod_ids)
+      if (id >= 0 && size_t(id) < earlier.size()) earlier[size_t(id)] = true;
+  }
+  for (size_t n = 0; n < scene.nodes.size(); ++n) {
+    const Node& node = scene.nodes[n];
+    if (node.lod_ids.empty() || node.extras_json.empty()) continue;
+    const nlohmann::json extras = nlohmann::json::parse(node.extras_json);
+    earlier[n] = earlier[n] || (extras.is_object() && extras.contains("lodkit"));
+  }
+  return earlier;
+}
+
+// Where the levels of a separate mesh that node `n` draws go: below `n`, or, when `n` is the first
+// level an earlier run put below its parent (`earlier`, untransformed, childless), below that parent
+// in its stead, as the first run put them, so that running lod again does not nest chains. Not when
+// its morph weights drive the mesh (`morphing`): the new levels take them from it.
+int32_t levels_parent(const Scene& scene, const std::vector<bool>& earlier, int32_t n, bool morphing) {
+  const Node& node = scene.nodes[size_t(n)];
+  const bool placed = node.has_matrix || node.translation != float3{} || node.rotation != float4{0, 0, 0, 1} ||
+                      node.scale != float3{1, 1, 1} || !node.children.empty();
+  return earlier[size_t(n)] && node.parent >= 0 && !placed && !morphing ? node.parent : n;
+}
+
 // The document static chains go into: the glTF `source` (flattened into the chains' inputs, so
 // material id k + 1 is its material k) without its triangles, so that materials, textures and
 // everything else stay and its nodes remain, without those meshes; or a new document with the
@@ -859,6 +889,10 @@ Command register_lod(CLI::App& root) {
               if (in_format == FileFormat::glb || in_format == FileFormat::gltf) scene = read_scene(o->input, bar.read_options());
               else mesh = read_mesh(o->input, bar.read_options());
             }
+            // lod on its own output: the earlier geomorphs lead to levels that go, and are not
+            // blend shapes to carry; the earlier chains' nodes go (once the new chains are built).
+            drop_geomorphs(scene, [](const Node&) { return true; });
+            const std::vector<bool> earlier = earlier_chain_nodes(scene);
             std::vector<SkinnedPrimitive> skinned = scene.source ? skinned_primitives(scene) : std::vector<SkinnedPrimitive>{};
             const std::set<int32_t> earlier_levels = earlier_skinned_levels(scene, skinned);
             const std::vector<SkinnedGroup> groups = skinned_groups(scene, skinned);
@@ -928,6 +962,7 @@ Command register_lod(CLI::App& root) {
             // node, untransformed; a rigid group drawn by its nodes below its frame, untransformed),
             // and nothing else.
             std::vector<Node> solo = scene.nodes;
+            std::vector<std::vector<int32_t>> separate_parents;  // per part, the frame or per drawing node levels_parent
             for (Node& node : solo) node.mesh = -1;
             for (const SeparatePart& m : separate) {
               const int32_t top = m.frame >= 0 ? m.frame : m.nodes[0];
@@ -936,15 +971,19 @@ Command register_lod(CLI::App& root) {
               Node& node = solo[size_t(top)];
               node.gpu_instances.clear(), node.visible = true;  // (levels go below it: hidden when it is)
               node.has_matrix = false, node.translation = {}, node.rotation = {0, 0, 0, 1}, node.scale = {1, 1, 1};
-              std::vector<std::string> names;
-              for (const int32_t k : m.frame >= 0 ? std::vector<int32_t>{m.frame} : m.nodes) names.push_back(node_label(scene.nodes, size_t(k)));
-              const std::string name = fmt::format("{}", fmt::join(names, ", "));
               with_nodes(solo, {top}, [&](const Scene& view) {
                 std::vector<uint32_t> streams;
                 chains.push_back(prepare_static(flatten_streams(view, streams), &view, *o));
                 chains.back().streams = std::move(streams);
               });
-              chains.back().report.node = name;
+              // Named after the nodes its levels go below (a frame, or each node drawing it).
+              const bool morphing = !chains.back().morph.targets.empty();
+              std::vector<int32_t>& parents = separate_parents.emplace_back();
+              for (const int32_t k : m.frame >= 0 ? std::vector<int32_t>{m.frame} : m.nodes)
+                parents.push_back(m.frame >= 0 ? k : levels_parent(scene, earlier, k, morphing));
+              std::vector<std::string> names;
+              for (const int32_t k : parents) names.push_back(node_label(scene.nodes, size_t(k)));
+              chains.back().report.node = fmt::format("{}", fmt::join(names, ", "));
               chains.back().report.instances = m.instanced ? m.instances : 0;
               chains.back().report.animated = m.animated;
               chains.back().report.switched = m.switched;
@@ -983,20 +1022,48 @@ Command register_lod(CLI::App& root) {
               out = chain_document(scene.source ? &scene : nullptr, reports[0].chain.levels.front().mesh.material_names);
             }
             const size_t first_separate = chains.size() - separate.size();
+            // An earlier run's chains (lod on its own output): the nodes whose meshes the new chains
+            // replace go, save those the new levels go below or take morph weights from.
+            std::vector<std::vector<Node::GpuInstance>> instances(out.nodes.size());  // (of nodes that may go)
+            {
+              std::vector<bool> drawn(out.gltf_mesh_count, false);
+              for (const Primitive& p : out.primitives)
+                if (p.gltf_mesh < drawn.size()) drawn[p.gltf_mesh] = true;
+              std::vector<bool> erase(out.nodes.size(), false);
+              for (size_t n = 0; n < earlier.size() && n < erase.size(); ++n)
+                {
+                const int32_t drew = out.nodes[n].mesh;
+                erase[n] = earlier[n] && (drew < 0 || (size_t(drew) < drawn.size() && !drawn[size_t(drew)]));
+              }
+              for (const StaticChain& c : chains)
+                for (const int32_t n : c.targets.nodes)
+                  if (n >= 0) erase[size_t(n)] = false;
+              for (size_t c = first_separate; c < chains.size(); ++c)
+                for (const int32_t parent : separate_parents[c - first_separate]) erase[size_t(parent)] = false;
+              for (size_t n = 0; n < erase.size(); ++n) instances[n] = out.nodes[n].gpu_instances;
+              const std::vector<int32_t> remap = erase_nodes(out, erase);
+              for (StaticChain& c : chains)
+                for (int32_t& n : c.targets.nodes)
+                  if (n >= 0) n = remap[size_t(n)];
+              for (std::vector<int32_t>& parents : separate_parents)
+                for (int32_t& n : parents) n = remap[size_t(n)];
+            }
             for (size_t c = 0; c < first_separate; ++c) add_chain(out, reports[first_chain + c], chains[c].targets, chains[c].streams, {});
             for (size_t c = first_separate; c < chains.size(); ++c) {
               const SeparatePart& part = separate[c - first_separate];
+              const std::vector<int32_t>& parents = separate_parents[c - first_separate];
               if (part.frame >= 0) {
                 // A rigid group's levels under its frame, with its nodes' morph weights in turn.
-                add_chain(out, reports[first_chain + c], chains[c].targets, chains[c].streams, {node_label(out.nodes, size_t(part.frame)) + "_", part.frame});
+                add_chain(out, reports[first_chain + c], chains[c].targets, chains[c].streams, {node_label(out.nodes, size_t(parents[0])) + "_", parents[0]});
                 continue;
               }
-              // Every node that drew the mesh draws the chain: its own level nodes, under it.
+              // Every node that drew the mesh draws the chain: its own level nodes, under it (or in
+              // its stead, levels_parent), with its instances and morph weights.
               std::optional<uint32_t> meshes;
-              for (const int32_t n : part.nodes) {
-                const std::vector<Node::GpuInstance> instances = out.nodes[size_t(n)].gpu_instances;  // (a copy: add_chain adds nodes)
+              for (size_t k = 0; k < part.nodes.size(); ++k) {
+                const int32_t parent = parents[k];
                 meshes = add_chain(out, reports[first_chain + c], chains[c].targets, chains[c].streams,
-                                   {node_label(out.nodes, size_t(n)) + "_", n, instances, n, meshes});
+                                   {node_label(out.nodes, size_t(parent)) + "_", parent, instances[size_t(part.nodes[k])], parent, meshes});
               }
             }
             written = write_scene(out, o->output, o->gltf);

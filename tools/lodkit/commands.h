@@ -97,6 +97,12 @@ std::vector<Member> split_members(const Joined& joined, Mesh mesh, std::vector<u
 // "LODKIT_geomorph", "MSFT_screencoverage") once they no longer hold.
 bool erase_extras(Node& node, std::initializer_list<const char*> members);  // whether any was there
 
+// lod --morph's geomorphs (extras "LODKIT_geomorph") leave the meshes of the nodes `which` takes,
+// the facts those nodes' extras: a geomorph moved the old vertices onto the next level's, and at
+// new vertices it would morph towards nothing. The blend shapes before it stay
+// (Primitive::source_target_count).
+void drop_geomorphs(Scene& scene, const std::function<bool(const Node&)>& which);
+
 // A primitive whose vertices moved: vertex v lies at blends[v] on the vertices it had, so the glTF
 // streams lodkit does not model are interpolated there (Primitive::source_weights), through its
 // source_vertices when it has them.
