@@ -11,7 +11,8 @@
 // the same vertex classes (source_vertex_classes) and morph targets (source_morph_targets). Written
 // quantized (KHR_mesh_quantization), it must read back with the same vertices and triangles; with
 // Draco (the reversed copy), with its triangles and positions within a quantization step, and
-// Draco on the grid, with its triangles.
+// Draco on the grid, with its triangles. erase_nodes on the nodes that draw nothing must keep what
+// the scene draws and renumber every reference (check_erase_nodes).
 // The shared oracle lives in fuzz_common.h.
 #include <unistd.h>
 
@@ -87,12 +88,16 @@ size_t total_vertices(const Scene& scene) {
   return n;
 }
 
-void check_flatten(const Scene& scene) {
-  // Instancing (nodes and GPU instances) multiplies the vertices: flatten only scenes whose worst
-  // case stays small.
+// Instancing (nodes and GPU instances) multiplies the vertices: flatten only scenes whose worst
+// case stays small.
+bool small_when_flat(const Scene& scene) {
   size_t placements = 1;
   for (const Node& node : scene.nodes) placements += std::max<size_t>(1, node.gpu_instances.size());
-  if (total_vertices(scene) * placements > 10 * max_round_trip_vertices) return;
+  return total_vertices(scene) * placements <= 10 * max_round_trip_vertices;
+}
+
+void check_flatten(const Scene& scene) {
+  if (!small_when_flat(scene)) return;
   // flatten may refuse a scene whose node transforms overflow float, but only as bad input.
   const std::optional<Mesh> flat = run_step("gltf flatten", true, [&] { return flatten(scene); });
   if (flat) check_mesh(*flat, "gltf flatten");
@@ -266,6 +271,45 @@ void check_morph_targets(const Scene& scene, const Scene& reversed_scene) {
 
 }  // namespace
 
+// erase_nodes, asked to erase every node that draws no mesh (lod erases only such nodes): the
+// nodes it keeps are the rest and those something needs, renumbered within the new count wherever
+// they are named; what the nodes draw is what they drew (flatten, bit for bit, in the same order);
+// and the document written back round-trips.
+void check_erase_nodes(const Scene& scene) {
+  const std::string stage = "erase_nodes";
+  std::vector<bool> erase(scene.nodes.size());
+  for (size_t n = 0; n < scene.nodes.size(); ++n) erase[n] = scene.nodes[n].mesh < 0;
+  Scene erased = scene;
+  const std::vector<int32_t> remap = *run_step(stage, false, [&] { return erase_nodes(erased, erase); });
+  if (remap.size() != scene.nodes.size()) fail(stage, "the renumbering is not one entry per node");
+  int32_t next = 0;
+  for (size_t n = 0; n < remap.size(); ++n) {
+    if (remap[n] < 0 && !erase[n]) fail(stage, "node " + std::to_string(n) + " was erased unasked");
+    if (remap[n] >= 0 && remap[n] != next++) fail(stage, "the kept nodes are not numbered in order");
+  }
+  if (size_t(next) != erased.nodes.size()) fail(stage, "the scene does not have the kept nodes");
+  const auto named = [&](int32_t n, const char* what) {
+    if (n < -1 || n >= next) fail(stage, std::string(what) + " names node " + std::to_string(n) + " of " + std::to_string(next));
+  };
+  for (const Node& node : erased.nodes) {
+    named(node.parent, "a parent");
+    for (const int32_t c : node.children) named(c, "a child");
+    for (const int32_t id : node.lod_ids) named(id, "an MSFT_lod id");
+  }
+  for (const int32_t r : erased.roots) named(r, "a root");
+  for (const Skin& skin : erased.skins)
+    for (const int32_t j : skin.joints) named(j, "a joint");
+  for (const Animation& clip : erased.animations)
+    for (const AnimationChannel& ch : clip.channels) named(ch.node, "a channel");
+  // (Left without nodes or roots, flatten draws every primitive once, as for a scene without
+  // nodes: not what the nodes drew.)
+  const bool drawn_by_nodes = !erased.nodes.empty() && !erased.roots.empty();
+  const std::optional<Mesh> before =
+      drawn_by_nodes && small_when_flat(scene) ? run_step("gltf flatten", true, [&] { return flatten(scene); }) : std::nullopt;
+  if (before) require_same_geometry(*before, *run_step(stage + ": flatten", false, [&] { return flatten(erased); }), Exactness::bits, stage);
+  check_round_trip(erased, "gltf round trip, meshless nodes erased", {});
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::span<const uint8_t> input(data, size);
   const std::string stage = "gltf read";
@@ -278,6 +322,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   check_flatten(*scene);
   if (total_vertices(*scene) > max_round_trip_vertices) return 0;
   check_round_trip(*scene, "gltf round trip", {});
+  check_erase_nodes(*scene);
   const Scene backwards = reversed(*scene);
   check_round_trip(backwards, "gltf round trip, vertices reversed, meshopt-compressed", {.meshopt_compression = true});
   check_round_trip(*scene, "gltf round trip, KHR meshopt version 1", {.meshopt_compression = true, .meshopt_khr = true});
