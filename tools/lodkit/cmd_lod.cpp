@@ -445,14 +445,32 @@ Joined join_group(const Scene& scene, const SkinnedGroup& g) {
   return join_members(members);
 }
 
-// The skinned simplifier's options for a skin: its poses as the mode needs them.
-SkinSimplifyOptions skin_options(const Scene& scene, uint32_t skin, SkinMode mode, uint32_t pose_count) {
+// The skins a group is drawn with: its first node's, then those of the others (a crowd), each once.
+std::vector<uint32_t> group_skins(const Scene& scene, const SkinnedGroup& g) {
+  std::vector<uint32_t> skins{g.skin};
+  for (const uint32_t n : g.also)
+    if (const int32_t s = scene.nodes[n].skin; s >= 0 && std::find(skins.begin(), skins.end(), uint32_t(s)) == skins.end())
+      skins.push_back(uint32_t(s));
+  return skins;
+}
+
+// The skinned simplifier's options for a group's skins: their poses as the mode needs them. Houle's
+// one pose is the first skin's; multipose takes `pose_count` of every skin, so that a crowd's chain
+// holds in the poses of each skeleton drawing it (another clip, other proportions), their joints
+// cut to the fewest any skin has (the mesh uses no more).
+SkinSimplifyOptions skin_options(const Scene& scene, const std::vector<uint32_t>& skins, SkinMode mode, uint32_t pose_count) {
   SkinSimplifyOptions so;
   so.mode = mode;
   if (mode == SkinMode::houle) {
-    so.poses = {joint_matrices(scene, skin, world_matrices(scene, mid_range_pose(scene)))};
+    so.poses = {joint_matrices(scene, skins[0], world_matrices(scene, mid_range_pose(scene)))};
   } else if (mode == SkinMode::multipose) {
-    so.poses = sample_poses(scene, skin, pose_count);
+    for (const uint32_t skin : skins) {
+      std::vector<std::vector<mat4>> poses = sample_poses(scene, skin, pose_count);
+      so.poses.insert(so.poses.end(), std::make_move_iterator(poses.begin()), std::make_move_iterator(poses.end()));
+    }
+    size_t joints = SIZE_MAX;
+    for (const std::vector<mat4>& pose : so.poses) joints = std::min(joints, pose.size());
+    for (std::vector<mat4>& pose : so.poses) pose.resize(joints);
   }
   return so;
 }
@@ -462,7 +480,7 @@ SkinSimplifyOptions skin_options(const Scene& scene, uint32_t skin, SkinMode mod
 // input itself.
 ProgressiveMesh skinned_progressive_mesh(const Scene& scene, const SkinnedGroup& g, SkinMode mode, uint32_t pose_count,
                                          SimplifyOptions simplify, uint64_t triangles) {
-  SkinSimplifyOptions so = skin_options(scene, g.skin, mode, pose_count);
+  SkinSimplifyOptions so = skin_options(scene, group_skins(scene, g), mode, pose_count);
   so.simplify = std::move(simplify);
   so.simplify.target_triangles = std::max<uint64_t>(1, triangles);
   so.simplify.record = true;
@@ -472,21 +490,21 @@ ProgressiveMesh skinned_progressive_mesh(const Scene& scene, const SkinnedGroup&
   return ProgressiveMesh(std::move(input), std::move(r.record));
 }
 
-// The skinned chains. The groups of one skin (a character's meshes, usually) share its simplifier,
-// so they are built in one batch (lod::build_lod_chains: small ones side by side); each chain is
+// The skinned chains. The groups of the same skins (a character's meshes, usually) share their
+// simplifier, so they are built in one batch (lod::build_lod_chains: small ones side by side); each chain is
 // what it would be alone.
 std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<SkinnedGroup>& groups, SkinMode mode,
                                        uint32_t pose_count, const LodOptions& base,
                                        const std::function<void(double)>& progress) {
   if (pose_count == 0) throw_usage("--poses must be at least 1");
-  std::map<uint32_t, std::vector<size_t>> by_skin;  // skin -> its groups, in order
-  uint64_t total = 0, done = 0;                     // triangles
+  std::map<std::vector<uint32_t>, std::vector<size_t>> by_skin;  // skins -> their groups, in order
+  uint64_t total = 0, done = 0;                                  // triangles
   for (size_t k = 0; k < groups.size(); ++k) {
-    by_skin[groups[k].skin].push_back(k);
+    by_skin[group_skins(scene, groups[k])].push_back(k);
     for (const uint32_t p : groups[k].primitives) total += scene.primitives[p].mesh.triangle_count();
   }
   std::vector<ChainReport> reports(groups.size());
-  for (const auto& [skin, batch] : by_skin) {
+  for (const auto& [skins, batch] : by_skin) {
     std::vector<Joined> joined;
     joined.reserve(batch.size());  // (no reallocation: the pointers below stay valid)
     std::vector<const Mesh*> meshes;
@@ -498,7 +516,7 @@ std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<Ski
       triangles += meshes.back()->triangle_count();
     }
     LodOptions options = base;
-    options.simplifier = skinned_simplifier(skin_options(scene, skin, mode, pose_count));
+    options.simplifier = skinned_simplifier(skin_options(scene, skins, mode, pose_count));
     options.progress = [&](double f) { progress((double(done) + f * double(triangles)) / double(std::max<uint64_t>(1, total))); };
     std::vector<LodChain> chains = build_lod_chains(meshes, options);
     for (size_t i = 0; i < batch.size(); ++i) {
@@ -848,7 +866,7 @@ Command register_lod(CLI::App& root) {
   app->add_option("--attributes", o->attributes, "Attribute weights, e.g. normal=1,uv=1,color=1");
   app->add_option("--skin-mode", o->skin_mode,
                  "Skinned glTF input: houle, subset or multipose (default: quadrics over --poses poses of every clip)");
-  app->add_option("--poses", o->poses, "Skinned input, multipose mode: poses sampled over the clips (default 16)");
+  app->add_option("--poses", o->poses, "Skinned input, multipose mode: poses sampled over the clips, per skin drawing the mesh (default 16)");
   app->add_option("--lpm", o->lpm, "Also write a progressive mesh (.lpm) down to the coarsest level (skinned input: multipose or subset mode, one skinned mesh)");
   app->add_option("--threads", o->threads, "Worker threads (0: all); the output does not depend on it");
   app->add_flag("--force", o->force, "Allow writing over the input file");
