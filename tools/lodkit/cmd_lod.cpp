@@ -491,8 +491,8 @@ ProgressiveMesh skinned_progressive_mesh(const Scene& scene, const SkinnedGroup&
 }
 
 // The skinned chains. The groups of the same skins (a character's meshes, usually) share their
-// simplifier, so they are built in one batch (lod::build_lod_chains: small ones side by side); each chain is
-// what it would be alone.
+// simplifier, so they are built in one batch (lod::build_lod_chains: small ones side by side); each
+// chain is what it would be alone.
 std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<SkinnedGroup>& groups, SkinMode mode,
                                        uint32_t pose_count, const LodOptions& base,
                                        const std::function<void(double)>& progress) {
@@ -1048,8 +1048,7 @@ Command register_lod(CLI::App& root) {
               for (const Primitive& p : out.primitives)
                 if (p.gltf_mesh < drawn.size()) drawn[p.gltf_mesh] = true;
               std::vector<bool> erase(out.nodes.size(), false);
-              for (size_t n = 0; n < earlier.size() && n < erase.size(); ++n)
-                {
+              for (size_t n = 0; n < earlier.size() && n < erase.size(); ++n) {
                 const int32_t drew = out.nodes[n].mesh;
                 erase[n] = earlier[n] && (drew < 0 || (size_t(drew) < drawn.size() && !drawn[size_t(drew)]));
               }
