@@ -4130,9 +4130,16 @@ WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, co
     throw_usage("cannot write glTF: position_bits is " + std::to_string(options.position_bits) + ", not 1 to 30 (Draco)");
   WriteReport report;
   std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots, options, report);
-  // MSFT_lod and instancing are declared only while a node still uses them.
-  for (const std::string ext : {"MSFT_lod", gpu_instancing})
-    if (std::none_of(model.nodes.begin(), model.nodes.end(), [&](const tg::Node& n) { return n.extensions.count(ext) > 0; }))
+  // MSFT_lod, instancing and visibility are declared only while a node still uses them (a clip
+  // switching a node's visibility uses it too).
+  const bool switched = std::any_of(model.animations.begin(), model.animations.end(), [](const tg::Animation& anim) {
+    return std::any_of(anim.channels.begin(), anim.channels.end(), [](const tg::AnimationChannel& ch) {
+      return channel_pointer(ch).find(std::string("/extensions/") + node_visibility + "/") != std::string::npos;
+    });
+  });
+  for (const std::string ext : {"MSFT_lod", gpu_instancing, node_visibility})
+    if (!(ext == node_visibility && switched) &&
+        std::none_of(model.nodes.begin(), model.nodes.end(), [&](const tg::Node& n) { return n.extensions.count(ext) > 0; }))
       std::erase(model.extensionsUsed, ext), std::erase(model.extensionsRequired, ext);
   // So is KHR_animation_pointer (the reader makes a node property's pointer a core channel).
   if (std::none_of(model.animations.begin(), model.animations.end(), [](const tg::Animation& anim) {

@@ -1511,6 +1511,16 @@ TEST(CliLod, VisibilitySwitchesKeepTheirMeshesBelowThem) {
   doc["extensionsUsed"] = {"KHR_node_visibility", "KHR_animation_pointer"};
   test::write_bytes(dir / "switch.glb", test::glb_bytes(glb));
   test::expect_valid_gltf({dir / "switch.glb"});
+  {
+    // The switch alone, no node with the extension: written again, the document still declares it.
+    test::Glb blink = glb;
+    blink.doc["nodes"][1].erase("extensions");
+    test::write_bytes(dir / "blink.glb", test::glb_bytes(blink));
+    write_scene(read_scene(dir / "blink.glb"), dir / "blink-again.glb");
+    test::expect_valid_gltf({dir / "blink-again.glb"});
+    const nlohmann::json used = test::glb_json(dir / "blink-again.glb")["extensionsUsed"];
+    EXPECT_EQ(std::count(used.begin(), used.end(), "KHR_node_visibility"), 1);
+  }
   Scene in = read_scene(dir / "switch.glb");
   EXPECT_FALSE(in.nodes[0].has_visibility);
   EXPECT_TRUE(in.nodes[1].has_visibility);

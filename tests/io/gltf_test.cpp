@@ -642,7 +642,8 @@ TEST(GltfInstancing, EveryInstanceIsReadPlacedAndKept) {
 
 // KHR_node_visibility: a triangle drawn by a root and by its child (moved up by 2). Hidden, the
 // child leaves the root's triangle to flatten(); the root hidden takes both. The extension
-// survives a write; a `visible` that is not a boolean is refused, naming the node.
+// survives a write, and is no longer declared once no node has it; a `visible` that is not a
+// boolean is refused, naming the node.
 TEST(GltfRead, NodeVisibilityHidesTheNodeAndWhatIsBelowIt) {
   TempDir dir;
   const auto file = [](const Json& root_visibility, const Json& child_visibility) {
@@ -673,6 +674,15 @@ TEST(GltfRead, NodeVisibilityHidesTheNodeAndWhatIsBelowIt) {
   write_scene(scene, dir / "out.glb");
   EXPECT_EQ(test::glb_json(dir / "out.glb")["nodes"][1]["extensions"], test::glb_json(dir / "in.glb")["nodes"][1]["extensions"]);
   expect_bad_input(file(nullptr, "no"), "visible.glb", "nodes[1].extensions.KHR_node_visibility.visible must be true or false");
+  // The only node with the extension erased (lod::erase_nodes): the document no longer declares it.
+  test::write_bytes(dir / "in.glb", file(nullptr, false));
+  Scene lone = read_scene(dir / "in.glb");
+  ASSERT_EQ(erase_nodes(lone, {false, true}), (std::vector<int32_t>{0, -1}));
+  write_scene(lone, dir / "erased.glb");
+  test::expect_valid_gltf({dir / "erased.glb"});
+  EXPECT_EQ(test::glb_json(dir / "erased.glb").value("extensionsUsed", Json::array()), Json::array());
+  write_scene(read_scene(dir / "in.glb"), dir / "kept.glb");
+  EXPECT_EQ(test::glb_json(dir / "kept.glb")["extensionsUsed"], Json::array({"KHR_node_visibility"}));
 }
 
 // Visibility set in code is written: a hidden node of a Scene built without a source, a source node
