@@ -158,6 +158,11 @@ ChannelTarget channel_target(const tg::AnimationChannel& ch) {
     if (const PointerTarget t = split_pointer(pointer, list); t.index >= 0) return {list, t.index, std::string(t.rest)};
   return {};
 }
+// Whether a channel switches a node's KHR_node_visibility (a KHR_animation_pointer to
+// "/nodes/N/extensions/KHR_node_visibility/...").
+bool switches_visibility(const ChannelTarget& t) {
+  return t.list == "nodes" && t.property.starts_with(std::string("extensions/") + node_visibility + "/");
+}
 // Points a channel at another node or mesh (`list` as channel_target gave), the property kept.
 void retarget_channel(tg::AnimationChannel& ch, std::string_view list, int index) {
   if (ch.target_node >= 0) {
@@ -1220,8 +1225,7 @@ class SceneBuilder {
           continue;  // (any other path: an extension's target, kept in the source only)
         }
         const ChannelTarget t = channel_target(channel);
-        if (t.list == "nodes" && t.property.starts_with(std::string("extensions/") + node_visibility + "/") &&
-            size_t(t.index) < scene.nodes.size())
+        if (switches_visibility(t) && size_t(t.index) < scene.nodes.size())
           scene.nodes[size_t(t.index)].has_visibility = true;
         if (t.list != "meshes" || t.property != "weights") continue;
         std::optional<AnimationChannel> keys;  // decoded once a node draws the mesh
@@ -4065,17 +4069,8 @@ std::vector<int32_t> erase_nodes(Scene& scene, const std::vector<bool>& erase) {
   for (size_t n = 0; n < sources; ++n)
     if (!gone[n]) nodes.push_back(std::move(doc.nodes[n]));
   doc.nodes = std::move(nodes);
-  for (tg::Node& node : doc.nodes) {
-    renumber(node.children, remap);
-    const auto lod = node.extensions.find("MSFT_lod");
-    if (lod == node.extensions.end() || !lod->second.IsObject() || !lod->second.Get("ids").IsArray()) continue;
-    tg::Value::Object ext = lod->second.Get<tg::Value::Object>();
-    tg::Value::Array ids;
-    for (const tg::Value& id : ext["ids"].Get<tg::Value::Array>())
-      if (!id.IsInt() || moved(id.Get<int>()) >= 0) ids.push_back(id.IsInt() ? tg::Value(int(moved(id.Get<int>()))) : id);
-    ext["ids"] = tg::Value(std::move(ids));
-    lod->second = tg::Value(std::move(ext));
-  }
+  // (MSFT_lod ids: the writer writes every node's from the scene's Node::lod_ids, renumbered below.)
+  for (tg::Node& node : doc.nodes) renumber(node.children, remap);
   for (tg::Scene& s : doc.scenes) renumber(s.nodes, remap);
   for (tg::Skin& skin : doc.skins) {
     renumber(skin.joints, remap);
@@ -4134,7 +4129,7 @@ WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, co
   // switching a node's visibility uses it too).
   const bool switched = std::any_of(model.animations.begin(), model.animations.end(), [](const tg::Animation& anim) {
     return std::any_of(anim.channels.begin(), anim.channels.end(), [](const tg::AnimationChannel& ch) {
-      return channel_pointer(ch).find(std::string("/extensions/") + node_visibility + "/") != std::string::npos;
+      return switches_visibility(channel_target(ch));
     });
   });
   for (const std::string ext : {"MSFT_lod", gpu_instancing, node_visibility})

@@ -1042,7 +1042,7 @@ Command register_lod(CLI::App& root) {
             const size_t first_separate = chains.size() - separate.size();
             // An earlier run's chains (lod on its own output): the nodes whose meshes the new chains
             // replace go, save those the new levels go below or take morph weights from.
-            std::vector<std::vector<Node::GpuInstance>> instances(out.nodes.size());  // (of nodes that may go)
+            std::vector<std::vector<Node::GpuInstance>> instances(out.nodes.size());  // (of separate meshes' nodes, which may go)
             {
               std::vector<bool> drawn(out.gltf_mesh_count, false);
               for (const Primitive& p : out.primitives)
@@ -1057,7 +1057,8 @@ Command register_lod(CLI::App& root) {
                   if (n >= 0) erase[size_t(n)] = false;
               for (size_t c = first_separate; c < chains.size(); ++c)
                 for (const int32_t parent : separate_parents[c - first_separate]) erase[size_t(parent)] = false;
-              for (size_t n = 0; n < erase.size(); ++n) instances[n] = out.nodes[n].gpu_instances;
+              for (const SeparatePart& part : separate)
+                for (const int32_t n : part.nodes) instances[size_t(n)] = out.nodes[size_t(n)].gpu_instances;
               const std::vector<int32_t> remap = erase_nodes(out, erase);
               for (StaticChain& c : chains)
                 for (int32_t& n : c.targets.nodes)
