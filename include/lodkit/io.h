@@ -130,7 +130,7 @@ struct Node {
   std::string name;
   int32_t parent = -1;
   std::vector<int32_t> children;
-  int32_t mesh = -1;  // glTF mesh index
+  int32_t mesh = -1;  // glTF mesh index (a source node written back takes a new mesh, not another of the source's)
   int32_t skin = -1;
   // Local transform: `matrix` (column-major) when has_matrix, else T * R * S.
   bool has_matrix = false;

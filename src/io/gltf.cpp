@@ -3523,8 +3523,8 @@ void take_morph_weights(tg::Model& model, const Scene& scene, const std::vector<
 // level): primitives past the source's meshes become new meshes (with the source's materials),
 // nodes past the source's nodes are appended (name, transform, mesh, skin, GPU instances, MSFT_lod,
 // visibility and extras; a child of its parent, in the default scene if Scene::roots lists it), and
-// MSFT_lod ids, visibility and extras set on the source's own nodes are applied. Everything else of
-// the source stays as it was.
+// MSFT_lod ids, visibility, extras and a new mesh set on the source's own nodes are applied.
+// Everything else of the source stays as it was.
 void add_to_source(tg::Model& model, const Scene& scene) {
   const size_t source_meshes = model.meshes.size();
   for (size_t i = 0; i < scene.primitives.size(); ++i) {
@@ -3548,17 +3548,23 @@ void add_to_source(tg::Model& model, const Scene& scene) {
   if (scene.nodes.size() < source_nodes) return;  // a scene that lost nodes adds none
   tg::Buffer new_data;  // new nodes' instances and merged weight clips
   MergedSamplers merged_samplers;
+  const auto known_mesh = [&](size_t i, int32_t mesh) {
+    if (size_t(mesh) >= model.meshes.size()) throw_usage("cannot write glTF: nodes[" + str(i) + "] uses a mesh the document does not have");
+    return int(mesh);
+  };
   for (size_t i = 0; i < scene.nodes.size(); ++i) {
     const Node& in = scene.nodes[i];
     if (i < source_nodes) {
+      // A source node may draw a new mesh instead of its own (lodkit lod on its own output gives an
+      // earlier first level the new one; its weights and their clips stay, fitted to the new targets).
+      if (in.mesh >= int32_t(source_meshes)) model.nodes[i].mesh = known_mesh(i, in.mesh);
       set_node_extensions(model, in, model.nodes[i]);
       continue;
     }
     tg::Node node;
     node.name = valid_utf8(in.name);
     if (in.mesh >= 0) {
-      if (size_t(in.mesh) >= model.meshes.size()) throw_usage("cannot write glTF: nodes[" + str(i) + "] uses a mesh the document does not have");
-      node.mesh = in.mesh;
+      node.mesh = known_mesh(i, in.mesh);
       if (in.skin >= 0) {
         if (size_t(in.skin) >= model.skins.size()) throw_usage("cannot write glTF: nodes[" + str(i) + "] uses a skin the document does not have");
         node.skin = in.skin;

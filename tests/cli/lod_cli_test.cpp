@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <set>
 #include <tuple>
@@ -50,18 +51,24 @@ std::vector<size_t> level_nodes(const nlohmann::json& doc) {
   return out;
 }
 
-// A glTF document's node structure: per node its name, children, MSFT_lod ids, whether it draws a
-// mesh and whether it is instanced; and the default scene's roots. (What lod on its own output
-// must give as lod once gives it.)
+// A glTF document's node structure, whatever the order of its nodes: the default scene's roots, each
+// with its name, whether it draws a mesh and whether it is instanced, its MSFT_lod levels and its
+// children, so described; and how many nodes there are. (What lod on its own output must give as
+// lod once gives it.)
 nlohmann::json node_structure(const nlohmann::json& doc) {
-  nlohmann::json nodes = nlohmann::json::array();
-  for (const nlohmann::json& node : doc["nodes"]) {
+  const std::function<nlohmann::json(size_t)> describe = [&](size_t n) {
+    const nlohmann::json& node = doc["nodes"][n];
     const nlohmann::json extensions = node.value("extensions", nlohmann::json::object());
-    nodes.push_back({node.value("name", ""), node.value("children", nlohmann::json::array()),
-                     extensions.contains("MSFT_lod") ? extensions["MSFT_lod"]["ids"] : nlohmann::json::array(),
-                     node.contains("mesh"), extensions.contains("EXT_mesh_gpu_instancing")});
-  }
-  return {{"nodes", nodes}, {"roots", doc["scenes"][doc.value("scene", 0)]["nodes"]}};
+    nlohmann::json levels = nlohmann::json::array(), children = levels;
+    if (extensions.contains("MSFT_lod"))
+      for (const size_t id : extensions["MSFT_lod"]["ids"]) levels.push_back(describe(id));
+    for (const size_t child : node.value("children", std::vector<size_t>{})) children.push_back(describe(child));
+    return nlohmann::json{node.value("name", ""), node.contains("mesh"), extensions.contains("EXT_mesh_gpu_instancing"), levels,
+                          children};
+  };
+  nlohmann::json roots = nlohmann::json::array();
+  for (const size_t root : doc["scenes"][doc.value("scene", 0)]["nodes"]) roots.push_back(describe(root));
+  return {{"nodes", doc["nodes"].size()}, {"roots", roots}};
 }
 
 TEST(CliLod, WritesAValidMsftLodChain) {
@@ -699,6 +706,31 @@ TEST(CliLod, StaticLevelsKeepOneNodesMorphTargets) {
     }
     EXPECT_EQ(channels, 1u);
   }
+  // lod on that chain: the nodes lod once wrote, each level's weights driven by the clip as before:
+  // with geomorphs, level 0's again the clip's then 0; without, the clip's alone (the earlier first
+  // level, which holds the weights and clip, is the new one).
+  for (const bool morph : {true, false}) {
+    SCOPED_TRACE(morph);
+    std::vector<std::string> args = {"lod", (dir / "geomorph.glb").string(), "-o", (dir / "relod.glb").string(), "--ratios",
+                                     "1,0.5"};
+    if (morph) args.push_back("--morph");
+    ASSERT_EQ(test::run_cli(args).exit_code, 0);
+    test::expect_valid_gltf({dir / "relod.glb"});
+    const nlohmann::json rdoc = glb_json(dir / "relod.glb");
+    EXPECT_EQ(node_structure(rdoc), node_structure(glb_json(dir / "geomorph.glb")));
+    const std::vector<size_t> relod_levels = level_nodes(rdoc);
+    ASSERT_EQ(relod_levels.size(), 2u);
+    for (size_t i = 0; i < 2; ++i) {
+      const size_t n = relod_levels[i];
+      ASSERT_EQ(weight_channels(rdoc, 0, n), 1u) << n;
+      for (const auto& channel : rdoc["animations"][0]["channels"]) {
+        if (channel["target"]["path"] != "weights" || channel["target"]["node"] != n) continue;
+        const nlohmann::json& sampler = rdoc["animations"][0]["samplers"][channel["sampler"].get<size_t>()];
+        const std::vector<float> weights = i == 0 && morph ? std::vector<float>{0, 0, 1, 0} : std::vector<float>{0, 1};
+        EXPECT_EQ(test::glb_floats(dir / "relod.glb", sampler["output"]), weights) << n;
+      }
+    }
+  }
   // lodkit simplify on that chain: each level it changes loses its geomorph (stale: it moved the
   // old vertices), but keeps the input's blend shape, carried to its new vertices, and the clip then
   // drives one weight per key. Level 0 was the input torus, so its new vertices' offsets name points
@@ -1207,9 +1239,9 @@ TEST(CliLod, AMeshDrawnByManyNodesGetsOneChain) {
   const Mesh before = flatten(read_scene(dir / "many.glb")), after = flatten(out);
   EXPECT_EQ(after.triangle_count(), before.triangle_count());
   EXPECT_EQ(points_off(after, before, 1e-4), 0u);
-  // lod on its own output: the earlier coarser levels and the sphere's chain go. The torus morphs,
-  // and its first levels' weights drive it now (those of a, b and c went with their meshes): they
-  // stay, each the parent of the new levels. Level 0 still draws the input.
+  // lod on its own output: the earlier coarser levels and the sphere's chain go, and the nodes lod
+  // once wrote stay. The torus morphs, and its first levels' weights drive it now (those of a, b
+  // and c went with their meshes): each is the new first level. Level 0 still draws the input.
   const auto lod_again = [&](const char* from, const char* to) {
     const test::RunResult again =
         test::run_cli({"lod", (dir / from).string(), "-o", (dir / to).string(), "--ratios", "1,0.25", "--json"});
@@ -1220,15 +1252,14 @@ TEST(CliLod, AMeshDrawnByManyNodesGetsOneChain) {
     EXPECT_EQ(points_off(twice, before, 1e-4), 0u);
     return nlohmann::json::parse(again.out);
   };
-  EXPECT_EQ(lod_again("lod.glb", "again.glb")["instanced"][0]["node"], "a_LOD0, b_LOD0, c_LOD0");
+  EXPECT_EQ(lod_again("lod.glb", "again.glb")["instanced"][0]["node"], "a, b, c");
   const nlohmann::json once = glb_json(dir / "lod.glb"), twice = glb_json(dir / "again.glb");
-  EXPECT_EQ(twice["nodes"].size(), once["nodes"].size() + 3);
+  EXPECT_EQ(node_structure(twice), node_structure(once));
   std::vector<std::string> empty;  // nodes that draw nothing and have no children
   for (const nlohmann::json& node : twice["nodes"])
     if (!node.contains("mesh") && !node.contains("children")) empty.push_back(node["name"]);
   EXPECT_EQ(empty, std::vector<std::string>{"ball"});
-  // Without morph targets, the new levels go below a, b and c in place of the old: the nodes lod
-  // once wrote.
+  // Without morph targets, the new levels go below a, b and c in place of the old (which go).
   input.primitives[0].targets.clear();
   write_scene(input, dir / "still.glb");
   ASSERT_EQ(test::run_cli({"lod", (dir / "still.glb").string(), "-o", (dir / "still-lod.glb").string(), "--ratios", "1,0.25"}).exit_code, 0);
@@ -1465,6 +1496,15 @@ TEST(CliLod, ARigidGroupMergesItsNodesMorphTargets) {
     EXPECT_EQ(ka, kb);
     EXPECT_EQ(ka[1].size(), 2 * ka[0].size());  // two weights a key: both nodes'
   }
+  // lod on its own output: the nodes lod once wrote, each level's weights driven as before (its
+  // first level the earlier one, which holds them).
+  lod("carried-lod.glb", "again.glb");
+  const nlohmann::json c = glb_json(dir / "again.glb");
+  EXPECT_EQ(node_structure(c), node_structure(b));
+  const std::vector<size_t> lc = level_nodes(c);
+  ASSERT_EQ(lc.size(), 2u);
+  for (size_t i = 0; i < 2; ++i)
+    EXPECT_EQ(weight_keys(dir / "again.glb", c, lc[i]), weight_keys(dir / "carried-lod.glb", b, lb[i])) << i;
 }
 
 // KHR_node_visibility: a torus its node hides ("hidden"), and a lamp and a bulb below a node a clip

@@ -239,15 +239,22 @@ std::vector<bool> earlier_chain_nodes(const Scene& scene) {
   return earlier;
 }
 
-// Where the levels of a separate mesh that node `n` draws go: below `n`, or, when `n` is the first
-// level an earlier run put below its parent (`earlier`, untransformed, childless), below that parent
-// in its stead, as the first run put them, so that running lod again does not nest chains. Not when
-// its morph weights drive the mesh (`morphing`): the new levels take them from it.
-int32_t levels_parent(const Scene& scene, const std::vector<bool>& earlier, int32_t n, bool morphing) {
+// Whether node `n` is a first level an earlier run made (`earlier`) where that run put it
+// (untransformed, childless): lod on its own output puts the new chain in its place rather than
+// below it, so that chains do not nest. The node goes, unless it lends the chain its morph weights,
+// which only a node of the document can hold: then it becomes the new first level (ChainPlace::first).
+bool earlier_level_in_place(const Scene& scene, const std::vector<bool>& earlier, int32_t n) {
   const Node& node = scene.nodes[size_t(n)];
   const bool placed = node.has_matrix || node.translation != float3{} || node.rotation != float4{0, 0, 0, 1} ||
                       node.scale != float3{1, 1, 1} || !node.children.empty();
-  return earlier[size_t(n)] && node.parent >= 0 && !placed && !morphing ? node.parent : n;
+  return earlier[size_t(n)] && !placed;
+}
+
+// Where the levels of a separate mesh that node `n` draws go: below `n`, or below its parent when it
+// is an earlier run's first level in place, as that run put them.
+int32_t levels_parent(const Scene& scene, const std::vector<bool>& earlier, int32_t n) {
+  const int32_t parent = scene.nodes[size_t(n)].parent;
+  return parent >= 0 && earlier_level_in_place(scene, earlier, n) ? parent : n;
 }
 
 // The document static chains go into: the glTF `source` (flattened into the chains' inputs, so
@@ -268,13 +275,16 @@ Scene chain_document(const Scene* source, const std::vector<std::string>& materi
 // Where a chain's nodes go: named `prefix`LODi, the first under `parent` (a new root when -1), each
 // drawn once per instance of `instances` (a chain in its mesh's own space, for a node drawing that
 // mesh), with the morph weights of node `weights_of` (-1: the chain's own morphing nodes'). With
-// `meshes` set, the levels' glTF meshes are those an earlier add_chain of the chain returned.
+// `meshes` set, the levels' glTF meshes are those an earlier add_chain of the chain returned. With
+// `first` set, that node (an earlier run's first level, in place, lending its weights: it keeps
+// them, its clips, name and place) is the first level, and the others take its weights.
 struct ChainPlace {
   std::string prefix;
   int32_t parent = -1;
   std::vector<Node::GpuInstance> instances;
   int32_t weights_of = -1;
   std::optional<uint32_t> meshes;
+  int32_t first = -1;
 };
 
 // Appends a chain to a chain_document: one new glTF mesh per level with a primitive per material
@@ -340,24 +350,31 @@ uint32_t add_chain(Scene& scene, const ChainReport& r, const LevelTargets& targe
       add(std::move(prim), part.material);
     }
   }
+  const bool reuse = place.first >= 0;
+  const auto level_node = [&](size_t i) { return i == 0 && reuse ? place.first : node_base + int32_t(i) - int32_t(reuse); };
   for (size_t i = 0; i < chain.levels.size(); ++i) {
     Node node;
     node.name = fmt::format("{}LOD{}", place.prefix, i);
     node.mesh = int32_t(mesh_base + i);
     node.gpu_instances = place.instances;
     nlohmann::json extras = {{"lodkit", level_facts(r, i)}};
-    if (i < chain.morphs.size())
-      extras["LODKIT_geomorph"] = {{"target", targets.at(i).size()}, {"to_node", node_base + int32_t(i) + 1}};
+    if (i < chain.morphs.size()) extras["LODKIT_geomorph"] = {{"target", targets.at(i).size()}, {"to_node", level_node(i + 1)}};
     if (!targets.at(i).empty()) node.morph_weights_of = place.weights_of >= 0 ? std::vector<int32_t>{place.weights_of} : targets.nodes;
     if (i == 0) {
-      for (size_t k = 1; k < chain.levels.size(); ++k) node.lod_ids.push_back(node_base + int32_t(k));
+      for (size_t k = 1; k < chain.levels.size(); ++k) node.lod_ids.push_back(level_node(k));
       extras["MSFT_screencoverage"] = r.coverage;
       node.parent = place.parent;
     }
     node.extras_json = extras.dump();
+    if (i == 0 && reuse) {
+      Node& old = scene.nodes[size_t(place.first)];
+      old.mesh = node.mesh, old.gpu_instances = std::move(node.gpu_instances), old.lod_ids = std::move(node.lod_ids);
+      old.extras_json = std::move(node.extras_json);
+      continue;
+    }
     scene.nodes.push_back(std::move(node));
   }
-  if (place.parent < 0) scene.roots.push_back(node_base);
+  if (place.parent < 0 && !reuse) scene.roots.push_back(node_base);
   return mesh_base;
 }
 
@@ -968,6 +985,7 @@ Command register_lod(CLI::App& root) {
             const size_t first_chain = reports.size();
             // A skinned character's props: a chain when there are triangles (the character alone
             // needs none); without skins, the input must have some.
+            int32_t static_first = -1;  // the node the static chain's first level takes over (ChainPlace::first)
             if (skinned.empty() ? separate.empty() || mesh.triangle_count() > 0 : mesh.triangle_count() > 0) {
               validate(mesh, o->input);
               if (scene.source)
@@ -975,12 +993,18 @@ Command register_lod(CLI::App& root) {
               else
                 chains.push_back(prepare_static(std::move(mesh), nullptr, *o));
               chains.back().streams = std::move(static_streams);
+              // Its levels are roots: an earlier static chain's first level, lending it the weights alone.
+              const FlatMorphTargets& morph = chains.back().morph;
+              if (!morph.targets.empty() && morph.nodes.size() == 1 && morph.nodes[0] >= 0 &&
+                  scene.nodes[size_t(morph.nodes[0])].parent < 0 && earlier_level_in_place(scene, earlier, morph.nodes[0]))
+                static_first = morph.nodes[0];
             }
             // Each separate part: its own chain in its own space (a mesh drawn once by its first
             // node, untransformed; a rigid group drawn by its nodes below its frame, untransformed),
             // and nothing else.
             std::vector<Node> solo = scene.nodes;
             std::vector<std::vector<int32_t>> separate_parents;  // per part, the frame or per drawing node levels_parent
+            std::vector<std::vector<int32_t>> separate_firsts;   // and the node its first level takes over, or -1
             for (Node& node : solo) node.mesh = -1;
             for (const SeparatePart& m : separate) {
               const int32_t top = m.frame >= 0 ? m.frame : m.nodes[0];
@@ -997,8 +1021,11 @@ Command register_lod(CLI::App& root) {
               // Named after the nodes its levels go below (a frame, or each node drawing it).
               const bool morphing = !chains.back().morph.targets.empty();
               std::vector<int32_t>& parents = separate_parents.emplace_back();
-              for (const int32_t k : m.frame >= 0 ? std::vector<int32_t>{m.frame} : m.nodes)
-                parents.push_back(m.frame >= 0 ? k : levels_parent(scene, earlier, k, morphing));
+              std::vector<int32_t>& firsts = separate_firsts.emplace_back();
+              for (const int32_t k : m.frame >= 0 ? std::vector<int32_t>{m.frame} : m.nodes) {
+                parents.push_back(m.frame >= 0 ? k : levels_parent(scene, earlier, k));
+                firsts.push_back(morphing && parents.back() != k ? k : -1);
+              }
               std::vector<std::string> names;
               for (const int32_t k : parents) names.push_back(node_label(scene.nodes, size_t(k)));
               chains.back().report.node = fmt::format("{}", fmt::join(names, ", "));
@@ -1055,8 +1082,11 @@ Command register_lod(CLI::App& root) {
               for (const StaticChain& c : chains)
                 for (const int32_t n : c.targets.nodes)
                   if (n >= 0) erase[size_t(n)] = false;
-              for (size_t c = first_separate; c < chains.size(); ++c)
+              for (size_t c = first_separate; c < chains.size(); ++c) {
                 for (const int32_t parent : separate_parents[c - first_separate]) erase[size_t(parent)] = false;
+                for (const int32_t first : separate_firsts[c - first_separate])
+                  if (first >= 0) erase[size_t(first)] = false;
+              }
               for (const SeparatePart& part : separate)
                 for (const int32_t n : part.nodes) instances[size_t(n)] = out.nodes[size_t(n)].gpu_instances;
               const std::vector<int32_t> remap = erase_nodes(out, erase);
@@ -1065,8 +1095,13 @@ Command register_lod(CLI::App& root) {
                   if (n >= 0) n = remap[size_t(n)];
               for (std::vector<int32_t>& parents : separate_parents)
                 for (int32_t& n : parents) n = remap[size_t(n)];
+              for (std::vector<int32_t>& firsts : separate_firsts)
+                for (int32_t& n : firsts)
+                  if (n >= 0) n = remap[size_t(n)];
+              if (static_first >= 0) static_first = remap[size_t(static_first)];
             }
-            for (size_t c = 0; c < first_separate; ++c) add_chain(out, reports[first_chain + c], chains[c].targets, chains[c].streams, {});
+            for (size_t c = 0; c < first_separate; ++c)
+              add_chain(out, reports[first_chain + c], chains[c].targets, chains[c].streams, {.first = static_first});
             for (size_t c = first_separate; c < chains.size(); ++c) {
               const SeparatePart& part = separate[c - first_separate];
               const std::vector<int32_t>& parents = separate_parents[c - first_separate];
@@ -1079,9 +1114,10 @@ Command register_lod(CLI::App& root) {
               // its stead, levels_parent), with its instances and morph weights.
               std::optional<uint32_t> meshes;
               for (size_t k = 0; k < part.nodes.size(); ++k) {
-                const int32_t parent = parents[k];
+                const int32_t parent = parents[k], first = separate_firsts[c - first_separate][k];
                 meshes = add_chain(out, reports[first_chain + c], chains[c].targets, chains[c].streams,
-                                   {node_label(out.nodes, size_t(parent)) + "_", parent, instances[size_t(part.nodes[k])], parent, meshes});
+                                   {node_label(out.nodes, size_t(parent)) + "_", parent, instances[size_t(part.nodes[k])],
+                                    first >= 0 ? first : parent, meshes, first});
               }
             }
             written = write_scene(out, o->output, o->gltf);
