@@ -137,13 +137,23 @@ struct SkinSimplifyOptions {
   SkinMode mode = SkinMode::multipose;
   SimplifyOptions simplify;  // targets, safety, threads; the metric applies to houle and subset
   // Joint matrices of the poses (lod::joint_matrices, lod::sample_poses). multipose sums its quadrics
-  // over all of them; houle simplifies in poses[0]; subset ignores them.
+  // over all of them (rigid copies once, lod::merge_rigid_poses); houle simplifies in poses[0];
+  // subset ignores them.
   std::vector<std::vector<mat4>> poses;
   std::vector<float> pose_weights;  // multipose: importance per pose; empty: all alike
   // multipose: collapsing an edge whose ends have disjoint influences costs as much as moving by
   // bone_weight times its length (half the L1 distance of the weights scales it).
   float bone_weight = 1.0f;
 };
+
+// Poses that shape `mesh` alike, merged: a pose that is an earlier one moved as a whole by one
+// rigid motion, in every joint the mesh weights (within 1e-5, relative), goes, and its weight (1
+// each when `weights` is empty) is added to that pose's. A crowd's copies of one skeleton playing
+// one clip, or the rest poses of clips that move none of its joints, then count once. Multipose's
+// costs are distances, which a rigid motion keeps, so the simplification is the same (to rounding)
+// for the cost of the poses kept; simplify_skinned merges them. `weights` is left empty when no pose
+// goes. Returns how many went.
+size_t merge_rigid_poses(const Mesh& mesh, std::vector<std::vector<mat4>>& poses, std::vector<float>& weights);
 
 // Simplifies a skinned mesh given in bind space (positions, normals, joints and weights) so that it
 // keeps playing the skeleton's clips. The result is in bind space, and every vertex has at most four

@@ -114,6 +114,75 @@ const char* skin_mode_name(SkinMode mode) {
   return "?";
 }
 
+size_t merge_rigid_poses(const Mesh& mesh, std::vector<std::vector<mat4>>& poses, std::vector<float>& weights) {
+  if (!weights.empty() && weights.size() != poses.size()) throw_usage("merge_rigid_poses: one weight per pose, or none");
+  // The joints the mesh weights (the others may move as they like).
+  std::vector<uint32_t> used;
+  {
+    std::vector<bool> weighted;
+    const auto note = [&](const std::vector<ushort4>& joints, const std::vector<float4>& w) {
+      for (size_t v = 0; v < joints.size() && v < w.size(); ++v) {
+        const float wv[4] = {w[v].x, w[v].y, w[v].z, w[v].w};
+        for (int k = 0; k < 4; ++k) {
+          if (wv[k] == 0) continue;
+          if (joints[v][k] >= weighted.size()) weighted.resize(size_t(joints[v][k]) + 1, false);
+          weighted[joints[v][k]] = true;
+        }
+      }
+    };
+    note(mesh.joints, mesh.weights);
+    note(mesh.joints1, mesh.weights1);
+    for (uint32_t j = 0; j < weighted.size(); ++j)
+      if (weighted[j]) used.push_back(j);
+  }
+  for (const std::vector<mat4>& pose : poses)
+    if (!used.empty() && pose.size() <= used.back()) return 0;  // (simplify_skinned refuses these poses)
+  if (used.empty() || poses.size() < 2) return 0;
+  constexpr double tolerance = 1e-5;
+  // Whether pose b is pose a moved by one rigid motion T (taken from the first used joint).
+  const auto rigid_copy = [&](const std::vector<mat4>& a, const std::vector<mat4>& b) {
+    const mat4 t = multiply(b[used[0]], affine_inverse(a[used[0]]));
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) {
+        double dot = 0;  // columns i and k of T's linear part: orthonormal
+        for (int r = 0; r < 3; ++r) dot += double(t[size_t(4 * i + r)]) * t[size_t(4 * k + r)];
+        if (std::abs(dot - (i == k)) > tolerance) return false;
+      }
+    const double det = double(t[0]) * (double(t[5]) * t[10] - double(t[9]) * t[6]) -
+                       double(t[4]) * (double(t[1]) * t[10] - double(t[9]) * t[2]) +
+                       double(t[8]) * (double(t[1]) * t[6] - double(t[5]) * t[2]);
+    if (!(det > 0)) return false;
+    for (const uint32_t j : used) {
+      const mat4 moved = multiply(t, a[j]);
+      double size = 1;  // the entries' scale, for a relative tolerance
+      for (int e = 0; e < 16; ++e) size = std::max({size, std::abs(double(moved[size_t(e)])), std::abs(double(b[j][size_t(e)]))});
+      for (int e = 0; e < 16; ++e)
+        if (!(std::abs(double(moved[size_t(e)]) - b[j][size_t(e)]) <= tolerance * size)) return false;
+    }
+    return true;
+  };
+  std::vector<size_t> kept;  // indices into poses
+  std::vector<double> summed;
+  for (size_t p = 0; p < poses.size(); ++p) {
+    const double w = weights.empty() ? 1.0 : double(weights[p]);
+    size_t k = 0;
+    while (k < kept.size() && !rigid_copy(poses[kept[k]], poses[p])) ++k;
+    if (k < kept.size()) {
+      summed[k] += w;
+    } else {
+      kept.push_back(p);
+      summed.push_back(w);
+    }
+  }
+  const size_t gone = poses.size() - kept.size();
+  if (gone == 0) return 0;
+  std::vector<std::vector<mat4>> merged;
+  for (const size_t p : kept) merged.push_back(std::move(poses[p]));
+  poses = std::move(merged);
+  weights.assign(summed.begin(), summed.end());
+  return gone;
+}
+
 SimplifyResult simplify_skinned(const Mesh& mesh, const SkinSimplifyOptions& options) {
   const size_t joints = options.poses.empty() ? 0 : options.poses[0].size();
   for (const auto& pose : options.poses)
@@ -137,14 +206,17 @@ SimplifyResult simplify_skinned(const Mesh& mesh, const SkinSimplifyOptions& opt
       return r;
     }
     case SkinMode::multipose: {
-      collapse::MultiposeInput in;
-      in.poses = options.poses;
-      in.pose_weights = options.pose_weights;
-      in.bone_weight = options.bone_weight;
       // The engine's chosen influences come normalised, and the others are the input's: normalise
       // those first, so that the record replays on the normalised input (lod::normalize_influences).
       Mesh normalized = mesh;
       normalize_influences(normalized);
+      std::vector<std::vector<mat4>> poses = options.poses;
+      std::vector<float> weights = options.pose_weights;
+      merge_rigid_poses(normalized, poses, weights);
+      collapse::MultiposeInput in;
+      in.poses = poses;
+      in.pose_weights = weights;
+      in.bone_weight = options.bone_weight;
       return collapse::simplify_multipose(normalized, options.simplify, in);
     }
   }

@@ -160,6 +160,54 @@ TEST(SimplifySkinned, MultiposeIsBestOverTheRangeOfMotion) {
   EXPECT_LE(worst[2], worst[1]);
 }
 
+// Poses that are one another moved as a whole, rigidly (a crowd's skeletons in step), count once
+// with their weights summed; a scaled copy, a copy with one used joint moved, and other poses stay.
+// A joint no vertex weights may differ. The multi-pose simplification with the copies is the one
+// with the merged pose weighted twice, bit for bit.
+TEST(SimplifySkinned, RigidCopiesOfAPoseCountOnce) {
+  const Mesh m = arm(40, 12);
+  const mat4 moved = compose_trs({3, -2, 1}, {0, 0, std::sin(0.35f), std::cos(0.35f)}, {1, 1, 1});
+  const mat4 scaled = compose_trs({0, 0, 0}, {0, 0, 0, 1}, {2, 2, 2});
+  const auto times = [](const mat4& t, std::vector<mat4> pose) {
+    for (mat4& j : pose) j = multiply(t, j);
+    return pose;
+  };
+  std::vector<mat4> elbow_off = bent(0.5f);
+  elbow_off[1][12] += 0.01f;
+  std::vector<std::vector<mat4>> poses = {bent(0.5f), times(moved, bent(0.5f)), bent(1.5f), times(scaled, bent(0.5f)),
+                                          elbow_off, times(moved, bent(1.5f))};
+  std::vector<float> weights;
+  EXPECT_EQ(merge_rigid_poses(m, poses, weights), 2u);
+  ASSERT_EQ(poses.size(), 4u);
+  EXPECT_EQ(poses[0], bent(0.5f));
+  EXPECT_EQ(poses[1], bent(1.5f));
+  EXPECT_EQ(weights, (std::vector<float>{2, 2, 1, 1}));
+  // Given weights are summed; nothing merged leaves them as they were.
+  poses = {bent(0.5f), bent(1.0f), times(moved, bent(0.5f))};
+  weights = {0.25f, 1, 0.5f};
+  EXPECT_EQ(merge_rigid_poses(m, poses, weights), 1u);
+  EXPECT_EQ(weights, (std::vector<float>{0.75f, 1}));
+  poses = {bent(0.5f), bent(1.0f)};
+  weights.clear();
+  EXPECT_EQ(merge_rigid_poses(m, poses, weights), 0u);
+  EXPECT_TRUE(weights.empty());
+  // Only the upper arm weighted: the elbow's bend changes nothing.
+  Mesh upper = m;
+  for (float4& w : upper.weights) w = {1, 0, 0, 0};
+  poses = {bent(0.5f), bent(1.5f)};
+  EXPECT_EQ(merge_rigid_poses(upper, poses, weights), 1u);
+
+  SkinSimplifyOptions copies, merged;
+  copies.simplify.target_ratio = merged.simplify.target_ratio = 0.1f;
+  copies.poses = {bent(0.3f), times(moved, bent(0.3f)), bent(1.2f)};
+  merged.poses = {bent(0.3f), bent(1.2f)};
+  merged.pose_weights = {2, 1};
+  const SimplifyResult a = simplify_skinned(m, copies), b = simplify_skinned(m, merged);
+  EXPECT_EQ(a.mesh.indices, b.mesh.indices);
+  EXPECT_EQ(a.mesh.positions, b.mesh.positions);
+  EXPECT_EQ(a.error, b.error);
+}
+
 // A skinned chain built with the multi-pose simplifier, then the skeletal geomorph in several frames:
 // t = 0 is the skinned finer level, t = 1 puts every vertex exactly on its skinned target.
 TEST(SkinnedGeomorph, EndsAreTheSkinnedLevelsInAnyFrame) {
