@@ -13,6 +13,7 @@
 #   scripts/bench.sh instanced [RUNS=3]
 #   scripts/bench.sh turntable [RUNS=3]
 #   scripts/bench.sh parts [RUNS=3]
+#   scripts/bench.sh crowd [RUNS=3]
 #
 # io: loads a binary PLY and an OBJ of >= 3M triangles (bunny00.off subdivided 1->4) with lodkit and
 # with Assimp, each loader in its own process under /usr/bin/time -v; prints a markdown table of
@@ -75,6 +76,10 @@
 # then lodkit simplify --ratio 0.1 on the same scene the same way (lod::simplify_batch: each mesh on its
 # own, side by side) (bench/lod/parts.py); writes bench/results/parts.json.
 #
+# crowd: lodkit lod --poses 8 on the humanoid (lodkit_fixtures) drawn by 1, 2, 4, 8, 16 and 32 copies of
+# its skeleton playing its clips in step: median wall time and peak RSS, each as a ratio to the crowd
+# of one, whose chain every crowd's must be (bench/lod/crowd.py); writes bench/results/crowd.json.
+#
 # The build is the release preset (build/release); LODKIT_BENCH_BUILD=DIR uses another configured
 # build directory instead.
 set -euo pipefail
@@ -82,7 +87,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 usage() {
-  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5] | compress [RUNS=5] | morphs [RUNS=3] | instanced [RUNS=3] | turntable [RUNS=3] | parts [RUNS=3]" >&2
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5] | compress [RUNS=5] | morphs [RUNS=3] | instanced [RUNS=3] | turntable [RUNS=3] | parts [RUNS=3] | crowd [RUNS=3]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -312,7 +317,8 @@ area_compress() {
 # ---- instanced, turntable and parts: lod on a scene a Python script writes -----------------------
 # instanced: a forest, GPU instances against plain nodes (bench/lod/instanced.py); turntable: meshes
 # below one animated node, one group chain against one per mesh (bench/lod/turntable.py, corpus meshes);
-# parts: many small animated meshes, one chain each (and simplified each), one thread against all (bench/lod/parts.py).
+# parts: many small animated meshes, one chain each (and simplified each), one thread against all (bench/lod/parts.py);
+# crowd: one skinned mesh drawn by 1 to 32 skeletons in step, against the crowd of one (bench/lod/crowd.py).
 area_lod_scene() {
   local name=$1
   shift
@@ -321,6 +327,7 @@ area_lod_scene() {
   [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
   configure
   build_targets lodkit_cli
+  [ "$name" != crowd ] || build_targets lodkit_fixtures
   [ "$name" != turntable ] || [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
   echo
   machine_line
@@ -439,5 +446,6 @@ case $area in
   instanced) area_lod_scene instanced "$@" ;;
   turntable) area_lod_scene turntable "$@" ;;
   parts) area_lod_scene parts "$@" ;;
+  crowd) area_lod_scene crowd "$@" ;;
   *) usage ;;
 esac
