@@ -42,9 +42,11 @@ scripts/fetch-corpus.sh
 
 # The glTF tests' Node.js tools (npm registry), each at its lockfile's versions; skipped quietly
 # when npm is absent (the tests that need them then skip): Khronos' glTF validator, and a second
-# glTF reader (glTF-Transform with Google's draco3dgltf and meshoptimizer's decoders).
+# glTF reader (glTF-Transform with Google's draco3dgltf and meshoptimizer's decoders, and three.js's
+# GLTFLoader, a viewer's). Again when the lockfile is newer than the installed tree.
 for tool in gltf-validator gltf-loader; do
-  if command -v npm >/dev/null && [ ! -f "tests/$tool/node_modules/.package-lock.json" ]; then
+  installed="tests/$tool/node_modules/.package-lock.json"
+  if command -v npm >/dev/null && { [ ! -f "$installed" ] || [ "tests/$tool/package-lock.json" -nt "$installed" ]; }; then
     echo "setup: installing $tool (npm)"
     npm ci --prefix "tests/$tool" --silent --no-audit --no-fund >/dev/null
   fi
