@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
     const Mesh& mesh = c.scene.primitives[sp.primitive].mesh;
     const Frames frames = frames_of(c.scene, sp.skin);
     const std::vector<std::vector<mat4>> poses = sample_poses(c.scene, sp.skin, 16);
-    const std::vector<mat4> mid = joint_matrices(c.scene, sp.skin, world_matrices(c.scene, mid_range_pose(c.scene)));
+    const std::vector<mat4> mid = joint_matrices(c.scene, sp.skin, world_matrices(c.scene, mid_range_pose(c.scene, sp.skin)));
     float3 lo, hi;
     bounding_box(mesh, lo, hi);
     const double diagonal = std::sqrt(double(hi.x - lo.x) * (hi.x - lo.x) + double(hi.y - lo.y) * (hi.y - lo.y) +

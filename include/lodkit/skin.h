@@ -125,13 +125,16 @@ enum class SkinMode : uint8_t {
 };
 const char* skin_mode_name(SkinMode mode);  // "houle", "subset", "multipose"
 
-// Joint matrices of skin `skin` in `count` poses spread evenly over the time of every clip of the
-// scene, clip after clip (the rest pose alone when there is no clip).
+// Joint matrices of skin `skin` in `count` poses spread evenly over the time of the clips that
+// shape it, clip after clip: those that move one of its joints or a node between them (not another
+// character's clips, nor one that only carries the skeleton along). The rest pose alone when no
+// clip does.
 std::vector<std::vector<mat4>> sample_poses(const Scene& scene, uint32_t skin, uint32_t count);
-// A "mid-range" pose: per node, the mean of its local transforms over `samples` poses spread over
-// every clip (rotations averaged in one hemisphere, renormalised): each joint half way through its
-// range of motion. The rest pose when there is no clip.
-Pose mid_range_pose(const Scene& scene, uint32_t samples = 64);
+// A "mid-range" pose for skin `skin`: per node, the mean of its local transforms over `samples`
+// poses spread over the clips that shape it, as sample_poses's (rotations averaged in one
+// hemisphere, renormalised): each joint half way through its range of motion. The rest pose when
+// no clip shapes it.
+Pose mid_range_pose(const Scene& scene, uint32_t skin, uint32_t samples = 64);
 
 struct SkinSimplifyOptions {
   SkinMode mode = SkinMode::multipose;

@@ -82,12 +82,41 @@ SimplifyResult simplify_houle(const Mesh& mesh, const SkinSimplifyOptions& o) {
   return r;
 }
 
-// `count` moments spread over the scene's clips played one after another: the mid-points of equal
+// The clips that change the shape of skin `skin`: those with a channel that moves one of its
+// joints or a node between them (an ancestor of some of its joints, not of all). A clip that moves
+// none of them (another character's, or one that only carries the skeleton along) moves the skinned
+// mesh rigidly at most: its poses would teach the simplification nothing.
+std::vector<size_t> shaping_clips(const Scene& scene, uint32_t skin) {
+  const std::vector<int32_t>& joints = scene.skins[skin].joints;
+  std::vector<uint32_t> below(scene.nodes.size(), 0);  // per node, the joints it is or is above
+  std::vector<bool> joint(scene.nodes.size(), false);
+  for (const int32_t j : joints) {
+    if (j < 0 || size_t(j) >= scene.nodes.size() || joint[size_t(j)]) continue;
+    joint[size_t(j)] = true;
+    // (Bounded: the reader refuses cycles, and a path is at most every node.)
+    for (int32_t n = j, steps = 0; n >= 0 && size_t(n) < below.size() && size_t(steps) <= below.size(); n = scene.nodes[size_t(n)].parent, ++steps)
+      ++below[size_t(n)];
+  }
+  const uint32_t all = uint32_t(std::count(joint.begin(), joint.end(), true));
+  std::vector<size_t> clips;
+  for (size_t a = 0; a < scene.animations.size(); ++a)
+    for (const AnimationChannel& ch : scene.animations[a].channels) {
+      if (ch.path == AnimationPath::weights || ch.node < 0 || size_t(ch.node) >= below.size()) continue;
+      const size_t n = size_t(ch.node);
+      if (joint[n] || (below[n] > 0 && below[n] < all)) {
+        clips.push_back(a);
+        break;
+      }
+    }
+  return clips;
+}
+
+// `count` moments spread over `clips` of the scene played one after another: the mid-points of equal
 // steps (clips of zero length share the steps evenly instead). Needs at least one clip.
-std::vector<std::pair<size_t, float>> spread_over_clips(const Scene& scene, uint32_t count) {
+std::vector<std::pair<size_t, float>> spread_over_clips(const Scene& scene, const std::vector<size_t>& clips, uint32_t count) {
   std::vector<float> durations;
   double total = 0;
-  for (size_t a = 0; a < scene.animations.size(); ++a) total += durations.emplace_back(animation_duration(scene, a));
+  for (const size_t a : clips) total += durations.emplace_back(animation_duration(scene, a));
   std::vector<std::pair<size_t, float>> moments;
   for (uint32_t i = 0; i < count; ++i) {
     size_t clip = 0;
@@ -98,7 +127,7 @@ std::vector<std::pair<size_t, float>> spread_over_clips(const Scene& scene, uint
     } else {
       clip = size_t(i) * durations.size() / count;
     }
-    moments.emplace_back(clip, float(t));
+    moments.emplace_back(clips[clip], float(t));
   }
   return moments;
 }
@@ -348,11 +377,12 @@ std::vector<std::vector<mat4>> sample_poses(const Scene& scene, uint32_t skin, u
   if (count == 0) throw_usage("sample_poses: ask for at least one pose");
   std::vector<std::vector<mat4>> poses;
   const Pose rest = rest_pose(scene);
-  if (scene.animations.empty()) {
+  const std::vector<size_t> clips = shaping_clips(scene, skin);
+  if (clips.empty()) {
     poses.push_back(joint_matrices(scene, skin, world_matrices(scene, rest)));
     return poses;
   }
-  for (const auto& [clip, time] : spread_over_clips(scene, count)) {
+  for (const auto& [clip, time] : spread_over_clips(scene, clips, count)) {
     Pose pose = rest;
     sample_animation(scene, clip, time, pose);
     poses.push_back(joint_matrices(scene, skin, world_matrices(scene, pose)));
@@ -360,13 +390,15 @@ std::vector<std::vector<mat4>> sample_poses(const Scene& scene, uint32_t skin, u
   return poses;
 }
 
-Pose mid_range_pose(const Scene& scene, uint32_t samples) {
+Pose mid_range_pose(const Scene& scene, uint32_t skin, uint32_t samples) {
+  if (skin >= scene.skins.size()) throw_usage("mid_range_pose: skin " + std::to_string(skin) + " does not exist");
   Pose mean = rest_pose(scene);
-  if (scene.animations.empty() || samples == 0) return mean;
+  const std::vector<size_t> clips = shaping_clips(scene, skin);
+  if (clips.empty() || samples == 0) return mean;
   const size_t nodes = mean.translation.size();
   std::vector<double> t(3 * nodes, 0.0), s(3 * nodes, 0.0), q(4 * nodes, 0.0);
   const Pose rest = mean;
-  for (const auto& [clip, time] : spread_over_clips(scene, samples)) {
+  for (const auto& [clip, time] : spread_over_clips(scene, clips, samples)) {
     Pose pose = rest;
     sample_animation(scene, clip, time, pose);
     for (size_t n = 0; n < nodes; ++n) {

@@ -208,6 +208,39 @@ TEST(SimplifySkinned, RigidCopiesOfAPoseCountOnce) {
   EXPECT_EQ(a.error, b.error);
 }
 
+// Poses are sampled over the clips that shape the skin. A clip that spins a node outside the
+// skeleton, and one that carries the whole skeleton (its root's parent, at rest the identity),
+// change neither the sampled poses nor the mid-range pose, bit for bit; a clip that bends an elbow
+// does.
+TEST(SkinPoses, OnlyClipsThatShapeTheSkinAreSampled) {
+  const Scene base = fixtures::humanoid_scene();
+  const std::vector<std::vector<mat4>> poses = sample_poses(base, 0, 8);
+  const Pose mid = mid_range_pose(base, 0);
+  Scene scene = base;
+  const int32_t prop = int32_t(scene.nodes.size()), carrier = prop + 1;
+  scene.nodes.resize(scene.nodes.size() + 2);
+  scene.nodes[size_t(carrier)].children = {int32_t(fixtures::hips)};
+  scene.nodes[fixtures::hips].parent = carrier;
+  scene.roots = {carrier, prop, scene.roots[1]};
+  for (const int32_t n : {prop, carrier}) {
+    Animation clip;
+    clip.channels.push_back({.node = n, .path = AnimationPath::rotation, .times = {0, 3}, .values = {0, 0, 0, 1, 0, 0, 1, 0}, .components = 4});
+    clip.channels.push_back({.node = n, .path = AnimationPath::translation, .times = {0, 3}, .values = {0, 0, 0, 5, 0, 0}, .components = 3});
+    scene.animations.push_back(clip);
+  }
+  EXPECT_EQ(sample_poses(scene, 0, 8), poses);
+  const Pose carried = mid_range_pose(scene, 0);
+  for (size_t n = 0; n < base.nodes.size(); ++n) {
+    EXPECT_EQ(carried.rotation[n], mid.rotation[n]) << n;
+    EXPECT_EQ(carried.translation[n], mid.translation[n]) << n;
+  }
+  Animation flex;
+  flex.channels.push_back({.node = int32_t(fixtures::elbow_l), .path = AnimationPath::rotation, .times = {0, 1},
+                           .values = {0, 0, 0, 1, 0, 0, std::sin(0.6f), std::cos(0.6f)}, .components = 4});
+  scene.animations.push_back(flex);
+  EXPECT_NE(sample_poses(scene, 0, 8), poses);
+}
+
 // A skinned chain built with the multi-pose simplifier, then the skeletal geomorph in several frames:
 // t = 0 is the skinned finer level, t = 1 puts every vertex exactly on its skinned target.
 TEST(SkinnedGeomorph, EndsAreTheSkinnedLevelsInAnyFrame) {

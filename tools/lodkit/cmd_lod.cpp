@@ -479,7 +479,7 @@ SkinSimplifyOptions skin_options(const Scene& scene, const std::vector<uint32_t>
   SkinSimplifyOptions so;
   so.mode = mode;
   if (mode == SkinMode::houle) {
-    so.poses = {joint_matrices(scene, skins[0], world_matrices(scene, mid_range_pose(scene)))};
+    so.poses = {joint_matrices(scene, skins[0], world_matrices(scene, mid_range_pose(scene, skins[0])))};
   } else if (mode == SkinMode::multipose) {
     for (const uint32_t skin : skins) {
       std::vector<std::vector<mat4>> poses = sample_poses(scene, skin, pose_count);
