@@ -42,8 +42,8 @@ scripts/fetch-corpus.sh
 
 # The glTF tests' Node.js tools (npm registry), each at its lockfile's versions; skipped quietly
 # when npm is absent (the tests that need them then skip): Khronos' glTF validator, and a second
-# glTF reader (glTF-Transform with Google's draco3dgltf and meshoptimizer's decoders, and three.js's
-# GLTFLoader, a viewer's). Again when the lockfile is newer than the installed tree.
+# glTF reader (glTF-Transform with Google's draco3dgltf and meshoptimizer's decoders, and two viewers'
+# loaders: three.js's GLTFLoader and Babylon.js's). Again when the lockfile is newer than the installed tree.
 for tool in gltf-validator gltf-loader; do
   installed="tests/$tool/node_modules/.package-lock.json"
   if command -v npm >/dev/null && { [ ! -f "$installed" ] || [ "tests/$tool/package-lock.json" -nt "$installed" ]; }; then

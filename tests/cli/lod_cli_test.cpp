@@ -107,6 +107,35 @@ TEST(CliLod, WritesAValidMsftLodChain) {
   test::expect_valid_gltf({dir / "chain.glb"});
 }
 
+// A viewer's reading of the chain (tests/gltf-loader/babylon_lod.mjs): Babylon.js loads MSFT_lod
+// progressively, the coarsest level (the last id) first, each finer one replacing it, up to
+// maxLODsToLoad levels. Stopped after k, it draws the k-th coarsest level, its triangles exactly;
+// loading them all ends on level 0.
+TEST(CliLod, BabylonLoadsTheChainCoarsestFirst) {
+  const std::filesystem::path tools = std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-loader";
+  if (!std::filesystem::exists(tools / "node_modules/@babylonjs/loaders") || std::system("command -v node >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "Babylon.js is not installed in tests/gltf-loader (scripts/setup.sh)";
+  test::TempDir dir;
+  write_mesh(shapes::torus(1.0f, 0.3f, 48, 24), dir / "torus.ply");
+  const test::RunResult r = test::run_cli({"lod", (dir / "torus.ply").string(), "-o", (dir / "chain.glb").string(), "--ratios",
+                                           "1,0.5,0.2,0.05", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json levels = nlohmann::json::parse(r.out)["levels"];
+  ASSERT_EQ(levels.size(), 4u);
+  for (size_t k = 1; k <= 4; ++k) {
+    SCOPED_TRACE(k);
+    const test::RunResult b = test::run_program({"node", (tools / "babylon_lod.mjs").string(), (dir / "chain.glb").string(), std::to_string(k)});
+    ASSERT_EQ(b.exit_code, 0) << b.err;
+    const std::string last = b.out.substr(b.out.find_last_of('\n', b.out.size() - 2) + 1);  // (Babylon logs a banner first)
+    const nlohmann::json seen = nlohmann::json::parse(last);
+    std::vector<std::string> order;
+    for (size_t i = 0; i < k; ++i) order.push_back("LOD" + std::to_string(3 - i));
+    EXPECT_EQ(seen["loaded"], order);
+    ASSERT_EQ(seen["drawn"].size(), 1u);
+    EXPECT_EQ(seen["drawn"][0]["indices"], 3 * levels[4 - k]["triangles"].get<size_t>());
+  }
+}
+
 // lodkit simplify on a chain: the levels it changes lose the facts lodkit lod wrote about them
 // (their triangles and errors, and the geomorph whose morph target goes with the old vertices),
 // the chain itself (MSFT_lod) stays; a run that changes nothing keeps them all.
