@@ -110,7 +110,7 @@ TEST(CliLod, WritesAValidMsftLodChain) {
 // A viewer's reading of the chain (tests/gltf-loader/babylon_lod.mjs): Babylon.js loads MSFT_lod
 // progressively, the coarsest level (the last id) first, each finer one replacing it, up to
 // maxLODsToLoad levels. Stopped after k, it draws the k-th coarsest level, its triangles exactly;
-// loading them all ends on level 0.
+// loading them all ends on level 0. three.js (three_load.mjs) draws level 0.
 TEST(CliLod, BabylonLoadsTheChainCoarsestFirst) {
   const std::filesystem::path tools = std::filesystem::path(LODKIT_SOURCE_DIR) / "tests/gltf-loader";
   if (!std::filesystem::exists(tools / "node_modules/@babylonjs/loaders") || std::system("command -v node >/dev/null 2>&1") != 0)
@@ -134,6 +134,12 @@ TEST(CliLod, BabylonLoadsTheChainCoarsestFirst) {
     ASSERT_EQ(seen["drawn"].size(), 1u);
     EXPECT_EQ(seen["drawn"][0]["indices"], 3 * levels[4 - k]["triangles"].get<size_t>());
   }
+  // three.js does not read MSFT_lod: it draws the scene, where level 0 alone is.
+  const test::RunResult t = test::run_program({"node", (tools / "three_load.mjs").string(), (dir / "chain.glb").string()});
+  ASSERT_EQ(t.exit_code, 0) << t.err;
+  const nlohmann::json three = nlohmann::json::parse(t.out)["drawn"];
+  ASSERT_EQ(three.size(), 1u);
+  EXPECT_EQ(three[0]["indices"], 3 * levels[0]["triangles"].get<size_t>());
 }
 
 // lodkit simplify on a chain: the levels it changes lose the facts lodkit lod wrote about them

@@ -1,8 +1,9 @@
 // A viewer's reading of a glTF for lodkit's tests: three.js's GLTFLoader (with meshoptimizer's
 // JavaScript decoder for EXT_ and KHR_meshopt_compression) parses the file, and this prints as JSON
 // what a renderer would get: per glTF mesh, each primitive's geometry (every attribute's item size,
-// normalized flag and values as three.js holds them, the morph targets' values, the indices), and
-// per clip each track's name, times and values.
+// normalized flag and values as three.js holds them, the morph targets' values, the indices), per
+// clip each track's name, times and values, and what its default scene draws: each mesh's name
+// and index count.
 import { readFileSync } from 'node:fs';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
 import { MeshoptDecoder } from 'meshoptimizer';
@@ -23,4 +24,8 @@ const primitives = [];
   });
 });
 const clips = gltf.animations.map((clip) => clip.tracks.map((t) => ({ name: t.name, times: Array.from(t.times), values: Array.from(t.values) })));
-process.stdout.write(JSON.stringify({ primitives, clips }));
+const drawn = [];
+gltf.scene.traverse((o) => {
+  if (o.isMesh) drawn.push({ name: o.name, indices: o.geometry.index ? o.geometry.index.count : o.geometry.attributes.position.count });
+});
+process.stdout.write(JSON.stringify({ primitives, clips, drawn }));
