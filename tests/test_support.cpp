@@ -158,6 +158,18 @@ std::string first_diff(const char* what, const std::vector<T>& a, const std::vec
 }
 }  // namespace
 
+std::vector<std::array<uint32_t, 3>> canonical_triangles(const std::vector<uint32_t>& indices, const std::vector<uint32_t>* map) {
+  std::vector<std::array<uint32_t, 3>> out;
+  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+    std::array<uint32_t, 3> c;
+    for (size_t k = 0; k < 3; ++k) c[k] = map ? (*map)[indices[t + k]] : indices[t + k];
+    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+    out.push_back(c);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::string mesh_difference(const Mesh& a, const Mesh& b) {
   std::string d;
   auto check = [&](const char* what, const auto& x, const auto& y) {

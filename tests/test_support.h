@@ -1,6 +1,7 @@
 // Shared test helpers: temporary folders, running the CLI, the corpus location.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -101,5 +102,10 @@ std::vector<float3> glb_morph_positions(const std::filesystem::path& path, size_
 
 // Describes the first difference between two meshes ("" when equal, bitwise on floats).
 std::string mesh_difference(const Mesh& a, const Mesh& b);
+
+// A triangle list's triangles through a vertex map (none: as they are), each as its rotation that
+// starts at the smallest id (so the winding counts), sorted: what survives a codec that reorders
+// triangles and may start one at another corner.
+std::vector<std::array<uint32_t, 3>> canonical_triangles(const std::vector<uint32_t>& indices, const std::vector<uint32_t>* map = nullptr);
 
 }  // namespace lod::test

@@ -71,20 +71,6 @@ float dot3(const float3& a, const float3& b) { return a.x * b.x + a.y * b.y + a.
 float length3(const float3& a) { return std::sqrt(dot3(a, a)); }
 float cosine(const float3& a, const float3& b) { return dot3(a, b) / (length3(a) * length3(b)); }
 
-// A mesh's triangles through a vertex map, each as its rotation that starts at the smallest id
-// (so the winding counts), sorted.
-std::vector<std::array<uint32_t, 3>> triangles(const std::vector<uint32_t>& indices, const std::vector<uint32_t>* map) {
-  std::vector<std::array<uint32_t, 3>> out;
-  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
-    std::array<uint32_t, 3> c;
-    for (size_t k = 0; k < 3; ++k) c[k] = map ? (*map)[indices[t + k]] : indices[t + k];
-    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
-    out.push_back(c);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
 // `b` is `a` with its vertices and triangles reordered: each vertex of b has exactly the position of
 // one vertex of a (a's positions being distinct), its normal exactly (normal_cos 1) or within
 // `normal_cos`, and the triangles through that match are a's.
@@ -108,7 +94,7 @@ void expect_same_up_to_order(const Mesh& a, const Mesh& b, float normal_cos) {
   }
   if (normal_cos >= 1.0f) EXPECT_EQ(unequal_normals, 0u);
   else EXPECT_GE(worst, normal_cos);
-  EXPECT_EQ(triangles(b.indices, &match), triangles(a.indices, nullptr));
+  EXPECT_EQ(test::canonical_triangles(b.indices, &match), test::canonical_triangles(a.indices));
 }
 
 TEST(GltfCompression, MeshoptFilesReadLikeTheirUncompressedTwin) {
@@ -218,7 +204,7 @@ TEST(GltfCompression, DracoFileMatchesItsSourceWithinTheQuantizationStep) {
   ASSERT_EQ(decoded.uvs[0].size(), decoded.vertex_count());
 
   const std::vector<uint32_t> match = match_within_quantization(source, decoded, 14, 2.5f);
-  EXPECT_EQ(triangles(decoded.indices, &match), triangles(source.indices, nullptr));  // winding included
+  EXPECT_EQ(test::canonical_triangles(decoded.indices, &match), test::canonical_triangles(source.indices));  // winding included
 
   // Written back: plain, valid glTF with the decoded mesh.
   const test::RunResult r = test::run_cli({"convert", (dir / "d.glb").string(), (dir / "out.glb").string()});
@@ -615,7 +601,7 @@ TEST(GltfCompression, DracoOutputMatchesItsSourceWithinTheQuantizationStep) {
   const Mesh decoded = only_mesh(read_scene(dir / "d.glb"));
   ASSERT_EQ(decoded.triangle_count(), source.triangle_count());
   const std::vector<uint32_t> match = match_within_quantization(source, decoded, 14, 2.5f);
-  EXPECT_EQ(triangles(decoded.indices, &match), triangles(source.indices, nullptr));
+  EXPECT_EQ(test::canonical_triangles(decoded.indices, &match), test::canonical_triangles(source.indices));
 
   // Fewer position bits: a coarser grid, still within its step.
   o.position_bits = 8;
@@ -685,7 +671,7 @@ TEST(GltfCompression, DracoMorphTargetsFollowEdgebreakersVertexOrder) {
   const Mesh& m = only_mesh(back);
   ASSERT_EQ(m.vertex_count(), source.vertex_count());
   const std::vector<uint32_t> match = match_within_quantization(source, m, 14, 2.6f);
-  EXPECT_EQ(triangles(m.indices, &match), triangles(source.indices, nullptr));
+  EXPECT_EQ(test::canonical_triangles(m.indices, &match), test::canonical_triangles(source.indices));
   EXPECT_NE(match, [&] {
     std::vector<uint32_t> identity(m.vertex_count());
     std::iota(identity.begin(), identity.end(), 0u);
@@ -724,7 +710,7 @@ TEST(GltfCompression, DracoLevelsCarryTheSourcesMorphTargets) {
     const Mesh &a = plain.primitives[level].mesh, &b = packed.primitives[level].mesh;
     ASSERT_EQ(a.vertex_count(), b.vertex_count()) << level;
     const std::vector<uint32_t> match = match_within_quantization(a, b, 14, 2.6f);
-    EXPECT_EQ(triangles(b.indices, &match), triangles(a.indices, nullptr)) << level;
+    EXPECT_EQ(test::canonical_triangles(b.indices, &match), test::canonical_triangles(a.indices)) << level;
     const std::vector<MorphTarget> ta = source_morph_targets(plain, level), tb = source_morph_targets(packed, level);
     ASSERT_EQ(ta.size(), 1u);
     ASSERT_EQ(tb.size(), 1u);
@@ -812,7 +798,7 @@ TEST(GltfCompression, DracoCarriesTheSourcesOwnStreamsThroughEdgebreaker) {
       EXPECT_EQ(targets[0].positions[v], target.positions[s]) << v;
       moved += s != v;
     }
-    EXPECT_EQ(triangles(m.indices, &match), triangles(source.indices, nullptr)) << alike;
+    EXPECT_EQ(test::canonical_triangles(m.indices, &match), test::canonical_triangles(source.indices)) << alike;
     if (alike) EXPECT_EQ(moved, 0u);
     else EXPECT_GT(moved, 0u);
   }

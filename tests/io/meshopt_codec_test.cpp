@@ -349,15 +349,7 @@ Json read_with_three(const std::filesystem::path& file) {
   Json doc = Json::parse(r.out);
   for (Json& p : doc["primitives"]) {
     if (p["indices"].is_null()) continue;
-    const std::vector<uint32_t> indices = p["indices"];
-    std::vector<std::array<uint32_t, 3>> triangles;
-    for (size_t t = 0; t + 2 < indices.size(); t += 3) {
-      std::array<uint32_t, 3> c = {indices[t], indices[t + 1], indices[t + 2]};
-      std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
-      triangles.push_back(c);
-    }
-    std::sort(triangles.begin(), triangles.end());
-    p["indices"] = triangles;
+    p["indices"] = test::canonical_triangles(p["indices"].get<std::vector<uint32_t>>());
   }
   return doc;
 }

@@ -351,6 +351,7 @@ uint32_t add_chain(Scene& scene, const ChainReport& r, const LevelTargets& targe
     }
   }
   const bool reuse = place.first >= 0;
+  const int32_t weights_of = reuse ? place.first : place.weights_of;
   const auto level_node = [&](size_t i) { return i == 0 && reuse ? place.first : node_base + int32_t(i) - int32_t(reuse); };
   for (size_t i = 0; i < chain.levels.size(); ++i) {
     Node node;
@@ -359,7 +360,7 @@ uint32_t add_chain(Scene& scene, const ChainReport& r, const LevelTargets& targe
     node.gpu_instances = place.instances;
     nlohmann::json extras = {{"lodkit", level_facts(r, i)}};
     if (i < chain.morphs.size()) extras["LODKIT_geomorph"] = {{"target", targets.at(i).size()}, {"to_node", level_node(i + 1)}};
-    if (!targets.at(i).empty()) node.morph_weights_of = place.weights_of >= 0 ? std::vector<int32_t>{place.weights_of} : targets.nodes;
+    if (!targets.at(i).empty()) node.morph_weights_of = weights_of >= 0 ? std::vector<int32_t>{weights_of} : targets.nodes;
     if (i == 0) {
       for (size_t k = 1; k < chain.levels.size(); ++k) node.lod_ids.push_back(level_node(k));
       extras["MSFT_screencoverage"] = r.coverage;
@@ -1116,8 +1117,8 @@ Command register_lod(CLI::App& root) {
               for (size_t k = 0; k < part.nodes.size(); ++k) {
                 const int32_t parent = parents[k], first = separate_firsts[c - first_separate][k];
                 meshes = add_chain(out, reports[first_chain + c], chains[c].targets, chains[c].streams,
-                                   {node_label(out.nodes, size_t(parent)) + "_", parent, instances[size_t(part.nodes[k])],
-                                    first >= 0 ? first : parent, meshes, first});
+                                   {node_label(out.nodes, size_t(parent)) + "_", parent, instances[size_t(part.nodes[k])], parent,
+                                    meshes, first});
               }
             }
             written = write_scene(out, o->output, o->gltf);
