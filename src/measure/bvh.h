@@ -69,6 +69,9 @@ class TriangleBvh {
     return closest_distance_squared(p, triangles_[slot_[triangle]]);
   }
 
+  // One triangle (mesh index) as the searches hold it: corner, edges, unit normal.
+  const PreparedTriangle& prepared(uint32_t triangle) const { return triangles_[slot_[triangle]]; }
+
   // Reusable memory for closest_group (one per thread).
   struct GroupScratch {
     // Per point, padded to whole batches of lanes: x, y, z and the squared distance (floats), then

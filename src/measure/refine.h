@@ -7,7 +7,10 @@
 //  - piecewise: the patch is cut where the candidates' (linearly interpolated) distances cross, and
 //    each piece is bounded by its own triangle's convex distance at the piece's vertices. This is
 //    what makes the bound tight across folds of the other surface (a simplified mesh against its
-//    original: corners on the surface, several of its triangles under one patch).
+//    original: corners on the surface, several of its triangles under one patch);
+//  - prisms: the patch is cut by each candidate's face region (where the foot on its plane lies
+//    inside it), and each piece bounded by its own triangle; tight where the other surface's faces
+//    lie under the patch flat or parallel, where the interpolated cuts above only shrink with it.
 // The smallest of these bounds each patch. Patches whose bound exceeds the largest distance found
 // are split 1 -> 4 (three new corner queries each), the worst first, in rounds.
 #pragma once
