@@ -12,7 +12,8 @@
 //    inside it), and each piece bounded by its own triangle; tight where the other surface's faces
 //    lie under the patch flat or parallel, where the interpolated cuts above only shrink with it.
 // The smallest of these bounds each patch. Patches whose bound exceeds the largest distance found
-// are split 1 -> 4 (three new corner queries each), the worst first, in rounds.
+// are split 1 -> 4 (three new corner queries each; a needle is bisected at its longest edge, one
+// query), the worst first, in rounds.
 #pragma once
 
 #include <cstdint>

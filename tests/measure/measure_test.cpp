@@ -350,6 +350,32 @@ TEST(MeasureRefine, CoincidentAndParallelFacesAreBoundedTightly) {
   }
 }
 
+// A needle (1 long, 0.002 wide) on a flat sheet of 400 x 4 cells: the distance is 0, and a piece of
+// the needle is bounded by it once it spans a cell or two. Split 1 -> 4, the needle's children stay
+// needles and that takes 4^8 patches; bisected, a few thousand. The bound must close within the
+// budget. Then the sheet dips under x = 0.63, off the few samples: the bound must hold a dense
+// scan's maximum there (the needle's far half lies in one child of its first bisection only: both
+// children must count).
+TEST(MeasureRefine, ANeedleIsBoundedWithinTheBudget) {
+  Mesh a;
+  a.positions = {{0.0f, 0.501f, 0.0f}, {1.0f, 0.5f, 0.0f}, {0.001f, 0.503f, 0.0f}};
+  a.indices = {0, 1, 2};
+  Mesh b = shapes::grid(400, 4);
+  b.normals.clear();
+  const float tolerance = 1e-5f;
+  const CompareOptions options{.samples = 3, .edge_samples = false, .refine = true, .refine_tolerance = tolerance,
+                               .refine_budget = 30'000, .attributes = false};
+  const Deviation flat = compare(a, b, options);
+  EXPECT_LE(flat.a_to_b.max_bound, flat.a_to_b.max + tolerance * flat.diagonal + 1e-6);
+  EXPECT_LE(flat.a_to_b.refine_samples, 30'000u);
+
+  for (float3& p : b.positions) p.z = -0.02f * std::exp(-(p.x - 0.63f) * (p.x - 0.63f) / 0.002f);
+  const Deviation dip = compare(a, b, options);
+  const double dense = dense_max_distance(a, b, 100);
+  EXPECT_GT(dense, 0.015);
+  EXPECT_GE(dip.a_to_b.max_bound, dense - 1e-6);
+}
+
 TEST(MeasureCompare, SameResultOnAnyThreadCount) {
   const Mesh a = shapes::torus(1.0f, 0.3f, 64, 32), b = shapes::torus(1.02f, 0.28f, 24, 12);
   Deviation first;
