@@ -121,8 +121,10 @@ float prism_bound(const vec3f corners[3], const uint32_t* candidate, int count, 
     const vec3f origin[3] = {t.a, t.a, t.a + t.ab};
     const vec3f normal[3] = {m.ab, m.ac, m.bc};
     float g[3][3];  // g[e][j]: patch corner j's side of T's edge e, positive inside
+    bool finite = true;
     for (int e = 0; e < 3; ++e)
-      for (int j = 0; j < 3; ++j) g[e][j] = dot(normal[e], corners[j] - origin[e]);
+      for (int j = 0; j < 3; ++j) finite &= std::isfinite(g[e][j] = dot(normal[e], corners[j] - origin[e]));
+    if (!finite) continue;  // overflowed: no cut (a NaN side would drop the piece from the cover)
     int next = 0;
     Piece* out = pieces[1 - cur];
     for (int i = 0; i < live; ++i) {
