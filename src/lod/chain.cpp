@@ -163,10 +163,10 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
         // budget is eight times the samples: the default (as many) ran out on bunny00's levels,
         // leaving bounds 2-4x the error; four times closed them within the tolerance, for 1.2x the
         // build time. Where even this runs out, the bound is still certified, only looser.
-        // A small mesh takes fewer samples but keeps the budget of 20,000: the refinement then finds
-        // what the samples miss, and its queries go where the bound is open (a 288-triangle chain:
-        // 0.83x the build time, the same errors and bounds to 0.4%). Budget and samples cut
-        // together left a cube-meshed level's bound 537x looser.
+        // A small mesh takes fewer samples but keeps the budget of 160,000 queries (8 x 20,000): the
+        // refinement then finds what the samples miss, and its queries go where the bound is open (a
+        // 288-triangle chain: 0.84x the build time, the same errors and bounds to 0.4%). Budget and
+        // samples cut together left a cube-meshed level's bound 537x looser.
         const uint64_t samples = std::clamp<uint64_t>(2 * input_triangles, 2'000, 1'000'000);
         const uint64_t budget = 8 * std::max<uint64_t>(samples, 20'000);
         const Deviation d = compare(input, level.mesh,

@@ -243,31 +243,54 @@ int longest_edge(const vec3f c[3], bool* needle) {
   return e;
 }
 
-void bisect(const Patch& p, Split& s, const TriangleBvh& to, const core::TriangleAdjacency* neighbours, float threshold) {
-  bool needle;
-  const int e = longest_edge(p.corner, &needle), f = (e + 1) % 3, g = (e + 2) % 3;
+void set_corner(Patch& child, int k, const vec3f& c, float d, uint32_t closest) {
+  child.corner[k] = c, child.distance[k] = d, child.closest[k] = closest;
+}
+
+// Each child's bound, once bisect or quarter has set its corners.
+void bound_children(const Patch& p, Split& s, const TriangleBvh& to, const core::TriangleAdjacency* neighbours,
+                    float threshold) {
+  for (int c = 0; c < s.children; ++c) {
+    Patch& child = s.child[c];
+    child.triangle = p.triangle;
+    child.bound = patch_bound(child.corner, child.distance, child.closest, p.extra, to, neighbours, threshold, &child.extra);
+  }
+}
+
+// A needle: at the longest edge's midpoint m, into (c_e, m, c_g) and (m, c_f, c_g).
+void bisect(const Patch& p, int e, Split& s, const TriangleBvh& to) {
+  const int f = (e + 1) % 3, g = (e + 2) % 3;
   s.children = 2, s.points = 1;
   s.point[0] = midpoint(p.corner[e], p.corner[f]);
   s.hit[0] = to.closest(s.point[0], p.closest[e]);
   const float md = std::sqrt(s.hit[0].distance_squared);
   const uint32_t mc = s.hit[0].triangle;
-  // (c_e, m, c_g) and (m, c_f, c_g)
-  auto set = [](Patch& child, int k, const vec3f& c, float d, uint32_t closest) {
-    child.corner[k] = c, child.distance[k] = d, child.closest[k] = closest;
-  };
-  Patch& a = s.child[0];
-  set(a, 0, p.corner[e], p.distance[e], p.closest[e]);
-  set(a, 1, s.point[0], md, mc);
-  set(a, 2, p.corner[g], p.distance[g], p.closest[g]);
-  Patch& b = s.child[1];
-  set(b, 0, s.point[0], md, mc);
-  set(b, 1, p.corner[f], p.distance[f], p.closest[f]);
-  set(b, 2, p.corner[g], p.distance[g], p.closest[g]);
-  for (int c = 0; c < 2; ++c) {
-    Patch& child = s.child[c];
-    child.triangle = p.triangle;
-    child.bound = patch_bound(child.corner, child.distance, child.closest, p.extra, to, neighbours, threshold, &child.extra);
+  set_corner(s.child[0], 0, p.corner[e], p.distance[e], p.closest[e]);
+  set_corner(s.child[0], 1, s.point[0], md, mc);
+  set_corner(s.child[0], 2, p.corner[g], p.distance[g], p.closest[g]);
+  set_corner(s.child[1], 0, s.point[0], md, mc);
+  set_corner(s.child[1], 1, p.corner[f], p.distance[f], p.closest[f]);
+  set_corner(s.child[1], 2, p.corner[g], p.distance[g], p.closest[g]);
+}
+
+// Otherwise at the three edge midpoints, into (c0, m01, m20), (m01, c1, m12), (m20, m12, c2) and
+// (m01, m12, m20).
+void quarter(const Patch& p, Split& s, const TriangleBvh& to) {
+  s.children = 4, s.points = 3;
+  for (int e = 0; e < 3; ++e) {
+    s.point[e] = midpoint(p.corner[e], p.corner[(e + 1) % 3]);
+    s.hit[e] = to.closest(s.point[e], p.closest[e]);
   }
+  const vec3f* m = s.point;
+  const float md[3] = {std::sqrt(s.hit[0].distance_squared), std::sqrt(s.hit[1].distance_squared),
+                       std::sqrt(s.hit[2].distance_squared)};
+  const uint32_t mc[3] = {s.hit[0].triangle, s.hit[1].triangle, s.hit[2].triangle};
+  for (int c = 0; c < 3; ++c) {
+    set_corner(s.child[c], c, p.corner[c], p.distance[c], p.closest[c]);
+    set_corner(s.child[c], (c + 1) % 3, m[c], md[c], mc[c]);
+    set_corner(s.child[c], (c + 2) % 3, m[(c + 2) % 3], md[(c + 2) % 3], mc[(c + 2) % 3]);
+  }
+  for (int k = 0; k < 3; ++k) set_corner(s.child[3], k, m[k], md[k], mc[k]);
 }
 
 }  // namespace
@@ -325,35 +348,10 @@ RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& 
           const Patch& p = open[i];
           Split& s = splits[i];
           bool needle;
-          longest_edge(p.corner, &needle);
-          if (needle) {
-            bisect(p, s, to, input.neighbours, threshold);
-            return;
-          }
-          s.children = 4, s.points = 3;
-          for (int e = 0; e < 3; ++e) {
-            s.point[e] = midpoint(p.corner[e], p.corner[(e + 1) % 3]);
-            s.hit[e] = to.closest(s.point[e], p.closest[e]);
-          }
-          const vec3f m[3] = {s.point[0], s.point[1], s.point[2]};
-          const float md[3] = {std::sqrt(s.hit[0].distance_squared), std::sqrt(s.hit[1].distance_squared),
-                               std::sqrt(s.hit[2].distance_squared)};
-          const uint32_t mc[3] = {s.hit[0].triangle, s.hit[1].triangle, s.hit[2].triangle};
-          // Corners of the four children: (c0, m01, m20), (m01, c1, m12), (m20, m12, c2), (m01, m12, m20).
-          auto set = [&](Patch& child, int k, const vec3f& c, float d, uint32_t closest) {
-            child.corner[k] = c, child.distance[k] = d, child.closest[k] = closest;
-          };
-          for (int c = 0; c < 3; ++c) {
-            Patch& child = s.child[c];
-            set(child, c, p.corner[c], p.distance[c], p.closest[c]);
-            set(child, (c + 1) % 3, m[c], md[c], mc[c]);
-            set(child, (c + 2) % 3, m[(c + 2) % 3], md[(c + 2) % 3], mc[(c + 2) % 3]);
-          }
-          for (int k = 0; k < 3; ++k) set(s.child[3], k, m[k], md[k], mc[k]);
-          for (Patch& child : s.child) {
-            child.triangle = p.triangle;
-            child.bound = patch_bound(child.corner, child.distance, child.closest, p.extra, to, input.neighbours, threshold, &child.extra);
-          }
+          const int e = longest_edge(p.corner, &needle);
+          if (needle) bisect(p, e, s, to);
+          else quarter(p, s, to);
+          bound_children(p, s, to, input.neighbours, threshold);
         },
         64);
     for (size_t i = 0; i < batch; ++i) result.queries += splits[i].points;
