@@ -4,8 +4,9 @@
 #   scripts/fuzz.sh FORMAT|all [SECONDS=600] [JOBS=nproc]
 #
 # FORMAT is obj, ply, off, stl, gltf, lpm (progressive meshes), meshopt (the meshopt vertex decoder,
-# on a stride byte, two count bytes and a stream) or simplify (the simplifier, on 16 option bytes
-# followed by an OFF file). JOBS is how many fuzzer processes run at once: with `all`,
+# on a stride byte, two count bytes and a stream), simplify (the simplifier, on 16 option bytes
+# followed by an OFF file) or compare (lod::compare's certified bound, on two small meshes: see
+# fuzz/fuzz_compare.cpp). JOBS is how many fuzzer processes run at once: with `all`,
 # that many formats at a time; with one format and JOBS > 1, libFuzzer's -fork=JOBS.
 #
 # Builds the fuzz preset when needed. Seeds (fuzz/seeds/<format>/) are copied into the working corpus
@@ -22,7 +23,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
-all_formats=(obj ply off stl gltf lpm meshopt simplify)
+all_formats=(obj ply off stl gltf lpm meshopt simplify compare)
 usage() {
   echo "usage: scripts/fuzz.sh FORMAT|all [SECONDS=600] [JOBS=$(nproc)]   (FORMAT: ${all_formats[*]})" >&2
   exit 2

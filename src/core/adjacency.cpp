@@ -46,6 +46,7 @@ TriangleAdjacency triangle_adjacency(std::span<const uint32_t> indices, std::spa
     return key(3 * t + k) < key(3 * t + (k + 1) % 3);
   };
   for (size_t v = 0; v < id_count; ++v) {
+    if (edges[v].empty()) continue;  // its data() may be null, and null + 1 is undefined
     Entry* begin = edges[v].data();
     Entry* end = begin + edges[v].size();
     // Insertion sort: buckets are tiny.
