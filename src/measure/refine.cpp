@@ -139,12 +139,10 @@ float prism_bound(const vec3f corners[3], const uint32_t* candidate, int count, 
         }
         outside_one = all_out;
       }
-      if (outside_one || !inside_all) {
+      if (outside_one) {
         if (next == max_pieces) return give_up;
-        if (outside_one) {
-          out[next++] = p;
-          continue;
-        }
+        out[next++] = p;
+        continue;
       }
       if (inside_all) {
         bound2 = std::max(bound2, worst(p, candidate[k], give_up2));
@@ -153,6 +151,7 @@ float prism_bound(const vec3f corners[3], const uint32_t* candidate, int count, 
       }
       // Peel: the part outside edge 0 goes on, then of the rest the part outside edge 1, and so on;
       // what is inside all three is T's.
+      if (next == max_pieces) return give_up;
       Piece rest[2];
       rest[0] = p;
       int r = 0;
@@ -354,8 +353,8 @@ RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& 
           bound_children(p, s, to, input.neighbours, threshold);
         },
         64);
-    for (size_t i = 0; i < batch; ++i) result.queries += splits[i].points;
-    for (size_t i = 0; i < batch; ++i)
+    for (size_t i = 0; i < batch; ++i) {
+      result.queries += splits[i].points;
       for (int e = 0; e < splits[i].points; ++e) {
         const ClosestHit& h = splits[i].hit[e];
         const float d = std::sqrt(h.distance_squared);
@@ -365,6 +364,7 @@ RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& 
           result.location = {splits[i].point[e], h.point, open[i].triangle, h.triangle};
         }
       }
+    }
     next.clear();
     auto keep = [&](const Patch& p) {
       if (p.bound > result.max + input.tolerance) next.push_back(p);
