@@ -11,6 +11,7 @@
 //  - prisms: the patch is cut by each candidate's face region (where the foot on its plane lies
 //    inside it), and each piece bounded by its own triangle; tight where the other surface's faces
 //    lie under the patch flat or parallel, where the interpolated cuts above only shrink with it.
+//    A piece no prism takes recruits the triangle across from it (a step over the adjacency).
 // The smallest of these bounds each patch. Patches whose bound exceeds the largest distance found
 // are split 1 -> 4 (three new corner queries each; a needle is bisected at its longest edge, one
 // query), the worst first, in rounds.
