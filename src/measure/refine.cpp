@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <tuple>
+#include <utility>
 
 #include "core/parallel.h"
 
@@ -33,21 +35,30 @@ constexpr size_t max_batch = 8192;
 
 namespace {
 
-// Sutherland-Hodgman: keep the part of a convex polygon (barycentric points) where g(b) <= 0, g linear.
-int clip_polygon(const std::array<float, 3>* in, int n, const float g[3], std::array<float, 3>* out) {
+// Sutherland-Hodgman: the part of a convex polygon (barycentric points) where g(b) <= 0, g linear,
+// into `below`, and if `above` is given the part where g(b) >= 0 into it, in one pass (the cut
+// points are the same bits either way). Returns the two vertex counts.
+std::pair<int, int> split_polygon(const std::array<float, 3>* in, int n, const float g[3], std::array<float, 3>* below,
+                                  std::array<float, 3>* above = nullptr) {
   auto value = [&](const std::array<float, 3>& b) { return b[0] * g[0] + b[1] * g[1] + b[2] * g[2]; };
-  int m = 0;
+  int m = 0, k = 0;
+  const float v0 = value(in[0]);
+  float va = v0;
   for (int i = 0; i < n; ++i) {
     const std::array<float, 3>& a = in[i];
-    const std::array<float, 3>& b = in[(i + 1) % n];
-    const float va = value(a), vb = value(b);
-    if (va <= 0) out[m++] = a;
+    const std::array<float, 3>& b = in[i + 1 == n ? 0 : i + 1];
+    const float vb = i + 1 == n ? v0 : value(b);
+    if (va <= 0) below[m++] = a;
+    if (above && va >= 0) above[k++] = a;
     if ((va < 0 && vb > 0) || (va > 0 && vb < 0)) {
       const float s = va / (va - vb);
-      out[m++] = {a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]), a[2] + s * (b[2] - a[2])};
+      const std::array<float, 3> cut = {a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]), a[2] + s * (b[2] - a[2])};
+      below[m++] = cut;
+      if (above) above[k++] = cut;
     }
+    va = vb;
   }
-  return m;
+  return {m, k};
 }
 
 }  // namespace
@@ -72,7 +83,7 @@ float piecewise_bound(const vec3f corners[3], const uint32_t* candidate, const f
     for (int j = 0; j < count && n > 0; ++j) {
       if (j == k) continue;
       const float g[3] = {f[k][0] - f[j][0], f[k][1] - f[j][1], f[k][2] - f[j][2]};
-      n = clip_polygon(buffer[cur], n, g, buffer[1 - cur]);
+      n = split_polygon(buffer[cur], n, g, buffer[1 - cur]).first;
       cur = 1 - cur;
     }
     for (int v = 0; v < n; ++v) {
@@ -168,16 +179,14 @@ float prism_bound(const vec3f corners[3], const uint32_t* candidates, int count,
       rest[0] = p;
       int r = 0;
       for (int e = 0; e < 3 && rest[r].n > 0; ++e) {
-        // clip_polygon keeps where its linear function is <= 0: g keeps the outside of edge e, -g the inside.
-        const float outside[3] = {g[e][0], g[e][1], g[e][2]}, inside[3] = {-g[e][0], -g[e][1], -g[e][2]};
+        // g is negative outside edge e: that part is cut off, the part inside goes on.
         if (rest[r].n >= max_vertices) return false;  // a clip adds one vertex at most
         Piece& cut = out[next];
-        cut.n = clip_polygon(rest[r].v, rest[r].n, outside, cut.v);
+        std::tie(cut.n, rest[1 - r].n) = split_polygon(rest[r].v, rest[r].n, g[e], cut.v, rest[1 - r].v);
         if (cut.n >= 3) {
           if (next + 1 == max_pieces) return false;
           ++next;
         }
-        rest[1 - r].n = clip_polygon(rest[r].v, rest[r].n, inside, rest[1 - r].v);
         r = 1 - r;
       }
       if (rest[r].n >= 3) bound2 = std::max(bound2, worst(rest[r], id, give_up2));
