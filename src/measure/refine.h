@@ -37,7 +37,7 @@ struct RefineInput {
   // one triangle that may cover the whole patch. May be null.
   const std::vector<uint32_t>* triangle_closest = nullptr;
   const TriangleBvh* to = nullptr;
-  const core::TriangleAdjacency* neighbours = nullptr;  // of `to`, for candidates a patch's corners miss
+  const core::TriangleAdjacency* neighbours = nullptr;  // of `to`: candidates a patch's corners miss
   float tolerance = 0;  // object space: stop when the bound is within this of the largest distance
   uint64_t budget = 0;  // queries
   unsigned threads = 0;
@@ -57,8 +57,8 @@ RefineResult refine_max(const RefineInput& input, float max, const MaxLocation& 
 
 // The bound of one patch. Candidate triangles for the convexity bound: each corner's closest and
 // `extra` (UINT32_MAX for none); `best` receives the candidate that gave the smallest bound.
-// `neighbours` (the adjacency of `to`, may be null) adds the candidates' neighbours when the bound is
-// above `enough`; below it the cheaper bound is returned as is.
+// Above `enough` the cheaper bounds give way to the costlier ones; below it the bound is returned as
+// is. `neighbours` (the adjacency of `to`, may be null) lets the prisms recruit more candidates.
 float patch_bound(const vec3f corners[3], const float distances[3], const uint32_t closest[3], uint32_t extra,
                   const TriangleBvh& to, const core::TriangleAdjacency* neighbours, float enough,
                   uint32_t* best = nullptr);
