@@ -113,10 +113,10 @@ float prism_bound(const vec3f corners[3], const uint32_t* candidates, int count,
                   const core::TriangleAdjacency* neighbours, float give_up) {
   constexpr int max_vertices = 12, max_pieces = 16;  // beyond them: give up (rare; the caller keeps its bound)
   // A leftover piece that would raise the bound recruits the neighbour across from it, at most this
-  // many: under a fan of needles (a CAD blade's lossless levels: up to 35 coplanar needles 100 long
-  // meet at one apex) a patch covers triangles that are neither its corners' closest nor their
-  // neighbours, and a leftover's bound by the nearest candidate is the gap to it (0.0057 there after
-  // the whole budget; the distance: 1e-7). Corpus chains: 0.77x the build time, bounds 0.95x.
+  // many: a patch often covers triangles none of its corners is closest to (across a fold, or under
+  // a fan of needles: a CAD blade's lossless levels have up to 35 coplanar needles 100 long meeting
+  // at one apex), and a leftover's bound by the nearest candidate is the gap to it (0.0057 there
+  // after the whole budget; the distance: 1e-7). Corpus chains: 0.77x the build time, bounds 0.95x.
   constexpr int max_recruits = 64;
   struct Piece {
     std::array<float, 3> v[max_vertices];  // barycentric in the patch
