@@ -31,10 +31,6 @@ struct Split {
 
 constexpr size_t max_batch = 8192;
 
-}  // namespace
-
-namespace {
-
 // Sutherland-Hodgman: the part of a convex polygon (barycentric points) where g(b) <= 0, g linear,
 // into `below`, and if `above` is given the part where g(b) >= 0 into it, in one pass (the cut
 // points are the same bits either way). Returns the two vertex counts.
@@ -60,10 +56,6 @@ std::pair<int, int> split_polygon(const std::array<float, 3>* in, int n, const f
   }
   return {m, k};
 }
-
-}  // namespace
-
-namespace {
 
 constexpr int max_candidates = 4;  // each corner's closest triangle and the patch's extra
 
@@ -255,8 +247,7 @@ float patch_bound(const vec3f corners[3], const float distances[3], const uint32
   float f[max_candidates][3];
   int count = 0;
   auto add = [&](uint32_t t) {
-    if (t == UINT32_MAX || count == max_candidates || std::find(candidate, candidate + count, t) != candidate + count)
-      return;
+    if (t == UINT32_MAX || std::find(candidate, candidate + count, t) != candidate + count) return;
     candidate[count] = t;
     for (int i = 0; i < 3; ++i)
       f[count][i] = closest[i] == t ? distances[i] : std::sqrt(to.distance_squared(corners[i], t));

@@ -378,9 +378,9 @@ TEST(MeasureRefine, ANeedleIsBoundedWithinTheBudget) {
 
 // A unit square against the same square as a fan of 128 needles from one corner (a CAD blade's
 // lossless levels have such fans: up to 35 coplanar needles 100 long meeting at an apex). The
-// distance is 0. Near the apex a patch of the square covers needles that are neither its corners'
-// closest nor their neighbours; bounded by the nearest of those, the rest of it was off by the gap
-// (the blade's levels: 0.0057 after the whole budget, the distance 1e-7). The bound must close.
+// distance is 0. Near the apex a patch of the square covers needles none of its corners is closest
+// to; bounded by the nearest candidate, the rest of it was off by the gap (the blade's levels:
+// 0.0057 after the whole budget, the distance 1e-7). The bound must close.
 TEST(MeasureRefine, AFanOfNeedlesIsBoundedWithinTheBudget) {
   Mesh square = shapes::grid(4, 4);
   square.normals.clear();
@@ -400,8 +400,8 @@ TEST(MeasureRefine, AFanOfNeedlesIsBoundedWithinTheBudget) {
   EXPECT_LE(d.a_to_b.max_bound, d.a_to_b.max + tolerance * d.diagonal + 1e-6);
   EXPECT_LE(d.a_to_b.refine_samples, budget);
 
-  // Corrugated (the rim alternately up and down): near the apex, the recruited needles' bounds must
-  // still hold a dense scan's maximum.
+  // Corrugated (the rim alternately up and down): near the apex the bound must still hold a dense
+  // scan's maximum (a soundness check; no recruit fires here, even on a 30-query budget).
   for (size_t i = 1; i < fan.positions.size(); ++i) fan.positions[i].z = (i % 2 ? 0.01f : -0.01f);
   Mesh corner;
   corner.positions = {{0.02f, 0.01f, 0.0f}, {0.3f, 0.05f, 0.0f}, {0.2f, 0.25f, 0.0f}};
