@@ -1341,6 +1341,7 @@ struct StreamCoding {
   bool quantize = false;               // normals, tangents, UVs, colours and weights in fewer bits
   const PositionGrid* grid = nullptr;  // positions and target positions on this grid
   const UvBoxes* uv_boxes = nullptr;   // quantized: UV sets outside [0, 1] stored on these boxes
+  int normal_bits = 8;                 // quantized: normals and tangents in bytes (8) or shorts (9-16)
 };
 
 // Each element's float components (float2, float3, float4), stored as integers I = code(value,
@@ -1373,6 +1374,18 @@ template <class I, class T>
 std::vector<uint8_t> snorm(const std::vector<T>& values) {
   const float top = float(std::numeric_limits<I>::max());
   return pack_components<I>(values, [top](float x, size_t) { return std::lround(std::clamp(x, -1.0f, 1.0f) * top); });
+}
+// Directions (normals, tangents, their morph displacements) in `bits` per component: normalized
+// bytes for 8, else normalized shorts on multiples of 2^(16 - bits), the nearest, with +-1 kept
+// exact (32767, not a multiple) so unit axes stay unit. Returns the bytes and the component type.
+template <class T>
+std::pair<std::vector<uint8_t>, int> snorm_directions(const std::vector<T>& values, int bits) {
+  if (bits <= 8) return {snorm<int8_t>(values), TINYGLTF_COMPONENT_TYPE_BYTE};
+  const double step = double(1 << (16 - bits));
+  return {pack_components<int16_t>(values, [step](float x, size_t) {
+            return std::clamp(std::lround(std::round(std::clamp(double(x), -1.0, 1.0) * 32767.0 / step) * step), -32767L, 32767L);
+          }),
+          TINYGLTF_COMPONENT_TYPE_SHORT};
 }
 // Unsigned normalized integers of type I (UVs, colours): round(x * max).
 template <class I, class T>
@@ -1484,8 +1497,10 @@ class BinWriter {
     if (coding.quantize) {
       const std::string_view name = semantic;
       // (Core glTF allows integer UVs and colours; integer normals and tangents need the extension.)
-      if (name == "NORMAL" || name == "TANGENT")
-        return used_quantization_ = true, add_packed(snorm<int8_t>(values), TINYGLTF_COMPONENT_TYPE_BYTE, type, true);
+      if (name == "NORMAL" || name == "TANGENT") {
+        const auto [packed, component] = snorm_directions(values, coding.normal_bits);
+        return used_quantization_ = true, add_packed(packed, component, type, true);
+      }
       if (name.starts_with("TEXCOORD") && all_in_range(values, 0.0f, 1.0f))
         return add_packed(unorm<uint16_t>(values), TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, type, true);
       if (name == "COLOR_0" && all_in_range(values, 0.0f, 1.0f))
@@ -1537,11 +1552,13 @@ class BinWriter {
     return add_displacements(steps, nullptr);
   }
 
-  // A morph target's normal or tangent displacements. Quantized, in normalized bytes like the
-  // normals themselves, where they fit the range (a flipped normal moves by up to 2).
+  // A morph target's normal or tangent displacements. Quantized, in the normals' own integers, where
+  // they fit the range (a flipped normal moves by up to 2).
   int add_direction_offsets(const std::vector<float3>& d, const StreamCoding& coding) {
-    if (coding.quantize && all_in_range(d, -1.0f, 1.0f))
-      return used_quantization_ = true, add_packed(snorm<int8_t>(d), TINYGLTF_COMPONENT_TYPE_BYTE, TINYGLTF_TYPE_VEC3, true);
+    if (coding.quantize && all_in_range(d, -1.0f, 1.0f)) {
+      const auto [packed, component] = snorm_directions(d, coding.normal_bits);
+      return used_quantization_ = true, add_packed(packed, component, TINYGLTF_TYPE_VEC3, true);
+    }
     return add_accessor(d, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, TINYGLTF_TARGET_ARRAY_BUFFER);
   }
 
@@ -1596,7 +1613,7 @@ class BinWriter {
   // grid (`coding`), the positions go into the stream as their grid coordinates, exactly, and the
   // morph targets are stored as -q stores them; Draco quantizes the other streams either way.
   std::vector<uint32_t> add_draco_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim,
-                                           int position_bits, bool outside, const StreamCoding& coding) {
+                                           int position_bits, int normal_bits, bool outside, const StreamCoding& coding) {
     for_each_unmodelled_stream(prim, [&](int, const std::string& semantic, int index) {
       if (index >= 0) throw_internal("Draco: the source's " + semantic + " stream would not follow the renumbered vertices");
     });
@@ -1608,7 +1625,7 @@ class BinWriter {
       for (const float3& p : mesh.positions)
         for (const auto& [x, c] : {std::pair{p.x, 0}, std::pair{p.y, 1}, std::pair{p.z, 2}}) grid_positions.push_back(uint16_t(code(x, size_t(c))));
     }
-    std::optional<io::DracoPrimitive> encoded = io::encode_draco(mesh, position_bits, track_points, grid_positions);
+    std::optional<io::DracoPrimitive> encoded = io::encode_draco(mesh, position_bits, normal_bits, track_points, grid_positions);
     if (!encoded) {
       ++report_.draco_plain;
       add_geometry(mesh, targets, prim, coding);  // (libdraco cannot take it)
@@ -3111,11 +3128,12 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     const int32_t shared = in.shares_vertices_with;
     std::vector<Gathered>& extra = gathered[p.scene_primitive];
     const UvBoxes* boxes = uv_boxes.empty() ? nullptr : &uv_boxes[i];
-    const StreamCoding coding{options.quantize, on_grid[p.mesh] ? &grid : nullptr, boxes};
+    const StreamCoding coding{options.quantize, on_grid[p.mesh] ? &grid : nullptr, boxes, options.normal_bits ? options.normal_bits : 8};
     if (options.draco) {
       // Each primitive its own stream (Draco has no shared vertex buffers); the gathered streams
       // outside it follow its vertices.
-      const std::vector<uint32_t> point_source = writer.add_draco_geometry(in.mesh, in.targets, out, options.position_bits, !extra.empty(), coding);
+      const std::vector<uint32_t> point_source = writer.add_draco_geometry(in.mesh, in.targets, out, options.position_bits,
+                                                                                options.normal_bits ? options.normal_bits : 10, !extra.empty(), coding);
       if (!point_source.empty())
         for (Gathered& g : extra) g.bytes = gather_elements(g.bytes, element_bytes(g.like.componentType, g.like.type), point_source);
     } else if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && out.targets.empty() && extra.empty() &&
@@ -4129,6 +4147,8 @@ WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, co
   }
   if (options.draco && (options.position_bits < 1 || options.position_bits > 30))
     throw_usage("cannot write glTF: position_bits is " + std::to_string(options.position_bits) + ", not 1 to 30 (Draco)");
+  if (options.normal_bits != 0 && (options.normal_bits < 8 || options.normal_bits > 16))
+    throw_usage("cannot write glTF: normal_bits is " + std::to_string(options.normal_bits) + ", not 0 (the default) or 8 to 16");
   WriteReport report;
   std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots, options, report);
   // MSFT_lod, instancing and visibility are declared only while a node still uses them (a clip

@@ -443,8 +443,10 @@ struct ViewUse {
   bool indices = false, attributes = false, excluded = false;
   // Every accessor of the view holds animation translation or scale keys (float VEC3), or every one
   // rotation keys (normalized short VEC4), or every one a primitive's normals or tangents (normalized
-  // bytes): with -q they may go through the EXPONENTIAL, QUATERNION or OCTAHEDRAL filter.
+  // bytes, or every one normalized shorts: `direction_bytes`): with -q they may go through the
+  // EXPONENTIAL, QUATERNION or OCTAHEDRAL filter.
   bool keys = false, rotations = false, directions = false, other = false;
+  uint64_t direction_bytes = 0;
   uint64_t stride = 0;  // element (or byteStride) size shared by its accessors
 };
 
@@ -502,8 +504,14 @@ std::vector<ViewUse> view_uses(const Json& doc) {
       const std::string vec = accessor.value("type", std::string());
       if (kinds[k] == 1 && type == TINYGLTF_COMPONENT_TYPE_FLOAT && vec == "VEC3" && !normalized) u.keys = true;
       else if (kinds[k] == 2 && type == TINYGLTF_COMPONENT_TYPE_SHORT && vec == "VEC4" && normalized) u.rotations = true;
-      else if (kinds[k] == 3 && type == TINYGLTF_COMPONENT_TYPE_BYTE && (vec == "VEC3" || vec == "VEC4") && normalized) u.directions = true;
-      else u.other = true;
+      else if (kinds[k] == 3 && (type == TINYGLTF_COMPONENT_TYPE_BYTE || type == TINYGLTF_COMPONENT_TYPE_SHORT) &&
+               (vec == "VEC3" || vec == "VEC4") && normalized) {
+        const uint64_t bytes = type == TINYGLTF_COMPONENT_TYPE_BYTE ? 1 : 2;
+        if (u.direction_bytes && u.direction_bytes != bytes) u.other = true;
+        u.directions = true, u.direction_bytes = bytes;
+      } else {
+        u.other = true;
+      }
       const uint64_t stride = view.value("byteStride", element);
       u.excluded |= stride == 0 || stride % 4 != 0 || stride > 256 || (u.stride && u.stride != stride);
       u.stride = stride;
@@ -513,8 +521,8 @@ std::vector<ViewUse> view_uses(const Json& doc) {
 }
 
 // The view's bytes encoded (vertex streams at version 1 with `khr`) after `filter`, or nothing when
-// that is not smaller.
-std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const ViewUse& u, bool khr, ViewFilter filter) {
+// that is not smaller. `normal_bits`: the octahedral filter's bits on shorts (bytes take 8).
+std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const ViewUse& u, bool khr, ViewFilter filter, int normal_bits) {
   const size_t count = size_t(length / u.stride);
   std::vector<uint8_t> out;
   if (u.indices) {
@@ -555,12 +563,21 @@ std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const Vie
       meshopt_encodeFilterQuat(filtered.data(), count, size_t(u.stride), animation_quat_bits, values.data());
       data = filtered.data();
     } else if (filter == ViewFilter::octahedral) {
-      // Normalized bytes in (a normal's fourth byte is padding; a tangent's w, its handedness, the
-      // filter keeps).
-      std::vector<float> values(static_cast<size_t>(length));
-      for (size_t i = 0; i < values.size(); ++i) values[i] = std::max(float(int8_t(data[i])) / 127.0f, -1.0f);
+      // Normalized bytes or shorts in (a normal's fourth component is padding; a tangent's w, its
+      // handedness, the filter keeps).
+      const bool wide = u.stride == 8;
+      std::vector<float> values(static_cast<size_t>(length) / (wide ? 2 : 1));
+      for (size_t i = 0; i < values.size(); ++i) {
+        if (wide) {
+          int16_t v;
+          std::memcpy(&v, data + 2 * i, 2);
+          values[i] = std::max(float(v) / 32767.0f, -1.0f);
+        } else {
+          values[i] = std::max(float(int8_t(data[i])) / 127.0f, -1.0f);
+        }
+      }
       filtered.resize(size_t(length));
-      meshopt_encodeFilterOct(filtered.data(), count, size_t(u.stride), 8, values.data());
+      meshopt_encodeFilterOct(filtered.data(), count, size_t(u.stride), wide ? normal_bits : 8, values.data());
       data = filtered.data();
     }
     if (khr) {
@@ -726,13 +743,15 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& 
   // filter, as gltfpack -c does: 16-bit mantissas, one exponent per key; views of rotation keys only
   // through the quaternion filter (gltfpack -c leaves them plain: it codes them in 61% of the
   // bytes, a baked character's file 9% smaller).
-  // With compress_more, views of normals and tangents through the octahedral filter (8 bits).
+  // With compress_more, views of normals and tangents through the octahedral filter: bytes in 8 bits,
+  // shorts (-q's above 8 normal bits) in normal_bits.
   const auto filter = [&](size_t v) {
     const ViewUse& u = use[v];
     if (!options.quantize || u.other || int(u.keys) + int(u.rotations) + int(u.directions) != 1) return ViewFilter::none;
     if (u.keys && u.stride == 12) return ViewFilter::exponential;
     if (u.rotations && u.stride == 8) return ViewFilter::quaternion;
-    if (u.directions && u.stride == 4 && options.compress_more) return ViewFilter::octahedral;
+    const bool bytes = u.direction_bytes == 1 && u.stride == 4, shorts = u.direction_bytes == 2 && u.stride == 8 && options.normal_bits > 8;
+    if (u.directions && (bytes || shorts) && options.compress_more) return ViewFilter::octahedral;
     return ViewFilter::none;
   };
   std::vector<ViewFilter> filters(views.size());
@@ -745,7 +764,7 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& 
     const ViewUse& u = use[v];
     const uint64_t length = views[v]["byteLength"].get<uint64_t>();
     if (u.excluded || u.stride == 0 || (u.indices && u.attributes) || length % u.stride != 0) continue;
-    encoded[v] = encode_view(bin.data() + views[v].value("byteOffset", uint64_t(0)), length, u, khr, filter(v));
+    encoded[v] = encode_view(bin.data() + views[v].value("byteOffset", uint64_t(0)), length, u, khr, filter(v), options.normal_bits);
     any = any || !encoded[v].empty();
   }
   if (!any) return;
@@ -789,7 +808,8 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& 
   }
 }
 
-std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, bool track_points, std::span<const uint16_t> grid_positions) {
+std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, int normal_bits, bool track_points,
+                                           std::span<const uint16_t> grid_positions) {
   const size_t n = mesh.vertex_count(), faces = mesh.triangle_count();
   draco::Mesh dm;
   dm.set_num_points(uint32_t(n));
@@ -839,7 +859,7 @@ std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, 
   } else {
     add("POSITION", GA::POSITION, TINYGLTF_TYPE_VEC3, 3, floats(mesh.positions), position_bits);
   }
-  if (!mesh.normals.empty()) add("NORMAL", GA::NORMAL, TINYGLTF_TYPE_VEC3, 3, floats(mesh.normals), 10);
+  if (!mesh.normals.empty()) add("NORMAL", GA::NORMAL, TINYGLTF_TYPE_VEC3, 3, floats(mesh.normals), normal_bits);
   if (!mesh.tangents.empty()) add("TANGENT", GA::GENERIC, TINYGLTF_TYPE_VEC4, 4, floats(mesh.tangents), 12);
   for (size_t k = 0; k < max_uv_sets; ++k)
     if (!mesh.uvs[k].empty()) add("TEXCOORD_" + std::to_string(k), GA::TEX_COORD, TINYGLTF_TYPE_VEC2, 2, floats(mesh.uvs[k]), 12);

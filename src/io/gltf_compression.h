@@ -54,13 +54,14 @@ void decode_compressed_geometry(tinygltf::Model& model, const std::vector<uint64
 // streams at version 1 by lodkit's own encoder (meshopt_codec.h). With `quantize` (lossy already),
 // animation translation and scale keys go through the EXPONENTIAL filter (16-bit mantissas, one
 // exponent per key), as gltfpack -c does, and rotation keys through the QUATERNION filter (16 bits);
-// with `compress_more` too, normals and tangents through the OCTAHEDRAL filter (8 bits). Nothing
+// with `compress_more` too, normals and tangents through the OCTAHEDRAL filter (8 bits in bytes,
+// `normal_bits` in shorts). Nothing
 // changes when no view gets smaller.
 void compress_meshopt(nlohmann::json& doc, std::vector<uint8_t>& bin, const WriteOptions& options);
 
 // Writing (WriteOptions::draco): a triangle mesh's vertex streams and indices as one Draco stream
-// for KHR_draco_mesh_compression. Positions are quantized to `position_bits`, normals to 10 bits
-// (octahedral), UVs to 12, colours to 8, and the other float streams (tangents, skin weights) to 12;
+// for KHR_draco_mesh_compression. Positions are quantized to `position_bits`, normals to
+// `normal_bits` (octahedral), UVs to 12, colours to 8, and the other float streams (tangents, skin weights) to 12;
 // joint indices and the connectivity are exact. The stream is decoded again to describe the
 // accessors, which must match what a loader decodes.
 // Edgebreaker, the smaller encoding, may renumber both vertices and triangles. Streams kept outside
@@ -87,7 +88,7 @@ struct DracoPrimitive {
 // bounds are then in grid steps.
 // Nothing when libdraco cannot encode the mesh so that it decodes again (a triangle with three
 // equal corners): the primitive is then written plain.
-std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, bool track_points,
+std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, int normal_bits, bool track_points,
                                            std::span<const uint16_t> grid_positions = {});
 
 }  // namespace lod::io

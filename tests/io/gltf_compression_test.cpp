@@ -617,6 +617,28 @@ TEST(GltfCompression, DracoOutputMatchesItsSourceWithinTheQuantizationStep) {
   EXPECT_LE(worst, std::sqrt(3.0f) * 0.5f * step + 1e-6f);
   EXPECT_GT(worst, 0.01f * step);  // (8 bits do move the vertices)
 
+  // normal_bits: the normals' octahedral grid, 10 bits by default. At 16, 2^6 times finer: the
+  // largest angle from the source normal falls by more than 16 times (the positions, 14 bits,
+  // still match each vertex to its source).
+  const auto worst_normal = [&](const std::filesystem::path& path) {
+    const Mesh m = only_mesh(read_scene(path));
+    const std::vector<uint32_t> to = match_within_quantization(source, m, 14, 2.5f);
+    double angle = 0;  // (atan2 of |a x b| and a . b in doubles: a float cosine cannot tell 1e-4 rad from 0)
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+      const float3 a = m.normals[v], b = source.normals[to[v]];
+      const double x = double(a.y) * b.z - double(a.z) * b.y, y = double(a.z) * b.x - double(a.x) * b.z, z = double(a.x) * b.y - double(a.y) * b.x;
+      angle = std::max(angle, std::atan2(std::hypot(x, y, z), double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z));
+    }
+    return angle;
+  };
+  o.position_bits = 14;
+  o.normal_bits = 16;
+  write_scene(scene_from_mesh(source), dir / "d16.glb", o);
+  const double coarse_normals = worst_normal(dir / "d.glb"), fine_normals = worst_normal(dir / "d16.glb");
+  EXPECT_GT(coarse_normals, 0.0);
+  EXPECT_LT(fine_normals, coarse_normals / 16);
+  test::expect_valid_gltf({dir / "d16.glb"});
+
   if (test::program_available("draco_decoder")) {
     // The stream alone, through Draco's own command-line decoder.
     const test::Glb glb = test::read_glb(dir / "d.glb");
@@ -1240,6 +1262,61 @@ TEST(GltfCompression, CompressMoreFiltersNormalsAndTangents) {
     for (size_t c = 0; c < 3; ++c)
       EXPECT_NEAR(std::max(second[3 * v + c].get<double>() / 127, -1.0), (&got.normals[v].x)[c], 1e-6) << v;
   test::expect_valid_gltf({dir / "cc.glb"});
+}
+
+// compress_more with normal_bits above 8 (--cc --normal-bits N): -q's shorts through the octahedral
+// filter in N bits, the views 8 bytes a vertex. The bound against the shorts -q alone stores, as
+// for bytes above: half a step of the filter, 1 / (2 (2^(N-1) - 1)), in u and v moves the direction
+// by at most sqrt 18 times that, and the decoder's rounding to shorts adds sqrt 3 / 65534 rad.
+// meshoptimizer's JavaScript decoder reads the same shorts; tangents keep their handedness.
+TEST(GltfCompression, CompressMoreFiltersShortNormalsInTheirBits) {
+  TempDir dir;
+  Mesh mesh = shapes::torus(1.0f, 0.3f, 48, 24);
+  for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+    const float3 n = mesh.normals[v];
+    const float len = std::hypot(n.x, n.y);
+    mesh.tangents.push_back(len > 1e-3f ? float4{-n.y / len, n.x / len, 0, v % 2 ? -1.0f : 1.0f} : float4{1, 0, 0, 1});
+  }
+  const Scene scene = scene_from_mesh(mesh);
+  const auto degrees = [](float3 a, float3 b) {
+    const double d = double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z;
+    const double la = std::hypot(double(a.x), double(a.y), double(a.z)), lb = std::hypot(double(b.x), double(b.y), double(b.z));
+    return std::acos(std::min(1.0, d / (la * lb))) * 180 / M_PI;
+  };
+  for (const int bits : {12, 16}) {
+    SCOPED_TRACE(bits);
+    const std::filesystem::path q = dir / "q.glb", cc = dir / "cc.glb";
+    write_scene(scene, q, {.quantize = true, .normal_bits = bits});
+    write_scene(scene, cc, {.meshopt_compression = true, .quantize = true, .compress_more = true, .normal_bits = bits});
+    const Json doc = test::glb_json(cc);
+    size_t octahedral = 0;
+    for (const Json& view : doc["bufferViews"])
+      if (view.contains("extensions") && view["extensions"][kMeshopt].value("filter", "") == "OCTAHEDRAL") {
+        ++octahedral;
+        EXPECT_EQ(view["extensions"][kMeshopt]["byteStride"], 8);
+      }
+    EXPECT_EQ(octahedral, 2u);  // the normals' view and the tangents'
+    const Mesh want = read_scene(q).primitives.at(0).mesh, got = read_scene(cc).primitives.at(0).mesh;
+    ASSERT_EQ(got.normals.size(), want.normals.size());
+    ASSERT_EQ(got.tangents.size(), want.tangents.size());
+    double worst = 0;
+    size_t moved = 0;
+    for (size_t v = 0; v < got.normals.size(); ++v) {
+      const float4 &a = got.tangents[v], &b = want.tangents[v];
+      worst = std::max({worst, degrees(got.normals[v], want.normals[v]), degrees({a.x, a.y, a.z}, {b.x, b.y, b.z})});
+      EXPECT_EQ(a.w, b.w) << v;
+      moved += got.normals[v].x != want.normals[v].x || got.normals[v].y != want.normals[v].y || got.normals[v].z != want.normals[v].z;
+    }
+    const double bound = (std::sqrt(18.0) * 0.5 / (std::exp2(bits - 1) - 1) + std::sqrt(3.0) / 65534) * 180 / M_PI;
+    EXPECT_LE(worst, bound);
+    EXPECT_GT(moved, 0u);  // (the filter did apply)
+    const Json second = test::read_with_second_reader(cc)[0]["attributes"]["NORMAL"]["values"];
+    ASSERT_EQ(second.size(), 3 * got.normals.size());
+    for (size_t v = 0; v < got.normals.size(); ++v)
+      for (size_t c = 0; c < 3; ++c)
+        EXPECT_NEAR(std::max(second[3 * v + c].get<double>() / 32767, -1.0), (&got.normals[v].x)[c], 1e-6) << v;
+    test::expect_valid_gltf({cc});
+  }
 }
 
 // The CLI's --draco: a LOD chain, valid, every level compressed; with -c, meshopt takes the rest

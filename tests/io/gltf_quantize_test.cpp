@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <numeric>
 #include <set>
 #include <string>
@@ -146,6 +147,87 @@ TEST(GltfQuantize, StreamsComeBackWithinHalfAStep) {
   EXPECT_LT(std::filesystem::file_size(dir / "qc.glb"), std::filesystem::file_size(dir / "c.glb") * 3 / 4);
   EXPECT_LT(std::filesystem::file_size(dir / "q.glb"), std::filesystem::file_size(dir / "plain.glb") * 3 / 4);
   test::expect_valid_gltf({dir / "q.glb", dir / "qc.glb"});
+}
+
+// normal_bits above 8 (the CLI's --normal-bits): normals and tangents in normalized shorts whose
+// values are multiples of 2^(16 - bits), or +-32767. By hand: a component moves by at most half a
+// multiple, 2^(15 - bits) / 32767 (or 1/32767 where clamped to 32767), so a unit vector by sqrt 3
+// times that, and the reader's renormalization at most doubles it. A tangent's handedness stays
+// exactly +-1. Bytes make a smaller -c file than shorts.
+TEST(GltfQuantize, NormalBitsStoreShortsOnTheirGrid) {
+  TempDir dir;
+  Mesh m = shapes::torus(1.0f, 0.3f, 48, 24);
+  for (size_t v = 0; v < m.vertex_count(); ++v) {
+    const float3 n = m.normals[v];
+    const float len = std::hypot(n.x, n.y);
+    m.tangents.push_back(len > 1e-3f ? float4{-n.y / len, n.x / len, 0, v % 2 ? -1.0f : 1.0f} : float4{1, 0, 0, 1});
+  }
+  const Scene scene = scene_from_mesh(m);
+  std::map<int, double> worst_of;
+  std::map<int, uintmax_t> compressed_bytes;
+  for (const int bits : {8, 12, 16}) {
+    SCOPED_TRACE(bits);
+    const std::filesystem::path path = dir / ("q" + std::to_string(bits) + ".glb");
+    write_scene(scene, path, {.quantize = true, .normal_bits = bits});
+    const test::Glb glb = test::read_glb(path);
+    const Json& attributes = glb.doc["meshes"][0]["primitives"][0]["attributes"];
+    for (const char* name : {"NORMAL", "TANGENT"}) {
+      const Json& accessor = glb.doc["accessors"][attributes[name].get<size_t>()];
+      EXPECT_EQ(accessor["componentType"], bits == 8 ? 5120 : 5122) << name;  // byte or short
+      EXPECT_TRUE(accessor["normalized"].get<bool>()) << name;
+    }
+    if (bits > 8) {
+      const double multiple = std::exp2(16 - bits);
+      size_t off_grid = 0;
+      for (const double q : stored<int16_t>(glb, attributes["NORMAL"], 3))
+        off_grid += std::fabs(q) != 32767 && std::fmod(q, multiple) != 0;
+      EXPECT_EQ(off_grid, 0u);
+    }
+    const Mesh back = flatten(read_scene(path));
+    ASSERT_EQ(back.vertex_count(), m.vertex_count());
+    double worst = 0;
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+      const float4 &t = m.tangents[v], &k = back.tangents[v];
+      worst = std::max({worst, distance(m.normals[v], back.normals[v]), distance({t.x, t.y, t.z}, {k.x, k.y, k.z})});
+      EXPECT_EQ(k.w, t.w) << v;
+    }
+    const double half = bits == 8 ? 0.5 / 127 : std::max(std::exp2(15 - bits), 1.0) / 32767;
+    EXPECT_LE(worst, 2 * std::sqrt(3.0) * half);
+    EXPECT_GT(worst, half / 8);  // (it did round)
+    worst_of[bits] = worst;
+    write_scene(scene, dir / "c.glb", {.meshopt_compression = true, .quantize = true, .normal_bits = bits});
+    compressed_bytes[bits] = std::filesystem::file_size(dir / "c.glb");
+    test::expect_valid_gltf({path, dir / "c.glb"});
+  }
+  EXPECT_LT(worst_of[12], worst_of[8] / 8);
+  EXPECT_LT(compressed_bytes[8], compressed_bytes[12]);
+  // A morph target's normal displacements take the same shorts, within the same half multiple.
+  Scene morphing = scene;
+  MorphTarget target;
+  for (const float3& p : m.positions) target.positions.push_back({0.5f * p.z, 0.25f * p.x, -0.4f * p.y});
+  for (const float3& n : m.normals) target.normals.push_back({0.1f * n.x, -0.2f * n.z, 0.3f * n.y});
+  morphing.primitives[0].targets.push_back(target);
+  write_scene(morphing, dir / "morph.glb", {.quantize = true, .normal_bits = 12});
+  const Json doc = test::glb_json(dir / "morph.glb");
+  EXPECT_EQ(doc["accessors"][doc["meshes"][0]["primitives"][0]["targets"][0]["NORMAL"].get<size_t>()]["componentType"], 5122);
+  const std::vector<MorphTarget> back = source_morph_targets(read_scene(dir / "morph.glb"), 0);
+  ASSERT_EQ(back.size(), 1u);
+  const double worst_displacement = largest_distance(back[0].normals, target.normals);
+  EXPECT_LE(worst_displacement, std::sqrt(3.0) * 8 / 32767 + 1e-7);
+  EXPECT_GT(worst_displacement, 1.0 / 32767);
+  test::expect_valid_gltf({dir / "morph.glb"});
+  // Out of range: refused.
+  EXPECT_THROW(write_scene(scene, dir / "bad.glb", {.quantize = true, .normal_bits = 7}), std::exception);
+  EXPECT_THROW(write_scene(scene, dir / "bad.glb", {.quantize = true, .normal_bits = 17}), std::exception);
+  // The CLI's --normal-bits: shorts with -q; out of 8-16, a usage error (exit 1) and no file.
+  write_scene(scene, dir / "in.glb");
+  test::RunResult r = test::run_cli({"convert", (dir / "in.glb").string(), (dir / "cli.glb").string(), "-q", "--normal-bits", "12"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Json cli = test::glb_json(dir / "cli.glb");
+  EXPECT_EQ(cli["accessors"][cli["meshes"][0]["primitives"][0]["attributes"]["NORMAL"].get<size_t>()]["componentType"], 5122);
+  r = test::run_cli({"convert", (dir / "in.glb").string(), (dir / "bad.glb").string(), "-q", "--normal-bits", "7"});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.glb"));
 }
 
 // Four nodes draw one mesh each: a matrix node, a rotated and non-uniformly scaled node, a node with

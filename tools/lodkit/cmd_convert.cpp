@@ -102,18 +102,22 @@ void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
                 "loaders that implement the KHR extension)");
   app->add_flag("-q,--quantize", options.quantize,
                 "glTF output: vertex streams in fewer bits (KHR_mesh_quantization, then required): positions on a "
-                "grid of --position-bits, normals and tangents in bytes, UVs in 16 bits (outside [0,1]: on a box, with KHR_texture_transform), colours and "
+                "grid of --position-bits, normals and tangents in --normal-bits (bytes by default), UVs in 16 bits (outside [0,1]: on a box, with KHR_texture_transform), colours and "
                 "weights in bytes");
   app->add_flag_callback(
       "--cc",
       [&options] { options.compress_more = options.meshopt_compression = options.quantize = true; },
       "glTF output: -c -q, and normals and tangents through meshopt's octahedral filter (8 bits, up to 1.4 degrees "
-      "from -q's), as gltfpack -cc");
+      "from -q's; or --normal-bits), as gltfpack -cc");
   app->add_flag("--draco", options.draco,
                 "glTF output: each triangle primitive's geometry as a Draco stream (KHR_draco_mesh_compression, then "
-                "required): positions in --position-bits, normals 10 bits, UVs 12, colours 8, weights and tangents 12");
+                "required): positions in --position-bits, normals in --normal-bits (default 10), UVs 12, colours 8, weights and tangents 12");
   app->add_option("--position-bits", options.position_bits, "With -q or --draco: bits per position coordinate (default 14)")
       ->check(CLI::Range(1, 16));
+  app->add_option("--normal-bits", options.normal_bits,
+                  "With -q, --cc or --draco: bits per normal and tangent component, 8 to 16, as gltfpack -vn (default 8; "
+                  "10 in Draco). Above 8, -q stores shorts: 12 bits are within 0.03 degrees, against the bytes' 0.4")
+      ->check(CLI::Range(8, 16));
   app->add_option("--anim-error", options.animation_error,
                   "With -q: how far a reduced animation curve may move what it animates, as a fraction of the scene's "
                   "extent (default 2^-12 = 0.000244; 0 keeps every key a curve needs exactly)")
