@@ -158,6 +158,15 @@ std::string first_diff(const char* what, const std::vector<T>& a, const std::vec
 }
 }  // namespace
 
+void add_tangents(Mesh& m) {
+  m.tangents.clear();
+  for (size_t v = 0; v < m.normals.size(); ++v) {
+    const float3 n = m.normals[v];
+    const float len = std::hypot(n.x, n.y);
+    m.tangents.push_back(len > 1e-3f ? float4{-n.y / len, n.x / len, 0, v % 2 ? -1.0f : 1.0f} : float4{1, 0, 0, v % 2 ? -1.0f : 1.0f});
+  }
+}
+
 std::vector<std::array<uint32_t, 3>> canonical_triangles(const std::vector<uint32_t>& indices, const std::vector<uint32_t>* map) {
   std::vector<std::array<uint32_t, 3>> out;
   for (size_t t = 0; t + 2 < indices.size(); t += 3) {

@@ -100,6 +100,10 @@ std::vector<float> glb_floats(const std::filesystem::path& path, size_t accessor
 std::vector<float3> glb_morph_positions(const std::filesystem::path& path, size_t mesh = 0, size_t primitive = 0,
                                         size_t target = 0);
 
+// Gives the mesh, which has normals, a unit tangent across each normal (in the xy plane; +x where the
+// normal is about z) with handedness alternating +1, -1 by vertex.
+void add_tangents(Mesh& m);
+
 // Describes the first difference between two meshes ("" when equal, bitwise on floats).
 std::string mesh_difference(const Mesh& a, const Mesh& b);
 

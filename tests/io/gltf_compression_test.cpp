@@ -1205,6 +1205,13 @@ TEST(GltfCompression, QuantizedCompressionFiltersRotationKeys) {
   }
 }
 
+// The angle between two directions, in degrees (their lengths divided out, in doubles).
+double degrees(float3 a, float3 b) {
+  const double d = double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z;
+  const double la = std::hypot(double(a.x), double(a.y), double(a.z)), lb = std::hypot(double(b.x), double(b.y), double(b.z));
+  return std::acos(std::min(1.0, d / (la * lb))) * 180 / M_PI;
+}
+
 // compress_more (the CLI's --cc, which implies -c -q): normals and tangents go through meshopt's
 // octahedral filter in 8 bits, as gltfpack -cc. The bound against the normalized bytes -q stores:
 // the filter keeps u, v of the octahedral map within half a step (1/254) each, which moves the
@@ -1217,13 +1224,7 @@ TEST(GltfCompression, CompressMoreFiltersNormalsAndTangents) {
   TempDir dir;
   Mesh mesh = shapes::torus(1.0f, 0.3f, 48, 24);
   ASSERT_EQ(mesh.normals.size(), mesh.vertex_count());
-  for (size_t v = 0; v < mesh.vertex_count(); ++v) {  // a tangent across each normal, handedness alternating
-    const float3 n = mesh.normals[v];
-    float3 t = {-n.y, n.x, 0};
-    const float len = std::hypot(t.x, t.y);
-    t = len > 1e-3f ? float3{t.x / len, t.y / len, 0} : float3{1, 0, 0};
-    mesh.tangents.push_back({t.x, t.y, t.z, v % 2 ? -1.0f : 1.0f});
-  }
+  test::add_tangents(mesh);
   const Scene scene = scene_from_mesh(mesh);
   write_scene(scene, dir / "q.glb", {.quantize = true});
   write_scene(scene, dir / "cc.glb", {.meshopt_compression = true, .quantize = true, .compress_more = true});
@@ -1240,11 +1241,6 @@ TEST(GltfCompression, CompressMoreFiltersNormalsAndTangents) {
   const Mesh want = read_scene(dir / "q.glb").primitives.at(0).mesh, got = read_scene(dir / "cc.glb").primitives.at(0).mesh;
   ASSERT_EQ(got.normals.size(), want.normals.size());
   ASSERT_EQ(got.tangents.size(), want.tangents.size());
-  const auto degrees = [](float3 a, float3 b) {
-    const double d = double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z;
-    const double la = std::hypot(double(a.x), double(a.y), double(a.z)), lb = std::hypot(double(b.x), double(b.y), double(b.z));
-    return std::acos(std::min(1.0, d / (la * lb))) * 180 / M_PI;
-  };
   double worst = 0;
   size_t moved = 0;
   for (size_t v = 0; v < got.normals.size(); ++v) {
@@ -1272,17 +1268,8 @@ TEST(GltfCompression, CompressMoreFiltersNormalsAndTangents) {
 TEST(GltfCompression, CompressMoreFiltersShortNormalsInTheirBits) {
   TempDir dir;
   Mesh mesh = shapes::torus(1.0f, 0.3f, 48, 24);
-  for (size_t v = 0; v < mesh.vertex_count(); ++v) {
-    const float3 n = mesh.normals[v];
-    const float len = std::hypot(n.x, n.y);
-    mesh.tangents.push_back(len > 1e-3f ? float4{-n.y / len, n.x / len, 0, v % 2 ? -1.0f : 1.0f} : float4{1, 0, 0, 1});
-  }
+  test::add_tangents(mesh);
   const Scene scene = scene_from_mesh(mesh);
-  const auto degrees = [](float3 a, float3 b) {
-    const double d = double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z;
-    const double la = std::hypot(double(a.x), double(a.y), double(a.z)), lb = std::hypot(double(b.x), double(b.y), double(b.z));
-    return std::acos(std::min(1.0, d / (la * lb))) * 180 / M_PI;
-  };
   for (const int bits : {12, 16}) {
     SCOPED_TRACE(bits);
     const std::filesystem::path q = dir / "q.glb", cc = dir / "cc.glb";

@@ -157,11 +157,7 @@ TEST(GltfQuantize, StreamsComeBackWithinHalfAStep) {
 TEST(GltfQuantize, NormalBitsStoreShortsOnTheirGrid) {
   TempDir dir;
   Mesh m = shapes::torus(1.0f, 0.3f, 48, 24);
-  for (size_t v = 0; v < m.vertex_count(); ++v) {
-    const float3 n = m.normals[v];
-    const float len = std::hypot(n.x, n.y);
-    m.tangents.push_back(len > 1e-3f ? float4{-n.y / len, n.x / len, 0, v % 2 ? -1.0f : 1.0f} : float4{1, 0, 0, 1});
-  }
+  test::add_tangents(m);
   const Scene scene = scene_from_mesh(m);
   std::map<int, double> worst_of;
   std::map<int, uintmax_t> compressed_bytes;
