@@ -1342,6 +1342,7 @@ struct StreamCoding {
   const PositionGrid* grid = nullptr;  // positions and target positions on this grid
   const UvBoxes* uv_boxes = nullptr;   // quantized: UV sets outside [0, 1] stored on these boxes
   int normal_bits = 8;                 // quantized: normals and tangents in bytes (8) or shorts (9-16)
+  io::DirectionFloats* directions = nullptr;  // quantized: where to keep their floats (--cc's filter codes them)
 };
 
 // Each element's float components (float2, float3, float4), stored as integers I = code(value,
@@ -1499,7 +1500,13 @@ class BinWriter {
       // (Core glTF allows integer UVs and colours; integer normals and tangents need the extension.)
       if (name == "NORMAL" || name == "TANGENT") {
         const auto [packed, component] = snorm_directions(values, coding.normal_bits);
-        return used_quantization_ = true, add_packed(packed, component, type, true);
+        const int accessor = add_packed(packed, component, type, true);
+        if (coding.directions) {
+          std::vector<float>& floats = (*coding.directions)[size_t(accessor)];
+          floats.assign(4 * values.size(), 0.0f);
+          for (size_t i = 0; i < values.size(); ++i) std::memcpy(&floats[4 * i], &values[i], sizeof(T));
+        }
+        return used_quantization_ = true, accessor;
       }
       if (name.starts_with("TEXCOORD") && all_in_range(values, 0.0f, 1.0f))
         return add_packed(unorm<uint16_t>(values), TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, type, true);
@@ -2618,9 +2625,10 @@ bool make_uv_boxes(tg::Model& model, const std::vector<std::pair<size_t, size_t>
 // Replaces the geometry of the triangle primitives listed in `slots` by scene.primitives[i].mesh,
 // drops what nothing references any more, and packs the surviving bufferViews and the new geometry
 // into one buffer (returned; buffer 0 of the model, whose `buffers` list is left empty), quantized as
-// `options` asks. `report` gets the Draco counts.
+// `options` asks. `report` gets the Draco counts; `directions`, under compress_more, the float values
+// of the quantized normals and tangents (compress_meshopt's octahedral filter codes those).
 std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, const std::vector<Slot>& slots,
-                                      const WriteOptions& options, WriteReport& report) {
+                                      const WriteOptions& options, WriteReport& report, io::DirectionFloats& directions) {
   const size_t mesh_count = model.meshes.size();
   // Which scene primitive replaces each glTF primitive (-1: none).
   std::vector<std::vector<int>> replaced_by(mesh_count);
@@ -3128,7 +3136,8 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     const int32_t shared = in.shares_vertices_with;
     std::vector<Gathered>& extra = gathered[p.scene_primitive];
     const UvBoxes* boxes = uv_boxes.empty() ? nullptr : &uv_boxes[i];
-    const StreamCoding coding{options.quantize, on_grid[p.mesh] ? &grid : nullptr, boxes, options.normal_bits ? options.normal_bits : 8};
+    const StreamCoding coding{options.quantize, on_grid[p.mesh] ? &grid : nullptr, boxes, options.normal_bits ? options.normal_bits : 8,
+                              options.compress_more && options.meshopt_compression ? &directions : nullptr};
     if (options.draco) {
       // Each primitive its own stream (Draco has no shared vertex buffers); the gathered streams
       // outside it follow its vertices.
@@ -4150,7 +4159,8 @@ WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, co
   if (options.normal_bits != 0 && (options.normal_bits < 8 || options.normal_bits > 16))
     throw_usage("cannot write glTF: normal_bits is " + std::to_string(options.normal_bits) + ", not 0 (the default) or 8 to 16");
   WriteReport report;
-  std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots, options, report);
+  io::DirectionFloats directions;
+  std::vector<uint8_t> bin = rebuild_geometry(model, scene, slots, options, report, directions);
   // MSFT_lod, instancing and visibility are declared only while a node still uses them (a clip
   // switching a node's visibility uses it too).
   const bool switched = std::any_of(model.animations.begin(), model.animations.end(), [](const tg::Animation& anim) {
@@ -4171,7 +4181,7 @@ WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, co
   if (scene.source) relocate_images(model, glb ? &bin : nullptr, scene.source->base_dir, path.parent_path());
   const std::string bin_name = path.stem().string() + ".bin";
   Json doc = serialize_json(model, bin.size(), glb ? "" : uri_escape(bin_name));
-  if (options.meshopt_compression) io::compress_meshopt(doc, bin, options);
+  if (options.meshopt_compression) io::compress_meshopt(doc, bin, options, directions);
   if (glb) {
     const std::vector<uint8_t> bytes = make_glb(dump_json(doc, false), bin, path.string());
     write_file_atomic(path, bytes);

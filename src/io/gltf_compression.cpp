@@ -521,8 +521,10 @@ std::vector<ViewUse> view_uses(const Json& doc) {
 }
 
 // The view's bytes encoded (vertex streams at version 1 with `khr`) after `filter`, or nothing when
-// that is not smaller. `normal_bits`: the octahedral filter's bits on shorts (bytes take 8).
-std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const ViewUse& u, bool khr, ViewFilter filter, int normal_bits) {
+// that is not smaller. `normal_bits`: the octahedral filter's bits on shorts (bytes take 8);
+// `given`: its input, 4 floats per element, where the caller has them (else the stored integers).
+std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const ViewUse& u, bool khr, ViewFilter filter, int normal_bits,
+                                 std::span<const float> given) {
   const size_t count = size_t(length / u.stride);
   std::vector<uint8_t> out;
   if (u.indices) {
@@ -567,7 +569,9 @@ std::vector<uint8_t> encode_view(const uint8_t* data, uint64_t length, const Vie
       // handedness, the filter keeps).
       const bool wide = u.stride == 8;
       std::vector<float> values(static_cast<size_t>(length) / (wide ? 2 : 1));
+      if (given.size() == values.size()) std::copy(given.begin(), given.end(), values.begin());
       for (size_t i = 0; i < values.size(); ++i) {
+        if (given.size() == values.size() && !std::isnan(given[i])) continue;
         if (wide) {
           int16_t v;
           std::memcpy(&v, data + 2 * i, 2);
@@ -731,9 +735,28 @@ void merge_views(Json& doc, std::vector<uint8_t>& bin, const std::vector<ViewUse
   doc["buffers"][0]["byteLength"] = bin.size();
 }
 
+// The octahedral filter's input for view v (`count` elements of `stride` bytes): 4 floats per
+// element, from `directions` for the elements of accessors found there, NaN for the others (which
+// encode_view reads from the stored integers); empty when no accessor of the view is found there.
+std::vector<float> direction_input(const Json& doc, size_t v, uint64_t count, uint64_t stride, const DirectionFloats& directions) {
+  std::vector<float> out;
+  if (directions.empty()) return out;
+  const Json& accessors = doc["accessors"];
+  for (const auto& [index, floats] : directions) {
+    if (index >= accessors.size()) continue;
+    const Json& accessor = accessors[index];
+    if (accessor.value("bufferView", uint64_t(-1)) != v) continue;
+    const uint64_t offset = accessor.value("byteOffset", uint64_t(0)), n = accessor.value("count", uint64_t(0));
+    if (offset % stride != 0 || offset / stride + n > count || floats.size() != 4 * n) continue;  // (never, as written)
+    if (out.empty()) out.assign(4 * count, std::numeric_limits<float>::quiet_NaN());
+    std::copy(floats.begin(), floats.end(), out.begin() + ptrdiff_t(4 * (offset / stride)));
+  }
+  return out;
+}
+
 }  // namespace
 
-void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& options) {
+void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& options, const DirectionFloats& directions) {
   const bool khr = options.meshopt_khr;
   const char* const extension = meshopt_names[khr ? 1 : 0];
   if (bin.empty() || !doc.contains("bufferViews") || doc["buffers"].size() != 1) return;
@@ -760,11 +783,14 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& 
   use = view_uses(doc);
   std::vector<std::vector<uint8_t>> encoded(views.size());
   bool any = false;
+  std::vector<float> given;
   for (size_t v = 0; v < views.size(); ++v) {
     const ViewUse& u = use[v];
     const uint64_t length = views[v]["byteLength"].get<uint64_t>();
     if (u.excluded || u.stride == 0 || (u.indices && u.attributes) || length % u.stride != 0) continue;
-    encoded[v] = encode_view(bin.data() + views[v].value("byteOffset", uint64_t(0)), length, u, khr, filter(v), options.normal_bits);
+    given.clear();
+    if (filter(v) == ViewFilter::octahedral) given = direction_input(doc, v, length / u.stride, u.stride, directions);
+    encoded[v] = encode_view(bin.data() + views[v].value("byteOffset", uint64_t(0)), length, u, khr, filter(v), options.normal_bits, given);
     any = any || !encoded[v].empty();
   }
   if (!any) return;

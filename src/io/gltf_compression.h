@@ -56,8 +56,11 @@ void decode_compressed_geometry(tinygltf::Model& model, const std::vector<uint64
 // exponent per key), as gltfpack -c does, and rotation keys through the QUATERNION filter (16 bits);
 // with `compress_more` too, normals and tangents through the OCTAHEDRAL filter (8 bits in bytes,
 // `normal_bits` in shorts). Nothing
-// changes when no view gets smaller.
-void compress_meshopt(nlohmann::json& doc, std::vector<uint8_t>& bin, const WriteOptions& options);
+// changes when no view gets smaller. `directions`: the float values of normal and tangent accessors
+// the writer quantized, by accessor index, 4 per element (a normal's fourth 0): the octahedral
+// filter codes those, not the bytes or shorts, so the normals are quantized once, not twice.
+using DirectionFloats = std::map<size_t, std::vector<float>>;
+void compress_meshopt(nlohmann::json& doc, std::vector<uint8_t>& bin, const WriteOptions& options, const DirectionFloats& directions = {});
 
 // Writing (WriteOptions::draco): a triangle mesh's vertex streams and indices as one Draco stream
 // for KHR_draco_mesh_compression. Positions are quantized to `position_bits`, normals to

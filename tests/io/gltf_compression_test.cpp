@@ -3,6 +3,7 @@
 // against their uncompressed twin or their source within the quantization step; and broken copies
 // of them, refused with a message.
 #include <gtest/gtest.h>
+#include <meshoptimizer.h>
 
 #include <algorithm>
 #include <array>
@@ -1213,95 +1214,76 @@ double degrees(float3 a, float3 b) {
 }
 
 // compress_more (the CLI's --cc, which implies -c -q): normals and tangents go through meshopt's
-// octahedral filter in 8 bits, as gltfpack -cc. The bound against the normalized bytes -q stores:
-// the filter keeps u, v of the octahedral map within half a step (1/254) each, which moves the
-// unfolded point (u, v, 1 - |u| - |v|), at least 1/sqrt 3 long, by at most sqrt 6 / 254, so the
-// direction by at most 0.96 degrees; the decoder's own rounding to bytes adds at most
-// sqrt 3 / 254 rad (0.39 degrees): 1.4 degrees. Read back by lodkit and by meshoptimizer's
-// JavaScript decoder (the second reader), which must agree; a tangent's handedness stays. Without
-// -q, or without compress_more, no view is filtered so.
+// octahedral filter, as gltfpack -cc: in 8 bits by default, from normalized bytes; with normal_bits
+// N above 8 in N bits, from shorts (views of 8 bytes a vertex). The filter codes the input's floats,
+// not the integers -q stores, so each normal is quantized once: the codes stored are those
+// meshoptimizer's own encoder makes of the float normals (computed here, apart from lodkit, and
+// read with meshoptimizer's vertex decoder). The bound against the input by hand: the filter keeps u, v of the octahedral map within
+// half a step, 1 / (2 (2^(N-1) - 1)), each, which moves the unfolded point (u, v, 1 - |u| - |v|), at
+// least 1/sqrt 3 long, by at most sqrt 6 times that, so the direction by at most sqrt 18 times it
+// (0.96 degrees at 8 bits); the decoder's rounding to bytes or shorts adds sqrt 3 / 254 or
+// sqrt 3 / 65534 rad. meshoptimizer's JavaScript decoder (the second reader) must agree; a
+// tangent's handedness stays. Without compress_more, no view is filtered so.
 TEST(GltfCompression, CompressMoreFiltersNormalsAndTangents) {
   TempDir dir;
   Mesh mesh = shapes::torus(1.0f, 0.3f, 48, 24);
   ASSERT_EQ(mesh.normals.size(), mesh.vertex_count());
   test::add_tangents(mesh);
   const Scene scene = scene_from_mesh(mesh);
-  write_scene(scene, dir / "q.glb", {.quantize = true});
-  write_scene(scene, dir / "cc.glb", {.meshopt_compression = true, .quantize = true, .compress_more = true});
-  write_scene(scene, dir / "cq.glb", {.meshopt_compression = true, .quantize = true});
-  const auto filters = [](const std::filesystem::path& file) {
-    std::multiset<std::string> out;
+  const auto octahedral_views = [](const std::filesystem::path& file, uint64_t stride) {
+    size_t count = 0;
     const Json doc = test::glb_json(file);
     for (const Json& view : doc["bufferViews"])
-      if (view.contains("extensions")) out.insert(view["extensions"]["EXT_meshopt_compression"].value("filter", "NONE"));
-    return out;
-  };
-  EXPECT_EQ(filters(dir / "cc.glb").count("OCTAHEDRAL"), 2u);  // the normals' view and the tangents'
-  EXPECT_EQ(filters(dir / "cq.glb").count("OCTAHEDRAL"), 0u);
-  const Mesh want = read_scene(dir / "q.glb").primitives.at(0).mesh, got = read_scene(dir / "cc.glb").primitives.at(0).mesh;
-  ASSERT_EQ(got.normals.size(), want.normals.size());
-  ASSERT_EQ(got.tangents.size(), want.tangents.size());
-  double worst = 0;
-  size_t moved = 0;
-  for (size_t v = 0; v < got.normals.size(); ++v) {
-    worst = std::max({worst, degrees(got.normals[v], want.normals[v]),
-                      degrees({got.tangents[v].x, got.tangents[v].y, got.tangents[v].z}, {want.tangents[v].x, want.tangents[v].y, want.tangents[v].z})});
-    EXPECT_EQ(got.tangents[v].w, want.tangents[v].w) << v;
-    moved += got.normals[v].x != want.normals[v].x || got.normals[v].y != want.normals[v].y || got.normals[v].z != want.normals[v].z;
-  }
-  EXPECT_LE(worst, 1.4);
-  EXPECT_GT(moved, got.normals.size() / 4);  // (the filter did apply)
-  // meshoptimizer's decoder reads the same bytes.
-  const Json second = test::read_with_second_reader(dir / "cc.glb")[0]["attributes"]["NORMAL"]["values"];
-  ASSERT_EQ(second.size(), 3 * got.normals.size());
-  for (size_t v = 0; v < got.normals.size(); ++v)
-    for (size_t c = 0; c < 3; ++c)
-      EXPECT_NEAR(std::max(second[3 * v + c].get<double>() / 127, -1.0), (&got.normals[v].x)[c], 1e-6) << v;
-  test::expect_valid_gltf({dir / "cc.glb"});
-}
-
-// compress_more with normal_bits above 8 (--cc --normal-bits N): -q's shorts through the octahedral
-// filter in N bits, the views 8 bytes a vertex. The bound against the shorts -q alone stores, as
-// for bytes above: half a step of the filter, 1 / (2 (2^(N-1) - 1)), in u and v moves the direction
-// by at most sqrt 18 times that, and the decoder's rounding to shorts adds sqrt 3 / 65534 rad.
-// meshoptimizer's JavaScript decoder reads the same shorts; tangents keep their handedness.
-TEST(GltfCompression, CompressMoreFiltersShortNormalsInTheirBits) {
-  TempDir dir;
-  Mesh mesh = shapes::torus(1.0f, 0.3f, 48, 24);
-  test::add_tangents(mesh);
-  const Scene scene = scene_from_mesh(mesh);
-  for (const int bits : {12, 16}) {
-    SCOPED_TRACE(bits);
-    const std::filesystem::path q = dir / "q.glb", cc = dir / "cc.glb";
-    write_scene(scene, q, {.quantize = true, .normal_bits = bits});
-    write_scene(scene, cc, {.meshopt_compression = true, .quantize = true, .compress_more = true, .normal_bits = bits});
-    const Json doc = test::glb_json(cc);
-    size_t octahedral = 0;
-    for (const Json& view : doc["bufferViews"])
       if (view.contains("extensions") && view["extensions"][kMeshopt].value("filter", "") == "OCTAHEDRAL") {
-        ++octahedral;
-        EXPECT_EQ(view["extensions"][kMeshopt]["byteStride"], 8);
+        ++count;
+        EXPECT_EQ(view["extensions"][kMeshopt]["byteStride"], stride);
       }
-    EXPECT_EQ(octahedral, 2u);  // the normals' view and the tangents'
-    const Mesh want = read_scene(q).primitives.at(0).mesh, got = read_scene(cc).primitives.at(0).mesh;
-    ASSERT_EQ(got.normals.size(), want.normals.size());
-    ASSERT_EQ(got.tangents.size(), want.tangents.size());
+    return count;
+  };
+  write_scene(scene, dir / "cq.glb", {.meshopt_compression = true, .quantize = true});
+  EXPECT_EQ(octahedral_views(dir / "cq.glb", 4), 0u);
+  for (const int bits : {0, 12, 16}) {
+    SCOPED_TRACE(bits);
+    const int n = bits ? bits : 8;
+    const bool wide = n > 8;
+    const std::filesystem::path cc = dir / "cc.glb";
+    write_scene(scene, cc, {.meshopt_compression = true, .quantize = true, .compress_more = true, .normal_bits = bits});
+    EXPECT_EQ(octahedral_views(cc, wide ? 8 : 4), 2u);  // the normals' view and the tangents'
+    const Mesh got = read_scene(cc).primitives.at(0).mesh;
+    ASSERT_EQ(got.normals.size(), mesh.normals.size());
+    ASSERT_EQ(got.tangents.size(), mesh.tangents.size());
+    // The codes stored: the normals' view decoded by meshoptimizer's vertex decoder, against its
+    // filter's codes of the float normals.
+    const size_t count = mesh.vertex_count(), stride = wide ? 8 : 4;
+    std::vector<float> input(4 * count, 0.0f);
+    for (size_t v = 0; v < count; ++v) std::memcpy(&input[4 * v], &mesh.normals[v], sizeof(float3));
+    std::vector<uint8_t> expected(count * stride);
+    meshopt_encodeFilterOct(expected.data(), count, stride, n, input.data());
+    const test::Glb glb = test::read_glb(cc);
+    const Json& normals = glb.doc["accessors"][glb.doc["meshes"][0]["primitives"][0]["attributes"]["NORMAL"].get<size_t>()];
+    const Json& compressed = glb.doc["bufferViews"][normals["bufferView"].get<size_t>()]["extensions"][kMeshopt];
+    ASSERT_EQ(compressed.value("filter", ""), "OCTAHEDRAL");
+    std::vector<uint8_t> stored(compressed["count"].get<size_t>() * stride);
+    ASSERT_EQ(meshopt_decodeVertexBuffer(stored.data(), compressed["count"].get<size_t>(), stride,
+                                         glb.bin.data() + compressed.value("byteOffset", size_t(0)), compressed["byteLength"].get<size_t>()),
+              0);
+    const size_t first = normals.value("byteOffset", size_t(0));
+    ASSERT_LE(first + count * stride, stored.size());
+    EXPECT_TRUE(std::equal(expected.begin(), expected.end(), stored.begin() + ptrdiff_t(first)));
     double worst = 0;
-    size_t moved = 0;
-    for (size_t v = 0; v < got.normals.size(); ++v) {
-      const float4 &a = got.tangents[v], &b = want.tangents[v];
-      worst = std::max({worst, degrees(got.normals[v], want.normals[v]), degrees({a.x, a.y, a.z}, {b.x, b.y, b.z})});
-      EXPECT_EQ(a.w, b.w) << v;
-      moved += got.normals[v].x != want.normals[v].x || got.normals[v].y != want.normals[v].y || got.normals[v].z != want.normals[v].z;
+    for (size_t v = 0; v < count; ++v) {
+      const float4 &t = got.tangents[v], &k = mesh.tangents[v];
+      worst = std::max({worst, degrees(got.normals[v], mesh.normals[v]), degrees({t.x, t.y, t.z}, {k.x, k.y, k.z})});
+      EXPECT_EQ(t.w, k.w) << v;
     }
-    const double bound = (std::sqrt(18.0) * 0.5 / (std::exp2(bits - 1) - 1) + std::sqrt(3.0) / 65534) * 180 / M_PI;
+    const double top = wide ? 32767 : 127;
+    const double bound = (std::sqrt(18.0) * 0.5 / (std::exp2(n - 1) - 1) + std::sqrt(3.0) * 0.5 / top) * 180 / M_PI;
     EXPECT_LE(worst, bound);
-    EXPECT_GT(moved, 0u);  // (the filter did apply)
+    EXPECT_GT(worst, bound / 8);  // (it did quantize)
     const Json second = test::read_with_second_reader(cc)[0]["attributes"]["NORMAL"]["values"];
-    ASSERT_EQ(second.size(), 3 * got.normals.size());
-    for (size_t v = 0; v < got.normals.size(); ++v)
-      for (size_t c = 0; c < 3; ++c)
-        EXPECT_NEAR(std::max(second[3 * v + c].get<double>() / 32767, -1.0), (&got.normals[v].x)[c], 1e-6) << v;
+    ASSERT_EQ(second.size(), 3 * count);
+    for (size_t v = 0; v < count; ++v)
+      for (size_t c = 0; c < 3; ++c) EXPECT_NEAR(std::max(second[3 * v + c].get<double>() / top, -1.0), (&got.normals[v].x)[c], 1e-6) << v;
     test::expect_valid_gltf({cc});
   }
 }

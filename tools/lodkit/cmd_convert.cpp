@@ -107,8 +107,8 @@ void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
   app->add_flag_callback(
       "--cc",
       [&options] { options.compress_more = options.meshopt_compression = options.quantize = true; },
-      "glTF output: -c -q, and normals and tangents through meshopt's octahedral filter (8 bits, up to 1.4 degrees "
-      "from -q's; or --normal-bits), as gltfpack -cc");
+      "glTF output: -c -q, and normals and tangents through meshopt's octahedral filter (8 bits, within 1.35 "
+      "degrees of the input; or --normal-bits), as gltfpack -cc");
   app->add_flag("--draco", options.draco,
                 "glTF output: each triangle primitive's geometry as a Draco stream (KHR_draco_mesh_compression, then "
                 "required): positions in --position-bits, normals in --normal-bits (default 10), UVs 12, colours 8, weights and tangents 12");
