@@ -302,14 +302,14 @@ area_compress() {
   command -v gltfpack >/dev/null || { echo "bench: gltfpack is not installed (scripts/setup.sh installs it)" >&2; exit 1; }
   command -v draco_transcoder >/dev/null || { echo "bench: draco_transcoder is not installed (scripts/setup.sh installs it)" >&2; exit 1; }
   configure
-  build_targets lodkit_cli lodkit_fixtures lodkit_bench_anim_error
+  build_targets lodkit_cli lodkit_fixtures lodkit_bench_anim_error lodkit_bench_normal_error
   [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
   echo
   machine_line
   echo
   mkdir -p bench/results
   python3 bench/compress/run.py "$build/lodkit" "$build/lodkit_fixtures" bench/results/compress.json --runs "$runs" \
-    --anim-error "$build/bench/lodkit_bench_anim_error"
+    --anim-error "$build/bench/lodkit_bench_anim_error" --normal-error "$build/bench/lodkit_bench_normal_error"
   echo
   echo "whole run: $((SECONDS - started)) s"
 }

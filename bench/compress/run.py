@@ -2,7 +2,7 @@
 """glTF compression (`-c`, EXT_meshopt_compression) and quantization (`-q`, KHR_mesh_quantization)
 against gltfpack.
 
-usage: run.py LODKIT FIXTURES OUT.json [--runs N]
+usage: run.py LODKIT FIXTURES OUT.json [--runs N] [--anim-error PROGRAM] [--normal-error PROGRAM]
 
 For each input (corpus meshes of at least 20,000 triangles, the two skinned test characters with
 their clips, the humanoid with a 20 s clip baked at 60 Hz, and bunny00's LOD chain as `lodkit lod`
@@ -13,6 +13,9 @@ writes it):
     (the same compression lodkit writes), and -c (its defaults: quantized, lossy).
   - lodkit -c and -c -q with --meshopt-khr (KHR_meshopt_compression, vertex codec version 1) against
     the same EXT ones and gltfpack's, with load times;
+  - normals in N bits (inputs with normals, with --normal-error PROGRAM): `optimize --lru --cc
+    --normal-bits N` against gltfpack's `-cc -vn N` of the plain file, N = 8, 12, 16: sizes and the
+    normals' error from the plain file (lodkit_bench_normal_error);
   - Draco: `lodkit convert --draco` of the plain file against Debian's draco_transcoder (libdraco
     1.5.5, the same library) on it at the same bit depths (14-bit positions, 10-bit normals, 12-bit
     UVs, tangents and weights, 8-bit colours) and its default compression level, as lodkit uses.
@@ -79,6 +82,7 @@ def timed(args, runs):
     return statistics.median(times)
 
 
+NORMAL_BITS = [8, 12, 16]
 DRACO_BITS = ["-qp", "14", "-qn", "10", "-qt", "12", "-qtg", "12", "-qw", "12", "-qg", "12", "-qc", "8"]
 
 
@@ -92,6 +96,7 @@ def main():
     lodkit, fixtures, out = sys.argv[1:4]
     runs = int(sys.argv[sys.argv.index("--runs") + 1]) if "--runs" in sys.argv else 5
     anim_error = sys.argv[sys.argv.index("--anim-error") + 1] if "--anim-error" in sys.argv else None
+    normal_error = sys.argv[sys.argv.index("--normal-error") + 1] if "--normal-error" in sys.argv else None
     tmp = tempfile.mkdtemp(prefix="lodkit-bench-compress-")
     inputs = []
     for name in CORPUS:
@@ -168,6 +173,17 @@ def main():
         if anim_error and src.endswith("humanoid_baked.glb"):
             row["anim_error_m"] = {tool: json.loads(run([anim_error, src, files[tool], BAKED_CLIP]))["joint_error"]
                                    for tool in ["lodkit -c", "lodkit -c -q", "lodkit -c -q khr", "lodkit --cc", "gltfpack -c", "gltfpack -cc"]}
+        # --cc --normal-bits N against gltfpack -cc -vn N, on inputs with normals: sizes and the normals'
+        # error from the plain file (lodkit_bench_normal_error).
+        if normal_error and "normal" in info(lodkit, files["lodkit"])["streams"]:
+            row["normal_bits"] = {}
+            for bits in NORMAL_BITS:
+                ours, theirs = stem + f"-cc-vn{bits}.glb", stem + f"-gp-cc-vn{bits}.glb"
+                run([lodkit, "optimize", src, "-o", ours, "--lru", "--cc", "--normal-bits", str(bits)])
+                run(["gltfpack", "-i", files["lodkit"], "-o", theirs, "-cc", "-vn", str(bits)])
+                row["normal_bits"][bits] = {tool: {"bytes": os.path.getsize(path), "gzip": gz(path),
+                                                   **json.loads(run([normal_error, files["lodkit"], path]))}
+                                            for tool, path in [("lodkit", ours), ("gltfpack", theirs)]}
         # Draco, from the same plain file.
         draco = {"lodkit --draco": stem + "-draco.glb", "draco_transcoder": stem + "-transcoder.glb"}
         commands = {"lodkit --draco": [lodkit, "convert", files["lodkit"], draco["lodkit --draco"], "--draco"],
@@ -272,6 +288,18 @@ def main():
     print()
     print(f"lodkit --draco ÷ draco_transcoder, raw size: median {statistics.median(dratios):.3f}, "
           f"min {min(dratios):.3f}, max {max(dratios):.3f} over the {len(dratios)} inputs both write whole")
+    print()
+    print("Normals in N bits: `lodkit optimize --lru --cc --normal-bits N` against `gltfpack -cc -vn N` of the `--lru` file"
+          " (inputs with normals); normal error from the plain file in degrees, max / mean (lodkit_bench_normal_error):")
+    print()
+    print("| input | N | lodkit KiB (gzip) | gltfpack KiB (gzip) | lodkit ÷ gltfpack | error lodkit | error gltfpack |")
+    print("|---|---|---|---|---|---|---|")
+    for r in rows:
+        for bits, t in r.get("normal_bits", {}).items():
+            a, b = t["lodkit"], t["gltfpack"]
+            print(f"| {r['input']} | {bits} | {a['bytes'] / 1024:.1f} ({a['gzip'] / 1024:.1f}) | {b['bytes'] / 1024:.1f} ({b['gzip'] / 1024:.1f}) | "
+                  f"{a['bytes'] / b['bytes']:.3f} | {a['max_degrees']:.4f} / {a['mean_degrees']:.4f} | "
+                  f"{b['max_degrees']:.4f} / {b['mean_degrees']:.4f} |")
     morphs = geomorph_chain(lodkit, tmp, runs)
     print()
     print("bunny00's geomorph chain (`lodkit lod data/corpus/bunny00.off --morph`, four levels, three geomorph targets), per output form:")
