@@ -86,6 +86,12 @@ struct WriteOptions {
   // `compress_more`'s octahedral filter takes shorts of that many bits. Smooth, shiny surfaces show
   // the bytes' 0.4 degrees as banding; 12 bits are within 0.03 degrees.
   int normal_bits = 0;
+  // With `quantize` or `draco`: bits per UV component, 1 to 16, as gltfpack's -vt; 0 for the
+  // default, 16 under `quantize` and 12 in Draco. Below 16, `quantize` stores every UV set a
+  // texture samples on a box (as it does for sets outside [0, 1]), in normalized unsigned shorts
+  // from 0 to 2^bits - 1, which the meshopt codec packs in fewer bits (gltfpack -c's default is
+  // 12); a set no box can hold (README, -q) keeps 16 bits or floats.
+  int uv_bits = 0;
   // Text formats print floats with the shortest representation that reads back bit-exact.
 };
 

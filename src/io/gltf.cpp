@@ -1328,8 +1328,10 @@ auto grid_code(const PositionGrid& grid) {
   return [&grid](float x, size_t c) { return std::lround(std::clamp((x - grid.offset[c]) / grid.scale, 0.0, grid.top)); };
 }
 
-// -q's box for a UV set outside [0, 1]: stored = (uv - offset) / scale in normalized unsigned
-// shorts, which the KHR_texture_transform of every texture sampling the set maps back.
+// -q's box for a UV set outside [0, 1], or for any sampled set below 16 UV bits: stored =
+// (uv - offset) / scale in normalized unsigned shorts, which the KHR_texture_transform of every
+// texture sampling the set maps back. With b UV bits the scale is the set's extent times
+// 65535 / (2^b - 1), so the stored values run from 0 to 2^b - 1.
 struct UvBox {
   float offset[2] = {0, 0}, scale[2] = {1, 1};
   bool operator==(const UvBox&) const = default;
@@ -1620,7 +1622,7 @@ class BinWriter {
   // grid (`coding`), the positions go into the stream as their grid coordinates, exactly, and the
   // morph targets are stored as -q stores them; Draco quantizes the other streams either way.
   std::vector<uint32_t> add_draco_geometry(const Mesh& mesh, const std::vector<MorphTarget>& targets, tg::Primitive& prim,
-                                           int position_bits, int normal_bits, bool outside, const StreamCoding& coding) {
+                                           const io::DracoBits& bits, bool outside, const StreamCoding& coding) {
     for_each_unmodelled_stream(prim, [&](int, const std::string& semantic, int index) {
       if (index >= 0) throw_internal("Draco: the source's " + semantic + " stream would not follow the renumbered vertices");
     });
@@ -1632,7 +1634,7 @@ class BinWriter {
       for (const float3& p : mesh.positions)
         for (const auto& [x, c] : {std::pair{p.x, 0}, std::pair{p.y, 1}, std::pair{p.z, 2}}) grid_positions.push_back(uint16_t(code(x, size_t(c))));
     }
-    std::optional<io::DracoPrimitive> encoded = io::encode_draco(mesh, position_bits, normal_bits, track_points, grid_positions);
+    std::optional<io::DracoPrimitive> encoded = io::encode_draco(mesh, bits, track_points, grid_positions);
     if (!encoded) {
       ++report_.draco_plain;
       add_geometry(mesh, targets, prim, coding);  // (libdraco cannot take it)
@@ -2513,7 +2515,7 @@ int texture_set(int tex_coord, const tg::ExtensionMap& extensions) {
 // point or line primitive kept as it was) or morphs that UV set, or the box is wider than 8 (a
 // step would pass 2^-13, a quarter of a 2048 texture's texel). Returns whether any box was made.
 bool make_uv_boxes(tg::Model& model, const std::vector<std::pair<size_t, size_t>>& where, const std::vector<const Mesh*>& meshes,
-                   std::vector<UvBoxes>& boxes) {
+                   int uv_bits, std::vector<UvBoxes>& boxes) {
   boxes.assign(where.size(), UvBoxes{});
   const size_t materials = model.materials.size();
   if (materials == 0) return false;
@@ -2593,14 +2595,14 @@ bool make_uv_boxes(tg::Model& model, const std::vector<std::pair<size_t, size_t>
   for (size_t g = 0; g < materials; ++g)
     for (size_t set = 0; set < max_uv_sets; ++set) {
       const Bounds& b = group[g][set];
-      if (!b.ok || !b.sampled || !b.outside || b.hi[0] - b.lo[0] > 8 || b.hi[1] - b.lo[1] > 8) continue;
+      if (!b.ok || !b.sampled || (!b.outside && uv_bits == 16) || b.hi[0] - b.lo[0] > 8 || b.hi[1] - b.lo[1] > 8) continue;
       UvBox box;
       for (size_t c = 0; c < 2; ++c) {
         // Floats, rounded outwards: the box holds every value, and the transform written is the
         // one the values were stored with.
         box.offset[c] = float(b.lo[c]);
         if (box.offset[c] > b.lo[c]) box.offset[c] = std::nextafter(box.offset[c], -INFINITY);
-        const double extent = b.hi[c] - box.offset[c];
+        const double extent = (b.hi[c] - box.offset[c]) * 65535.0 / double((1u << uv_bits) - 1);
         box.scale[c] = float(extent);
         if (box.scale[c] < extent) box.scale[c] = std::nextafter(box.scale[c], INFINITY);
         if (box.scale[c] == 0) box.scale[c] = 1;
@@ -2890,7 +2892,7 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     std::vector<std::pair<size_t, size_t>> where;
     std::vector<const Mesh*> drawn;
     for (const Pending& p : pending) where.emplace_back(p.mesh, p.primitive), drawn.push_back(&scene.primitives[p.scene_primitive].mesh);
-    used_uv_boxes = make_uv_boxes(model, where, drawn, uv_boxes);
+    used_uv_boxes = make_uv_boxes(model, where, drawn, options.uv_bits ? options.uv_bits : 16, uv_boxes);
   }
 
   // GPU instances of a grid mesh take the grid in their own transforms (below the node's, which
@@ -3141,8 +3143,8 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     if (options.draco) {
       // Each primitive its own stream (Draco has no shared vertex buffers); the gathered streams
       // outside it follow its vertices.
-      const std::vector<uint32_t> point_source = writer.add_draco_geometry(in.mesh, in.targets, out, options.position_bits,
-                                                                                options.normal_bits ? options.normal_bits : 10, !extra.empty(), coding);
+      const io::DracoBits bits{options.position_bits, options.normal_bits ? options.normal_bits : 10, options.uv_bits ? options.uv_bits : 12};
+      const std::vector<uint32_t> point_source = writer.add_draco_geometry(in.mesh, in.targets, out, bits, !extra.empty(), coding);
       if (!point_source.empty())
         for (Gathered& g : extra) g.bytes = gather_elements(g.bytes, element_bytes(g.like.componentType, g.like.type), point_source);
     } else if (shared >= 0 && written[size_t(shared)] && out.attributes.empty() && out.targets.empty() && extra.empty() &&
@@ -4156,6 +4158,8 @@ WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, co
   }
   if (options.draco && (options.position_bits < 1 || options.position_bits > 30))
     throw_usage("cannot write glTF: position_bits is " + std::to_string(options.position_bits) + ", not 1 to 30 (Draco)");
+  if (options.uv_bits < 0 || options.uv_bits > 16)
+    throw_usage("cannot write glTF: uv_bits is " + std::to_string(options.uv_bits) + ", not 0 (the default) or 1 to 16");
   if (options.normal_bits != 0 && (options.normal_bits < 8 || options.normal_bits > 16))
     throw_usage("cannot write glTF: normal_bits is " + std::to_string(options.normal_bits) + ", not 0 (the default) or 8 to 16");
   WriteReport report;

@@ -834,7 +834,7 @@ void compress_meshopt(Json& doc, std::vector<uint8_t>& bin, const WriteOptions& 
   }
 }
 
-std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, int normal_bits, bool track_points,
+std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, const DracoBits& bits, bool track_points,
                                            std::span<const uint16_t> grid_positions) {
   const size_t n = mesh.vertex_count(), faces = mesh.triangle_count();
   draco::Mesh dm;
@@ -883,12 +883,12 @@ std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, 
     if (grid_positions.size() != 3 * n) throw_internal("Draco: grid positions for another vertex count");
     add("POSITION", GA::POSITION, TINYGLTF_TYPE_VEC3, 3, grid_positions.data(), 0);  // (integers: exact)
   } else {
-    add("POSITION", GA::POSITION, TINYGLTF_TYPE_VEC3, 3, floats(mesh.positions), position_bits);
+    add("POSITION", GA::POSITION, TINYGLTF_TYPE_VEC3, 3, floats(mesh.positions), bits.position);
   }
-  if (!mesh.normals.empty()) add("NORMAL", GA::NORMAL, TINYGLTF_TYPE_VEC3, 3, floats(mesh.normals), normal_bits);
+  if (!mesh.normals.empty()) add("NORMAL", GA::NORMAL, TINYGLTF_TYPE_VEC3, 3, floats(mesh.normals), bits.normal);
   if (!mesh.tangents.empty()) add("TANGENT", GA::GENERIC, TINYGLTF_TYPE_VEC4, 4, floats(mesh.tangents), 12);
   for (size_t k = 0; k < max_uv_sets; ++k)
-    if (!mesh.uvs[k].empty()) add("TEXCOORD_" + std::to_string(k), GA::TEX_COORD, TINYGLTF_TYPE_VEC2, 2, floats(mesh.uvs[k]), 12);
+    if (!mesh.uvs[k].empty()) add("TEXCOORD_" + std::to_string(k), GA::TEX_COORD, TINYGLTF_TYPE_VEC2, 2, floats(mesh.uvs[k]), bits.uv);
   if (!mesh.colors.empty()) add("COLOR_0", GA::COLOR, TINYGLTF_TYPE_VEC4, 4, floats(mesh.colors), 8);
   const bool byte_joints = joints_fit_bytes(mesh);
   const std::vector<ushort4>* joints[2] = {&mesh.joints, &mesh.joints1};

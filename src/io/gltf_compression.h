@@ -63,8 +63,8 @@ using DirectionFloats = std::map<size_t, std::vector<float>>;
 void compress_meshopt(nlohmann::json& doc, std::vector<uint8_t>& bin, const WriteOptions& options, const DirectionFloats& directions = {});
 
 // Writing (WriteOptions::draco): a triangle mesh's vertex streams and indices as one Draco stream
-// for KHR_draco_mesh_compression. Positions are quantized to `position_bits`, normals to
-// `normal_bits` (octahedral), UVs to 12, colours to 8, and the other float streams (tangents, skin weights) to 12;
+// for KHR_draco_mesh_compression. Positions are quantized to `bits.position`, normals to
+// `bits.normal` (octahedral), UVs to `bits.uv`, colours to 8, and the other float streams (tangents, skin weights) to 12;
 // joint indices and the connectivity are exact. The stream is decoded again to describe the
 // accessors, which must match what a loader decodes.
 // Edgebreaker, the smaller encoding, may renumber both vertices and triangles. Streams kept outside
@@ -87,11 +87,14 @@ struct DracoPrimitive {
   bool sequential = false;  // encoded in place, not by Edgebreaker
 };
 // `grid_positions` (3 per vertex, or empty): the positions already on -q's grid, stored exactly as
-// unsigned shorts (KHR_mesh_quantization) instead of quantized to `position_bits`; the position
+// unsigned shorts (KHR_mesh_quantization) instead of quantized to `bits.position`; the position
 // bounds are then in grid steps.
 // Nothing when libdraco cannot encode the mesh so that it decodes again (a triangle with three
 // equal corners): the primitive is then written plain.
-std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, int position_bits, int normal_bits, bool track_points,
+struct DracoBits {
+  int position = 14, normal = 10, uv = 12;  // draco_transcoder's defaults but the positions' (11)
+};
+std::optional<DracoPrimitive> encode_draco(const Mesh& mesh, const DracoBits& bits, bool track_points,
                                            std::span<const uint16_t> grid_positions = {});
 
 }  // namespace lod::io

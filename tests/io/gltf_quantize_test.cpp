@@ -615,6 +615,76 @@ TEST(GltfQuantize, UvsOutsideTheUnitSquareTakeABoxThatTheTextureTransformsUndo) 
   test::expect_valid_gltf({dir / "q.glb"});
 }
 
+// uv_bits below 16 (the CLI's --uv-bits, gltfpack's -vt): every textured set goes on a box, a set
+// inside [0, 1] too, its stored values from 0 to 2^bits - 1 (normalized shorts), which the
+// textures' transforms map back within half a step of the box, extent / (2 (2^bits - 1)), carried
+// through each texture's own scale. The meshopt codec codes the smaller integers in fewer bytes
+// (the UV view's compressed length). A 64 x 64 grid textured within [0, 1], unevenly (u^2,
+// 0.5 + 0.45 sin(3v + u): a regular grid's UVs code in next to nothing at any bits), with the
+// material of textured_grid_document, at 8, 12 and 16 bits.
+TEST(GltfQuantize, UvBitsPutEveryTexturedSetOnABox) {
+  TempDir dir;
+  Mesh m;
+  const Json in = textured_grid_document(dir.path, m);
+  write_json(dir / "textured.gltf", in);
+  Scene scene = read_scene(dir / "textured.gltf");
+  m = shapes::grid(64, 64);
+  for (float2& uv : m.uvs[0]) uv = {uv.x * uv.x, 0.5f + 0.45f * std::sin(3 * uv.y + uv.x)};
+  m.materials.assign(m.triangle_count(), 0);
+  m.material_names = scene.primitives[0].mesh.material_names;
+  scene.primitives[0].mesh = m;
+  const std::vector<float2>& uvs = m.uvs[0];
+  ASSERT_EQ(uvs.size(), m.vertex_count());
+  std::map<int, uint64_t> compressed;
+  for (const int bits : {8, 12, 16}) {
+    SCOPED_TRACE(bits);
+    write_scene(scene, dir / "q.glb", {.quantize = true, .uv_bits = bits});
+    const test::Glb glb = test::read_glb(dir / "q.glb");
+    const Json& uv = glb.doc["accessors"][glb.doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"].get<size_t>()];
+    ASSERT_EQ(uv["componentType"], 5123);  // unsigned short
+    EXPECT_TRUE(uv.value("normalized", false));
+    const std::vector<double> q = stored<uint16_t>(glb, &uv - &glb.doc["accessors"][0], 2);
+    ASSERT_EQ(q.size(), 2 * m.vertex_count());
+    const double top = std::exp2(bits) - 1;
+    EXPECT_EQ(*std::max_element(q.begin(), q.end()), top);  // (the box spans the set)
+    const Json& out = glb.doc["materials"][0];
+    EXPECT_EQ(out["pbrMetallicRoughness"]["baseColorTexture"].contains("extensions"), bits < 16);
+    const Json* infos[2][2] = {{&in["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"], &out["pbrMetallicRoughness"]["baseColorTexture"]},
+                               {&in["materials"][0]["normalTexture"], &out["normalTexture"]}};
+    for (size_t t = 0; t < 2; ++t) {
+      double worst = 0;
+      for (size_t v = 0; v < m.vertex_count(); ++v) {
+        const auto want = apply_texture_transform(*infos[t][0], uvs[v].x, uvs[v].y);
+        const auto got = apply_texture_transform(*infos[t][1], q[2 * v] / 65535, q[2 * v + 1] / 65535);
+        worst = std::max({worst, std::fabs(want[0] - got[0]), std::fabs(want[1] - got[1])});
+      }
+      // Half a step of the box (at most 1 by 1), through the normal texture's own transform
+      // (rotation 0.3, scale 2 by 0.5: a component moves by at most cos 0.3 x 2 + sin 0.3 x 0.5
+      // half steps), and a float's rounding of the box.
+      const double half_step = 0.5 / top * (t == 1 ? std::cos(0.3) * 2 + std::sin(0.3) * 0.5 : 1);
+      EXPECT_LE(worst, half_step + 1e-6) << t;
+      EXPECT_GT(worst, half_step / 64) << t;  // (quantized: not the floats)
+    }
+    test::expect_valid_gltf({dir / "q.glb"});
+    write_scene(scene, dir / "c.glb", {.meshopt_compression = true, .quantize = true, .uv_bits = bits});
+    const Json c = test::glb_json(dir / "c.glb");
+    const Json& view = c["bufferViews"][c["accessors"][c["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"].get<size_t>()]["bufferView"].get<size_t>()];
+    compressed[bits] = view["extensions"]["EXT_meshopt_compression"]["byteLength"].get<uint64_t>();
+  }
+  EXPECT_LT(compressed[8], compressed[12]);
+  EXPECT_LT(compressed[12], compressed[16]);
+  // Out of range: refused; the CLI's --uv-bits likewise (a usage error) and in range written so.
+  EXPECT_THROW(write_scene(scene, dir / "bad.glb", {.quantize = true, .uv_bits = 17}), std::exception);
+  test::RunResult r = test::run_cli({"convert", (dir / "textured.gltf").string(), (dir / "cli.glb").string(), "-q", "--uv-bits", "17"});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  r = test::run_cli({"convert", (dir / "textured.gltf").string(), (dir / "cli.glb").string(), "-q", "--uv-bits", "10"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const test::Glb cli = test::read_glb(dir / "cli.glb");
+  const size_t accessor = cli.doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"].get<size_t>();
+  const std::vector<double> q = stored<uint16_t>(cli, accessor, 2);
+  EXPECT_EQ(*std::max_element(q.begin(), q.end()), 1023);
+}
+
 // Where a box could not hold, the UVs stay floats and the materials as they were: a material no
 // texture of which samples the set, a box wider than 8, a lines primitive drawn with the material
 // (kept as it was, in the source's UVs), an animation driving a texture's transform

@@ -102,7 +102,7 @@ void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
                 "loaders that implement the KHR extension)");
   app->add_flag("-q,--quantize", options.quantize,
                 "glTF output: vertex streams in fewer bits (KHR_mesh_quantization, then required): positions on a "
-                "grid of --position-bits, normals and tangents in --normal-bits (bytes by default), UVs in 16 bits (outside [0,1]: on a box, with KHR_texture_transform), colours and "
+                "grid of --position-bits, normals and tangents in --normal-bits (bytes by default), UVs in --uv-bits (16 by default; outside [0,1] or below 16 bits: on a box, with KHR_texture_transform), colours and "
                 "weights in bytes");
   app->add_flag_callback(
       "--cc",
@@ -111,13 +111,17 @@ void add_gltf_output_flags(CLI::App* app, WriteOptions& options) {
       "degrees of the input; or --normal-bits), as gltfpack -cc");
   app->add_flag("--draco", options.draco,
                 "glTF output: each triangle primitive's geometry as a Draco stream (KHR_draco_mesh_compression, then "
-                "required): positions in --position-bits, normals in --normal-bits (default 10), UVs 12, colours 8, weights and tangents 12");
+                "required): positions in --position-bits, normals in --normal-bits (default 10), UVs in --uv-bits (default 12), colours 8, weights and tangents 12");
   app->add_option("--position-bits", options.position_bits, "With -q or --draco: bits per position coordinate (default 14)")
       ->check(CLI::Range(1, 16));
   app->add_option("--normal-bits", options.normal_bits,
                   "With -q, --cc or --draco: bits per normal and tangent component, 8 to 16, as gltfpack -vn (default 8; "
                   "10 in Draco). Above 8, -q stores shorts: 12 bits are within 0.03 degrees, against the bytes' 0.4")
       ->check(CLI::Range(8, 16));
+  app->add_option("--uv-bits", options.uv_bits,
+                  "With -q or --draco: bits per UV component, 1 to 16, as gltfpack -vt (default 16; 12 in Draco). Below 16, -q "
+                  "puts every textured UV set on a box (KHR_texture_transform): fewer bytes under -c")
+      ->check(CLI::Range(1, 16));
   app->add_option("--anim-error", options.animation_error,
                   "With -q: how far a reduced animation curve may move what it animates, as a fraction of the scene's "
                   "extent (default 2^-12 = 0.000244; 0 keeps every key a curve needs exactly)")
