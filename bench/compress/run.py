@@ -5,14 +5,17 @@ against gltfpack.
 usage: run.py LODKIT FIXTURES OUT.json [--runs N] [--anim-error PROGRAM] [--normal-error PROGRAM]
 
 For each input (corpus meshes of at least 20,000 triangles, the two skinned test characters with
-their clips, the humanoid with a 20 s clip baked at 60 Hz, and bunny00's LOD chain as `lodkit lod`
-writes it):
+their clips, the humanoid with a 20 s clip baked at 60 Hz, bunny00 textured (below), and bunny00's
+LOD chain as `lodkit lod` writes it):
   - lodkit: `lodkit optimize IN --lru` (vertex cache and fetch order) written plain, with -c, and
     with -c -q (gltfpack's default bit depths: 14-bit positions, 8-bit normals);
   - gltfpack (Debian, 0.18) on the same plain file: -noq (its reordering, no quantization), -c -noq
     (the same compression lodkit writes), and -c (its defaults: quantized, lossy).
   - lodkit -c and -c -q with --meshopt-khr (KHR_meshopt_compression, vertex codec version 1) against
     the same EXT ones and gltfpack's, with load times;
+  - UVs in N bits (inputs with UVs: the textured bunny, bunny00 with a spherical mapping and a base
+    colour texture, written here without lodkit): `optimize --lru -c -q --uv-bits N` against
+    gltfpack's `-c -vt N` of the plain file, N = 10, 12, 16: sizes;
   - normals in N bits (inputs with normals, with --normal-error PROGRAM): `optimize --lru --cc
     --normal-bits N` against gltfpack's `-cc -vn N` of the plain file, N = 8, 12, 16: sizes and the
     normals' error from the plain file (lodkit_bench_normal_error);
@@ -29,8 +32,10 @@ load time of each file (decoding included) and each file's Hausdorff distance fr
 """
 import gzip
 import json
+import math
 import os
 import statistics
+import struct
 import subprocess
 import sys
 import tempfile
@@ -83,6 +88,45 @@ def timed(args, runs):
 
 
 NORMAL_BITS = [8, 12, 16]
+UV_BITS = [10, 12, 16]
+# A 1x1 PNG for the textured input's base colour.
+PNG = "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg=="
+
+
+def textured_bunny(off, out):
+    """bunny00 as a .glb with TEXCOORD_0 from a spherical mapping about its centroid (uneven, as
+    unwrapped UVs are) and a base colour texture sampling it, written without lodkit."""
+    lines = [l for l in open(off).read().split("\n") if l.strip() and not l.startswith("#")]
+    nv, nf = map(int, lines[1].split()[:2])
+    points = [tuple(map(float, l.split()[:3])) for l in lines[2:2 + nv]]
+    faces = [tuple(map(int, l.split()[1:4])) for l in lines[2 + nv:2 + nv + nf]]
+    c = [sum(p[k] for p in points) / nv for k in range(3)]
+    uvs = []
+    for p in points:
+        d = [p[k] - c[k] for k in range(3)]
+        r = math.sqrt(sum(x * x for x in d)) or 1.0
+        uvs.append((0.5 + math.atan2(d[2], d[0]) / (2 * math.pi), math.acos(max(-1.0, min(1.0, d[1] / r))) / math.pi))
+    pos = b"".join(struct.pack("<3f", *p) for p in points)
+    uv = b"".join(struct.pack("<2f", *t) for t in uvs)
+    idx = b"".join(struct.pack("<3I", *f) for f in faces)
+    data = pos + uv + idx
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+           "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+           "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+           "textures": [{"source": 0}], "images": [{"uri": "data:image/png;base64," + PNG}],
+           "buffers": [{"byteLength": len(data)}],
+           "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": len(pos), "target": 34962},
+                           {"buffer": 0, "byteOffset": len(pos), "byteLength": len(uv), "target": 34962},
+                           {"buffer": 0, "byteOffset": len(pos) + len(uv), "byteLength": len(idx), "target": 34963}],
+           "accessors": [{"bufferView": 0, "componentType": 5126, "count": nv, "type": "VEC3",
+                          "min": [min(p[k] for p in points) for k in range(3)], "max": [max(p[k] for p in points) for k in range(3)]},
+                         {"bufferView": 1, "componentType": 5126, "count": nv, "type": "VEC2"},
+                         {"bufferView": 2, "componentType": 5125, "count": 3 * nf, "type": "SCALAR"}]}
+    text = json.dumps(doc).encode()
+    text += b" " * ((4 - len(text) % 4) % 4)
+    with open(out, "wb") as f:
+        f.write(struct.pack("<III", 0x46546C67, 2, 12 + 8 + len(text) + 8 + len(data)) + struct.pack("<II", len(text), 0x4E4F534A) + text +
+                struct.pack("<II", len(data), 0x004E4942) + data)
 DRACO_BITS = ["-qp", "14", "-qn", "10", "-qt", "12", "-qtg", "12", "-qw", "12", "-qg", "12", "-qc", "8"]
 
 
@@ -116,6 +160,9 @@ def main():
     inputs.append(("humanoid (skinned, + 20 s baked at 60 Hz)", os.path.join(characters, "humanoid_baked.glb")))
     if os.path.exists(os.path.join(characters, "man.glb")):
         inputs.append(("man (skinned, 2 clips)", os.path.join(characters, "man.glb")))
+    textured = os.path.join(tmp, "bunny-textured.glb")
+    textured_bunny("data/corpus/bunny00.off", textured)
+    inputs.append(("bunny00 textured (spherical UVs)", textured))
     chain = os.path.join(tmp, "bunny-lod.glb")
     run([lodkit, "lod", "data/corpus/bunny00.off", "-o", chain])
     inputs.append(("bunny00 LOD chain (4 levels)", chain))
@@ -173,6 +220,14 @@ def main():
         if anim_error and src.endswith("humanoid_baked.glb"):
             row["anim_error_m"] = {tool: json.loads(run([anim_error, src, files[tool], BAKED_CLIP]))["joint_error"]
                                    for tool in ["lodkit -c", "lodkit -c -q", "lodkit -c -q khr", "lodkit --cc", "gltfpack -c", "gltfpack -cc"]}
+        # -c -q --uv-bits N against gltfpack -c -vt N, on inputs with UVs: sizes.
+        if "uv0" in info(lodkit, files["lodkit"])["streams"]:
+            row["uv_bits"] = {}
+            for bits in UV_BITS:
+                ours, theirs = stem + f"-cq-vt{bits}.glb", stem + f"-gp-c-vt{bits}.glb"
+                run([lodkit, "optimize", src, "-o", ours, "--lru", "-c", "-q", "--uv-bits", str(bits)])
+                run(["gltfpack", "-i", files["lodkit"], "-o", theirs, "-c", "-vt", str(bits)])
+                row["uv_bits"][bits] = {tool: {"bytes": os.path.getsize(path), "gzip": gz(path)} for tool, path in [("lodkit", ours), ("gltfpack", theirs)]}
         # --cc --normal-bits N against gltfpack -cc -vn N, on inputs with normals: sizes and the normals'
         # error from the plain file (lodkit_bench_normal_error).
         if normal_error and "normal" in info(lodkit, files["lodkit"])["streams"]:
@@ -288,6 +343,16 @@ def main():
     print()
     print(f"lodkit --draco ÷ draco_transcoder, raw size: median {statistics.median(dratios):.3f}, "
           f"min {min(dratios):.3f}, max {max(dratios):.3f} over the {len(dratios)} inputs both write whole")
+    print()
+    print("UVs in N bits: `lodkit optimize --lru -c -q --uv-bits N` against `gltfpack -c -vt N` of the `--lru` file (inputs with UVs):")
+    print()
+    print("| input | N | lodkit KiB (gzip) | gltfpack KiB (gzip) | lodkit ÷ gltfpack (gzip) |")
+    print("|---|---|---|---|---|")
+    for r in rows:
+        for bits, t in r.get("uv_bits", {}).items():
+            a, b = t["lodkit"], t["gltfpack"]
+            print(f"| {r['input']} | {bits} | {a['bytes'] / 1024:.1f} ({a['gzip'] / 1024:.1f}) | {b['bytes'] / 1024:.1f} ({b['gzip'] / 1024:.1f}) | "
+                  f"{a['bytes'] / b['bytes']:.3f} ({a['gzip'] / b['gzip']:.3f}) |")
     print()
     print("Normals in N bits: `lodkit optimize --lru --cc --normal-bits N` against `gltfpack -cc -vn N` of the `--lru` file"
           " (inputs with normals); normal error from the plain file in degrees, max / mean (lodkit_bench_normal_error):")
