@@ -220,25 +220,15 @@ def main():
         if anim_error and src.endswith("humanoid_baked.glb"):
             row["anim_error_m"] = {tool: json.loads(run([anim_error, src, files[tool], BAKED_CLIP]))["joint_error"]
                                    for tool in ["lodkit -c", "lodkit -c -q", "lodkit -c -q khr", "lodkit --cc", "gltfpack -c", "gltfpack -cc"]}
-        # -c -q --uv-bits N against gltfpack -c -vt N, on inputs with UVs: sizes.
-        if "uv0" in info(lodkit, files["lodkit"])["streams"]:
-            row["uv_bits"] = {}
-            for bits in UV_BITS:
-                ours, theirs = stem + f"-cq-vt{bits}.glb", stem + f"-gp-c-vt{bits}.glb"
-                run([lodkit, "optimize", src, "-o", ours, "--lru", "-c", "-q", "--uv-bits", str(bits)])
-                run(["gltfpack", "-i", files["lodkit"], "-o", theirs, "-c", "-vt", str(bits)])
-                row["uv_bits"][bits] = {tool: {"bytes": os.path.getsize(path), "gzip": gz(path)} for tool, path in [("lodkit", ours), ("gltfpack", theirs)]}
-        # --cc --normal-bits N against gltfpack -cc -vn N, on inputs with normals: sizes and the normals'
-        # error from the plain file (lodkit_bench_normal_error).
-        if normal_error and "normal" in info(lodkit, files["lodkit"])["streams"]:
-            row["normal_bits"] = {}
-            for bits in NORMAL_BITS:
-                ours, theirs = stem + f"-cc-vn{bits}.glb", stem + f"-gp-cc-vn{bits}.glb"
-                run([lodkit, "optimize", src, "-o", ours, "--lru", "--cc", "--normal-bits", str(bits)])
-                run(["gltfpack", "-i", files["lodkit"], "-o", theirs, "-cc", "-vn", str(bits)])
-                row["normal_bits"][bits] = {tool: {"bytes": os.path.getsize(path), "gzip": gz(path),
-                                                   **json.loads(run([normal_error, files["lodkit"], path]))}
-                                            for tool, path in [("lodkit", ours), ("gltfpack", theirs)]}
+        # -c -q --uv-bits N against gltfpack -c -vt N on inputs with UVs (sizes), --cc --normal-bits N
+        # against gltfpack -cc -vn N on inputs with normals (sizes, and the normals' error from the
+        # plain file: lodkit_bench_normal_error).
+        streams = info(lodkit, files["lodkit"])["streams"]
+        if "uv0" in streams:
+            row["uv_bits"] = bits_sweep(lodkit, src, files["lodkit"], stem, UV_BITS, ["-c", "-q", "--uv-bits"], ["-c", "-vt"])
+        if normal_error and "normal" in streams:
+            row["normal_bits"] = bits_sweep(lodkit, src, files["lodkit"], stem, NORMAL_BITS, ["--cc", "--normal-bits"], ["-cc", "-vn"],
+                                            normal_error)
         # Draco, from the same plain file.
         draco = {"lodkit --draco": stem + "-draco.glb", "draco_transcoder": stem + "-transcoder.glb"}
         commands = {"lodkit --draco": [lodkit, "convert", files["lodkit"], draco["lodkit --draco"], "--draco"],
@@ -343,28 +333,11 @@ def main():
     print()
     print(f"lodkit --draco ÷ draco_transcoder, raw size: median {statistics.median(dratios):.3f}, "
           f"min {min(dratios):.3f}, max {max(dratios):.3f} over the {len(dratios)} inputs both write whole")
-    print()
-    print("UVs in N bits: `lodkit optimize --lru -c -q --uv-bits N` against `gltfpack -c -vt N` of the `--lru` file (inputs with UVs):")
-    print()
-    print("| input | N | lodkit KiB (gzip) | gltfpack KiB (gzip) | lodkit ÷ gltfpack (gzip) |")
-    print("|---|---|---|---|---|")
-    for r in rows:
-        for bits, t in r.get("uv_bits", {}).items():
-            a, b = t["lodkit"], t["gltfpack"]
-            print(f"| {r['input']} | {bits} | {a['bytes'] / 1024:.1f} ({a['gzip'] / 1024:.1f}) | {b['bytes'] / 1024:.1f} ({b['gzip'] / 1024:.1f}) | "
-                  f"{a['bytes'] / b['bytes']:.3f} ({a['gzip'] / b['gzip']:.3f}) |")
-    print()
-    print("Normals in N bits: `lodkit optimize --lru --cc --normal-bits N` against `gltfpack -cc -vn N` of the `--lru` file"
-          " (inputs with normals); normal error from the plain file in degrees, max / mean (lodkit_bench_normal_error):")
-    print()
-    print("| input | N | lodkit KiB (gzip) | gltfpack KiB (gzip) | lodkit ÷ gltfpack | error lodkit | error gltfpack |")
-    print("|---|---|---|---|---|---|---|")
-    for r in rows:
-        for bits, t in r.get("normal_bits", {}).items():
-            a, b = t["lodkit"], t["gltfpack"]
-            print(f"| {r['input']} | {bits} | {a['bytes'] / 1024:.1f} ({a['gzip'] / 1024:.1f}) | {b['bytes'] / 1024:.1f} ({b['gzip'] / 1024:.1f}) | "
-                  f"{a['bytes'] / b['bytes']:.3f} | {a['max_degrees']:.4f} / {a['mean_degrees']:.4f} | "
-                  f"{b['max_degrees']:.4f} / {b['mean_degrees']:.4f} |")
+    print_bits_sweep(rows, "uv_bits", "UVs in N bits: `lodkit optimize --lru -c -q --uv-bits N` against `gltfpack -c -vt N` of the"
+                     " `--lru` file (inputs with UVs):")
+    print_bits_sweep(rows, "normal_bits", "Normals in N bits: `lodkit optimize --lru --cc --normal-bits N` against `gltfpack -cc -vn N`"
+                     " of the `--lru` file (inputs with normals); normal error from the plain file in degrees, max / mean"
+                     " (lodkit_bench_normal_error):")
     morphs = geomorph_chain(lodkit, tmp, runs)
     print()
     print("bunny00's geomorph chain (`lodkit lod data/corpus/bunny00.off --morph`, four levels, three geomorph targets), per output form:")
@@ -377,6 +350,37 @@ def main():
               f"{m['write_s']:.2f} s | {m['load_s'] * 1000:.1f} ms | {m['primitives']}, {m['morph_targets']} | {m['hausdorff']:.2e} |")
     with open(out, "w") as f:
         json.dump({"runs": runs, "rows": rows, "geomorph_chain": morphs}, f, indent=1)
+
+
+def bits_sweep(lodkit, src, plain, stem, bit_list, ours, theirs, error=None):
+    """Per bit depth N: `lodkit optimize SRC --lru OURS N` against `gltfpack -i PLAIN THEIRS N`, the
+    sizes raw and gzipped, and with `error` (a program given the plain file and the output) its JSON."""
+    out = {}
+    for bits in bit_list:
+        paths = {"lodkit": f"{stem}-{ours[-1].strip('-')}{bits}.glb", "gltfpack": f"{stem}-gp-{theirs[-1].strip('-')}{bits}.glb"}
+        run([lodkit, "optimize", src, "-o", paths["lodkit"], "--lru"] + ours + [str(bits)])
+        run(["gltfpack", "-i", plain, "-o", paths["gltfpack"]] + theirs + [str(bits)])
+        out[bits] = {tool: {"bytes": os.path.getsize(path), "gzip": gz(path), **(json.loads(run([error, plain, path])) if error else {})}
+                     for tool, path in paths.items()}
+    return out
+
+
+def print_bits_sweep(rows, key, title):
+    """bits_sweep's results as a table, with the error columns where it measured them."""
+    sweeps = [(r["input"], bits, t) for r in rows for bits, t in r.get(key, {}).items()]
+    errors = any("max_degrees" in t["lodkit"] for _, _, t in sweeps)
+    print()
+    print(title)
+    print()
+    print("| input | N | lodkit KiB (gzip) | gltfpack KiB (gzip) | lodkit ÷ gltfpack (gzip) |" + (" error lodkit | error gltfpack |" if errors else ""))
+    print("|---|---|---|---|---|" + ("---|---|" if errors else ""))
+    for name, bits, t in sweeps:
+        a, b = t["lodkit"], t["gltfpack"]
+        line = (f"| {name} | {bits} | {a['bytes'] / 1024:.1f} ({a['gzip'] / 1024:.1f}) | {b['bytes'] / 1024:.1f} ({b['gzip'] / 1024:.1f}) | "
+                f"{a['bytes'] / b['bytes']:.3f} ({a['gzip'] / b['gzip']:.3f}) |")
+        if errors:
+            line += f" {a['max_degrees']:.4f} / {a['mean_degrees']:.4f} | {b['max_degrees']:.4f} / {b['mean_degrees']:.4f} |"
+        print(line)
 
 
 # bunny00's LOD chain with geomorphs written in each form lodkit offers (and gltfpack's -c of the
