@@ -328,10 +328,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   check_round_trip(*scene, "gltf round trip, KHR meshopt version 1", {.meshopt_compression = true, .meshopt_khr = true});
   check_round_trip(*scene, "gltf round trip, quantized", {.quantize = true});
   // --cc: -c -q with the key filters, the octahedral normals and the strip-walk order's selection;
-  // the reversed copy with 12-bit normals (shorts, and the filter on them).
+  // the reversed copy with 12-bit normals (shorts, and the filter on them) and 12-bit UVs (every
+  // textured set on a box).
   check_round_trip(*scene, "gltf round trip, --cc", {.meshopt_compression = true, .quantize = true, .compress_more = true});
-  check_round_trip(backwards, "gltf round trip, vertices reversed, --cc --normal-bits 12",
-                   {.meshopt_compression = true, .quantize = true, .compress_more = true, .normal_bits = 12});
+  check_round_trip(backwards, "gltf round trip, vertices reversed, --cc --normal-bits 12 --uv-bits 12",
+                   {.meshopt_compression = true, .quantize = true, .compress_more = true, .normal_bits = 12, .uv_bits = 12});
   check_round_trip(backwards, "gltf round trip, vertices reversed, Draco", {.draco = true});
   check_round_trip(backwards, "gltf round trip, vertices reversed, Draco on the -q grid", {.quantize = true, .draco = true});
   check_vertex_classes(*scene, backwards);
