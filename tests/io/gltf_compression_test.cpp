@@ -158,6 +158,13 @@ TEST(GltfCompression, MeshoptFilesReadLikeTheirUncompressedTwin) {
   test::expect_valid_gltf({dir / "out.glb"});
 }
 
+// The angle between two directions, in degrees: atan2 of |a x b| and a . b in doubles (their lengths
+// cancel), well conditioned near 0 where a cosine cannot tell 1e-4 rad from 0.
+double degrees(float3 a, float3 b) {
+  const double x = double(a.y) * b.z - double(a.z) * b.y, y = double(a.z) * b.x - double(a.x) * b.z, z = double(a.x) * b.y - double(a.y) * b.x;
+  return std::atan2(std::hypot(x, y, z), double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z) * 180 / M_PI;
+}
+
 // Draco quantizes each attribute on a grid of 2^bits - 1 steps over its largest extent, so a value
 // moves at most half a step per component. Returns, per decoded vertex, the one source vertex
 // within that of it (positions at `position_bits` over `extent`; UVs at 12 bits over the torus's
@@ -624,12 +631,8 @@ TEST(GltfCompression, DracoOutputMatchesItsSourceWithinTheQuantizationStep) {
   const auto worst_normal = [&](const std::filesystem::path& path) {
     const Mesh m = only_mesh(read_scene(path));
     const std::vector<uint32_t> to = match_within_quantization(source, m, 14, 2.5f);
-    double angle = 0;  // (atan2 of |a x b| and a . b in doubles: a float cosine cannot tell 1e-4 rad from 0)
-    for (size_t v = 0; v < m.vertex_count(); ++v) {
-      const float3 a = m.normals[v], b = source.normals[to[v]];
-      const double x = double(a.y) * b.z - double(a.z) * b.y, y = double(a.z) * b.x - double(a.x) * b.z, z = double(a.x) * b.y - double(a.y) * b.x;
-      angle = std::max(angle, std::atan2(std::hypot(x, y, z), double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z));
-    }
+    double angle = 0;
+    for (size_t v = 0; v < m.vertex_count(); ++v) angle = std::max(angle, degrees(m.normals[v], source.normals[to[v]]));
     return angle;
   };
   o.position_bits = 14;
@@ -1204,13 +1207,6 @@ TEST(GltfCompression, QuantizedCompressionFiltersRotationKeys) {
     EXPECT_GT(worst, 0.0);  // (the filter did apply)
     test::expect_valid_gltf({file});
   }
-}
-
-// The angle between two directions, in degrees (their lengths divided out, in doubles).
-double degrees(float3 a, float3 b) {
-  const double d = double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z;
-  const double la = std::hypot(double(a.x), double(a.y), double(a.z)), lb = std::hypot(double(b.x), double(b.y), double(b.z));
-  return std::acos(std::min(1.0, d / (la * lb))) * 180 / M_PI;
 }
 
 // compress_more (the CLI's --cc, which implies -c -q): normals and tangents go through meshopt's
