@@ -355,12 +355,22 @@ class JsonChecker {
       // tinygltf silently drops a primitive without attributes, which would shift every index after it.
       for (size_t p = 0; p < primitives->size(); ++p) {
         const Json& primitive = (*primitives)[p];
+        const std::string where = "meshes[" + str(m) + "].primitives[" + str(p) + "]";
         auto attributes = primitive.is_object() ? primitive.find("attributes") : primitive.end();
         if (!primitive.is_object() || attributes == primitive.end() || !attributes->is_object())
-          fail("meshes[" + str(m) + "].primitives[" + str(p) + "] has no attributes object");
+          fail(where + " has no attributes object");
+        // tinygltf checks the indices accessor and its view itself, but names neither.
+        if (auto indices = primitive.find("indices"); indices != primitive.end()) {
+          const Json& accessor = element(array("accessors"), *indices, where + ".indices", "accessors");
+          if (auto view = accessor.find("bufferView"); view != accessor.end())
+            element(array("bufferViews"), *view, "accessors[" + indices->dump() + "].bufferView", "bufferViews");
+          else
+            fail(where + ".indices refers to accessors[" + indices->dump() + "], which has no bufferView");
+        }
       }
     }
     check_extension_integers();
+    check_data_uris();
     // tinygltf passes &buffer.data[view.byteOffset] with view.byteLength to the image loader unchecked.
     const Json* images = array("images");
     for (size_t i = 0; images && i < images->size(); ++i) {
@@ -407,6 +417,28 @@ class JsonChecker {
     const Json& e = (*list)[i];
     if (!e.is_object()) fail(std::string(list_name) + "[" + str(i) + "] is not an object");
     return e;
+  }
+
+  // A buffer's base64 data: URI must hold its byteLength (tinygltf's message names neither).
+  void check_data_uris() const {
+    const Json* buffers = array("buffers");
+    for (size_t b = 0; buffers && b < buffers->size(); ++b) {
+      const Json& buffer = (*buffers)[b];
+      if (!buffer.is_object()) continue;  // tinygltf reports it
+      auto uri = buffer.find("uri"), length = buffer.find("byteLength");
+      if (uri == buffer.end() || !uri->is_string() || length == buffer.end() || !length->is_number_unsigned()) continue;
+      const std::string& text = uri->get_ref<const std::string&>();
+      const size_t comma = text.find(',');
+      if (text.rfind("data:", 0) != 0 || comma == std::string::npos || text.rfind(";base64", comma) == std::string::npos)
+        continue;
+      // Decoded bytes: 3 per 4 characters, less the padding.
+      size_t chars = text.size() - comma - 1, pad = 0;
+      while (pad < 2 && chars > pad && text[text.size() - 1 - pad] == '=') ++pad;
+      const uint64_t holds = chars / 4 * 3 + (chars % 4 ? chars % 4 - 1 : 0) - (chars % 4 ? 0 : pad);
+      if (holds < length->get<uint64_t>())
+        fail("buffers[" + str(b) + "]: its data: URI holds " + str(holds) + " bytes, fewer than its byteLength (" +
+             length->dump() + ")");
+    }
   }
 
   // tinygltf 2.7 keeps an extension's integers as int, wrapping larger ones (2^32 + 5 reads as 5):

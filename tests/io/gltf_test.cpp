@@ -1207,6 +1207,26 @@ TEST(GltfMalformed, BufferRanges) {
   expect_bad_input(f.glb(), "sparse.glb", "sparse indices");
 }
 
+// A data: URI shorter than its buffer's byteLength: 4 base64 characters hold 3 bytes, less one per
+// '=' of padding; unpadded, 2 or 3 trailing characters hold 1 or 2.
+TEST(GltfMalformed, ShortDataUri) {
+  HandBuilt f = valid_triangle();
+  Json doc = Json::parse(f.gltf());
+  doc["buffers"][0]["byteLength"] = f.bin.size() + 1;
+  expect_bad_input(span_of(doc.dump()), "short.gltf",
+                   "buffers[0]: its data: URI holds " + std::to_string(f.bin.size()) + " bytes, fewer than its byteLength");
+  const auto buffer_only = [](const std::string& base64, int length) {
+    return Json{{"asset", {{"version", "2.0"}}},
+                {"buffers", Json::array({{{"byteLength", length}, {"uri", "data:application/octet-stream;base64," + base64}}})}}
+        .dump();
+  };
+  for (const auto& [base64, bytes] : std::vector<std::pair<std::string, int>>{{"AAE=", 2}, {"AA==", 1}, {"AAE", 2}, {"AA", 1}, {"AAEC", 3}}) {
+    SCOPED_TRACE(base64);
+    expect_bad_input(span_of(buffer_only(base64, bytes + 1)), "short.gltf", "holds " + std::to_string(bytes) + " bytes");
+    EXPECT_NO_THROW(read_gltf(span_of(buffer_only(base64, bytes)), "exact.gltf"));
+  }
+}
+
 TEST(GltfMalformed, Geometry) {
   HandBuilt f = valid_triangle();
   f.bin[f.bin.size() - 2] = 7;  // the last index (u16) becomes 7 with 3 vertices
@@ -1277,6 +1297,14 @@ TEST(GltfMalformed, References) {
   f = valid_triangle();
   f.doc["meshes"][0]["primitives"][0]["material"] = 0;
   expect_bad_input(f.glb(), "material.glb", "materials[0]");
+
+  // tinygltf's own check of these names neither the primitive nor the accessor.
+  f = valid_triangle();
+  f.doc["meshes"][0]["primitives"][0]["indices"] = 5;
+  expect_bad_input(f.glb(), "indices.glb", "meshes[0].primitives[0].indices refers to accessors[5], which does not exist");
+  f = valid_triangle();
+  f.doc["accessors"][1].erase("bufferView");
+  expect_bad_input(f.glb(), "indexview.glb", "meshes[0].primitives[0].indices refers to accessors[1], which has no bufferView");
 
   f = valid_triangle();
   f.doc["skins"] = Json::array({{{"joints", {0}}, {"inverseBindMatrices", 0}}});  // a VEC3 accessor
