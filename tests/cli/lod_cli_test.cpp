@@ -2207,5 +2207,21 @@ TEST(CliLod, SkinnedInputRefusesWhatItCannotDoYet) {
   EXPECT_NE(bad.err.find("--skin-mode"), std::string::npos) << bad.err;
 }
 
+// The skinned options are checked before the input is read, so a mistake shows on a mesh without
+// skins too, rather than being ignored there.
+TEST(CliLod, SkinOptionsAreCheckedForAnyInput) {
+  test::TempDir dir;
+  write_mesh(shapes::icosphere(2), dir / "ball.off");
+  const test::RunResult mode =
+      test::run_cli({"lod", (dir / "ball.off").string(), "-o", (dir / "x.glb").string(), "--skin-mode", "rigid"});
+  EXPECT_EQ(mode.exit_code, 1);
+  EXPECT_NE(mode.err.find("--skin-mode: 'rigid' is not houle, subset or multipose"), std::string::npos) << mode.err;
+  const test::RunResult poses = test::run_cli({"lod", (dir / "ball.off").string(), "-o", (dir / "x.glb").string(), "--poses", "0"});
+  EXPECT_EQ(poses.exit_code, 1);
+  EXPECT_NE(poses.err.find("--poses must be at least 1"), std::string::npos) << poses.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.glb"));
+  EXPECT_EQ(test::run_cli({"lod", (dir / "ball.off").string(), "-o", (dir / "x.glb").string(), "--skin-mode", "houle"}).exit_code, 0);
+}
+
 }  // namespace
 }  // namespace lod

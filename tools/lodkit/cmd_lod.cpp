@@ -514,7 +514,6 @@ ProgressiveMesh skinned_progressive_mesh(const Scene& scene, const SkinnedGroup&
 std::vector<ChainReport> build_skinned(const Scene& scene, const std::vector<SkinnedGroup>& groups, SkinMode mode,
                                        uint32_t pose_count, const LodOptions& base,
                                        const std::function<void(double)>& progress) {
-  if (pose_count == 0) throw_usage("--poses must be at least 1");
   std::map<std::vector<uint32_t>, std::vector<size_t>> by_skin;  // skins -> their groups, in order
   uint64_t total = 0, done = 0;                                  // triangles
   for (size_t k = 0; k < groups.size(); ++k) {
@@ -899,6 +898,9 @@ Command register_lod(CLI::App& root) {
             check_not_input(o->input, o->output, o->force);
             check_gltf_output_flags(o->gltf, o->output);
             if (!o->lpm.empty()) check_not_input(o->input, o->lpm, o->force);
+            // Checked before loading, so a mistyped mode is refused for a mesh without skins too.
+            const SkinMode skin_mode = parse_skin_mode(o->skin_mode);
+            if (o->poses == 0) throw_usage("--poses must be at least 1");
             LodOptions options;
             if (!o->ratios.empty()) options.ratios = parse_list(o->ratios, "--ratios");
             if (!o->errors.empty()) options.errors = parse_list(o->errors, "--errors");
@@ -972,7 +974,7 @@ Command register_lod(CLI::App& root) {
               if (o->morph && mesh.triangle_count() == 0 && separate.empty())
                 throw_usage("--morph: skinned input morphs at run time (lod::SkinnedGeomorph), not as glTF morph targets, "
                             "and this input has nothing else to morph");
-              const SkinMode mode = parse_skin_mode(o->skin_mode);
+              const SkinMode mode = skin_mode;
               if (!o->lpm.empty() && mode == SkinMode::houle)
                 throw_usage("--lpm: --skin-mode houle simplifies in one pose, so its collapse record is not in bind "
                             "space; use multipose or subset");
@@ -1054,7 +1056,7 @@ Command register_lod(CLI::App& root) {
             WriteReport written;
             // The progressive mesh spans the input down to the coarsest level's size.
             if (!skinned.empty() && !o->lpm.empty())
-              write_progressive_mesh(skinned_progressive_mesh(scene, groups[0], parse_skin_mode(o->skin_mode), o->poses,
+              write_progressive_mesh(skinned_progressive_mesh(scene, groups[0], skin_mode, o->poses,
                                                               options.simplify, reports[0].chain.levels.back().mesh.triangle_count()),
                                      o->lpm);
             Scene out;
