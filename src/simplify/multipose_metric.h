@@ -189,7 +189,8 @@ class MultiposeMetric {
   // The influences of a position (internal id), and whether a collapse chose them: the wedges of a
   // position no collapse kept keep their own, the input's.
   const Influences& influences(uint32_t position) const { return influences_[position]; }
-  bool chose(uint32_t position) const { return chosen_[position] != 0; }
+  // (None before initialize(), which the engine calls only if there is something to collapse.)
+  bool chose(uint32_t position) const { return position < chosen_.size() && chosen_[position] != 0; }
 
  private:
   struct Affine {

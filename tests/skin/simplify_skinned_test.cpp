@@ -114,6 +114,26 @@ TEST(SimplifySkinned, EveryModeGivesValidInfluencesAndRigidSingleBoneRegions) {
   }
 }
 
+// Asked to keep every triangle, each mode collapses nothing and keeps the input's influences (the
+// multi-pose engine read its per-position choices before they existed: a crash, found by lod
+// --errors, whose search asks for the source's own triangle count).
+TEST(SimplifySkinned, NothingToCollapseKeepsTheInput) {
+  const Mesh m = arm();
+  std::vector<std::vector<mat4>> poses;
+  for (int k = 0; k < 4; ++k) poses.push_back(bent(pi * 0.5f * float(k) / 3));
+  for (const SkinMode mode : {SkinMode::houle, SkinMode::subset, SkinMode::multipose}) {
+    SCOPED_TRACE(skin_mode_name(mode));
+    const SimplifyResult r = skin_test::simplify_in_mode(m, mode, 1.0f, poses, 1);
+    EXPECT_EQ(r.mesh.triangle_count(), m.triangle_count());
+    ASSERT_EQ(r.vertex_origin.size(), r.mesh.vertex_count());
+    expect_valid_influences(r.mesh, 2);
+    // Each vertex skins where its input vertex does, in a pose none of the above is.
+    const Mesh out = skinned(r.mesh, bent(1.1f)), in = skinned(m, bent(1.1f));
+    for (size_t v = 0; v < r.mesh.vertex_count(); ++v)
+      EXPECT_LE(length(sub(out.positions[v], in.positions[r.vertex_origin[v]])), 1e-5f) << "vertex " << v;
+  }
+}
+
 // With one pose where every joint is the identity and no bone-weight term, the pulled-back quadrics
 // are the bind-pose quadrics: the result must be exactly constrained QEM's. (Weights in eighths, so
 // that blended identity matrices are exactly the identity in floating point too.)
