@@ -46,8 +46,11 @@ struct LodOptions {
   // input). Empty: `levels` levels halving each time (1, 1/2, 1/4, ...).
   std::vector<float> ratios;
   uint32_t levels = 4;
-  // Instead of ratios: each level's error limit as a fraction of the bounding-box diagonal (finest
-  // first; 0 for the input itself).
+  // Instead of ratios: each level's limit on its certified distance to the input (LodLevel::
+  // error_bound), as a fraction of the bounding-box diagonal (finest first; 0 for the input itself:
+  // a later 0 keeps only the simplifier's exact collapses). A level by error is searched for, each
+  // try simplified to a triangle count and measured (the simplifier's own error, a quadric estimate,
+  // is only the first try's stop): a few times the build time of ratios.
   std::vector<float> errors;
   // Each level simplified from the previous one (errors accumulate; needed for geomorphs) or from
   // the input.

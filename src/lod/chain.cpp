@@ -2,7 +2,9 @@
 // with certified error bounds, geomorph tables and an optional shared vertex buffer.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
+#include <optional>
 
 #include "core/parallel.h"
 #include "lod/internal.h"
@@ -60,6 +62,149 @@ SharedVertices share_vertices(const Mesh& input, const std::vector<LodLevel>& le
   return shared;
 }
 
+uint64_t level_samples(const Mesh& input) { return std::clamp<uint64_t>(2 * input.triangle_count(), 2'000, 1'000'000); }
+
+// Each level's measurement: the symmetric Hausdorff distance to the input with a certified bound.
+Deviation measure_level(const Mesh& input, const Mesh& level, unsigned threads) {
+  // Two samples per input triangle find the maximum well on meshes of that density; the
+  // refinement then certifies a bound (it stops within its tolerance or at its budget). The
+  // budget is eight times the samples: the default (as many) ran out on bunny00's levels,
+  // leaving bounds 2-4x the error; four times closed them within the tolerance, for 1.2x the
+  // build time. Where even this runs out, the bound is still certified, only looser.
+  // A small mesh takes fewer samples but keeps the budget of 160,000 queries (8 x 20,000): the
+  // refinement then finds what the samples miss, and its queries go where the bound is open (a
+  // 288-triangle chain: 0.84x the build time, the same errors and bounds to 0.4%). Budget and
+  // samples cut together left a cube-meshed level's bound 537x looser.
+  const uint64_t samples = level_samples(input);
+  const uint64_t budget = 8 * std::max<uint64_t>(samples, 20'000);
+  return compare(input, level,
+                 {.samples = samples, .refine = true, .refine_tolerance = 1e-5f, .refine_budget = budget,
+                  .attributes = false, .threads = threads});
+}
+
+struct Attempt {
+  SimplifyResult result;
+  double distance = 0;  // sampled Hausdorff distance to the input (a lower bound)
+};
+
+// A level by error: simplified from `source` and as coarse as a few tries find, with its certified
+// bound to the input within `limit` (object space); `deviation` gets that measurement. The
+// simplifier's own error (the square root of a quadric cost) is only the first try's stop: the
+// distance measured runs up to 3x past it (bunny00's --errors 0.001 gave 0.27% of the diagonal).
+// Later tries ask for a triangle count, from the power law H ~ c / T^0.7 (measured on bunny00's
+// levels: 0.6-0.8) through the nearest results on each side of the limit, inside that bracket, or
+// halfway in the logarithm after two tries on the same side (a feature that fewer triangles do not
+// change breaks the law). The search ends when the bracket is within 10% (the distance is noisy in
+// the count below that) or after max_tries. Tries are judged by the sampled distance, a quarter of
+// the refined measurement's cost; the coarsest within the limit is then certified (refined). If its
+// bound is past the limit, the samples fell short: every try is judged again by its distance times
+// that shortfall, and the search goes on (two more tries, at most twice). With no try left within
+// the limit the source is kept (simplified to its own triangle count: no collapses).
+SimplifyResult level_within(const Mesh& input, const Mesh& source, const SimplifyOptions& base, double limit,
+                            const std::function<SimplifyResult(const Mesh&, const SimplifyOptions&)>& simplifier,
+                            Deviation& deviation, const std::function<void(double)>& progress) {
+  constexpr int max_tries = 6;
+  constexpr double exponent = 0.7;
+  const auto attempt = [&](uint64_t target, float max_error) {
+    SimplifyOptions so = base;
+    so.target_ratio = 0, so.target_triangles = target, so.max_error = max_error, so.max_relative_error = -1;
+    Attempt a;
+    a.result = simplifier ? simplifier(source, so) : simplify(source, so);
+    a.distance = a.result.mesh.triangle_count()
+                     ? compare(input, a.result.mesh, {.samples = level_samples(input), .attributes = false, .threads = base.threads})
+                           .hausdorff
+                     : std::numeric_limits<double>::infinity();  // nothing left: past any limit
+    return a;
+  };
+  std::vector<Attempt> within;                           // tries within the limit
+  uint64_t fine = source.triangle_count(), coarse = 0;  // the bracket: triangles within / past the limit
+  double fine_h = 0, coarse_h = 0;                       // their distances (fine_h 0: not measured)
+  bool past = false;                                     // whether `coarse` is known
+  // How far the sampled distance fell short of a certified bound that failed (from then on, tries
+  // are judged by their distance times this).
+  double shortfall = 1;
+  int streak = 0;  // consecutive tries on the same side of the limit
+  bool last_within = false;
+  const auto set_past = [&](uint64_t t, double h) {
+    if (!past || t > coarse) coarse = t, coarse_h = h, past = true;
+  };
+  const auto coarsest_within = [&] {
+    return std::min_element(within.begin(), within.end(), [](const Attempt& x, const Attempt& y) {
+      return x.result.mesh.triangle_count() < y.result.mesh.triangle_count();
+    });
+  };
+  const auto take = [&](Attempt&& a) {
+    const uint64_t t = a.result.mesh.triangle_count();
+    const bool is_within = a.distance * shortfall <= limit;
+    streak = is_within == last_within ? streak + 1 : 1, last_within = is_within;
+    if (is_within) {
+      if (within.empty() || t < fine) fine = t, fine_h = a.distance * shortfall;
+      within.push_back(std::move(a));
+    } else {
+      set_past(t, a.distance * shortfall);
+    }
+  };
+  // The next triangle count to try, or 0 when the bracket is closed.
+  const auto next_target = [&]() -> uint64_t {
+    // The power law needs a measured point past the limit (not an empty result).
+    const bool scaled = past && coarse > 0 && std::isfinite(coarse_h);
+    double t;
+    if (past && !within.empty()) {
+      if (double(fine) <= double(coarse) * 1.1 + 1) return 0;
+      t = scaled && fine_h > 0 && coarse_h > fine_h
+              ? std::exp(std::log(double(coarse)) + (std::log(limit) - std::log(coarse_h)) *
+                                                        (std::log(double(fine)) - std::log(double(coarse))) /
+                                                        (std::log(fine_h) - std::log(coarse_h)))
+              : std::sqrt(double(fine) * double(coarse));
+      const double margin = double(fine - coarse) / 4;
+      t = std::clamp(t, double(coarse) + margin, double(fine) - margin);
+    } else if (past) {  // every try so far is past the limit: finer
+      if (coarse >= fine) return 0;
+      // Twice past in a row, the law is off (a feature that fewer triangles do not change): halfway
+      // to the source, in the logarithm.
+      t = scaled && streak < 2 ? double(coarse) * std::pow(coarse_h / limit, 1 / exponent)
+                               : std::sqrt(double(std::max<uint64_t>(coarse, 1)) * double(fine));
+      t = std::clamp(t, double(coarse) * 1.05 + 1, double(fine));
+    } else {  // every try so far is within the limit: coarser
+      if (fine <= 1) return 0;
+      t = fine_h > 0 && streak < 2 ? double(fine) * std::pow(fine_h / limit, 1 / exponent) : double(fine) / 4;
+      t = std::clamp(t, 1.0, double(fine) * 0.95);
+    }
+    const uint64_t target = uint64_t(std::llround(t));
+    return target >= fine || (past && target <= coarse) ? 0 : target;
+  };
+  take(attempt(0, float(limit)));
+  // Tries end at max_tries, plus two more after each certification that fails (at most two).
+  for (int tries = 1, failed = 0;;) {
+    const uint64_t target = tries < max_tries + 2 * failed ? next_target() : 0;
+    if (target) {
+      take(attempt(target, -1));
+      ++tries;
+      if (progress) progress(std::min(1.0, double(tries) / max_tries));
+      continue;
+    }
+    if (within.empty()) break;
+    const auto best = coarsest_within();
+    deviation = measure_level(input, best->result.mesh, base.threads);
+    if (deviation.hausdorff_bound <= limit) return std::move(best->result);
+    // Its samples missed the maximum: past the limit after all. The other tries are judged again
+    // with that shortfall, and the search goes on finer.
+    shortfall = std::max(shortfall, deviation.hausdorff_bound / best->distance);
+    std::vector<Attempt> tried = std::move(within);
+    within.clear();
+    fine = source.triangle_count(), fine_h = 0;
+    const int kept_streak = streak;
+    for (Attempt& a : tried) take(std::move(a));
+    streak = kept_streak, last_within = false;  // the failed one is the last verdict
+    failed = std::min(failed + 1, 2);
+  }
+  SimplifyOptions so = base;
+  so.target_ratio = 0, so.target_triangles = source.triangle_count(), so.max_error = -1, so.max_relative_error = -1;
+  SimplifyResult kept = simplifier ? simplifier(source, so) : simplify(source, so);
+  deviation = measure_level(input, kept.mesh, base.threads);
+  return kept;
+}
+
 }  // namespace
 
 LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
@@ -81,6 +226,7 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
   std::vector<std::vector<uint32_t>> origin;  // per level: input vertex of each vertex
   std::vector<std::vector<uint32_t>> successor;  // per level: each input vertex's vertex (~0u: none)
   std::vector<bool> identity;                 // per level: the input itself (no error to measure)
+  std::vector<std::optional<Deviation>> measured;  // per level: measured while searching by error
   const size_t count = ratios.size();
   for (size_t i = 0; i < count; ++i) {
     const bool by_error = !errors.empty();
@@ -89,6 +235,7 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
     const Mesh& source = previous ? chain.levels.back().mesh : input;
     LodLevel level;
     std::vector<uint32_t> level_origin, level_successor;
+    std::optional<Deviation> deviation;
     if ((!by_error && target >= source.triangle_count() && !previous) || (by_error && errors[i] == 0 && !previous)) {
       // Everything kept: the input itself, vertex order and all.
       level.mesh = input;
@@ -108,7 +255,17 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
         so.keep_vertices = true;
         so.normal_weight = so.uv_weight = so.color_weight = 0;
       }
-      SimplifyResult r = o.simplifier ? o.simplifier(source, so) : simplify(source, so);
+      SimplifyResult r;
+      if (by_error && errors[i] > 0) {
+        // Within the limit as measured (a limit of 0 keeps the engine's exact collapses only).
+        deviation.emplace();
+        const auto searching = [&](double f) {
+          if (o.progress) o.progress((double(i) + f) / double(count) * (o.measure ? 0.5 : 1.0));
+        };
+        r = level_within(input, source, so, double(errors[i]) * chain.diagonal, o.simplifier, *deviation, searching);
+      } else {
+        r = o.simplifier ? o.simplifier(source, so) : simplify(source, so);
+      }
       if (o.morph && previous) chain.morphs.push_back(geomorph_from_record(source, r));
       level.engine_error = (previous ? chain.levels.back().engine_error : 0.0f) + r.error;
       level_origin.resize(r.vertex_origin.size());
@@ -128,6 +285,7 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
     identity.push_back(level.mesh.triangle_count() == input_triangles && level.engine_error == 0 && !previous &&
                        level_origin.size() == input.vertex_count());
     chain.levels.push_back(std::move(level));
+    measured.push_back(std::move(deviation));
     origin.push_back(std::move(level_origin));
     successor.push_back(std::move(level_successor));
     if (o.progress) o.progress(double(i + 1) / double(count) * (o.measure ? 0.5 : 1.0));
@@ -154,31 +312,21 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
     }
   }
 
-  if (o.measure)
-    for (size_t i = 0; i < count; ++i) {
-      LodLevel& level = chain.levels[i];
-      if (level.mesh.triangle_count() && !identity[i]) {
-        // Two samples per input triangle find the maximum well on meshes of that density; the
-        // refinement then certifies a bound (it stops within its tolerance or at its budget). The
-        // budget is eight times the samples: the default (as many) ran out on bunny00's levels,
-        // leaving bounds 2-4x the error; four times closed them within the tolerance, for 1.2x the
-        // build time. Where even this runs out, the bound is still certified, only looser.
-        // A small mesh takes fewer samples but keeps the budget of 160,000 queries (8 x 20,000): the
-        // refinement then finds what the samples miss, and its queries go where the bound is open (a
-        // 288-triangle chain: 0.84x the build time, the same errors and bounds to 0.4%). Budget and
-        // samples cut together left a cube-meshed level's bound 537x looser.
-        const uint64_t samples = std::clamp<uint64_t>(2 * input_triangles, 2'000, 1'000'000);
-        const uint64_t budget = 8 * std::max<uint64_t>(samples, 20'000);
-        const Deviation d = compare(input, level.mesh,
-                                    {.samples = samples, .refine = true, .refine_tolerance = 1e-5f,
-                                     .refine_budget = budget, .attributes = false, .threads = o.simplify.threads});
-        level.error = float(d.hausdorff);
-        level.error_bound = float(d.hausdorff_bound);
-      } else if (!level.mesh.triangle_count()) {
-        level.error = level.error_bound = chain.diagonal;  // nothing left
-      }
-      if (o.progress) o.progress(0.5 + 0.5 * double(i + 1) / double(count));
+  for (size_t i = 0; i < count; ++i) {
+    LodLevel& level = chain.levels[i];
+    if (measured[i]) {
+      // The search measured this geometry already (the optimisation above only reorders it).
+      level.error = float(measured[i]->hausdorff);
+      level.error_bound = float(measured[i]->hausdorff_bound);
+    } else if (o.measure && level.mesh.triangle_count() && !identity[i]) {
+      const Deviation d = measure_level(input, level.mesh, o.simplify.threads);
+      level.error = float(d.hausdorff);
+      level.error_bound = float(d.hausdorff_bound);
+    } else if (o.measure && !level.mesh.triangle_count()) {
+      level.error = level.error_bound = chain.diagonal;  // nothing left
     }
+    if (o.measure && o.progress) o.progress(0.5 + 0.5 * double(i + 1) / double(count));
+  }
   for (LodLevel& level : chain.levels) level.relative_error = chain.diagonal > 0 ? level.error / chain.diagonal : 0;
   if (o.shared_vertices) chain.shared = share_vertices(input, chain.levels, origin);
   for (size_t i = 0; i < count; ++i)

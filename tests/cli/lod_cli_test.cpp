@@ -71,6 +71,40 @@ nlohmann::json node_structure(const nlohmann::json& doc) {
   return {{"nodes", doc["nodes"].size()}, {"roots", roots}};
 }
 
+// --errors limits what the table reports: each level's certified bound (and so its measured error)
+// is within its fraction of the diagonal, read back from the file written.
+TEST(CliLod, ErrorsLimitTheMeasuredDistance) {
+  test::TempDir dir;
+  write_mesh(shapes::torus(1.0f, 0.3f, 48, 24), dir / "torus.ply");
+  const test::RunResult r = test::run_cli(
+      {"lod", (dir / "torus.ply").string(), "-o", (dir / "chain.glb").string(), "--errors", "0,0.004,0.02", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto report = nlohmann::json::parse(r.out);
+  ASSERT_EQ(report["levels"].size(), 3u);
+  const double diagonal = report["diagonal"].get<double>();
+  const Mesh input = read_mesh(dir / "torus.ply");
+  const Scene scene = read_scene(dir / "chain.glb");
+  ASSERT_EQ(scene.primitives.size(), 3u);
+  for (size_t i = 1; i < 3; ++i) {
+    const double limit = (i == 1 ? 0.004 : 0.02) * diagonal;
+    EXPECT_LE(report["levels"][i]["error_bound"].get<double>(), limit) << "level " << i;
+    const Deviation d = compare(input, scene.primitives[i].mesh, {.samples = 100'000, .seed = 3, .refine = true});
+    EXPECT_LE(d.hausdorff, limit) << "level " << i;
+  }
+  // A skinned character's chain too (measured in the bind pose), through the multi-pose simplifier,
+  // whose search once asked it to collapse nothing and crashed.
+  write_scene(fixtures::humanoid_scene(), dir / "humanoid.glb");
+  const test::RunResult s = test::run_cli(
+      {"lod", (dir / "humanoid.glb").string(), "-o", (dir / "h.glb").string(), "--errors", "0,0.005,0.02", "--json"});
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  const auto chain = nlohmann::json::parse(s.out)["skinned"]["chains"][0];
+  ASSERT_EQ(chain["levels"].size(), 3u);
+  for (size_t i = 1; i < 3; ++i) {
+    EXPECT_LE(chain["levels"][i]["error_bound"].get<double>(), (i == 1 ? 0.005 : 0.02) * chain["diagonal"].get<double>());
+    EXPECT_LT(chain["levels"][i]["triangles"].get<uint64_t>(), chain["levels"][i - 1]["triangles"].get<uint64_t>());
+  }
+}
+
 TEST(CliLod, WritesAValidMsftLodChain) {
   test::TempDir dir;
   const Mesh torus = shapes::torus(1.0f, 0.3f, 48, 24);

@@ -871,7 +871,7 @@ Command register_lod(CLI::App& root) {
   app->add_option("-o,--output", o->output, "Output glTF (.glb or .gltf)")->required();
   app->add_option("--levels", o->levels, "Number of levels, halving the triangles each time (default 4)");
   app->add_option("--ratios", o->ratios, "Fractions of the triangles per level, finest first, e.g. 1,0.5,0.25");
-  app->add_option("--errors", o->errors, "Error limit per level (fraction of the diagonal), finest first, e.g. 0,0.001,0.01");
+  app->add_option("--errors", o->errors, "Per level, a limit on its certified distance to the input (fraction of the diagonal), finest first, e.g. 0,0.001,0.01");
   app->add_option("--error-px", o->error_px, "Pixels of error allowed on screen when switching (default 1)");
   app->add_option("--screen-height", o->screen_height, "Screen height in pixels (default 1080)");
   app->add_option("--fov", o->fov_degrees, "Vertical field of view in degrees (default 60)");
