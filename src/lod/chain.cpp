@@ -87,7 +87,8 @@ struct Attempt {
   double distance = 0;  // sampled Hausdorff distance to the input (a lower bound)
 };
 
-// A level by error: simplified from `source` and as coarse as a few tries find, with its certified
+// A level by error: simplified from `source` (at `source_distance` from the input: the previous
+// level's bound, or 0) and as coarse as a few tries find, with its certified
 // bound to the input within `limit` (object space); `deviation` gets that measurement. The
 // simplifier's own error (the square root of a quadric cost) is only the first try's stop: the
 // distance measured runs up to 3x past it (bunny00's --errors 0.001 gave 0.27% of the diagonal).
@@ -100,7 +101,7 @@ struct Attempt {
 // bound is past the limit, the samples fell short: every try is judged again by its distance times
 // that shortfall, and the search goes on (two more tries, at most twice). With no try left within
 // the limit the source is kept (simplified to its own triangle count: no collapses).
-SimplifyResult level_within(const Mesh& input, const Mesh& source, const SimplifyOptions& base, double limit,
+SimplifyResult level_within(const Mesh& input, const Mesh& source, double source_distance, const SimplifyOptions& base, double limit,
                             const std::function<SimplifyResult(const Mesh&, const SimplifyOptions&)>& simplifier,
                             Deviation& deviation, const std::function<void(double)>& progress) {
   constexpr int max_tries = 6;
@@ -118,7 +119,7 @@ SimplifyResult level_within(const Mesh& input, const Mesh& source, const Simplif
   };
   std::vector<Attempt> within;                           // tries within the limit
   uint64_t fine = source.triangle_count(), coarse = 0;  // the bracket: triangles within / past the limit
-  double fine_h = 0, coarse_h = 0;                       // their distances (fine_h 0: not measured)
+  double fine_h = source_distance, coarse_h = 0;         // their distances (0: the input itself)
   bool past = false;                                     // whether `coarse` is known
   // How far the sampled distance fell short of a certified bound that failed (from then on, tries
   // are judged by their distance times this).
@@ -149,22 +150,18 @@ SimplifyResult level_within(const Mesh& input, const Mesh& source, const Simplif
     // The power law needs a measured point past the limit (not an empty result).
     const bool scaled = past && coarse > 0 && std::isfinite(coarse_h);
     double t;
-    if (past && !within.empty()) {
+    if (past) {  // finer than `coarse`, coarser than `fine` (a try within the limit, or the source)
       if (double(fine) <= double(coarse) * 1.1 + 1) return 0;
-      t = scaled && fine_h > 0 && coarse_h > fine_h
-              ? std::exp(std::log(double(coarse)) + (std::log(limit) - std::log(coarse_h)) *
-                                                        (std::log(double(fine)) - std::log(double(coarse))) /
-                                                        (std::log(fine_h) - std::log(coarse_h)))
-              : std::sqrt(double(fine) * double(coarse));
+      if (scaled && fine_h > 0 && coarse_h > fine_h)  // the law through both ends
+        t = std::exp(std::log(double(coarse)) + (std::log(limit) - std::log(coarse_h)) *
+                                                    (std::log(double(fine)) - std::log(double(coarse))) /
+                                                    (std::log(fine_h) - std::log(coarse_h)));
+      else if (scaled && streak < 2)  // the law from the coarse end
+        t = double(coarse) * std::pow(coarse_h / limit, 1 / exponent);
+      else  // twice past in a row, the law is off (a feature fewer triangles do not change): halfway
+        t = std::sqrt(double(std::max<uint64_t>(coarse, 1)) * double(fine));
       const double margin = double(fine - coarse) / 4;
       t = std::clamp(t, double(coarse) + margin, double(fine) - margin);
-    } else if (past) {  // every try so far is past the limit: finer
-      if (coarse >= fine) return 0;
-      // Twice past in a row, the law is off (a feature that fewer triangles do not change): halfway
-      // to the source, in the logarithm.
-      t = scaled && streak < 2 ? double(coarse) * std::pow(coarse_h / limit, 1 / exponent)
-                               : std::sqrt(double(std::max<uint64_t>(coarse, 1)) * double(fine));
-      t = std::clamp(t, double(coarse) * 1.05 + 1, double(fine));
     } else {  // every try so far is within the limit: coarser
       if (fine <= 1) return 0;
       t = fine_h > 0 && streak < 2 ? double(fine) * std::pow(fine_h / limit, 1 / exponent) : double(fine) / 4;
@@ -192,7 +189,7 @@ SimplifyResult level_within(const Mesh& input, const Mesh& source, const Simplif
     shortfall = std::max(shortfall, deviation.hausdorff_bound / best->distance);
     std::vector<Attempt> tried = std::move(within);
     within.clear();
-    fine = source.triangle_count(), fine_h = 0;
+    fine = source.triangle_count(), fine_h = source_distance;
     const int kept_streak = streak;
     for (Attempt& a : tried) take(std::move(a));
     streak = kept_streak, last_within = false;  // the failed one is the last verdict
@@ -262,7 +259,10 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
         const auto searching = [&](double f) {
           if (o.progress) o.progress((double(i) + f) / double(count) * (o.measure ? 0.5 : 1.0));
         };
-        r = level_within(input, source, so, double(errors[i]) * chain.diagonal, o.simplifier, *deviation, searching);
+        // The source's own distance: the previous level's bound (0 for the input).
+        const double source_distance = previous && measured.back() ? measured.back()->hausdorff_bound : 0.0;
+        r = level_within(input, source, source_distance, so, double(errors[i]) * chain.diagonal, o.simplifier, *deviation,
+                         searching);
       } else {
         r = o.simplifier ? o.simplifier(source, so) : simplify(source, so);
       }
