@@ -125,6 +125,25 @@ TEST(LodChain, LevelByErrorKeepsItsSourceWhenNoTryIsWithinTheLimit) {
   EXPECT_LE(chain.levels[1].error_bound, 0.001 * chain.diagonal);
 }
 
+// When the first try (the simplifier's own error stop) lands far past the limit, the power law from
+// it alone asks for more triangles than the source has: the search still tries between the two and
+// finds a level, rather than keeping the source.
+TEST(LodChain, LevelByErrorSearchesBetweenAFarFirstTryAndTheSource) {
+  const Mesh mesh = shapes::torus(1.0f, 0.3f, 48, 24);
+  LodOptions options{.errors = {0.0f, 0.002f}};
+  options.simplifier = [](const Mesh& source, const SimplifyOptions& so) {
+    SimplifyOptions s = so;
+    if (so.max_error >= 0) s.target_triangles = 8, s.max_error = -1;  // an error stop far too loose
+    return simplify(source, s);
+  };
+  const LodChain chain = build_lod_chain(mesh, options);
+  ASSERT_EQ(chain.levels.size(), 2u);
+  const double limit = 0.002 * chain.diagonal;
+  EXPECT_LT(chain.levels[1].mesh.triangle_count(), mesh.triangle_count() * 3 / 4);
+  EXPECT_LE(chain.levels[1].error_bound, limit);
+  EXPECT_GE(chain.levels[1].error_bound, 0.3 * limit);
+}
+
 TEST(Geomorph, EndsAreExactAndTheMiddleIsLinear) {
   for (const Mesh& mesh : {shapes::torus(1.0f, 0.3f, 32, 16), shapes::cylinder(24, 2.0f)}) {
     const LodChain chain = morph_chain(mesh);
