@@ -106,11 +106,15 @@ SimplifyResult level_within(const Mesh& input, const Mesh& source, double source
                             Deviation& deviation, const std::function<void(double)>& progress) {
   constexpr int max_tries = 6;
   constexpr double exponent = 0.7;
-  const auto attempt = [&](uint64_t target, float max_error) {
+  // The source simplified to `target` triangles (0: none) or `max_error` (< 0: none).
+  const auto simplified = [&](uint64_t target, float max_error) {
     SimplifyOptions so = base;
     so.target_ratio = 0, so.target_triangles = target, so.max_error = max_error, so.max_relative_error = -1;
+    return simplifier ? simplifier(source, so) : simplify(source, so);
+  };
+  const auto attempt = [&](uint64_t target, float max_error) {
     Attempt a;
-    a.result = simplifier ? simplifier(source, so) : simplify(source, so);
+    a.result = simplified(target, max_error);
     a.distance = a.result.mesh.triangle_count()
                      ? compare(input, a.result.mesh, {.samples = level_samples(input), .attributes = false, .threads = base.threads})
                            .hausdorff
@@ -195,9 +199,7 @@ SimplifyResult level_within(const Mesh& input, const Mesh& source, double source
     streak = kept_streak, last_within = false;  // the failed one is the last verdict
     failed = std::min(failed + 1, 2);
   }
-  SimplifyOptions so = base;
-  so.target_ratio = 0, so.target_triangles = source.triangle_count(), so.max_error = -1, so.max_relative_error = -1;
-  SimplifyResult kept = simplifier ? simplifier(source, so) : simplify(source, so);
+  SimplifyResult kept = simplified(source.triangle_count(), -1);
   deviation = measure_level(input, kept.mesh, base.threads);
   return kept;
 }
