@@ -106,6 +106,23 @@ TEST(LodChain, LevelsByErrorStayWithinTheirLimitsAsMeasured) {
   }
 }
 
+// The search's tries and measurements do not depend on the thread count, so neither do its levels.
+TEST(LodChain, LevelsByErrorAreTheSameOnAnyThreadCount) {
+  const Mesh mesh = shapes::torus(1.0f, 0.3f, 48, 24);
+  const auto chain_on = [&](unsigned threads) {
+    return build_lod_chain(mesh, {.errors = {0.0f, 0.003f, 0.02f}, .simplify = {.threads = threads}});
+  };
+  const LodChain one = chain_on(1);
+  for (const unsigned threads : {2u, 8u}) {
+    const LodChain other = chain_on(threads);
+    ASSERT_EQ(other.levels.size(), one.levels.size());
+    for (size_t i = 0; i < one.levels.size(); ++i) {
+      EXPECT_EQ(other.levels[i].mesh, one.levels[i].mesh) << threads << " threads, level " << i;
+      EXPECT_EQ(other.levels[i].error_bound, one.levels[i].error_bound) << threads << " threads, level " << i;
+    }
+  }
+}
+
 // A simplifier that overshoots every target (it always goes down to 8 triangles) leaves the search
 // nothing within the limit: the level then keeps its source's triangles, still within the limit.
 TEST(LodChain, LevelByErrorKeepsItsSourceWhenNoTryIsWithinTheLimit) {
