@@ -164,8 +164,10 @@ SimplifyResult level_within(const Mesh& input, const Mesh& source, double source
         t = double(coarse) * std::pow(coarse_h / limit, 1 / exponent);
       else  // twice past in a row, the law is off (a feature fewer triangles do not change): halfway
         t = std::sqrt(double(std::max<uint64_t>(coarse, 1)) * double(fine));
-      const double margin = double(fine - coarse) / 4;
-      t = std::clamp(t, double(coarse) + margin, double(fine) - margin);
+      // Kept off both ends by a sixth of the bracket, in the logarithm: a bracket up to the source
+      // can span thousands of times (a first try past the limit at 86 triangles, the source at 75,408).
+      const double step = std::pow(double(fine) / double(std::max<uint64_t>(coarse, 1)), 1.0 / 6);
+      t = std::clamp(t, std::max<double>(coarse, 1) * step, double(fine) / step);
     } else {  // every try so far is within the limit: coarser
       if (fine <= 1) return 0;
       t = fine_h > 0 && streak < 2 ? double(fine) * std::pow(fine_h / limit, 1 / exponent) : double(fine) / 4;
