@@ -6,6 +6,7 @@
 #   scripts/bench.sh simplify --requality
 #   scripts/bench.sh simplify --pathological [RUNS=3]
 #   scripts/bench.sh measure [PAIRS=20]
+#   scripts/bench.sh errors [RUNS=3]
 #   scripts/bench.sh lod [RUNS=15]
 #   scripts/bench.sh optimize [--quick] [--no-big] [RUNS=5]
 #   scripts/bench.sh render [RUNS=5]
@@ -30,6 +31,11 @@
 # --pathological: `lodkit simplify` to 10% on triangle fans of 2,000 to 100,000 triangles around one
 # position, where per-edge work that walks a whole star is quadratic: median time and peak memory
 # (bench/simplify/pathological.py).
+#
+# errors: levels by error, `lodkit lod --errors 0,E` against meshopt_simplify's target_error E on corpus
+# meshes at E = 0.2% and 1% of the diagonal: whether each stays within E as measured (certified
+# bounds), triangles and times, and lodkit's triangles at meshoptimizer's measured distance
+# (bench/lod/errors.py); writes bench/results/errors.json.
 #
 # measure: `lodkit compare` against CGAL's distance (cgal_distance) on PAIRS (mesh, simplified) pairs:
 # values and time at the same sample count; writes bench/results/measure.json.
@@ -87,7 +93,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 usage() {
-  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5] | compress [RUNS=5] | morphs [RUNS=3] | instanced [RUNS=3] | turntable [RUNS=3] | parts [RUNS=3] | crowd [RUNS=3]" >&2
+  echo "usage: scripts/bench.sh io [RUNS=5] | simplify [--quick] [RUNS=3] | simplify --requality | simplify --pathological [RUNS=3] | measure [PAIRS=20] | errors [RUNS=3] | lod [RUNS=15] | skin [RUNS=3] | optimize [--quick] [--no-big] [RUNS=5] | render [RUNS=5] | compress [RUNS=5] | morphs [RUNS=3] | instanced [RUNS=3] | turntable [RUNS=3] | parts [RUNS=3] | crowd [RUNS=3]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -235,6 +241,22 @@ area_measure() {
   echo
   mkdir -p bench/results
   python3 bench/simplify/measure.py "$build/bench" "$build/lodkit" build/bench-data/measure bench/results/measure.json "$pairs" "$machine"
+}
+
+# ---- errors --------------------------------------------------------------------------------------
+area_errors() {
+  [ $# -le 1 ] || usage
+  local runs=${1:-3}
+  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  configure
+  build_targets lodkit_cli peer_meshopt lodkit_bench_compare
+  [ -x "$build/bench/peer_meshopt" ] || { echo "bench: peer_meshopt was not built (libmeshoptimizer-dev missing?)" >&2; exit 1; }
+  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
+  echo
+  machine_line
+  echo
+  mkdir -p bench/results
+  python3 bench/lod/errors.py "$build/bench" "$build/lodkit" build/bench-data/errors bench/results/errors.json "$runs" "$machine"
 }
 
 # ---- lod -----------------------------------------------------------------------------------------
@@ -440,6 +462,7 @@ case $area in
   lod) area_lod "$@" ;;
   simplify) area_simplify "$@" ;;
   measure) area_measure "$@" ;;
+  errors) area_errors "$@" ;;
   render) area_render "$@" ;;
   compress) area_compress "$@" ;;
   morphs) area_morphs "$@" ;;
