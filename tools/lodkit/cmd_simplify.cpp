@@ -80,8 +80,9 @@ Command register_simplify(CLI::App& root) {
   app->add_option("--ratio", o->ratio, "Fraction of the triangles to keep, in [0, 1]");
   app->add_option("--triangles", o->triangles, "Number of triangles to keep (0: as few as the mesh allows)");
   app->add_option("--error", o->error,
-                  "Stop before the error exceeds this fraction of the bounding-box diagonal; with --ratio or --triangles, "
-                  "whichever is reached first");
+                  "Stop before the simplifier's own error (the square root of its quadric cost: an estimate the measured "
+                  "distance can exceed; lod --errors holds levels to the measured one) exceeds this fraction of the "
+                  "bounding-box diagonal; with --ratio or --triangles, whichever is reached first");
   app->add_option("--metric", o->metric, "edge, qem, cqem (default), memoryless or cmemoryless");
   app->add_option("--attributes", o->attributes, "Attribute weights, e.g. normal=1,uv=1,color=1");
   app->add_flag("--keep-vertices", o->keep_vertices, "Use only input vertices (LODs can share one vertex buffer)");
