@@ -196,9 +196,8 @@ SimplifyResult level_within(const Mesh& input, const Mesh& source, double source
     std::vector<Attempt> tried = std::move(within);
     within.clear();
     fine = source.triangle_count(), fine_h = source_distance;
-    const int kept_streak = streak;
     for (Attempt& a : tried) take(std::move(a));
-    streak = kept_streak, last_within = false;  // the failed one is the last verdict
+    streak = 1, last_within = false;  // the last verdict: the failed one, past
     failed = std::min(failed + 1, 2);
   }
   SimplifyResult kept = simplified(source.triangle_count(), -1);
