@@ -132,16 +132,33 @@ with_peak_memory() {
   rm -f "$log"
   return $status
 }
+# An area's optional count (RUNS or PAIRS): the value given, or DEFAULT; anything else is a usage
+# error. Called as `runs=$(count_arg DEFAULT "$@") || exit 2`.
+count_arg() {
+  local fallback=$1
+  shift
+  [ $# -le 1 ] || usage
+  local n=${1:-$fallback}
+  [[ $n =~ ^[1-9][0-9]*$ ]] || usage
+  echo "$n"
+}
 machine_line() {
   machine="$(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
   echo "machine: $machine, $(date -u +%Y-%m-%dT%H:%MZ), load average $(cut -d' ' -f1-3 /proc/loadavg)"
 }
 
+# Before an area's output: the corpus (fetched if missing) and the machine line.
+start_run() {
+  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
+  echo
+  machine_line
+  echo
+}
+
 # ---- io ------------------------------------------------------------------------------------------
 area_io() {
-  [ $# -le 1 ] || usage
-  local runs=${1:-5}
-  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  local runs
+  runs=$(count_arg 5 "$@") || exit 2
   configure
   local bench=$build/bench/lodkit_bench_io
   grep -q '^build bench/lodkit_bench_io:' "$build/build.ninja" ||
@@ -228,48 +245,36 @@ area_simplify() {
 
 # ---- measure -------------------------------------------------------------------------------------
 area_measure() {
-  [ $# -le 1 ] || usage
-  local pairs=${1:-20}
-  [[ $pairs =~ ^[1-9][0-9]*$ ]] || usage
+  local pairs
+  pairs=$(count_arg 20 "$@") || exit 2
   configure
   build_targets lodkit_cli lodkit_bench_simplify lodkit_bench_compare lodkit_bench_brute_force cgal_distance
   [ -x "$build/bench/cgal_distance" ] || { echo "bench: cgal_distance was not built (libcgal-dev missing?)" >&2; exit 1; }
   "$build/lodkit" compare --help >/dev/null 2>&1 || { echo "bench: this lodkit has no 'compare' subcommand yet" >&2; exit 1; }
-  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
-  echo
-  machine_line
-  echo
+  start_run
   mkdir -p bench/results
   python3 bench/simplify/measure.py "$build/bench" "$build/lodkit" build/bench-data/measure bench/results/measure.json "$pairs" "$machine"
 }
 
 # ---- errors --------------------------------------------------------------------------------------
 area_errors() {
-  [ $# -le 1 ] || usage
-  local runs=${1:-3}
-  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  local runs
+  runs=$(count_arg 3 "$@") || exit 2
   configure
   build_targets lodkit_cli peer_meshopt lodkit_bench_compare
   [ -x "$build/bench/peer_meshopt" ] || { echo "bench: peer_meshopt was not built (libmeshoptimizer-dev missing?)" >&2; exit 1; }
-  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
-  echo
-  machine_line
-  echo
+  start_run
   mkdir -p bench/results
   python3 bench/lod/errors.py "$build/bench" "$build/lodkit" build/bench-data/errors bench/results/errors.json "$runs" "$machine"
 }
 
 # ---- lod -----------------------------------------------------------------------------------------
 area_lod() {
-  [ $# -le 1 ] || usage
-  local runs=${1:-15}
-  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  local runs
+  runs=$(count_arg 15 "$@") || exit 2
   configure
   build_targets lodkit_bench_morph lodkit_bench_popping lodkit_bench_selection
-  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
-  echo
-  machine_line
-  echo
+  start_run
   local status=0
   echo "## geomorph throughput"
   with_peak_memory "$build/bench/lodkit_bench_morph" data/corpus/bunny00.off "$runs"
@@ -305,10 +310,7 @@ area_optimize() {
   build_targets lodkit_cli lodkit_bench_optimize
   [ -x "$build/bench/lodkit_bench_optimize" ] ||
     { echo "bench: lodkit_bench_optimize was not built (is libmeshoptimizer-dev installed?)" >&2; exit 1; }
-  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
-  echo
-  machine_line
-  echo
+  start_run
   mkdir -p bench/results
   python3 bench/optimize/run.py "$build/bench" "$build/lodkit" bench/results/optimize.jsonl ${runs:+--runs "$runs"} "${flags[@]}"
   python3 bench/optimize/report.py bench/results/optimize.jsonl bench/results/optimize.json "$machine" "${runs:-5}"
@@ -318,17 +320,13 @@ area_optimize() {
 
 # ---- compress ------------------------------------------------------------------------------------
 area_compress() {
-  [ $# -le 1 ] || usage
-  local runs=${1:-5} started=$SECONDS
-  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  local runs started=$SECONDS
+  runs=$(count_arg 5 "$@") || exit 2
   command -v gltfpack >/dev/null || { echo "bench: gltfpack is not installed (scripts/setup.sh installs it)" >&2; exit 1; }
   command -v draco_transcoder >/dev/null || { echo "bench: draco_transcoder is not installed (scripts/setup.sh installs it)" >&2; exit 1; }
   configure
   build_targets lodkit_cli lodkit_fixtures lodkit_bench_anim_error lodkit_bench_normal_error
-  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
-  echo
-  machine_line
-  echo
+  start_run
   mkdir -p bench/results
   python3 bench/compress/run.py "$build/lodkit" "$build/lodkit_fixtures" bench/results/compress.json --runs "$runs" \
     --anim-error "$build/bench/lodkit_bench_anim_error" --normal-error "$build/bench/lodkit_bench_normal_error"
@@ -344,9 +342,8 @@ area_compress() {
 area_lod_scene() {
   local name=$1
   shift
-  [ $# -le 1 ] || usage
-  local runs=${1:-3} started=$SECONDS
-  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  local runs started=$SECONDS
+  runs=$(count_arg 3 "$@") || exit 2
   configure
   build_targets lodkit_cli
   [ "$name" != crowd ] || build_targets lodkit_fixtures
@@ -362,15 +359,11 @@ area_lod_scene() {
 
 # ---- morphs: a blend shape carried through simplify (lod::vertex_blends), plain and through the forms
 area_morphs() {
-  [ $# -le 1 ] || usage
-  local runs=${1:-3}
-  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  local runs
+  runs=$(count_arg 3 "$@") || exit 2
   configure
   build_targets lodkit_bench_morph_transfer
-  [ -f data/corpus/bunny00.off ] || scripts/fetch-corpus.sh
-  echo
-  machine_line
-  echo
+  start_run
   local meshes=()
   for m in bunny00 armadillo elk cow knot hand fandisk camel; do meshes+=("data/corpus/$m.off"); done
   with_peak_memory "$build/bench/lodkit_bench_morph_transfer" "$runs" "${meshes[@]}"
@@ -378,9 +371,8 @@ area_morphs() {
 
 # ---- skin ----------------------------------------------------------------------------------------
 area_skin() {
-  [ $# -le 1 ] || usage
-  local runs=${1:-3}
-  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  local runs
+  runs=$(count_arg 3 "$@") || exit 2
   configure
   build_targets lodkit_bench_skin
   [ -f data/corpus/man.off ] || scripts/fetch-corpus.sh
@@ -394,9 +386,8 @@ area_skin() {
 
 # ---- render --------------------------------------------------------------------------------------
 area_render() {
-  [ $# -le 1 ] || usage
-  local runs=${1:-5}
-  [[ $runs =~ ^[1-9][0-9]*$ ]] || usage
+  local runs
+  runs=$(count_arg 5 "$@") || exit 2
   configure
   build_targets lodkit_cli lodkit_bench_render
   [ -x "$build/bench/lodkit_bench_render" ] || { echo "bench: lodkit_bench_render was not built" >&2; exit 1; }
