@@ -226,8 +226,17 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
   std::vector<std::vector<uint32_t>> origin;  // per level: input vertex of each vertex
   std::vector<std::vector<uint32_t>> successor;  // per level: each input vertex's vertex (~0u: none)
   std::vector<bool> identity;                 // per level: the input itself (no error to measure)
-  std::vector<std::optional<Deviation>> measured;  // per level: measured while searching by error
+  // Per level: its distance and bound when the search by error measured them (the Deviation's
+  // per-vertex arrays are not kept).
+  struct Measured {
+    double error, bound;
+  };
+  std::vector<std::optional<Measured>> measured;
   const size_t count = ratios.size();
+  // The build's progress after `levels` levels (the measurements, if any, are the second half).
+  const auto built = [&](double levels) {
+    if (o.progress) o.progress(levels / double(count) * (o.measure ? 0.5 : 1.0));
+  };
   for (size_t i = 0; i < count; ++i) {
     const bool by_error = !errors.empty();
     const uint64_t target = by_error ? 0 : uint64_t(std::llround(double(ratios[i]) * double(input_triangles)));
@@ -235,7 +244,7 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
     const Mesh& source = previous ? chain.levels.back().mesh : input;
     LodLevel level;
     std::vector<uint32_t> level_origin, level_successor;
-    std::optional<Deviation> deviation;
+    std::optional<Measured> found;
     if ((!by_error && target >= source.triangle_count() && !previous) || (by_error && errors[i] == 0 && !previous)) {
       // Everything kept: the input itself, vertex order and all.
       level.mesh = input;
@@ -246,7 +255,7 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
       SimplifyOptions so = o.simplify;
       so.target_ratio = 0;
       so.target_triangles = by_error ? 0 : std::max<uint64_t>(target, 1);
-      if (by_error) so.target_ratio = 0, so.max_error = errors[i] * chain.diagonal, so.max_relative_error = -1;
+      if (by_error) so.max_error = errors[i] * chain.diagonal, so.max_relative_error = -1;
       so.record = o.morph;
       // A geomorph moves a level's vertices onto the next level's: that level's triangles must be
       // this one's after collapses alone.
@@ -258,14 +267,12 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
       SimplifyResult r;
       if (by_error && errors[i] > 0) {
         // Within the limit as measured (a limit of 0 keeps the engine's exact collapses only).
-        deviation.emplace();
-        const auto searching = [&](double f) {
-          if (o.progress) o.progress((double(i) + f) / double(count) * (o.measure ? 0.5 : 1.0));
-        };
         // The source's own distance: the previous level's bound (0 for the input).
-        const double source_distance = previous && measured.back() ? measured.back()->hausdorff_bound : 0.0;
-        r = level_within(input, source, source_distance, so, double(errors[i]) * chain.diagonal, o.simplifier, *deviation,
-                         searching);
+        const double source_distance = previous && measured.back() ? measured.back()->bound : 0.0;
+        Deviation d;
+        r = level_within(input, source, source_distance, so, double(errors[i]) * chain.diagonal, o.simplifier, d,
+                         [&](double f) { built(double(i) + f); });
+        found = Measured{d.hausdorff, d.hausdorff_bound};
       } else {
         r = o.simplifier ? o.simplifier(source, so) : simplify(source, so);
       }
@@ -288,10 +295,10 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
     identity.push_back(level.mesh.triangle_count() == input_triangles && level.engine_error == 0 && !previous &&
                        level_origin.size() == input.vertex_count());
     chain.levels.push_back(std::move(level));
-    measured.push_back(std::move(deviation));
+    measured.push_back(found);
     origin.push_back(std::move(level_origin));
     successor.push_back(std::move(level_successor));
-    if (o.progress) o.progress(double(i + 1) / double(count) * (o.measure ? 0.5 : 1.0));
+    built(double(i + 1));
   }
 
   if (o.optimize) {
@@ -319,8 +326,8 @@ LodChain build_lod_chain(const Mesh& input, const LodOptions& o) {
     LodLevel& level = chain.levels[i];
     if (measured[i]) {
       // The search measured this geometry already (the optimisation above only reorders it).
-      level.error = float(measured[i]->hausdorff);
-      level.error_bound = float(measured[i]->hausdorff_bound);
+      level.error = float(measured[i]->error);
+      level.error_bound = float(measured[i]->bound);
     } else if (o.measure && level.mesh.triangle_count() && !identity[i]) {
       const Deviation d = measure_level(input, level.mesh, o.simplify.threads);
       level.error = float(d.hausdorff);
