@@ -3171,7 +3171,10 @@ std::vector<uint8_t> rebuild_geometry(tg::Model& model, const Scene& scene, cons
     if (options.draco) {
       // Each primitive its own stream (Draco has no shared vertex buffers); the gathered streams
       // outside it follow its vertices.
-      const io::DracoBits bits{options.position_bits, options.normal_bits ? options.normal_bits : 10, options.uv_bits ? options.uv_bits : 12};
+      io::DracoBits bits;  // its defaults where the options leave the bits at 0
+      bits.position = options.position_bits;
+      if (options.normal_bits) bits.normal = options.normal_bits;
+      if (options.uv_bits) bits.uv = options.uv_bits;
       const std::vector<uint32_t> point_source = writer.add_draco_geometry(in.mesh, in.targets, out, bits, !extra.empty(), coding);
       if (!point_source.empty())
         for (Gathered& g : extra) g.bytes = gather_elements(g.bytes, element_bytes(g.like.componentType, g.like.type), point_source);
