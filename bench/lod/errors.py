@@ -22,8 +22,10 @@ import os
 import statistics
 import subprocess
 import sys
-import time
 
+from common import run_lod
+
+# The measure bench's meshes (bench/simplify/measure.py).
 MESHES = ("bunny00.off", "armadillo.off", "refined_elephant.off", "fandisk_large.off", "man.off", "bear.off",
           "camel.off", "turbine.off", "cheese.off", "lion-head.off", "blade.off", "bull.off", "homer.off",
           "femur.off", "dino.off")
@@ -46,9 +48,8 @@ def lodkit_level(mesh, limit, repeat):
     out = os.path.join(work_dir, "lodkit.glb")
     seconds, report = [], None
     for _ in range(repeat):
-        start = time.perf_counter()
-        report = run_json([lodkit_cli, "lod", mesh, "-o", out, "--errors", f"0,{limit!r}", "--json"])
-        seconds.append(time.perf_counter() - start)
+        wall, _, report = run_lod(lodkit_cli, mesh, out, ["--errors", f"0,{limit!r}"])
+        seconds.append(wall)
     level = report["levels"][1]
     return level["triangles"], level["error_bound"] / report["diagonal"], statistics.median(seconds)
 
