@@ -81,6 +81,28 @@ TEST(CliOptimize, WeldKeepsVerticesWhoseMorphTargetsDiffer) {
   test::expect_valid_gltf({dir / "out.glb"});
 }
 
+// A flag whose value may be left out, written just before the input file, leaves the file to be
+// the input (CLI11 alone would take its name as the value): the same file as with the flag after it.
+TEST(CliOptimize, OptionalValueFlagsBeforeTheInputLeaveItTheInput) {
+  test::TempDir dir;
+  write_mesh(test::triangle_soup(shapes::icosphere(2)), dir / "soup.ply");
+  const std::string in = (dir / "soup.ply").string();
+  for (const char* flag : {"--weld", "--overdraw"}) {
+    SCOPED_TRACE(flag);
+    const test::RunResult after = test::run_cli({"optimize", in, flag, "-o", (dir / "after.ply").string(), "--json"});
+    ASSERT_EQ(after.exit_code, 0) << after.err;
+    const test::RunResult before = test::run_cli({"optimize", flag, in, "-o", (dir / "before.ply").string(), "--json"});
+    ASSERT_EQ(before.exit_code, 0) << before.err;
+    EXPECT_EQ(test::read_bytes(dir / "before.ply"), test::read_bytes(dir / "after.ply"));
+    const auto j = nlohmann::json::parse(before.out);
+    if (std::string(flag) == "--weld") EXPECT_EQ(j["output_vertices"], shapes::icosphere(2).vertex_count());
+    else EXPECT_EQ(j["overdraw"]["threshold"], 1.05);
+  }
+  // A word that is no number, with the input given too, is an error, not a second input.
+  EXPECT_EQ(test::run_cli({"optimize", "--weld", "x", in, "-o", (dir / "o.ply").string()}).exit_code, 1);
+  EXPECT_EQ(test::run_cli({"optimize", "--weld", "-o", (dir / "o.ply").string()}).exit_code, 1);  // no input
+}
+
 TEST(CliOptimize, StripIndicesDecodeToTheWrittenMesh) {
   test::TempDir dir;
   write_mesh(shapes::icosphere(3), dir / "sphere.ply");

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <numeric>
@@ -34,6 +35,17 @@ void check_not_input(const std::string& input, const std::string& output, bool f
   std::error_code ec;
   if (!force && std::filesystem::exists(output, ec) && std::filesystem::equivalent(input, output, ec))
     throw_usage(output + ": refusing to overwrite the input file (use --force)");
+}
+
+double optional_number(const std::string& flag, const std::string& word, double fallback, std::string& input) {
+  if (word.empty()) return fallback;
+  const char* begin = word.c_str();
+  char* end = nullptr;
+  const double value = std::strtod(begin, &end);
+  if (end != begin && *end == '\0') return value;
+  if (!input.empty()) throw_usage(flag + "=" + word + ": not a number");
+  input = word;  // `--weld IN`: the flag without a value, then the input
+  return fallback;
 }
 
 namespace {

@@ -20,6 +20,7 @@ namespace {
 
 struct OptimizeCommand {
   std::string input, output, strips, strip_indices;
+  std::string weld_word, overdraw_word;  // as given; read by optional_number
   float weld = -1;  // -1: no weld; 0: exact; > 0: tolerance (object space)
   double overdraw = -1;  // -1: no overdraw pass; else its threshold (misses relative to the cache order)
   float attribute_tolerance = 0;
@@ -42,12 +43,13 @@ Command register_optimize(CLI::App& root) {
   auto o = std::make_shared<OptimizeCommand>();
   CLI::App* app = root.add_subcommand(
       "optimize", "Consolidate for the GPU: weld, orient, vertex-cache order or strips, vertex-fetch order");
-  app->add_option("input", o->input, "Input mesh file")->required();
+  // Not required() here: `--weld IN` hands IN back to it after the parse (optional_number).
+  app->add_option("input", o->input, "Input mesh file (required)");
   app->add_option("-o,--output", o->output, "Output mesh file; the format follows the extension")->required();
-  app->add_option("--weld", o->weld,
+  app->add_option("--weld", o->weld_word,
                   "Weld duplicate vertices: bitwise equal, or with --weld=EPS positions closer than EPS (object space)")
       ->expected(0, 1)
-      ->default_str("0");
+      ->type_name("[=EPS]");
   app->add_flag("--weld-positions", o->weld_positions, "Weld by position alone (drops UV seams and hard normals)");
   app->add_option("--attribute-tolerance", o->attribute_tolerance,
                   "With --weld: normals, UVs, colours, tangents and weights may differ by this much per component");
@@ -55,11 +57,11 @@ Command register_optimize(CLI::App& root) {
   app->add_option("--strips", o->strips, "Also build triangle strips: sgi (the course's baseline) or best");
   app->add_flag("--restart", o->restart, "Join strips with a restart index (0xFFFFFFFF) instead of degenerate triangles");
   app->add_option("--strip-indices", o->strip_indices, "With --strips: write the strip index buffer here (little-endian uint32)");
-  app->add_option("--overdraw", o->overdraw,
+  app->add_option("--overdraw", o->overdraw_word,
                   "After the cache order, order for overdraw: --overdraw=T allows T times the cache order's FIFO misses "
                   "(default 1.05)")
       ->expected(0, 1)
-      ->default_str("1.05");
+      ->type_name("[=T]");
   app->add_option("--cache", o->cache, "Vertex cache entries to optimize for (default 16)");
   app->add_flag("--lru", o->lru, "Optimize for an LRU cache (default FIFO)");
   app->add_flag("--no-fetch", o->no_fetch, "Keep the vertex order (no renumbering by first use)");
@@ -68,9 +70,11 @@ Command register_optimize(CLI::App& root) {
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
   return {app, [o, app] {
             const bool weld_given = app->count("--weld") > 0;
-            if (weld_given && !(o->weld >= 0)) throw_usage("--weld=EPS needs EPS >= 0");
-            if (!weld_given) o->weld = -1;
             const bool overdraw = app->count("--overdraw") > 0;
+            if (weld_given) o->weld = float(optional_number("--weld", o->weld_word, 0.0, o->input));
+            if (overdraw) o->overdraw = optional_number("--overdraw", o->overdraw_word, 1.05, o->input);
+            if (o->input.empty()) throw_usage("input is required");
+            if (weld_given && !(o->weld >= 0)) throw_usage("--weld=EPS needs EPS >= 0");
             if (overdraw && !(o->overdraw >= 1)) throw_usage("--overdraw=T needs T >= 1");
             if (overdraw && !o->strips.empty()) throw_usage("--overdraw and --strips exclude each other (both set the triangle order)");
             if (o->strips != "" && o->strips != "sgi" && o->strips != "best")

@@ -125,6 +125,12 @@ void check_gltf_output_flags(const WriteOptions& options, const std::string& out
 void add_write_report(nlohmann::json& json, const WriteReport& report, const WriteOptions& options);
 std::string draco_line(const WriteReport& report, const WriteOptions& options);
 
+// The value of an option whose value may be left out (--weld, --weld=EPS): `fallback` when it was
+// given without one. CLI11 2.1 gives such an option the next word even when that word is the input
+// file (`--weld in.obj -o out.glb`), so a word that is not a number becomes `input` when no input was
+// given; otherwise it is a usage error.
+double optional_number(const std::string& flag, const std::string& word, double fallback, std::string& input);
+
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);
 
