@@ -241,6 +241,33 @@ TEST(Malformed, ADirectoryOrAMissingFileIsBadInput) {
   }
 }
 
+// A point cloud (vertices, no faces) is a valid file that the triangle commands cannot use: they
+// refuse it as bad input naming the file, where they used to write an empty file with exit 0. A
+// conversion keeps it where the format holds bare vertices, and refuses STL and glTF output.
+TEST(Malformed, APointCloudIsRefusedWhereItWouldBeLost) {
+  test::TempDir dir;
+  const std::string in = (dir / "cloud.off").string();
+  test::write_bytes(dir / "cloud.off", text("OFF\n4 0 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"));
+  const std::string out = (dir / "out").string();
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"simplify", in, "-o", out + ".glb", "--ratio", "0.5"},
+        {"lod", in, "-o", out + ".glb"},
+        {"lod", in, "-o", out + ".glb", "--errors", "0,0.01"},
+        {"optimize", in, "-o", out + ".obj"},
+        {"convert", in, "-o", out + ".stl"},
+        {"convert", in, "-o", out + ".glb"}}) {
+    SCOPED_TRACE(args[0] + " " + args[3]);
+    const test::RunResult r = test::run_cli(args);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("cloud.off: has no triangles (4 vertices)"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(args[3])) << "wrote " << args[3];
+  }
+  const test::RunResult r = test::run_cli({"convert", in, "-o", out + ".ply"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const test::RunResult info = test::run_cli({"info", "--json", out + ".ply"});
+  EXPECT_NE(info.out.find("\"vertices\": 4,"), std::string::npos) << info.out;
+}
+
 TEST(Malformed, WellFormedBaselinesLoad) {
   test::TempDir dir;
   const std::vector<Case> good = {

@@ -927,6 +927,11 @@ Command register_lod(CLI::App& root) {
               if (in_format == FileFormat::glb || in_format == FileFormat::gltf) scene = read_scene(o->input, bar.read_options());
               else mesh = read_mesh(o->input, bar.read_options());
             }
+            {
+              std::vector<const Mesh*> loaded = {&mesh};
+              for (const Primitive& p : scene.primitives) loaded.push_back(&p.mesh);
+              require_triangles(loaded, o->input, "build levels of");
+            }
             // lod on its own output: the earlier geomorphs lead to levels that go, and are not
             // blend shapes to carry; the earlier chains' nodes go (once the new chains are built).
             drop_geomorphs(scene, [](const Node&) { return true; });
