@@ -37,14 +37,13 @@ void check_not_input(const std::string& input, const std::string& output, bool f
     throw_usage(output + ": refusing to overwrite the input file (use --force)");
 }
 
-void require_triangles(std::span<const Mesh* const> meshes, const std::string& input, const std::string& doing) {
+void require_triangles(std::span<const Mesh* const> meshes, const std::string& input, const std::string& why) {
   uint64_t vertices = 0;
   for (const Mesh* m : meshes) {
     if (m->triangle_count()) return;
     vertices += m->vertex_count();
   }
-  throw_bad_input(input, "has no triangles (" + std::to_string(vertices) + " vertices): nothing to " + doing +
-                             "; lodkit works on triangle meshes");
+  throw_bad_input(input, "has no triangles (" + std::to_string(vertices) + " vertices): " + why);
 }
 
 double optional_number(const std::string& flag, const std::string& word, double fallback, std::string& input) {
@@ -356,10 +355,8 @@ Command register_convert(CLI::App& root) {
             // STL and a glTF written from a mesh hold triangles only: the points would be lost.
             // (glTF to glTF keeps points and lines as they were; OBJ, PLY and OFF keep the vertices.)
             const FileFormat out_format = format_from_path(o.output);
-            if (triangles == 0 && vertices > 0 && !(is_gltf(o.input) && is_gltf(o.output)) &&
-                (out_format == FileFormat::stl || is_gltf(o.output)))
-              throw_bad_input(o.input, "has no triangles (" + std::to_string(vertices) + " vertices): " +
-                                           o.output + " would be empty (OBJ, PLY and OFF keep the vertices)");
+            if (!(is_gltf(o.input) && is_gltf(o.output)) && (out_format == FileFormat::stl || is_gltf(o.output)))
+              require_triangles(file.meshes, o.input, o.output + " would be empty (OBJ, PLY and OFF keep the vertices)");
             start = std::chrono::steady_clock::now();
             WriteOptions write_options = o.gltf;
             write_options.binary = !o.ascii;

@@ -930,7 +930,7 @@ Command register_lod(CLI::App& root) {
             {
               std::vector<const Mesh*> loaded = {&mesh};
               for (const Primitive& p : scene.primitives) loaded.push_back(&p.mesh);
-              require_triangles(loaded, o->input, "build levels of");
+              require_triangles(loaded, o->input, "nothing to build levels of; lodkit works on triangle meshes");
             }
             // lod on its own output: the earlier geomorphs lead to levels that go, and are not
             // blend shapes to carry; the earlier chains' nodes go (once the new chains are built).

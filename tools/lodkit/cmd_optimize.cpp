@@ -112,7 +112,7 @@ Command register_optimize(CLI::App& root) {
             auto start = std::chrono::steady_clock::now();
             GeometryFile file(o->input, o->output);
             std::vector<Mesh*>& meshes = file.meshes;
-            require_triangles(meshes, o->input, "optimize");
+            require_triangles(meshes, o->input, "nothing to optimize; lodkit works on triangle meshes");
             const double load_seconds = seconds_since(start);
             if (!o->strip_indices.empty() && meshes.size() != 1)
               throw_usage("--strip-indices needs a single mesh (the input has " + std::to_string(meshes.size()) + " primitives)");

@@ -138,7 +138,7 @@ Command register_simplify(CLI::App& root) {
             auto start = std::chrono::steady_clock::now();
             GeometryFile file(o->input, o->output);
             std::vector<Mesh*>& meshes = file.meshes;
-            require_triangles(meshes, o->input, "simplify");
+            require_triangles(meshes, o->input, "nothing to simplify; lodkit works on triangle meshes");
             const double load_seconds = seconds_since(start);
             start = std::chrono::steady_clock::now();
 

@@ -132,8 +132,8 @@ std::string draco_line(const WriteReport& report, const WriteOptions& options);
 double optional_number(const std::string& flag, const std::string& word, double fallback, std::string& input);
 
 // Refuses (bad input) an input without a single triangle, a point cloud or a glTF of points and
-// lines only: simplifying, ordering or building levels of it would write an empty file.
-void require_triangles(std::span<const Mesh* const> meshes, const std::string& input, const std::string& doing);
+// lines only, saying `why`: simplifying, ordering or building levels of it would write an empty file.
+void require_triangles(std::span<const Mesh* const> meshes, const std::string& input, const std::string& why);
 
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);
