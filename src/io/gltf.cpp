@@ -1448,6 +1448,39 @@ std::array<std::vector<uint8_t>, 2> unorm8_weights(const std::vector<float4>& fi
   return out;
 }
 
+// A skinned vertex's float weights (one or two sets) as written: glTF asks them to sum to 1, which
+// the validator checks in float, within 2e-7 per nonzero weight. A vertex that does not (Draco's
+// 12-bit weights decoded: 1 +- 1.6e-4) is renormalised, summed in double with the rest left on the
+// largest; the others are written as they are (byte-identical).
+std::array<std::vector<float4>, 2> normalized_float_weights(const std::vector<float4>& first, const std::vector<float4>& second) {
+  std::array<std::vector<float4>, 2> out{first, second};
+  const size_t sets = second.empty() ? 1 : 2;
+  for (size_t v = 0; v < first.size(); ++v) {
+    float* w[2] = {&out[0][v].x, sets == 2 ? &out[1][v].x : nullptr};
+    float sum = 0;  // in the validator's order: each component across the sets
+    int nonzero = 0;
+    for (size_t k = 0; k < 4; ++k)
+      for (size_t set = 0; set < sets; ++set) sum += w[set][k], nonzero += w[set][k] != 0;
+    if (std::fabs(sum - 1.0f) <= 2e-7f * float(nonzero)) continue;
+    double total = 0;
+    for (size_t set = 0; set < sets; ++set)
+      for (size_t k = 0; k < 4; ++k) total += w[set][k] = std::isfinite(w[set][k]) ? std::max(w[set][k], 0.0f) : 0.0f;
+    if (!(total > 0)) continue;  // no weight to scale (invalid either way)
+    float* largest = w[0];
+    double rest = 0;
+    for (size_t set = 0; set < sets; ++set)
+      for (size_t k = 0; k < 4; ++k) {
+        w[set][k] = float(w[set][k] / total);
+        if (w[set][k] > *largest) largest = &w[set][k];
+      }
+    for (size_t set = 0; set < sets; ++set)
+      for (size_t k = 0; k < 4; ++k)
+        if (&w[set][k] != largest) rest += w[set][k];
+    *largest = float(1.0 - rest);
+  }
+  return out;
+}
+
 class BinWriter {
  public:
   BinWriter(tg::Model& model, std::vector<uint8_t>& bin) : model_(model), bin_(bin) {}
@@ -1630,12 +1663,13 @@ class BinWriter {
         prim.attributes["WEIGHTS_" + str(set)] = add_packed(packed[set], TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_TYPE_VEC4, true);
       }
     } else {
+      const auto weights = normalized_float_weights(mesh.weights, mesh.weights1);
       if (!mesh.joints.empty()) prim.attributes["JOINTS_0"] = add_joints(mesh.joints);
-      if (!mesh.weights.empty())
-        prim.attributes["WEIGHTS_0"] = add_accessor(mesh.weights, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
+      if (!weights[0].empty())
+        prim.attributes["WEIGHTS_0"] = add_accessor(weights[0], TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
       if (!mesh.joints1.empty()) prim.attributes["JOINTS_1"] = add_joints(mesh.joints1);
-      if (!mesh.weights1.empty())
-        prim.attributes["WEIGHTS_1"] = add_accessor(mesh.weights1, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
+      if (!weights[1].empty())
+        prim.attributes["WEIGHTS_1"] = add_accessor(weights[1], TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, array);
     }
     if (prim.targets.empty()) add_targets(mesh, targets, prim, coding);
     add_indices(mesh, prim);

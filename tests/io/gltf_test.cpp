@@ -19,6 +19,7 @@
 #include "io/lod_chain_scene.h"
 #include "lodkit/error.h"
 #include "lodkit/io.h"
+#include "skin/fixtures.h"
 #include "test_support.h"
 
 namespace lod {
@@ -1835,6 +1836,39 @@ TEST(GltfAnimationPointer, MeshWeightsDriveTheNodesWithoutWeightsOfTheirOwn) {
   write_scene(scene, dir / "out.glb");
   EXPECT_EQ(test::glb_json(dir / "out.glb")["animations"][0]["channels"], test::glb_json(dir / "in.glb")["animations"][0]["channels"]);
   expect_bad_input(document("VEC3"), "vec3.glb", "animations[0].channels[0] sampler output");
+}
+
+// Float weights are written summing to 1 as the validator counts it (in float, within 2e-7 per
+// nonzero weight): a vertex off by Draco's 12-bit steps (1 + 1.6e-4) is scaled back, in proportion;
+// a vertex already within is written bit for bit.
+TEST(GltfWrite, FloatWeightsSumToOne) {
+  TempDir dir;
+  Scene scene = fixtures::humanoid_scene();
+  size_t skinned = scene.primitives.size();
+  for (size_t i = 0; i < scene.primitives.size(); ++i)
+    if (!scene.primitives[i].mesh.weights.empty()) skinned = i;
+  ASSERT_LT(skinned, scene.primitives.size());
+  Mesh& mesh = scene.primitives[skinned].mesh;
+  const auto float_sum = [](const float4& w) { return ((w.x + w.y) + w.z) + w.w; };
+  const auto nonzero = [](const float4& w) { return float((w.x != 0) + (w.y != 0) + (w.z != 0) + (w.w != 0)); };
+  const std::vector<float4> original = mesh.weights;
+  for (const float4& w : original) ASSERT_LE(std::fabs(float_sum(w) - 1), 2e-7f * nonzero(w));  // (the fixture's are)
+  for (size_t v = 0; v < mesh.weights.size(); v += 2)
+    for (float* c : {&mesh.weights[v].x, &mesh.weights[v].y, &mesh.weights[v].z, &mesh.weights[v].w}) *c *= 1.00016f;
+  write_scene(scene, dir / "w.glb");
+  const Mesh back = read_scene(dir / "w.glb").primitives[skinned].mesh;
+  ASSERT_EQ(back.weights.size(), original.size());
+  for (size_t v = 0; v < original.size(); ++v) {
+    SCOPED_TRACE(v);
+    const float4& w = back.weights[v];
+    EXPECT_LE(std::fabs(float_sum(w) - 1), 2e-7f * nonzero(w));
+    if (v % 2) {
+      EXPECT_EQ(std::memcmp(&w, &original[v], sizeof(float4)), 0);
+    } else {
+      for (int k = 0; k < 4; ++k) EXPECT_NEAR((&w.x)[k], (&original[v].x)[k], 3e-7);
+    }
+  }
+  test::expect_valid_gltf({dir / "w.glb"});
 }
 
 }  // namespace
