@@ -449,6 +449,16 @@ TEST(CliLod, RefusesNonGltfOutputAndBadLists) {
   EXPECT_EQ(test::run_cli({"lod", (dir / "s.ply").string(), "-o", (dir / "o.glb").string(), "--ratios", "1,x"}).exit_code, 1);
   EXPECT_EQ(test::run_cli({"lod", (dir / "s.ply").string(), "-o", (dir / "o.glb").string(), "--ratios", "0.5,0.7"}).exit_code, 1);
   EXPECT_EQ(test::run_cli({"lod", (dir / "missing.ply").string(), "-o", (dir / "o.glb").string()}).exit_code, 2);
+  // --levels, --ratios and --errors each set the levels: together, or --levels 0, they are refused
+  // (the one ignored used to pass silently, and --levels 0 gave the default 4).
+  for (const std::vector<std::string>& extra :
+       {std::vector<std::string>{"--levels", "0"}, {"--levels", "3", "--ratios", "1,0.5"}, {"--levels", "2", "--errors", "0,0.01"}}) {
+    std::vector<std::string> args = {"lod", (dir / "s.ply").string(), "-o", (dir / "o.glb").string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const test::RunResult r = test::run_cli(args);
+    EXPECT_EQ(r.exit_code, 1) << extra[1] << ": " << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "o.glb"));
 }
 
 }  // namespace

@@ -32,7 +32,7 @@ namespace {
 
 struct LodCommand {
   std::string input, output, ratios, errors, metric = "cqem", attributes, lpm;
-  uint32_t levels = 0;
+  uint32_t levels = 0;  // (read only when given: LodOptions has the default)
   float error_px = 1.0f, screen_height = 1080.0f, fov_degrees = 60.0f;
   bool from_input = false, morph = false, shared = false, json = false, force = false;
   WriteOptions gltf;  // -c, -q
@@ -889,7 +889,7 @@ Command register_lod(CLI::App& root) {
   app->add_flag("--force", o->force, "Allow writing over the input file");
   add_gltf_output_flags(app, o->gltf);
   app->add_flag("--json", o->json, "Print a machine-readable report on stdout");
-  return {app, [o] {
+  return {app, [o, app] {
             const FileFormat format = format_from_path(o->output);
             if (format != FileFormat::glb && format != FileFormat::gltf)
               throw_usage("lod writes glTF: give an output ending in .glb or .gltf");
@@ -904,7 +904,10 @@ Command register_lod(CLI::App& root) {
             LodOptions options;
             if (!o->ratios.empty()) options.ratios = parse_list(o->ratios, "--ratios");
             if (!o->errors.empty()) options.errors = parse_list(o->errors, "--errors");
-            if (o->levels) options.levels = o->levels;
+            // Each of the three sets the levels; given together, one would be ignored.
+            if (app->count("--levels") + !o->ratios.empty() + !o->errors.empty() > 1)
+              throw_usage("--levels, --ratios and --errors exclude each other (each sets the levels)");
+            if (app->count("--levels")) options.levels = o->levels;  // (0 is refused with the others)
             options.from_previous = !o->from_input;
             if (o->morph && o->from_input) throw_usage("--morph needs each level simplified from the previous one (drop --from-input)");
             options.morph = o->morph;
