@@ -65,4 +65,20 @@ std::vector<float3> smooth_normals(const Mesh& mesh) {
   return normals;
 }
 
+void make_unit_normals(Mesh& mesh) {
+  bool zero = false;
+  for (float3& n : mesh.normals) {
+    const core::vec3d d = core::to_double(n);
+    if (std::fabs(core::length(d) - 1) <= 1e-6) continue;
+    n = core::unit_float3(d, float3{});
+    zero = zero || (n.x == 0 && n.y == 0 && n.z == 0);
+  }
+  if (!zero) return;
+  const std::vector<float3> smooth = smooth_normals(mesh);
+  for (size_t v = 0; v < mesh.normals.size(); ++v) {
+    float3& n = mesh.normals[v];
+    if (n.x == 0 && n.y == 0 && n.z == 0) n = core::unit_float3(core::to_double(smooth[v]), {0, 0, 1});
+  }
+}
+
 }  // namespace lod

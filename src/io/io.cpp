@@ -7,6 +7,20 @@
 
 namespace lod {
 
+namespace {
+
+// OBJ, PLY, OFF or STL.
+Mesh read_plain(const FileBytes& bytes, FileFormat format, const std::filesystem::path& path, const ReadOptions& options) {
+  switch (format) {
+    case FileFormat::obj: return read_obj(bytes, path.string(), options);
+    case FileFormat::ply: return read_ply(bytes, path.string(), options);
+    case FileFormat::off: return read_off(bytes, path.string(), options);
+    default: return read_stl(bytes, path.string(), options);
+  }
+}
+
+}  // namespace
+
 FileFormat format_from_path(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
@@ -38,26 +52,13 @@ Scene read_scene(const std::filesystem::path& path, const ReadOptions& options) 
     std::filesystem::path base = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
     return read_gltf(bytes, path.string(), base, options);
   }
-  Mesh mesh;
-  switch (format) {
-    case FileFormat::obj: mesh = read_obj(bytes, path.string(), options); break;
-    case FileFormat::ply: mesh = read_ply(bytes, path.string(), options); break;
-    case FileFormat::off: mesh = read_off(bytes, path.string(), options); break;
-    default: mesh = read_stl(bytes, path.string(), options); break;
-  }
-  return scene_from_mesh(mesh);
+  return scene_from_mesh(read_plain(bytes, format, path, options));
 }
 
 Mesh read_mesh(const std::filesystem::path& path, const ReadOptions& options) {
   FileFormat format = format_from_path(path);
   if (format == FileFormat::gltf || format == FileFormat::glb) return flatten(read_scene(path, options));
-  const FileBytes bytes = read_file_bytes(path);
-  switch (format) {
-    case FileFormat::obj: return read_obj(bytes, path.string(), options);
-    case FileFormat::ply: return read_ply(bytes, path.string(), options);
-    case FileFormat::off: return read_off(bytes, path.string(), options);
-    default: return read_stl(bytes, path.string(), options);
-  }
+  return read_plain(read_file_bytes(path), format, path, options);
 }
 
 WriteReport write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& options) {

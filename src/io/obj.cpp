@@ -406,7 +406,9 @@ Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const Rea
     parse_chunk(pieces[k], name, first_line[k], nullptr, {true, before[k], total}, again);
     chunks[k].corners = std::move(again.corners);
   }
-  return join_chunks(chunks, total);
+  Mesh mesh = join_chunks(chunks, total);
+  make_unit_normals(mesh);
+  return mesh;
 }
 
 namespace {

@@ -72,6 +72,31 @@ TEST(Obj, VertexColorsExtension) {
   EXPECT_EQ(m.colors[1], (float4{0, 1, 0, 1}));
 }
 
+// OBJ normals need not be unit length, and a corner may have none; Mesh::normals are unit
+// (make_unit_normals): vn 0 0 2 reads as +z, a unit vn keeps its bits, and the second triangle's
+// corners (no vn) take the smooth normal of the flat square, +z. Written to glTF, they validate.
+TEST(Obj, NormalsReadAtUnitLength) {
+  const std::string text =
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 2\nvn 0.6 0.8 0\n"
+      "f 1//1 2//2 3//1\nf 2 4 3\n";
+  const Mesh m = read_obj(bytes_of(text), "n.obj");
+  ASSERT_EQ(m.normals.size(), m.vertex_count());
+  ASSERT_EQ(m.vertex_count(), 6u);  // 2 and 3 split: with and without a normal
+  size_t unit_z = 0;
+  for (const float3& n : m.normals) {
+    if (n.x == 0.6f) {
+      EXPECT_EQ(n, (float3{0.6f, 0.8f, 0}));  // (bit for bit)
+    } else {
+      EXPECT_EQ(n, (float3{0, 0, 1}));
+      ++unit_z;
+    }
+  }
+  EXPECT_EQ(unit_z, 5u);
+  test::TempDir dir;
+  write_mesh(m, dir / "n.glb");
+  test::expect_valid_gltf({dir / "n.glb"});
+}
+
 TEST(Obj, RoundTripIsExactForShapes) {
   Mesh torus = shapes::torus();
   Mesh multi = shapes::cube();
