@@ -290,8 +290,12 @@ std::vector<Member> split_members(const Joined& j, Mesh mesh, std::vector<uint32
     std::iota(members[0].vertices.begin(), members[0].vertices.end(), 0u);
     return members;
   }
-  std::vector<uint32_t> index(mesh.vertex_count(), ~0u);   // joined vertex -> its member's
-  std::vector<uint32_t> member(mesh.vertex_count(), ~0u);  // joined vertex -> its member
+  // A joined vertex may be in several parts: a restored form's face normals are welded again, and
+  // coincident corners of two members with the same values become one vertex (two primitives
+  // drawing one flat quad). Each part's indices are set while it is at hand, then cleared.
+  std::vector<uint32_t> index(mesh.vertex_count(), ~0u);  // joined vertex -> its index in the part at hand
+  if (!successor.empty())
+    for (size_t k = 0; k < members.size(); ++k) members[k].successor.assign(offsets[k + 1] - offsets[k], ~0u);
   for (MaterialPart& part : split_by_material(mesh)) {
     const size_t k = size_t(part.material) - 1;
     if (part.material == 0 || k >= members.size())
@@ -301,20 +305,18 @@ std::vector<Member> split_members(const Joined& j, Mesh mesh, std::vector<uint32
     members[k].vertices = part.vertices;
     for (uint32_t i = 0; i < part.vertices.size(); ++i) {
       const uint32_t v = part.vertices[i];
-      index[v] = i, member[v] = uint32_t(k);
+      index[v] = i;
       if (origin.empty()) continue;
       // Wedges continue within their material, so a member's vertex comes from its own input.
       const uint32_t from = origin[v];
       if (from < offsets[k] || from >= offsets[k + 1]) throw_internal("split_members: a joined mesh's vertex continues another member's");
       members[k].origin.push_back(from - offsets[k]);
     }
-  }
-  for (size_t k = 0; k < members.size() && !successor.empty(); ++k) {
-    for (uint32_t v = offsets[k]; v < offsets[k + 1]; ++v) {
-      const uint32_t to = successor[v];
-      // Its own member's vertex (a wedge relinked across a material border would not be).
-      members[k].successor.push_back(to != ~0u && member[to] == k ? index[to] : ~0u);
-    }
+    // Its own part's vertex (a wedge relinked across a material border is none).
+    if (!successor.empty())
+      for (uint32_t v = offsets[k]; v < offsets[k + 1]; ++v)
+        if (successor[v] != ~0u) members[k].successor[v - offsets[k]] = index[successor[v]];
+    for (const uint32_t v : part.vertices) index[v] = ~0u;
   }
   return members;
 }
