@@ -332,6 +332,11 @@ std::vector<MaterialPart> split_by_material(const Mesh& mesh);
 // not be written. A weld that keeps classes apart (WeldOptions::vertex_classes) keeps them exact.
 std::vector<uint32_t> source_vertex_classes(const Scene& scene, size_t primitive);
 
+// The files a scene read from glTF names beside it: its external buffers and images, resolved
+// against its folder (data: URIs and the GLB chunk are none). Writing over one would change the
+// input. Empty for a scene not read from glTF.
+std::vector<std::filesystem::path> source_files(const Scene& scene);
+
 // The source glTF primitive's morph targets (POSITION, NORMAL and TANGENT displacements; other
 // semantics are not decoded), those it keeps (Primitive::source_target_count), per vertex of the
 // scene primitive (through Primitive::source_vertices). Empty when it has none or its vertices are

@@ -3984,6 +3984,12 @@ std::string uri_decode(const std::string& s) {
   return out;
 }
 
+// Whether a URI names a file beside the document: relative, without a scheme (data:, http:).
+bool relative_file_uri(const std::string& uri) {
+  const size_t colon = uri.find(':'), slash = uri.find('/');
+  return !uri.empty() && uri[0] != '/' && (colon == std::string::npos || colon > slash);
+}
+
 // The source's images outside its buffers (external files, data: URIs): a .glb (`bin` given) embeds
 // the ones it can type in its BIN chunk, one file as GLB intends; an external one it does not is
 // referred to by its path from the output's folder, so that a file written elsewhere still finds it.
@@ -4001,8 +4007,7 @@ void relocate_images(tg::Model& model, std::vector<uint8_t>* bin, const std::fil
       }
     }
     const std::string& uri = image.uri;  // empty for a data: URI (its bytes are in image.image)
-    const size_t colon = uri.find(':'), slash = uri.find('/');
-    if (uri.empty() || uri[0] == '/' || (colon != std::string::npos && colon < slash) || source_dir.empty()) continue;
+    if (!relative_file_uri(uri) || source_dir.empty()) continue;
     std::error_code ec;
     const std::filesystem::path file = std::filesystem::absolute(source_dir / uri_decode(uri), ec).lexically_normal();
     const std::filesystem::path there = std::filesystem::absolute(output_dir.empty() ? "." : output_dir, ec).lexically_normal();
@@ -4012,6 +4017,16 @@ void relocate_images(tg::Model& model, std::vector<uint8_t>* bin, const std::fil
     for (const auto& part : relative) escaped += (escaped.empty() ? "" : "/") + uri_escape(part.string());
     image.uri = escaped;
   }
+}
+
+std::vector<std::filesystem::path> source_files(const Scene& scene) {
+  std::vector<std::filesystem::path> files;
+  if (!scene.source || scene.source->base_dir.empty()) return files;
+  for (const tg::Buffer& buffer : scene.source->model.buffers)
+    if (relative_file_uri(buffer.uri)) files.push_back(scene.source->base_dir / uri_decode(buffer.uri));
+  for (const tg::Image& image : scene.source->model.images)
+    if (relative_file_uri(image.uri)) files.push_back(scene.source->base_dir / uri_decode(image.uri));
+  return files;
 }
 
 namespace {

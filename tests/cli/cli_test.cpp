@@ -139,6 +139,35 @@ TEST(Cli, ConvertRefusesToOverwriteItsInputUnlessForced) {
   EXPECT_EQ(read_mesh(path).triangle_count(), 12u);
 }
 
+// A .gltf output writes OUT.bin beside it: named after the input's buffer, it would write over a
+// file the input reads (scene.gltf reading data.bin, written as data.gltf). Every command that
+// writes a scene refuses, and leaves the buffer as it was; --force allows it; another name is fine.
+TEST(Cli, RefusesToWriteOverABufferTheInputReads) {
+  test::TempDir dir;
+  write_scene(scene_from_mesh(shapes::icosphere(2)), dir / "scene.gltf");
+  ASSERT_TRUE(std::filesystem::exists(dir / "scene.bin"));
+  std::filesystem::rename(dir / "scene.bin", dir / "data.bin");
+  std::string json = test::read_bytes(dir / "scene.gltf");
+  const size_t at = json.find("\"scene.bin\"");
+  ASSERT_NE(at, std::string::npos);
+  json.replace(at, 11, "\"data.bin\"");
+  test::write_text(dir / "scene.gltf", json);
+  const std::string in = (dir / "scene.gltf").string(), out = (dir / "data.gltf").string();
+  const std::string buffer = test::read_bytes(dir / "data.bin");
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"simplify", in, "-o", out, "--ratio", "0.5"}, {"optimize", in, "-o", out}, {"convert", in, out},
+        {"lod", in, "-o", out}, {"lod", in, "-o", (dir / "l.glb").string(), "--lpm", (dir / "data.bin").string()}}) {
+    SCOPED_TRACE(args[0]);
+    const test::RunResult r = test::run_cli(args);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find("which the input reads"), std::string::npos) << r.err;
+    EXPECT_TRUE(test::read_bytes(dir / "data.bin") == buffer);
+  }
+  EXPECT_EQ(test::run_cli({"convert", in, (dir / "other.gltf").string()}).exit_code, 0);
+  EXPECT_EQ(test::run_cli({"convert", in, out, "--force"}).exit_code, 0);
+  EXPECT_EQ(read_scene(out).primitives.size(), 1u);  // (forced: data.bin is the output's buffer now)
+}
+
 TEST(Cli, FailedConvertLeavesNoPartialOutput) {
   test::TempDir dir;
   auto bad = dir / "bad.off";

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -37,6 +38,22 @@ void check_not_input(const std::string& input, const std::string& output, bool f
     throw_usage(output + ": refusing to overwrite the input file (use --force)");
 }
 
+void check_not_source(const Scene& scene, const std::string& output, bool force) {
+  if (force || output.empty()) return;
+  std::vector<std::filesystem::path> written = {output};
+  const std::filesystem::path path(output);
+  std::string ext = path.extension().string();  // (not format_from_path: an .lpm is no mesh format)
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext == ".gltf") written.push_back(path.parent_path() / (path.stem().string() + ".bin"));
+  for (const std::filesystem::path& read : source_files(scene))
+    for (const std::filesystem::path& w : written) {
+      std::error_code ec;
+      if (std::filesystem::exists(w, ec) && std::filesystem::equivalent(read, w, ec))
+        throw_usage(output + ": refusing to write " + w.string() + " over " + read.string() +
+                    ", which the input reads (use another output name, or --force)");
+    }
+}
+
 void require_triangles(std::span<const Mesh* const> meshes, const std::string& input, const std::string& why) {
   uint64_t vertices = 0;
   for (const Mesh* m : meshes) {
@@ -64,13 +81,14 @@ bool is_gltf(const std::string& path) {
 }
 }  // namespace
 
-GeometryFile::GeometryFile(const std::string& input, const std::string& output)
+GeometryFile::GeometryFile(const std::string& input, const std::string& output, bool force)
     : as_scene_(is_gltf(input) && is_gltf(output)) {
   {
     ProgressBar bar("loading");
     if (as_scene_) scene_ = read_scene(input, bar.read_options());
     else mesh_ = read_mesh(input, bar.read_options());
   }
+  if (as_scene_) check_not_source(scene_, output, force);
   if (as_scene_)
     for (Primitive& p : scene_.primitives) meshes.push_back(&p.mesh);
   else
@@ -346,7 +364,7 @@ Command register_convert(CLI::App& root) {
             // change is kept; any other pair converts the (flattened) mesh, keeping its vertex order
             // and material ids.
             auto start = std::chrono::steady_clock::now();
-            const GeometryFile file(o.input, o.output);
+            const GeometryFile file(o.input, o.output, o.force);
             double load_seconds = seconds_since(start);
             size_t vertices = 0, triangles = 0;
             for (const Mesh* m : file.meshes) {

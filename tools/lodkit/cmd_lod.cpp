@@ -935,6 +935,8 @@ Command register_lod(CLI::App& root) {
               for (const Primitive& p : scene.primitives) loaded.push_back(&p.mesh);
               require_triangles(loaded, o->input, "nothing to build levels of; lodkit works on triangle meshes");
             }
+            check_not_source(scene, o->output, o->force);
+            check_not_source(scene, o->lpm, o->force);
             // lod on its own output: the earlier geomorphs lead to levels that go, and are not
             // blend shapes to carry; the earlier chains' nodes go (once the new chains are built).
             drop_geomorphs(scene, [](const Node&) { return true; });

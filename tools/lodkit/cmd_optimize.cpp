@@ -110,7 +110,7 @@ Command register_optimize(CLI::App& root) {
             };
 
             auto start = std::chrono::steady_clock::now();
-            GeometryFile file(o->input, o->output);
+            GeometryFile file(o->input, o->output, o->force);
             std::vector<Mesh*>& meshes = file.meshes;
             require_triangles(meshes, o->input, "nothing to optimize; lodkit works on triangle meshes");
             const double load_seconds = seconds_since(start);

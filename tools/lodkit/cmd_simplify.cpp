@@ -136,7 +136,7 @@ Command register_simplify(CLI::App& root) {
             if (!o->attributes.empty()) parse_attributes(o->attributes, options);
 
             auto start = std::chrono::steady_clock::now();
-            GeometryFile file(o->input, o->output);
+            GeometryFile file(o->input, o->output, o->force);
             std::vector<Mesh*>& meshes = file.meshes;
             require_triangles(meshes, o->input, "nothing to simplify; lodkit works on triangle meshes");
             const double load_seconds = seconds_since(start);

@@ -38,7 +38,8 @@ void parse_attributes(const std::string& text, SimplifyOptions& options);
 // what to process in place. Not copyable: `meshes` points into it.
 class GeometryFile {
  public:
-  GeometryFile(const std::string& input, const std::string& output);
+  // Refuses (check_not_source) an output that would write over a file the input glTF reads.
+  GeometryFile(const std::string& input, const std::string& output, bool force);
   GeometryFile(const GeometryFile&) = delete;
   GeometryFile& operator=(const GeometryFile&) = delete;
   WriteReport write(const std::string& output, const WriteOptions& options = {}) const;
@@ -137,5 +138,8 @@ void require_triangles(std::span<const Mesh* const> meshes, const std::string& i
 
 // Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
 void check_not_input(const std::string& input, const std::string& output, bool force);
+// Likewise over a file an input glTF reads (lod::source_files): a .gltf output writes OUT.bin beside
+// it, which may be the input's buffer (scene.gltf reading data.bin, written as data.gltf).
+void check_not_source(const Scene& scene, const std::string& output, bool force);
 
 }  // namespace lod::cli
