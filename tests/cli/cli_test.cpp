@@ -141,7 +141,7 @@ TEST(Cli, ConvertRefusesToOverwriteItsInputUnlessForced) {
 
 // A .gltf output writes OUT.bin beside it: named after the input's buffer, it would write over a
 // file the input reads (scene.gltf reading data.bin, written as data.gltf). Every command that
-// writes a scene refuses, and leaves the buffer as it was; --force allows it; another name is fine.
+// writes a file refuses, and leaves the buffer as it was; --force allows it; another name is fine.
 TEST(Cli, RefusesToWriteOverABufferTheInputReads) {
   test::TempDir dir;
   write_scene(scene_from_mesh(shapes::icosphere(2)), dir / "scene.gltf");
@@ -156,7 +156,9 @@ TEST(Cli, RefusesToWriteOverABufferTheInputReads) {
   const std::string buffer = test::read_bytes(dir / "data.bin");
   for (const std::vector<std::string>& args :
        {std::vector<std::string>{"simplify", in, "-o", out, "--ratio", "0.5"}, {"optimize", in, "-o", out}, {"convert", in, out},
-        {"lod", in, "-o", out}, {"lod", in, "-o", (dir / "l.glb").string(), "--lpm", (dir / "data.bin").string()}}) {
+        {"lod", in, "-o", out}, {"lod", in, "-o", (dir / "l.glb").string(), "--lpm", (dir / "data.bin").string()},
+        {"optimize", in, "-o", (dir / "o.glb").string(), "--strips", "best", "--strip-indices", (dir / "data.bin").string()},
+        {"compare", in, in, "--heatmap", out}}) {
     SCOPED_TRACE(args[0]);
     const test::RunResult r = test::run_cli(args);
     EXPECT_EQ(r.exit_code, 1) << r.err;

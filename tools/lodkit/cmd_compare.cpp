@@ -94,8 +94,17 @@ Command register_compare(CLI::App& root) {
             Mesh a, b;
             {
               ProgressBar bar("loading");
-              a = read_mesh(o->a, bar.read_options());
-              b = read_mesh(o->b, bar.read_options());
+              // (A glTF through its scene, flattened as read_mesh does, to check the heat map against
+              // the files it reads.)
+              const auto load = [&](const std::string& path) {
+                const FileFormat format = format_from_path(path);
+                if (format != FileFormat::gltf && format != FileFormat::glb) return read_mesh(path, bar.read_options());
+                const Scene scene = read_scene(path, bar.read_options());
+                if (!o->heatmap.empty()) check_not_source(scene, o->heatmap, false);
+                return flatten(scene);
+              };
+              a = load(o->a);
+              b = load(o->b);
             }
             for (const auto& [mesh, name] : {std::pair<const Mesh&, const std::string&>{a, o->a}, {b, o->b}}) {
               validate(mesh, name);

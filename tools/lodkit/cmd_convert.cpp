@@ -50,7 +50,7 @@ void check_not_source(const Scene& scene, const std::string& output, bool force)
       std::error_code ec;
       if (std::filesystem::exists(w, ec) && std::filesystem::equivalent(read, w, ec))
         throw_usage(output + ": refusing to write " + w.string() + " over " + read.string() +
-                    ", which the input reads (use another output name, or --force)");
+                    ", which the input reads (choose another output name)");
     }
 }
 
@@ -88,11 +88,15 @@ GeometryFile::GeometryFile(const std::string& input, const std::string& output, 
     if (as_scene_) scene_ = read_scene(input, bar.read_options());
     else mesh_ = read_mesh(input, bar.read_options());
   }
-  if (as_scene_) check_not_source(scene_, output, force);
+  check_not_source(output, force);
   if (as_scene_)
     for (Primitive& p : scene_.primitives) meshes.push_back(&p.mesh);
   else
     meshes.push_back(&mesh_);
+}
+
+void GeometryFile::check_not_source(const std::string& path, bool force) const {
+  if (as_scene_) cli::check_not_source(scene_, path, force);
 }
 
 WriteReport GeometryFile::write(const std::string& output, const WriteOptions& options) const {

@@ -84,6 +84,7 @@ Command register_optimize(CLI::App& root) {
             if (!(o->attribute_tolerance >= 0)) throw_usage("--attribute-tolerance must be >= 0");
             if ((o->weld_positions || o->attribute_tolerance > 0) && o->weld < 0) o->weld = 0;
             check_not_input(o->input, o->output, o->force);
+            if (!o->strip_indices.empty()) check_not_input(o->input, o->strip_indices, o->force);
             check_gltf_output_flags(o->gltf, o->output);
             const float t = o->attribute_tolerance;
             OptimizeOptions options{
@@ -111,6 +112,7 @@ Command register_optimize(CLI::App& root) {
 
             auto start = std::chrono::steady_clock::now();
             GeometryFile file(o->input, o->output, o->force);
+            if (!o->strip_indices.empty()) file.check_not_source(o->strip_indices, o->force);
             std::vector<Mesh*>& meshes = file.meshes;
             require_triangles(meshes, o->input, "nothing to optimize; lodkit works on triangle meshes");
             const double load_seconds = seconds_since(start);

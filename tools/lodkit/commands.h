@@ -43,6 +43,8 @@ class GeometryFile {
   GeometryFile(const GeometryFile&) = delete;
   GeometryFile& operator=(const GeometryFile&) = delete;
   WriteReport write(const std::string& output, const WriteOptions& options = {}) const;
+  // lod::cli::check_not_source for another file the command writes (the constructor checks `output`).
+  void check_not_source(const std::string& path, bool force) const;
   // After meshes[i] changed for each i where changed[i]: the facts `lodkit lod` wrote on the glTF
   // nodes that draw them (extras "lodkit": triangles, errors, switch distance; "LODKIT_geomorph": a
   // morph target) no longer hold, and are removed, the geomorph's target too.
