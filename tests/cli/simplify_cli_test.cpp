@@ -237,6 +237,25 @@ TEST(CliSimplify, DoubleSidedMeshesStayDoubleSided) {
                                        [](const Mesh& m) { EXPECT_EQ(test::double_sided_problem(m), ""); });
 }
 
+// `flat` (flat-shaded, two materials) as one glTF mesh of two primitives, simplified to a tenth: the
+// run succeeds in the flat-shaded form and writes two faceted primitives in a valid file. Returns
+// them (none when the run failed).
+std::vector<Primitive> simplified_flat_pair(const test::TempDir& dir, const Mesh& flat) {
+  const Scene in = scene_from_mesh(flat);
+  EXPECT_EQ(in.primitives.size(), 2u);
+  write_scene(in, dir / "in.glb");
+  const test::RunResult r =
+      test::run_cli({"simplify", (dir / "in.glb").string(), "-o", (dir / "out.glb").string(), "--ratio", "0.1", "--json"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  if (r.exit_code != 0) return {};
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["flat_shaded"].get<bool>());
+  Scene out = read_scene(dir / "out.glb");
+  EXPECT_EQ(out.primitives.size(), 2u);
+  for (const Primitive& p : out.primitives) EXPECT_EQ(test::faceted_problem(p.mesh), "");
+  test::expect_valid_gltf({dir / "out.glb"});
+  return std::move(out.primitives);
+}
+
 // A glTF mesh whose two materials are two primitives, each with its own copy of the border's
 // vertices: they are simplified as one mesh, so the border stays closed (welded by position, the
 // result has no boundary edge, as the torus has none) and each primitive keeps its material. With
@@ -253,22 +272,9 @@ TEST(CliSimplify, FlatShadedPrimitivesOfOneMeshSimplifyTogether) {
     torus.materials[t] = torus.positions[torus.indices[3 * t]].x + torus.positions[torus.indices[3 * t + 1]].x > 0 ? 1 : 0;
   Mesh flat = test::flat_shaded(torus);
   flat.material_names = {"left", "right"};
-  const Scene in = scene_from_mesh(flat);
-  ASSERT_EQ(in.primitives.size(), 2u);
-  write_scene(in, dir / "in.glb");
-  const test::RunResult r =
-      test::run_cli({"simplify", (dir / "in.glb").string(), "-o", (dir / "out.glb").string(), "--ratio", "0.1", "--json"});
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(nlohmann::json::parse(r.out)["flat_shaded"].get<bool>());
-  const Scene out = read_scene(dir / "out.glb");
-  ASSERT_EQ(out.primitives.size(), 2u);
   size_t triangles = 0;
-  for (const Primitive& p : out.primitives) {
-    EXPECT_EQ(test::faceted_problem(p.mesh), "");
-    triangles += p.mesh.triangle_count();
-  }
+  for (const Primitive& p : simplified_flat_pair(dir, flat)) triangles += p.mesh.triangle_count();
   EXPECT_LE(triangles, torus.triangle_count() / 10 + 1);
-  test::expect_valid_gltf({dir / "out.glb"});
 }
 
 // Two primitives of one mesh drawing the same flat-shaded torus: faceted again, the coincident
@@ -287,20 +293,8 @@ TEST(CliSimplify, CoincidentFlatShadedPrimitivesShareFacetedVertices) {
   twice.materials.assign(flat.triangle_count(), 0);
   twice.materials.resize(2 * flat.triangle_count(), 1);
   twice.material_names = {"a", "b"};
-  const Scene in = scene_from_mesh(twice);
-  ASSERT_EQ(in.primitives.size(), 2u);
-  write_scene(in, dir / "in.glb");
-  const test::RunResult r =
-      test::run_cli({"simplify", (dir / "in.glb").string(), "-o", (dir / "out.glb").string(), "--ratio", "0.1", "--json"});
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(nlohmann::json::parse(r.out)["flat_shaded"].get<bool>());
-  const Scene out = read_scene(dir / "out.glb");
-  ASSERT_EQ(out.primitives.size(), 2u);
-  for (const Primitive& p : out.primitives) {
-    EXPECT_EQ(test::faceted_problem(p.mesh), "");
+  for (const Primitive& p : simplified_flat_pair(dir, twice))
     EXPECT_GT(p.mesh.triangle_count(), 0u);  // (coincident, every edge is non-manifold: few collapses)
-  }
-  test::expect_valid_gltf({dir / "out.glb"});
 }
 
 // Also when one has streams the other lacks (UVs on the left only): each keeps its own.
