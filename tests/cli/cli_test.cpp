@@ -122,6 +122,7 @@ TEST(Cli, ConvertBetweenEveryPairOfTextFormatsKeepsTheSurface) {
   }
 }
 
+// (And every command refuses an output whose folder is missing.)
 TEST(Cli, ConvertRefusesToOverwriteItsInputUnlessForced) {
   test::TempDir dir;
   auto path = dir / "mesh.obj";
@@ -137,6 +138,16 @@ TEST(Cli, ConvertRefusesToOverwriteItsInputUnlessForced) {
   r = test::run_cli({"convert", path.string(), path.string(), "--force"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(read_mesh(path).triangle_count(), 12u);
+  // An output in a folder that does not exist is refused before any work (it used to fail only
+  // when written, after the simplification or the chain).
+  for (const char* command : {"convert", "simplify", "optimize", "lod"}) {
+    std::vector<std::string> args = {command, path.string(), "-o", (dir / "missing" / "out.glb").string()};
+    if (std::string(command) == "simplify") args.insert(args.end(), {"--ratio", "0.5"});
+    r = test::run_cli(args);
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;  // (as a failed write: bad input)
+    EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "missing"));
 }
 
 // A .gltf output writes OUT.bin beside it: named after the input's buffer, it would write over a

@@ -32,10 +32,13 @@ struct ConvertOptions {
 
 }  // namespace
 
-void check_not_input(const std::string& input, const std::string& output, bool force) {
+void check_output(const std::string& input, const std::string& output, bool force) {
   std::error_code ec;
   if (!force && std::filesystem::exists(output, ec) && std::filesystem::equivalent(input, output, ec))
     throw_usage(output + ": refusing to overwrite the input file (use --force)");
+  const std::filesystem::path folder = std::filesystem::path(output).parent_path();
+  if (!folder.empty() && !std::filesystem::is_directory(folder, ec))
+    throw_bad_input(output, "the folder " + folder.string() + " does not exist");  // (as the write would say: 2)
 }
 
 void check_not_source(const Scene& scene, const std::string& output, bool force) {
@@ -362,7 +365,7 @@ Command register_convert(CLI::App& root) {
             if (o.output.empty()) throw_usage("convert needs an output file: lodkit convert IN OUT");
             format_from_path(o.input);
             format_from_path(o.output);
-            check_not_input(o.input, o.output, o.force);
+            check_output(o.input, o.output, o.force);
             check_gltf_output_flags(o.gltf, o.output);
             // glTF to glTF goes through the scene (GeometryFile), so everything lodkit does not
             // change is kept; any other pair converts the (flattened) mesh, keeping its vertex order

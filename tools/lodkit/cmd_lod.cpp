@@ -895,9 +895,9 @@ Command register_lod(CLI::App& root) {
               throw_usage("lod writes glTF: give an output ending in .glb or .gltf");
             if (!(o->error_px > 0) || !(o->screen_height > 0) || !(o->fov_degrees > 0 && o->fov_degrees < 180))
               throw_usage("--error-px and --screen-height must be > 0 and --fov in (0, 180)");
-            check_not_input(o->input, o->output, o->force);
+            check_output(o->input, o->output, o->force);
             check_gltf_output_flags(o->gltf, o->output);
-            if (!o->lpm.empty()) check_not_input(o->input, o->lpm, o->force);
+            if (!o->lpm.empty()) check_output(o->input, o->lpm, o->force);
             // Checked before loading, so a mistyped mode is refused for a mesh without skins too.
             const SkinMode skin_mode = parse_skin_mode(o->skin_mode);
             if (o->poses == 0) throw_usage("--poses must be at least 1");

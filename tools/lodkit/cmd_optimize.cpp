@@ -83,8 +83,8 @@ Command register_optimize(CLI::App& root) {
             if (o->cache < 3 || o->cache > 64) throw_usage("--cache must be in [3, 64]");
             if (!(o->attribute_tolerance >= 0)) throw_usage("--attribute-tolerance must be >= 0");
             if ((o->weld_positions || o->attribute_tolerance > 0) && o->weld < 0) o->weld = 0;
-            check_not_input(o->input, o->output, o->force);
-            if (!o->strip_indices.empty()) check_not_input(o->input, o->strip_indices, o->force);
+            check_output(o->input, o->output, o->force);
+            if (!o->strip_indices.empty()) check_output(o->input, o->strip_indices, o->force);
             check_gltf_output_flags(o->gltf, o->output);
             const float t = o->attribute_tolerance;
             OptimizeOptions options{

@@ -114,7 +114,7 @@ Command register_simplify(CLI::App& root) {
               throw_usage("simplify needs a target: --ratio R, --triangles N or --error E");
             if (has_ratio && !(o->ratio >= 0 && o->ratio <= 1)) throw_usage("--ratio must be in [0, 1]");
             if (has_error && !(o->error >= 0)) throw_usage("--error must be >= 0 (a fraction of the bounding-box diagonal)");
-            check_not_input(o->input, o->output, o->force);
+            check_output(o->input, o->output, o->force);
             check_gltf_output_flags(o->gltf, o->output);
             SimplifyOptions options{
                 // Only --error: as far as the error allows.

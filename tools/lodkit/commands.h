@@ -138,8 +138,9 @@ double optional_number(const std::string& flag, const std::string& word, double 
 // lines only, saying `why`: simplifying, ordering or building levels of it would write an empty file.
 void require_triangles(std::span<const Mesh* const> meshes, const std::string& input, const std::string& why);
 
-// Refuses to write over the input (it would be lost if anything went wrong) unless `force`.
-void check_not_input(const std::string& input, const std::string& output, bool force);
+// Checked before any work: refuses to write over the input (it would be lost if anything went wrong)
+// unless `force`, and an output in a folder that does not exist (found only at the end otherwise).
+void check_output(const std::string& input, const std::string& output, bool force);
 // Likewise over a file an input glTF reads (lod::source_files): a .gltf output writes OUT.bin beside
 // it, which may be the input's buffer (scene.gltf reading data.bin, written as data.gltf).
 void check_not_source(const Scene& scene, const std::string& output, bool force);
