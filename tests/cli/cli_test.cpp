@@ -139,12 +139,14 @@ TEST(Cli, ConvertRefusesToOverwriteItsInputUnlessForced) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(read_mesh(path).triangle_count(), 12u);
   // An output in a folder that does not exist is refused before any work (it used to fail only
-  // when written, after the simplification or the chain).
-  for (const char* command : {"convert", "simplify", "optimize", "lod"}) {
-    std::vector<std::string> args = {command, path.string(), "-o", (dir / "missing" / "out.glb").string()};
-    if (std::string(command) == "simplify") args.insert(args.end(), {"--ratio", "0.5"});
+  // when written, after the simplification, the chain, the measurement or the drawing).
+  const std::string in = path.string(), out = (dir / "missing" / "out.glb").string();
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"convert", in, "-o", out}, {"simplify", in, "-o", out, "--ratio", "0.5"}, {"optimize", in, "-o", out},
+        {"lod", in, "-o", out}, {"render", in, "-o", (dir / "missing" / "x.png").string()},
+        {"compare", in, in, "--heatmap", (dir / "missing" / "h.ply").string()}}) {
     r = test::run_cli(args);
-    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;  // (as a failed write: bad input)
+    EXPECT_EQ(r.exit_code, 2) << args[0] << ": " << r.err;  // (as a failed write: bad input)
     EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
   }
   EXPECT_FALSE(std::filesystem::exists(dir / "missing"));

@@ -89,6 +89,7 @@ Command register_compare(CLI::App& root) {
               for (const std::string& input : {o->a, o->b})
                 if (std::filesystem::exists(o->heatmap, ec) && std::filesystem::equivalent(input, o->heatmap, ec))
                   throw_usage(o->heatmap + ": refusing to write the heat map over an input file");
+              check_output_folder(o->heatmap);
             }
             auto start = std::chrono::steady_clock::now();
             Mesh a, b;

@@ -36,9 +36,14 @@ void check_output(const std::string& input, const std::string& output, bool forc
   std::error_code ec;
   if (!force && std::filesystem::exists(output, ec) && std::filesystem::equivalent(input, output, ec))
     throw_usage(output + ": refusing to overwrite the input file (use --force)");
+  check_output_folder(output);
+}
+
+void check_output_folder(const std::string& output) {
+  std::error_code ec;
   const std::filesystem::path folder = std::filesystem::path(output).parent_path();
   if (!folder.empty() && !std::filesystem::is_directory(folder, ec))
-    throw_bad_input(output, "the folder " + folder.string() + " does not exist");  // (as the write would say: 2)
+    throw_bad_input(output, "the folder " + folder.string() + " does not exist");
 }
 
 void check_not_source(const Scene& scene, const std::string& output, bool force) {

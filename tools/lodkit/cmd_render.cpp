@@ -207,6 +207,7 @@ Command register_render(CLI::App& root) {
             if (o->samples == 0) throw_usage("--samples must be at least 1");
             if (!o->turntable && std::filesystem::path(o->output).extension() != ".png")
               throw_usage(o->output + ": lodkit render writes PNG: give an output ending in .png");
+            if (!o->turntable) check_output_folder(o->output);  // (a turntable's folder is made)
             const float3 direction = view_direction(o->view);
             const double fov = o->fov_degrees * M_PI / 180;
             const RenderOptions options{.width = width,

@@ -139,8 +139,11 @@ double optional_number(const std::string& flag, const std::string& word, double 
 void require_triangles(std::span<const Mesh* const> meshes, const std::string& input, const std::string& why);
 
 // Checked before any work: refuses to write over the input (it would be lost if anything went wrong)
-// unless `force`, and an output in a folder that does not exist (found only at the end otherwise).
+// unless `force`, and an output in a folder that does not exist (check_output_folder).
 void check_output(const std::string& input, const std::string& output, bool force);
+// Refuses (bad input, exit 2, as the write itself would say) an output in a folder that does not
+// exist: found only at the end otherwise, after the work.
+void check_output_folder(const std::string& output);
 // Likewise over a file an input glTF reads (lod::source_files): a .gltf output writes OUT.bin beside
 // it, which may be the input's buffer (scene.gltf reading data.bin, written as data.gltf).
 void check_not_source(const Scene& scene, const std::string& output, bool force);
