@@ -20,6 +20,9 @@ enum class FileFormat { obj, ply, off, stl, gltf, glb };
 // From the extension (case-insensitive); throws lod::Error (usage) for an unknown one.
 FileFormat format_from_path(const std::filesystem::path& path);
 const char* format_name(FileFormat format);
+// The buffer file write_gltf writes beside a .gltf at `path` (its stem + ".bin"); empty for any other
+// extension, which need not be a mesh format (a .glb holds its buffer).
+std::filesystem::path gltf_buffer_path(const std::filesystem::path& path);
 
 struct ReadOptions {
   // Called now and then with the fraction of the input consumed, in [0, 1]. May be empty.

@@ -4263,7 +4263,8 @@ WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, co
       }))
     std::erase(model.extensionsUsed, animation_pointer), std::erase(model.extensionsRequired, animation_pointer);
   if (scene.source) relocate_images(model, glb ? &bin : nullptr, scene.source->base_dir, path.parent_path());
-  const std::string bin_name = path.stem().string() + ".bin";
+  const std::filesystem::path bin_path = gltf_buffer_path(path);  // (empty for a .glb)
+  const std::string bin_name = bin_path.filename().string();
   Json doc = serialize_json(model, bin.size(), glb ? "" : uri_escape(bin_name));
   if (options.meshopt_compression) io::compress_meshopt(doc, bin, options, directions);
   if (glb) {
@@ -4272,7 +4273,7 @@ WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, co
     report.bytes = bytes.size();
     return report;
   }
-  if (!bin.empty()) write_file_atomic(path.parent_path() / bin_name, bin);
+  if (!bin.empty()) write_file_atomic(bin_path, bin);
   const std::string json = dump_json(doc, true);
   write_file_atomic(path, json);
   report.bytes = bin.size() + json.size();

@@ -9,6 +9,12 @@ namespace lod {
 
 namespace {
 
+std::string lower_extension(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext;
+}
+
 // OBJ, PLY, OFF or STL.
 Mesh read_plain(const FileBytes& bytes, FileFormat format, const std::filesystem::path& path, const ReadOptions& options) {
   switch (format) {
@@ -22,8 +28,7 @@ Mesh read_plain(const FileBytes& bytes, FileFormat format, const std::filesystem
 }  // namespace
 
 FileFormat format_from_path(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  const std::string ext = lower_extension(path);
   if (ext == ".obj") return FileFormat::obj;
   if (ext == ".ply") return FileFormat::ply;
   if (ext == ".off") return FileFormat::off;
@@ -31,6 +36,11 @@ FileFormat format_from_path(const std::filesystem::path& path) {
   if (ext == ".gltf") return FileFormat::gltf;
   if (ext == ".glb") return FileFormat::glb;
   throw_usage(path.string() + ": unknown mesh format '" + ext + "' (expected .obj .ply .off .stl .gltf .glb)");
+}
+
+std::filesystem::path gltf_buffer_path(const std::filesystem::path& path) {
+  if (lower_extension(path) != ".gltf") return {};
+  return path.parent_path() / (path.stem().string() + ".bin");
 }
 
 const char* format_name(FileFormat format) {

@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -49,10 +48,7 @@ void check_output_folder(const std::string& output) {
 void check_not_source(const Scene& scene, const std::string& output, bool force) {
   if (force || output.empty()) return;
   std::vector<std::filesystem::path> written = {output};
-  const std::filesystem::path path(output);
-  std::string ext = path.extension().string();  // (not format_from_path: an .lpm is no mesh format)
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  if (ext == ".gltf") written.push_back(path.parent_path() / (path.stem().string() + ".bin"));
+  if (std::filesystem::path bin = gltf_buffer_path(output); !bin.empty()) written.push_back(std::move(bin));
   for (const std::filesystem::path& read : source_files(scene))
     for (const std::filesystem::path& w : written) {
       std::error_code ec;
