@@ -101,11 +101,13 @@ PositionIds position_ids(const Mesh& mesh);
 // ids, so a UV seam does not crease it; in double). (0, 0, 0) where they cancel or there are none.
 std::vector<float3> smooth_normals(const Mesh& mesh);
 
-// Gives every normal unit length, as Mesh::normals promises: a normal off it is scaled to it, a zero
-// one takes its smooth normal (smooth_normals), or +z where that is zero too. A normal within 1e-6
-// of unit length is kept bit for bit. OBJ, PLY and OFF do not ask unit normals of the file (an OBJ
-// corner without `vn` reads as zero); their readers call this.
-void make_unit_normals(Mesh& mesh);
+// Gives every normal and tangent unit length, as Mesh promises (glTF requires it): a normal off it
+// is scaled to it, a zero one takes its smooth normal (smooth_normals), or +z where that is zero
+// too. A tangent's xyz likewise; a zero one takes a direction perpendicular to the normal, and its
+// w becomes the sign of w (+1 for 0). A direction within 1e-6 of unit length is kept bit for bit.
+// No reader asks unit directions of its file (an OBJ corner without `vn` reads as zero); they all
+// call this.
+void make_unit_directions(Mesh& mesh);
 
 // Topological and geometric statistics. Topology is computed on position ids, so seams do not cut.
 struct ComponentStats {

@@ -65,19 +65,34 @@ std::vector<float3> smooth_normals(const Mesh& mesh) {
   return normals;
 }
 
-void make_unit_normals(Mesh& mesh) {
-  bool zero = false;
-  for (float3& n : mesh.normals) {
+void make_unit_directions(Mesh& mesh) {
+  std::vector<float3> smooth;  // smooth_normals, when a zero direction needs them
+  const auto smooth_at = [&](size_t v) {
+    if (smooth.empty()) smooth = smooth_normals(mesh);
+    return core::unit_float3(core::to_double(smooth[v]), {0, 0, 1});
+  };
+  const auto is_zero = [](const float3& n) { return n.x == 0 && n.y == 0 && n.z == 0; };
+  for (size_t v = 0; v < mesh.normals.size(); ++v) {
+    float3& n = mesh.normals[v];
     const core::vec3d d = core::to_double(n);
     if (std::fabs(core::length(d) - 1) <= 1e-6) continue;
     n = core::unit_float3(d, float3{});
-    zero = zero || (n.x == 0 && n.y == 0 && n.z == 0);
+    if (is_zero(n)) n = smooth_at(v);
   }
-  if (!zero) return;
-  const std::vector<float3> smooth = smooth_normals(mesh);
-  for (size_t v = 0; v < mesh.normals.size(); ++v) {
-    float3& n = mesh.normals[v];
-    if (n.x == 0 && n.y == 0 && n.z == 0) n = core::unit_float3(core::to_double(smooth[v]), {0, 0, 1});
+  for (size_t v = 0; v < mesh.tangents.size(); ++v) {
+    float4& t = mesh.tangents[v];
+    if (t.w != 1 && t.w != -1) t.w = t.w < 0 ? -1.0f : 1.0f;
+    const core::vec3d d{t.x, t.y, t.z};
+    if (std::fabs(core::length(d) - 1) <= 1e-6) continue;
+    float3 xyz = core::unit_float3(d, float3{});
+    if (is_zero(xyz)) {
+      // Any direction in the tangent plane beats none: the normal crossed with the axis least
+      // along it.
+      const core::vec3d n = core::to_double(v < mesh.normals.size() ? mesh.normals[v] : smooth_at(v));
+      const core::vec3d axis = std::fabs(n.x) < 0.5 ? core::vec3d{1, 0, 0} : core::vec3d{0, 1, 0};
+      xyz = core::unit_float3(core::cross(core::cross(n, axis), n), {1, 0, 0});
+    }
+    t = {xyz.x, xyz.y, xyz.z, t.w};
   }
 }
 

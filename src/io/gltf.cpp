@@ -1052,6 +1052,9 @@ class SceneBuilder {
       for (size_t i = 0; i < vertex_count; ++i) corners[i] = uint32_t(i);
     }
     mesh.indices = triangle_list(prim.mode, std::move(corners), where);
+    // The spec asks unit normals and tangents, but files break it (exporters write unnormalized
+    // ones, quantized ones drift by their step); an output must not carry that on.
+    make_unit_directions(mesh);
     return mesh;
   }
 

@@ -407,7 +407,7 @@ Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const Rea
     chunks[k].corners = std::move(again.corners);
   }
   Mesh mesh = join_chunks(chunks, total);
-  make_unit_normals(mesh);
+  make_unit_directions(mesh);
   return mesh;
 }
 

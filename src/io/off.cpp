@@ -119,7 +119,7 @@ Mesh read_off(std::span<const uint8_t> bytes, const std::string& name, const Rea
     io::append_fan(mesh.indices, polygon);
     in.next_line();
   }
-  make_unit_normals(mesh);
+  make_unit_directions(mesh);
   return mesh;
 }
 

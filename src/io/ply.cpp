@@ -472,7 +472,7 @@ Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const Rea
     else if (!has_lists(e)) read_fixed_element(binary, e);
     else read_element(binary, e, is_face, vertex->count, mesh, options);
   }
-  make_unit_normals(mesh);
+  make_unit_directions(mesh);
   return mesh;
 }
 

@@ -568,6 +568,31 @@ TEST(GltfRead, NormalizedIntegerAttributesAndVec3Colors) {
   EXPECT_EQ(m.weights[2], (float4{0, 0, 0, 1.0f}));
 }
 
+// glTF asks unit normals and tangents (w = +-1), but files break it; Mesh::normals and tangents are
+// unit all the same (make_unit_directions), so what lodkit writes validates. Vertex 0 is right and
+// keeps its bits; 1 is scaled; 2 is zero and takes the triangle's normal, +z, and a tangent
+// perpendicular to it; the tangents' w become their signs.
+TEST(GltfRead, NormalsAndTangentsReadAtUnitLength) {
+  HandBuilt f;
+  const int pos = f.positions({0, 0, 0, 1, 0, 0, 0, 1, 0});
+  const int normal = f.accessor(std::vector<float>{0.6f, 0, 0.8f, 0, 3, 4, 0, 0, 0}, kFloat, "VEC3", 3, kArrayBuffer);
+  const int tangent = f.accessor(std::vector<float>{1, 0, 0, -1, 0, 0, 2, 0.5f, 0, 0, 0, -3}, kFloat, "VEC4", 4, kArrayBuffer);
+  f.doc["meshes"] = Json::array({{{"primitives", {{{"attributes", {{"POSITION", pos}, {"NORMAL", normal}, {"TANGENT", tangent}}}}}}}});
+  const Scene scene = read_gltf(span_of(f.gltf()), "directions.gltf");
+  const Mesh& m = scene.primitives[0].mesh;
+  EXPECT_EQ(m.normals, (std::vector<float3>{{0.6f, 0, 0.8f}, {0, 0.6f, 0.8f}, {0, 0, 1}}));
+  ASSERT_EQ(m.tangents.size(), 3u);
+  EXPECT_EQ(m.tangents[0], (float4{1, 0, 0, -1}));
+  EXPECT_EQ(m.tangents[1], (float4{0, 0, 1, 1}));
+  const float4 t = m.tangents[2];
+  EXPECT_NEAR(t.x * t.x + t.y * t.y + t.z * t.z, 1.0, 1e-6);
+  EXPECT_EQ(t.z, 0.0f);  // (perpendicular to +z)
+  EXPECT_EQ(t.w, -1.0f);
+  TempDir dir;
+  write_scene(scene, dir / "d.glb");
+  test::expect_valid_gltf({dir / "d.glb"});
+}
+
 TEST(GltfRead, InterleavedStreamsWithByteStride) {
   HandBuilt f;
   // position xyz + normal xyz per vertex, 24-byte stride, one bufferView for both accessors.

@@ -73,7 +73,7 @@ TEST(Obj, VertexColorsExtension) {
 }
 
 // OBJ normals need not be unit length, and a corner may have none; Mesh::normals are unit
-// (make_unit_normals): vn 0 0 2 reads as +z, a unit vn keeps its bits, and the second triangle's
+// (make_unit_directions): vn 0 0 2 reads as +z, a unit vn keeps its bits, and the second triangle's
 // corners (no vn) take the smooth normal of the flat square, +z. Written to glTF, they validate.
 TEST(Obj, NormalsReadAtUnitLength) {
   const std::string text =

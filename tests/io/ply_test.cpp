@@ -124,6 +124,24 @@ TEST(Ply, RoundTripIsExactWithEveryStream) {
   }
 }
 
+// PLY promises nothing of tangents; Mesh's are unit with w = +-1 (make_unit_directions).
+TEST(Ply, TangentsReadAtUnitLength) {
+  const std::string text =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "property float tx\nproperty float ty\nproperty float tz\nproperty float tw\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0 3 4 0 1\n0 1 0 1 0 0 -0.5\n0 0 1 0 0 0 0\n3 0 1 2\n";
+  const Mesh m = read(text);
+  ASSERT_EQ(m.tangents.size(), 3u);
+  EXPECT_EQ(m.tangents[0], (float4{0.6f, 0.8f, 0, 1}));
+  EXPECT_EQ(m.tangents[1], (float4{1, 0, 0, -1}));
+  // Zero, without normals: a direction across the triangle's normal, +x.
+  const float4 t = m.tangents[2];
+  EXPECT_NEAR(t.x * t.x + t.y * t.y + t.z * t.z, 1.0, 1e-6);
+  EXPECT_EQ(t.x, 0.0f);
+  EXPECT_EQ(t.w, 1.0f);
+}
+
 TEST(Ply, AFileWithoutFacesIsAPointSet) {
   Mesh m = read("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
                 "1 2 3\n4 5 6\n");
