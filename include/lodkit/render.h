@@ -202,6 +202,10 @@ class Font {
   // per em, blending `color` (sRGB bytes) by the glyphs' coverage. Returns the advance in pixels.
   int draw(Image& image, int x, int y, const std::string& text, uint32_t size, const uint8_t color[3]) const;
   int width(const std::string& text, uint32_t size) const;  // advance of `text` in pixels
+  // At `size`: pixels from the baseline up to the font's ascender, and from its ascender down to its
+  // descender (a line's height without spacing).
+  int ascent(uint32_t size) const;
+  int line_height(uint32_t size) const;
 
  private:
   struct Face;

@@ -2,6 +2,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <string>
+#include <vector>
 
 #include "lodkit/error.h"
 #include "lodkit/measure.h"
@@ -26,6 +28,35 @@ uint8_t srgb_byte(float linear) {
   const double c = std::clamp(double(linear), 0.0, 1.0);
   const double s = c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1 / 2.4) - 0.055;
   return uint8_t(std::lround(s * 255));
+}
+
+// `text` cut back by whole UTF-8 characters and ended with an ellipsis, as long as fits `width`.
+std::string ellipsized(const Font& font, std::string text, uint32_t size, int width) {
+  static const std::string dots = "\u2026";
+  while (!text.empty() && font.width(text + dots, size) > width) {
+    while (!text.empty() && (uint8_t(text.back()) & 0xC0) == 0x80) text.pop_back();  // continuation bytes
+    if (!text.empty()) text.pop_back();                                             // and the lead byte
+  }
+  return text + dots;
+}
+
+// Greedy word wrap of `text` into lines no wider than `width` pixels at `size`; a word wider than
+// that on its own is cut (ellipsized).
+std::vector<std::string> wrap(const Font& font, const std::string& text, uint32_t size, int width) {
+  std::vector<std::string> words, lines;
+  for (size_t i = 0; i < text.size();) {
+    const size_t end = std::min(text.find(' ', i), text.size());
+    if (end > i) words.push_back(text.substr(i, end - i));
+    i = end + 1;
+  }
+  for (const std::string& word : words) {
+    if (!lines.empty() && font.width(lines.back() + ' ' + word, size) <= width) {
+      lines.back() += ' ' + word;
+    } else {
+      lines.push_back(font.width(word, size) <= width ? word : ellipsized(font, word, size, width));
+    }
+  }
+  return lines;
 }
 
 }  // namespace
@@ -55,10 +86,35 @@ Image contact_sheet(std::span<const Image> panels, std::span<const std::string> 
   sheet.width = options.width;
   sheet.height = options.height;
   sheet.rgba.assign(size_t(sheet.width) * sheet.height * 4, 255);
-  // One type size for every label: the layout's, or smaller until the longest fits its panel.
+  // One type size for every label: the layout's, or smaller until the longest fits its panel on one
+  // line; below 8 pixels, the labels wrap onto the lines the strip holds instead (at the largest size
+  // down to 6 where they all fit, the last line kept ellipsized where they do not), so a label
+  // never runs into its neighbour's cell.
+  const int room = std::max(1, int(l.panel_width) - int(l.label_size));
+  const auto advance = [&](uint32_t size) { return font.line_height(size); };  // baseline to baseline
   uint32_t size = l.label_size;
-  for (const std::string& label : labels)
-    while (size > 8 && font.width(label, size) > int(l.panel_width) - int(l.label_size)) --size;
+  const auto fits_one_line = [&] {
+    return std::all_of(labels.begin(), labels.end(), [&](const std::string& label) { return font.width(label, size) <= room; });
+  };
+  while (size > 8 && !fits_one_line()) --size;
+  std::vector<std::vector<std::string>> lines(labels.size());
+  const auto wrap_all = [&] {
+    size_t most = 1;
+    for (size_t i = 0; i < labels.size(); ++i) most = std::max(most, (lines[i] = wrap(font, labels[i], size, room)).size());
+    return most;
+  };
+  if (!fits_one_line()) {
+    for (size = std::min(l.label_size, 8u);; --size)
+      if (int(wrap_all()) * advance(size) <= int(l.label_height) || size == 6) break;
+    const size_t most = size_t(std::max(1, int(l.label_height) / advance(size)));
+    for (std::vector<std::string>& label : lines)
+      if (label.size() > most) {
+        label.resize(most);
+        label.back() = ellipsized(font, label.back(), size, room);
+      }
+  } else {
+    for (size_t i = 0; i < labels.size(); ++i) lines[i] = {labels[i]};
+  }
   for (size_t i = 0; i < panels.size(); ++i) {
     const Image& panel = panels[i];
     if (panel.width != l.panel_width || panel.height != l.panel_height)
@@ -70,11 +126,17 @@ Image contact_sheet(std::span<const Image> panels, std::span<const std::string> 
     for (uint32_t y = 0; y < panel.height; ++y)
       std::memcpy(&sheet.rgba[(size_t(y0 + y) * sheet.width + x0) * 4], &panel.rgba[size_t(y) * panel.width * 4],
                   size_t(panel.width) * 4);
-    // The label centred in the strip under the panel, its baseline a third of the way up.
-    const int text_width = font.width(labels[i], size);
-    const int x = int(x0) + std::max(0, (int(l.panel_width) - text_width) / 2);
-    const int baseline = int(y0 + l.panel_height + l.label_height) - int(l.label_height) / 3;
-    font.draw(sheet, x, baseline, labels[i], size, black);
+    // The label centred in the strip under the panel: one line with its baseline a third of the way
+    // up, or the block of lines centred.
+    const int strip = int(y0 + l.panel_height);
+    const int top = strip + (int(l.label_height) - int(lines[i].size()) * advance(size)) / 2;
+    for (size_t k = 0; k < lines[i].size(); ++k) {
+      const int text_width = font.width(lines[i][k], size);
+      const int x = int(x0) + std::max(0, (int(l.panel_width) - text_width) / 2);
+      const int baseline = lines[i].size() == 1 ? strip + int(l.label_height) - int(l.label_height) / 3
+                                                : top + int(k) * advance(size) + font.ascent(size);
+      font.draw(sheet, x, baseline, lines[i][k], size, black);
+    }
   }
   // Hairlines between the cells.
   const uint8_t grey[3] = {200, 200, 200};

@@ -3,6 +3,7 @@
 #include <ft2build.h>
 #include FT_FREETYPE_H
 
+#include <algorithm>
 #include <string>
 
 #include "lodkit/error.h"
@@ -77,6 +78,23 @@ Font::~Font() = default;
 
 int Font::width(const std::string& text, uint32_t size) const {
   return layout(face_->face, text, size, false, [](int) {});
+}
+
+namespace {
+
+// The face's size metrics at `size` pixels per em (26.6 fixed point).
+const FT_Size_Metrics& size_metrics(FT_Face face, uint32_t size) {
+  if (FT_Set_Pixel_Sizes(face, 0, std::max(size, 1u))) throw_internal("FreeType: cannot set the font size " + std::to_string(size));
+  return face->size->metrics;
+}
+
+}  // namespace
+
+int Font::ascent(uint32_t size) const { return int((size_metrics(face_->face, size).ascender + 63) >> 6); }
+
+int Font::line_height(uint32_t size) const {
+  const FT_Size_Metrics& m = size_metrics(face_->face, size);
+  return int((m.ascender - m.descender + 63) >> 6);
 }
 
 int Font::draw(Image& image, int x, int y, const std::string& text, uint32_t size, const uint8_t color[3]) const {

@@ -123,6 +123,41 @@ TEST(ContactSheet, PanelsInAGridWithLabels) {
   EXPECT_THROW(sheet_layout(100, {.width = 100, .height = 100}), Error);
 }
 
+// Labels too long for their panels at 8 pixels (4 panels in 320x240, 160 pixels wide) wrap onto the
+// strip's lines, or are cut with an ellipsis, and never ink a neighbour's cell: every dark pixel
+// lies in its own label's strip; the sentence takes two lines (two bands of inked rows), the
+// single long word one.
+TEST(ContactSheet, LongLabelsWrapInsideTheirCells) {
+  const SheetOptions options{.width = 320, .height = 240};
+  const SheetLayout layout = sheet_layout(4, options);
+  ASSERT_EQ(layout.panel_width, 160u);
+  const Image white = filled(layout.panel_width, layout.panel_height, 255, 255, 255);
+  const Image panels[4] = {white, white, white, white};
+  const std::string labels[4] = {"LOD0: 1,234,567 triangles x 12 instances, error 0.000123 (0.05%)", "",
+                                 std::string(200, 'W'), ""};
+  const Font font;
+  ASSERT_GT(font.width(labels[0], 8), int(layout.panel_width));  // (too long for one line)
+  const Image sheet = contact_sheet(panels, labels, options, font);
+  const uint32_t cell_height = layout.panel_height + layout.label_height;
+  std::vector<bool> inked_rows[4] = {std::vector<bool>(layout.label_height), std::vector<bool>(layout.label_height),
+                                     std::vector<bool>(layout.label_height), std::vector<bool>(layout.label_height)};
+  for (uint32_t y = 0; y < sheet.height; ++y)
+    for (uint32_t x = 0; x < sheet.width; ++x) {
+      if (sheet.pixel(x, y)[0] >= 150) continue;  // (the hairlines are grey 200)
+      const uint32_t cell = (y / cell_height) * 2 + x / layout.panel_width, row = y % cell_height;
+      ASSERT_TRUE(cell == 0 || cell == 2) << "ink at " << x << "," << y << " in cell " << cell;
+      ASSERT_GE(row, layout.panel_height) << "ink at " << x << "," << y << " above the strip";
+      inked_rows[cell][row - layout.panel_height] = true;
+    }
+  const auto bands = [](const std::vector<bool>& rows) {
+    size_t count = 0;
+    for (size_t r = 0; r < rows.size(); ++r) count += rows[r] && (r == 0 || !rows[r - 1]);
+    return count;
+  };
+  EXPECT_EQ(bands(inked_rows[0]), 2u);
+  EXPECT_EQ(bands(inked_rows[2]), 1u);
+}
+
 TEST(ContactSheet, HeatLegendRunsBlueToRed) {
   const Font font;
   Image image = filled(400, 300, 255, 255, 255);
