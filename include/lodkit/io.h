@@ -30,6 +30,9 @@ struct ReadOptions {
   // Worker threads a reader may use (OBJ parses pieces of a large file in parallel); 0 means one per
   // hardware thread. The result never depends on it.
   unsigned threads = 0;
+  // Called with each problem the reader let pass (a glTF extension the file requires that lodkit
+  // does not know), as a sentence naming the file. May be empty.
+  std::function<void(const std::string& message)> warning;
 };
 
 struct WriteOptions {

@@ -102,6 +102,19 @@ void declare_extension(std::vector<std::string>& list, const std::string& ext) {
   if (std::find(list.begin(), list.end(), ext) == list.end()) list.push_back(ext);
 }
 
+// Extensions lodkit knows: it reads and writes them (compression, quantization, MSFT_lod,
+// instancing, visibility, texture transforms, animation pointers), or they concern only materials,
+// textures, lights or metadata, so a changed mesh still agrees with them. None refers to a node by
+// index in a way erase_nodes would break (it renumbers MSFT_lod and KHR_animation_pointer's).
+bool known_extension(const std::string& ext) {
+  static const std::set<std::string> known = {
+      "EXT_mesh_gpu_instancing", "EXT_meshopt_compression", "EXT_texture_avif", "EXT_texture_webp",
+      "KHR_animation_pointer", "KHR_draco_mesh_compression", "KHR_lights_punctual", "KHR_mesh_quantization",
+      "KHR_meshopt_compression", "KHR_node_visibility", "KHR_texture_basisu", "KHR_texture_transform",
+      "KHR_xmp_json_ld", "MSFT_lod", "MSFT_texture_dds"};
+  return known.count(ext) > 0 || ext.starts_with("KHR_materials_");
+}
+
 // The MSFT_lod extension of a node: its ids array (null when the node has none, or an empty one).
 const tg::Value& msft_lod_ids(const tg::Node& node) {
   static const tg::Value none;
@@ -3966,6 +3979,11 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
   document.validate();
   Scene scene = SceneBuilder(document).build();
   scene.extensions_used = std::move(extensions_used);
+  if (options.warning)
+    for (const std::string& ext : source->model.extensionsRequired)
+      if (!known_extension(ext))
+        options.warning(name + ": the file requires " + ext + ", which lodkit does not know: it is kept as it is, but "
+                        "what lodkit changes may no longer agree with it");
   scene.source = std::move(source);
   scene.name = name;
   if (options.progress) options.progress(1.0);
@@ -4118,18 +4136,6 @@ std::vector<MorphTarget> source_morph_targets(const Scene& scene, size_t primiti
 
 namespace {
 
-// Document extensions known to refer to no node by index (or whose references erase_nodes
-// renumbers: MSFT_lod, KHR_animation_pointer). Any other might, so a document declaring one keeps
-// every node where it is.
-bool refers_to_no_node(const std::string& ext) {
-  static const std::set<std::string> known = {
-      "EXT_mesh_gpu_instancing", "EXT_meshopt_compression", "EXT_texture_avif", "EXT_texture_webp",
-      "KHR_animation_pointer", "KHR_draco_mesh_compression", "KHR_lights_punctual", "KHR_mesh_quantization",
-      "KHR_node_visibility", "KHR_texture_basisu", "KHR_texture_transform", "KHR_xmp_json_ld", "MSFT_lod",
-      "MSFT_texture_dds"};
-  return known.count(ext) > 0 || ext.starts_with("KHR_materials_");
-}
-
 // A node list renumbered: erased nodes (-1 in `remap`) leave it.
 template <typename Index>
 void renumber(std::vector<Index>& list, const std::vector<int32_t>& remap) {
@@ -4147,7 +4153,7 @@ std::vector<int32_t> erase_nodes(Scene& scene, const std::vector<bool>& erase) {
   if (!scene.source || scene.source->model.nodes.size() > count || erase.size() != count) return remap;
   const tg::Model& model = scene.source->model;
   const size_t sources = model.nodes.size();  // (the nodes past them are new: renumbered, never erased)
-  if (!std::all_of(model.extensionsUsed.begin(), model.extensionsUsed.end(), refers_to_no_node)) return remap;
+  if (!std::all_of(model.extensionsUsed.begin(), model.extensionsUsed.end(), known_extension)) return remap;
   // What else needs a node keeps it: a camera, another extension (a light), a skin, a node taking its
   // morph weights, a child that stays (a new node below it among them).
   std::vector<bool> gone(count, false);

@@ -183,6 +183,35 @@ TEST(Cli, RefusesToWriteOverABufferTheInputReads) {
   EXPECT_EQ(read_scene(out).primitives.size(), 1u);  // (forced: data.bin is the output's buffer now)
 }
 
+// A glTF extension the file requires and lodkit does not know is kept, with a warning on stderr
+// from every command that reads the file (once per read), since what lodkit changes may no longer
+// agree with it; a required extension lodkit knows (KHR_materials_unlit) gives none.
+TEST(Cli, WarnsOfARequiredExtensionItDoesNotKnow) {
+  test::TempDir dir;
+  write_scene(scene_from_mesh(shapes::icosphere(2)), dir / "scene.glb");
+  test::Glb glb = test::read_glb(dir / "scene.glb");
+  glb.doc["extensionsUsed"] = {"ABC_geometry_magic", "KHR_materials_unlit"};
+  glb.doc["extensionsRequired"] = glb.doc["extensionsUsed"];
+  glb.doc["meshes"][0]["primitives"][0]["extensions"]["ABC_geometry_magic"] = {{"level", 1}};
+  const std::string in = (dir / "in.glb").string(), out = (dir / "out.glb").string();
+  test::write_bytes(dir / "in.glb", test::glb_bytes(glb));
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"simplify", in, "-o", out, "--ratio", "0.5"}, {"optimize", in, "-o", out}, {"convert", in, out},
+        {"lod", in, "-o", out}, {"info", in}}) {
+    SCOPED_TRACE(args[0]);
+    const test::RunResult r = test::run_cli(args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string warning = "lodkit: warning: " + in + ": the file requires ABC_geometry_magic, which lodkit does not know";
+    const size_t at = r.err.find(warning);
+    ASSERT_NE(at, std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("ABC_geometry_magic", at + warning.size()), std::string::npos) << r.err;  // once
+    EXPECT_EQ(r.err.find("KHR_materials_unlit"), std::string::npos) << r.err;
+    if (args[0] == "info") continue;
+    const nlohmann::json doc = test::glb_json(out);
+    EXPECT_EQ(doc["extensionsRequired"], glb.doc["extensionsRequired"]);
+  }
+}
+
 TEST(Cli, FailedConvertLeavesNoPartialOutput) {
   test::TempDir dir;
   auto bad = dir / "bad.off";

@@ -31,7 +31,14 @@ void ProgressBar::update(double fraction) {
 ReadOptions ProgressBar::read_options() {
   ReadOptions options;
   if (enabled_) options.progress = [this](double f) { update(f); };
+  options.warning = [this](const std::string& message) { warn(message); };
   return options;
+}
+
+void ProgressBar::warn(const std::string& message) {
+  if (shown_) std::fprintf(stderr, "\r\033[2K");
+  std::fprintf(stderr, "lodkit: warning: %s\n", message.c_str());
+  last_percent_ = -1;  // (the bar is drawn again at its next update)
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {

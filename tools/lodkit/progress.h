@@ -17,8 +17,10 @@ class ProgressBar {
   ProgressBar& operator=(const ProgressBar&) = delete;
 
   void update(double fraction);
-  // A ReadOptions whose progress callback drives this bar.
+  // A ReadOptions whose progress callback drives this bar, and whose warnings go to stderr (warn).
   ReadOptions read_options();
+  // Prints "lodkit: warning: MESSAGE" on a line of its own, below the bar.
+  void warn(const std::string& message);
 
  private:
   std::string label_;
