@@ -3,7 +3,7 @@
 #
 #   scripts/fuzz.sh FORMAT|all [SECONDS=600] [JOBS=nproc]
 #
-# FORMAT is obj, ply, off, stl, gltf, lpm (progressive meshes), meshopt (the meshopt vertex decoder,
+# FORMAT is obj, mtl (OBJ material libraries), ply, off, stl, gltf, lpm (progressive meshes), meshopt (the meshopt vertex decoder,
 # on a stride byte, two count bytes and a stream), simplify (the simplifier, on 16 option bytes
 # followed by an OFF file) or compare (lod::compare's certified bound, on two small meshes: see
 # fuzz/fuzz_compare.cpp). JOBS is how many fuzzer processes run at once: with `all`,
@@ -23,7 +23,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
-all_formats=(obj ply off stl gltf lpm meshopt simplify compare)
+all_formats=(obj mtl ply off stl gltf lpm meshopt simplify compare)
 usage() {
   echo "usage: scripts/fuzz.sh FORMAT|all [SECONDS=600] [JOBS=$(nproc)]   (FORMAT: ${all_formats[*]})" >&2
   exit 2

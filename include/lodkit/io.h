@@ -244,6 +244,10 @@ struct Scene {
   // node channels); the writer keeps the source's channels, pointers included.
   std::vector<Animation> animations;
   std::vector<std::string> material_names;  // by glTF material index
+  // By glTF material index, as material_names, in a scene made from a mesh that has them
+  // (scene_from_mesh): what the writer makes those materials look like. Empty otherwise (a glTF
+  // source keeps its own materials).
+  std::vector<MaterialLook> material_looks;
   uint32_t image_count = 0;
   uint32_t texture_count = 0;
   // glTF meshes in the source document, points and lines included: a primitive with a gltf_mesh
@@ -351,7 +355,18 @@ std::vector<MorphTarget> source_morph_targets(const Scene& scene, size_t primiti
 
 // ---- per format, in memory (used by the file functions, tests and fuzzers) ----------------------
 // `name` is used in error messages. Writers append to `out`.
-Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});
+// `material_libraries`, when given, gets the text of each mtllib statement, in file order.
+Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {},
+              std::vector<std::string>* material_libraries = nullptr);
+// A Wavefront MTL material library (what an OBJ's mtllib names): each material as glTF's
+// metallic-roughness core sees it (Kd, d or Tr, Ke, Pm, Pr or Ns; map_Kd, norm or map_Bump,
+// map_Ke), texture paths resolved against `folder`.
+struct MtlMaterial {
+  std::string name;
+  MaterialLook look;
+};
+std::vector<MtlMaterial> read_mtl(std::span<const uint8_t> bytes, const std::string& name,
+                                  const std::filesystem::path& folder = {});
 Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});
 Mesh read_off(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});
 Mesh read_stl(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});

@@ -25,6 +25,19 @@ using ushort4 = std::array<uint16_t, 4>;
 
 inline constexpr size_t max_uv_sets = 4;
 
+// How a material looks, where the input says so (an OBJ's MTL library), in glTF's
+// metallic-roughness terms: what a glTF written from the mesh gets. Textures are file paths (UTF-8),
+// as resolved against the library's folder; empty for none.
+struct MaterialLook {
+  float4 base_color{1, 1, 1, 1};      // RGB (MTL Kd) and alpha (d, or 1 - Tr)
+  float3 emissive{0, 0, 0};           // MTL Ke
+  float metallic = 0, roughness = 1;  // MTL Pm and Pr, or roughness from the Phong exponent Ns
+  std::string base_color_texture;     // map_Kd
+  std::string normal_texture;         // norm, map_Bump or bump
+  std::string emissive_texture;       // map_Ke
+  friend bool operator==(const MaterialLook&, const MaterialLook&) = default;
+};
+
 // An indexed triangle mesh in structure-of-arrays form.
 // Every non-empty vertex stream has exactly vertex_count() entries; an empty stream is absent.
 // Triangles are counter-clockwise seen from outside (glTF / OpenGL convention).
@@ -47,6 +60,9 @@ struct Mesh {
   std::vector<uint32_t> indices;    // 3 per triangle
   std::vector<uint32_t> materials;  // per triangle material id; empty means every triangle uses material 0
   std::vector<std::string> material_names;  // indexed by material id; may be empty or shorter
+  // Indexed by material id, as material_names, when the input described the materials (an OBJ's
+  // MTL library); empty otherwise.
+  std::vector<MaterialLook> material_looks;
   std::vector<uint32_t> groups;             // per triangle group id (OBJ g/o); empty means no groups
   std::vector<std::string> group_names;     // indexed by group id
 
@@ -59,6 +75,10 @@ struct Mesh {
 
   friend bool operator==(const Mesh&, const Mesh&) = default;
 };
+
+// Gives `to` the tables `from` keeps by material and group id (material names and looks, group
+// names), not the per-triangle ids: for a mesh made of another's triangles.
+void copy_id_tables(Mesh& to, const Mesh& from);
 
 // Copies vertex `from` of `src` (all streams present in `dst`) to the end of `dst`.
 void append_vertex(Mesh& dst, const Mesh& src, uint32_t from);

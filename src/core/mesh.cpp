@@ -6,6 +6,12 @@
 
 namespace lod {
 
+void copy_id_tables(Mesh& to, const Mesh& from) {
+  to.material_names = from.material_names;
+  to.material_looks = from.material_looks;
+  to.group_names = from.group_names;
+}
+
 size_t Mesh::uv_set_count() const {
   size_t n = 0;
   while (n < max_uv_sets && !uvs[n].empty()) ++n;

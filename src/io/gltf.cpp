@@ -3736,6 +3736,15 @@ tg::Model model_from_scene(const Scene& scene, std::vector<Slot>& slots) {
   for (int m = 0; m <= max_material; ++m) {
     tg::Material material;
     if (size_t(m) < scene.material_names.size()) material.name = valid_utf8(scene.material_names[size_t(m)]);
+    if (size_t(m) < scene.material_looks.size()) {
+      const MaterialLook& look = scene.material_looks[size_t(m)];
+      const float4& c = look.base_color;
+      material.pbrMetallicRoughness.baseColorFactor = {c.x, c.y, c.z, c.w};
+      material.pbrMetallicRoughness.metallicFactor = look.metallic;
+      material.pbrMetallicRoughness.roughnessFactor = look.roughness;
+      material.emissiveFactor = {look.emissive.x, look.emissive.y, look.emissive.z};
+      if (c.w < 1) material.alphaMode = "BLEND";
+    }
     model.materials.push_back(std::move(material));
   }
   tg::Scene out_scene;
@@ -4005,6 +4014,19 @@ std::string uri_decode(const std::string& s) {
   return out;
 }
 
+// The URI of `file` from a document in `output_dir`: its relative path, %-escaped; empty when it
+// has none.
+std::string relative_uri(const std::filesystem::path& file, const std::filesystem::path& output_dir) {
+  std::error_code ec;
+  const std::filesystem::path from = std::filesystem::absolute(file, ec).lexically_normal();
+  const std::filesystem::path there = std::filesystem::absolute(output_dir.empty() ? "." : output_dir, ec).lexically_normal();
+  const std::filesystem::path relative = from.lexically_relative(there);
+  if (ec || relative.empty()) return {};
+  std::string escaped;
+  for (const auto& part : relative) escaped += (escaped.empty() ? "" : "/") + uri_escape(part.string());
+  return escaped;
+}
+
 // Whether a URI names a file beside the document: relative, without a scheme (data:, http:).
 bool relative_file_uri(const std::string& uri) {
   const size_t colon = uri.find(':'), slash = uri.find('/');
@@ -4029,14 +4051,58 @@ void relocate_images(tg::Model& model, std::vector<uint8_t>* bin, const std::fil
     }
     const std::string& uri = image.uri;  // empty for a data: URI (its bytes are in image.image)
     if (!relative_file_uri(uri) || source_dir.empty()) continue;
-    std::error_code ec;
-    const std::filesystem::path file = std::filesystem::absolute(source_dir / uri_decode(uri), ec).lexically_normal();
-    const std::filesystem::path there = std::filesystem::absolute(output_dir.empty() ? "." : output_dir, ec).lexically_normal();
-    const std::filesystem::path relative = file.lexically_relative(there);
-    if (ec || relative.empty()) continue;
-    std::string escaped;
-    for (const auto& part : relative) escaped += (escaped.empty() ? "" : "/") + uri_escape(part.string());
-    image.uri = escaped;
+    if (std::string relative = relative_uri(source_dir / uri_decode(uri), output_dir); !relative.empty()) image.uri = relative;
+  }
+}
+
+// The textures of a scene's material looks (one image and texture per file; PNG and JPEG, the
+// types glTF's core knows), on the materials model_from_scene made. A .glb gets the images' bytes
+// (relocate_images embeds them); a .gltf refers to the files from `output_dir`. A texture is left
+// out where its file cannot be read or typed, and where a primitive with its material has no UVs
+// (glTF's validator refuses a texture without them).
+void add_look_textures(tg::Model& model, const Scene& scene, bool glb, const std::filesystem::path& output_dir) {
+  std::vector<bool> has_uvs(scene.material_looks.size(), true);
+  for (const Primitive& prim : scene.primitives)
+    if (prim.material >= 0 && size_t(prim.material) < has_uvs.size() && prim.mesh.uvs[0].empty()) has_uvs[size_t(prim.material)] = false;
+  std::map<std::string, int> texture_of;  // file -> texture index, or -1
+  const auto texture = [&](const std::string& file) {
+    const auto [it, inserted] = texture_of.try_emplace(file, -1);
+    if (!inserted) return it->second;
+    std::vector<unsigned char> bytes;
+    try {
+      const FileBytes read = read_file_bytes(std::filesystem::path(file));
+      bytes.assign(read.data(), read.data() + read.size());
+    } catch (const Error&) {
+      return -1;
+    }
+    tg::Image image;
+    image.mimeType = image_mime_type(bytes);
+    if (image.mimeType != "image/png" && image.mimeType != "image/jpeg") return -1;
+    if (glb) {
+      image.image = std::move(bytes);
+    } else {
+      image.uri = relative_uri(std::filesystem::path(file), output_dir);
+      if (image.uri.empty()) return -1;
+      image.mimeType.clear();  // (the URI's extension says it)
+    }
+    tg::Texture t;
+    t.source = int(model.images.size());
+    model.images.push_back(std::move(image));
+    it->second = int(model.textures.size());
+    model.textures.push_back(t);
+    return it->second;
+  };
+  for (size_t m = 0; m < scene.material_looks.size() && m < model.materials.size(); ++m) {
+    if (!has_uvs[m]) continue;
+    const MaterialLook& look = scene.material_looks[m];
+    tg::Material& material = model.materials[m];
+    if (!look.base_color_texture.empty()) material.pbrMetallicRoughness.baseColorTexture.index = texture(look.base_color_texture);
+    if (!look.normal_texture.empty()) material.normalTexture.index = texture(look.normal_texture);
+    if (!look.emissive_texture.empty()) {
+      material.emissiveTexture.index = texture(look.emissive_texture);
+      // An emissive texture is multiplied by the factor: black (MTL without Ke) would hide it.
+      if (material.emissiveTexture.index >= 0 && look.emissive == float3{}) material.emissiveFactor = {1, 1, 1};
+    }
   }
 }
 
@@ -4244,6 +4310,7 @@ WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, co
     for (const Primitive& prim : scene.primitives) slots.push_back({int(prim.gltf_mesh), int(prim.gltf_primitive)});
   } else {
     model = model_from_scene(scene, slots);
+    add_look_textures(model, scene, glb, path.parent_path());
   }
   if (options.draco && (options.position_bits < 1 || options.position_bits > 30))
     throw_usage("cannot write glTF: position_bits is " + std::to_string(options.position_bits) + ", not 1 to 30 (Draco)");
@@ -4271,7 +4338,7 @@ WriteReport write_gltf(const Scene& scene, const std::filesystem::path& path, co
                            [](const tg::AnimationChannel& ch) { return ch.target_extensions.count(animation_pointer) > 0; });
       }))
     std::erase(model.extensionsUsed, animation_pointer), std::erase(model.extensionsRequired, animation_pointer);
-  if (scene.source) relocate_images(model, glb ? &bin : nullptr, scene.source->base_dir, path.parent_path());
+  relocate_images(model, glb ? &bin : nullptr, scene.source ? scene.source->base_dir : std::filesystem::path(), path.parent_path());
   const std::filesystem::path bin_path = gltf_buffer_path(path);  // (empty for a .glb)
   const std::string bin_name = bin_path.filename().string();
   Json doc = serialize_json(model, bin.size(), glb ? "" : uri_escape(bin_name));

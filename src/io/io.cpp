@@ -15,10 +15,72 @@ std::string lower_extension(const std::filesystem::path& path) {
   return ext;
 }
 
+void warn(const ReadOptions& options, const std::string& message) {
+  if (options.warning) options.warning(message);
+}
+
+// Mesh::material_looks of an OBJ from the MTL libraries its mtllib statements name, beside it. A
+// statement's text is one file name, or failing that several blank-separated ones. A library or a
+// texture that is not there is a warning, not an error: the mesh is whole, and its materials keep
+// their names.
+void read_material_looks(Mesh& mesh, const std::vector<std::string>& statements, const std::filesystem::path& obj,
+                         const ReadOptions& options) {
+  if (mesh.material_names.empty() || statements.empty()) return;
+  const std::filesystem::path folder = obj.parent_path();
+  std::vector<MtlMaterial> materials;
+  for (const std::string& text : statements) {
+    std::vector<std::string> names{text};
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(folder / std::filesystem::path(text), ec)) {
+      names.clear();
+      for (size_t i = 0; i < text.size();) {
+        const size_t end = std::min(text.find_first_of(" \t", i), text.size());
+        if (end > i) names.push_back(text.substr(i, end - i));
+        i = end + 1;
+      }
+    }
+    for (const std::string& name : names) {
+      const std::filesystem::path file = folder / std::filesystem::path(name);
+      if (!std::filesystem::is_regular_file(file, ec)) {
+        warn(options, obj.string() + ": material library " + name + " not found: its materials keep only their names");
+        continue;
+      }
+      std::vector<MtlMaterial> read = read_mtl(read_file_bytes(file), file.string(), file.parent_path());
+      materials.insert(materials.end(), std::make_move_iterator(read.begin()), std::make_move_iterator(read.end()));
+    }
+  }
+  if (materials.empty()) return;
+  mesh.material_looks.assign(mesh.material_names.size(), MaterialLook{});
+  size_t missing = 0;
+  std::string first_missing;
+  for (size_t id = 0; id < mesh.material_names.size(); ++id) {
+    // The first definition of a name counts, as in the readers lodkit's peers use.
+    const auto it = std::find_if(materials.begin(), materials.end(), [&](const MtlMaterial& m) { return m.name == mesh.material_names[id]; });
+    if (it == materials.end()) {
+      if (!mesh.material_names[id].empty() && !missing++) first_missing = mesh.material_names[id];
+      continue;
+    }
+    mesh.material_looks[id] = it->look;
+    for (const std::string* texture : {&it->look.base_color_texture, &it->look.normal_texture, &it->look.emissive_texture}) {
+      std::error_code ec;
+      if (!texture->empty() && !std::filesystem::is_regular_file(std::filesystem::path(*texture), ec))
+        warn(options, obj.string() + ": material " + it->name + "'s texture " + *texture + " not found");
+    }
+  }
+  if (missing)
+    warn(options, obj.string() + ": " + std::to_string(missing) + " material(s) in no material library (" + first_missing +
+                      (missing > 1 ? ", ...)" : ")") + ": they keep only their names");
+}
+
 // OBJ, PLY, OFF or STL.
 Mesh read_plain(const FileBytes& bytes, FileFormat format, const std::filesystem::path& path, const ReadOptions& options) {
   switch (format) {
-    case FileFormat::obj: return read_obj(bytes, path.string(), options);
+    case FileFormat::obj: {
+      std::vector<std::string> libraries;
+      Mesh mesh = read_obj(bytes, path.string(), options, &libraries);
+      read_material_looks(mesh, libraries, path, options);
+      return mesh;
+    }
     case FileFormat::ply: return read_ply(bytes, path.string(), options);
     case FileFormat::off: return read_off(bytes, path.string(), options);
     default: return read_stl(bytes, path.string(), options);

@@ -1,6 +1,6 @@
 // Wavefront OBJ: v (optionally with r g b), vt, vn, faces of any size (fan-triangulated), negative
-// (relative) indices, g/o groups and usemtl materials. Other statements (mtllib, s, l, p, ...) are
-// skipped.
+// (relative) indices, g/o groups, usemtl materials and the mtllib statements naming their libraries
+// (read by the file layer, io.cpp). Other statements (s, l, p, ...) are skipped.
 //
 // Vertices: a file whose faces use positions only keeps its `v` list as the vertex list, in file
 // order. Otherwise every distinct (v, vt, vn) triple becomes one vertex, in order of first use.
@@ -100,6 +100,7 @@ struct Chunk {
   std::vector<float3> normals;
   std::vector<Corner> corners;  // 3 per triangle
   std::vector<Event> events;
+  std::vector<std::string> libraries;  // mtllib statements' text
   bool any_texcoord = false, any_normal = false;
   bool local_refs = false;  // holds chunk_local indices
   uint64_t lines = 0;
@@ -205,7 +206,9 @@ void parse_chunk(std::span<const uint8_t> bytes, const std::string& name, uint64
       chunk.events.push_back({chunk.corners.size() / 3, key == "usemtl", std::string(in.rest_of_line())});
     } else if (key.starts_with('#')) {
       // comment line
-    } else if (key == "vp" || key == "s" || key == "l" || key == "p" || key == "mtllib" || key == "usemap" ||
+    } else if (key == "mtllib") {
+      chunk.libraries.emplace_back(in.rest_of_line());
+    } else if (key == "vp" || key == "s" || key == "l" || key == "p" || key == "usemap" ||
                key == "maplib" || key == "cstype" || key == "deg" || key == "curv" || key == "surf" || key == "parm" ||
                key == "end" || key == "trim" || key == "hole" || key == "bmat" || key == "step" || key == "lod" ||
                key == "shadow_obj" || key == "trace_obj" || key == "ctech" || key == "stech" || key == "call" ||
@@ -350,7 +353,8 @@ Mesh join_chunks(std::vector<Chunk>& chunks, const Counts& total) {
 
 }  // namespace
 
-Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options) {
+Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options,
+              std::vector<std::string>* material_libraries) {
   if (bytes.empty()) throw_bad_input_at_line(name, 1, "empty file, expected OBJ statements");
   // Parse chunks of lines in parallel, then join them in file order: the result does not depend on
   // the number of threads. Only the first chunk reports progress (they advance at the same pace).
@@ -408,6 +412,8 @@ Mesh read_obj(std::span<const uint8_t> bytes, const std::string& name, const Rea
   }
   Mesh mesh = join_chunks(chunks, total);
   make_unit_directions(mesh);
+  if (material_libraries)
+    for (const Chunk& chunk : chunks) material_libraries->insert(material_libraries->end(), chunk.libraries.begin(), chunk.libraries.end());
   return mesh;
 }
 

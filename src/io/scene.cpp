@@ -335,6 +335,11 @@ Mesh flatten(const Scene& scene, const FlattenOptions& options) {
     for (uint32_t id : out.materials) max_id = std::max(max_id, id);
     out.material_names.assign(std::max<size_t>(max_id, scene.material_names.size()) + 1, std::string());
     for (size_t k = 0; k < scene.material_names.size(); ++k) out.material_names[k + 1] = scene.material_names[k];
+    if (!scene.material_looks.empty()) {
+      out.material_looks.assign(out.material_names.size(), MaterialLook{});
+      for (size_t k = 0; k < scene.material_looks.size() && k + 1 < out.material_looks.size(); ++k)
+        out.material_looks[k + 1] = scene.material_looks[k];
+    }
   }
   return out;
 }
@@ -542,6 +547,7 @@ std::vector<MaterialPart> split_by_material(const Mesh& mesh) {
     part.mesh = mesh;
     part.mesh.materials.clear();
     part.mesh.material_names.clear();
+    part.mesh.material_looks.clear();
     part.mesh.groups.clear();
     part.mesh.group_names.clear();
     part.vertices.resize(mesh.vertex_count());
@@ -575,6 +581,7 @@ Scene scene_from_mesh(const Mesh& mesh) {
   std::vector<MaterialPart> parts = split_by_material(mesh);
   Scene scene;
   scene.material_names = mesh.material_names;
+  scene.material_looks = mesh.material_looks;
   Node node;
   node.mesh = 0;
   scene.nodes.push_back(node);
@@ -591,6 +598,7 @@ Scene scene_from_mesh(const Mesh& mesh) {
   for (const Primitive& prim : scene.primitives)
     if (prim.material >= 0 && size_t(prim.material) >= scene.material_names.size())
       scene.material_names.resize(size_t(prim.material) + 1);
+  if (!scene.material_looks.empty()) scene.material_looks.resize(scene.material_names.size());
   return scene;
 }
 

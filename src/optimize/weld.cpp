@@ -144,8 +144,7 @@ WeldResult weld(const Mesh& mesh, const WeldOptions& options) {
   r.input_vertices = mesh.vertex_count();
   r.remap.assign(mesh.vertex_count(), none);
   Mesh& out = r.mesh;
-  out.material_names = mesh.material_names;
-  out.group_names = mesh.group_names;
+  copy_id_tables(out, mesh);
   // Every input vertex's kept vertex is itself or an earlier one, so one pass numbers them.
   uint32_t count = 0;
   for (uint32_t v = 0; v < mesh.vertex_count(); ++v) {

@@ -87,7 +87,7 @@ std::optional<Mesh> double_sided_fronts(const Mesh& mesh, SurfaceForm& form) {
     if (size_t(twin[t]) > t)
       for (int k = 0; k < 3; ++k) kept[mesh.indices[3 * t + k]] = 0;
   Mesh front;
-  front.material_names = mesh.material_names, front.group_names = mesh.group_names;
+  copy_id_tables(front, mesh);
   for (uint32_t v = 0; v < mesh.vertex_count(); ++v)
     if (kept[v] == 0) kept[v] = uint32_t(front.vertex_count()), append_vertex(front, mesh, v);
   form.source = kept, form.back.assign(mesh.vertex_count(), false);
@@ -125,7 +125,7 @@ bool flat_shaded(const Mesh& mesh) {
 // Returns each corner's vertex.
 std::vector<uint32_t> refacet(Mesh& mesh) {
   Mesh split;
-  split.material_names = mesh.material_names, split.group_names = mesh.group_names;
+  copy_id_tables(split, mesh);
   split.materials = mesh.materials, split.groups = mesh.groups;
   for (size_t t = 0; t < mesh.triangle_count(); ++t) {
     const float3 n = core::unit_float3(core::triangle_cross(mesh, t), {0, 0, 1});

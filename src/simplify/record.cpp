@@ -64,8 +64,7 @@ void append_current(Mesh& out, const Mesh& input, const Snapshot& s, uint32_t v)
 
 Mesh empty_like(const Mesh& input) {
   Mesh out;
-  out.material_names = input.material_names;
-  out.group_names = input.group_names;
+  copy_id_tables(out, input);
   return out;
 }
 

@@ -260,11 +260,12 @@ int32_t levels_parent(const Scene& scene, const std::vector<bool>& earlier, int3
 // The document static chains go into: the glTF `source` (flattened into the chains' inputs, so
 // material id k + 1 is its material k) without its triangles, so that materials, textures and
 // everything else stay and its nodes remain, without those meshes; or a new document with the
-// input's material names.
-Scene chain_document(const Scene* source, const std::vector<std::string>& material_names) {
+// materials (names and looks) of the input, `input`.
+Scene chain_document(const Scene* source, const Mesh& input) {
   Scene scene;
   if (!source) {
-    scene.material_names = material_names;
+    scene.material_names = input.material_names;
+    scene.material_looks = input.material_looks;
     return scene;
   }
   scene = *source;
@@ -321,7 +322,8 @@ uint32_t add_chain(Scene& scene, const ChainReport& r, const LevelTargets& targe
       for (const MaterialPart& part : split_by_material(level)) {
         Primitive prim;
         prim.mesh = chain.shared.vertices;
-        prim.mesh.materials.clear(), prim.mesh.material_names.clear(), prim.mesh.groups.clear(), prim.mesh.group_names.clear();
+        prim.mesh.materials.clear(), prim.mesh.groups.clear();
+        copy_id_tables(prim.mesh, Mesh{});
         prim.mesh.indices.clear();
         prim.targets = level_targets;
         for (size_t t = 0; t < level.triangle_count(); ++t)
@@ -1077,7 +1079,7 @@ Command register_lod(CLI::App& root) {
                 return earlier_levels.count(int32_t(m)) || (!chains.empty() && !skinned_meshes.count(int32_t(m)));
               });
             } else {
-              out = chain_document(scene.source ? &scene : nullptr, reports[0].chain.levels.front().mesh.material_names);
+              out = chain_document(scene.source ? &scene : nullptr, reports[0].chain.levels.front().mesh);
             }
             const size_t first_separate = chains.size() - separate.size();
             // An earlier run's chains (lod on its own output): the nodes whose meshes the new chains

@@ -1,0 +1,134 @@
+// MTL material libraries: the statements read (values derived by hand), malformed input, and an
+// OBJ's materials carried into glTF (factors, textures embedded in a .glb or referred to from a
+// .gltf, checked against the files and by the Khronos validator).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "lodkit/error.h"
+#include "lodkit/io.h"
+#include "test_support.h"
+
+namespace lod {
+namespace {
+
+using test::bytes_of;
+
+// A 1x1 RGB PNG (signature, IHDR, IDAT of one filtered pixel, IEND), made with zlib by hand.
+const std::string tiny_png(
+    "\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x00\x00\x01\x00\x00\x00\x01\x08\x02\x00\x00"
+    "\x00\x90\x77\x53\xde\x00\x00\x00\x0c\x49\x44\x41\x54\x78\x9c\x63\xf8\xdf\xc0\x00\x00\x04\x01\x01\x80\xc5\x2a\x18"
+    "\x5d\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82",
+    69);
+
+TEST(Mtl, ReadsWhatGltfsCoreHasRoomFor) {
+  const std::string text =
+      "# made by hand\n"
+      "newmtl stone\nKd 0.8 0.5 0.3\nd 0.5\nNs 98\nKa 0 0 0\nillum 2\n"
+      "map_Kd -s 1 1 1 -bm 0.5 -clamp on textures\\stone wall.png\n"
+      "newmtl glow\nKd 0.25\nTr 0.75\nKe 1 0.5 0\nPm 0.7\nPr 0.2\nNs 10\nnorm -bm 2 n.png\nmap_Ke /abs/e.png\n"
+      "newmtl plain\n";
+  const std::vector<MtlMaterial> m = read_mtl(bytes_of(text), "scene.mtl", "/models");
+  ASSERT_EQ(m.size(), 3u);
+  EXPECT_EQ(m[0].name, "stone");
+  EXPECT_EQ(m[0].look.base_color, (float4{0.8f, 0.5f, 0.3f, 0.5f}));
+  EXPECT_NEAR(m[0].look.roughness, std::sqrt(2.0 / 100.0), 1e-7);  // GGX roughness of Phong exponent 98
+  EXPECT_EQ(m[0].look.metallic, 0.0f);
+  EXPECT_EQ(m[0].look.base_color_texture, "/models/textures/stone wall.png");
+  EXPECT_EQ(m[1].name, "glow");
+  EXPECT_EQ(m[1].look.base_color, (float4{0.25f, 0.25f, 0.25f, 0.25f}));  // one Kd value for all three; d = 1 - Tr
+  EXPECT_EQ(m[1].look.emissive, (float3{1, 0.5f, 0}));
+  EXPECT_EQ(m[1].look.metallic, 0.7f);
+  EXPECT_EQ(m[1].look.roughness, 0.2f);  // Pr, not Ns
+  EXPECT_EQ(m[1].look.normal_texture, "/models/n.png");
+  EXPECT_EQ(m[1].look.emissive_texture, "/abs/e.png");
+  EXPECT_EQ(m[2].name, "plain");
+  EXPECT_TRUE(m[2].look == MaterialLook{});
+}
+
+TEST(Mtl, RejectsMalformedStatementsNamingTheLine) {
+  const auto message = [](const std::string& text) {
+    try {
+      read_mtl(bytes_of(text), "bad.mtl");
+    } catch (const Error& e) {
+      EXPECT_EQ(e.category(), ErrorCategory::bad_input);
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("newmtl a\n\nKd 1 x 1\n").find("bad.mtl:3"), std::string::npos) << message("newmtl a\n\nKd 1 x 1\n");
+  EXPECT_NE(message("Kd 1 1 1\n").find("bad.mtl:1"), std::string::npos);
+  EXPECT_NE(message("newmtl a\nmap_Kd -bm 1\n").find("no file"), std::string::npos);
+  EXPECT_NE(message("newmtl\n").find("names no material"), std::string::npos);
+  EXPECT_NE(message("newmtl a\nd nan\n").find("bad.mtl:2"), std::string::npos);
+}
+
+// An OBJ's mtllib, beside it: its materials' looks on the mesh, then in glTF. Material "stone" is in
+// the library with a texture; "lost" is in none (a warning). The .glb embeds the texture's bytes;
+// a .gltf in a subfolder refers to it as ../tex.png; both validate.
+TEST(Mtl, ObjMaterialsReachGltf) {
+  test::TempDir dir;
+  test::write_text(dir / "tex.png", tiny_png);
+  test::write_text(dir / "m.mtl", "newmtl stone\nKd 0.8 0.5 0.3\nPr 0.4\nmap_Kd tex.png\n");
+  test::write_text(dir / "quad.obj",
+                   "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                   "usemtl stone\nf 1/1 2/2 3/3\nusemtl lost\nf 1/1 3/3 4/4\n");
+  std::vector<std::string> warnings;
+  const ReadOptions options{.warning = [&](const std::string& w) { warnings.push_back(w); }};
+  const Mesh mesh = read_mesh(dir / "quad.obj", options);
+  ASSERT_EQ(mesh.material_names, (std::vector<std::string>{"stone", "lost"}));
+  ASSERT_EQ(mesh.material_looks.size(), 2u);
+  EXPECT_EQ(mesh.material_looks[0].base_color, (float4{0.8f, 0.5f, 0.3f, 1}));
+  EXPECT_EQ(mesh.material_looks[0].roughness, 0.4f);
+  EXPECT_TRUE(mesh.material_looks[1] == MaterialLook{});
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("1 material(s) in no material library (lost)"), std::string::npos) << warnings[0];
+
+  std::filesystem::create_directory(dir / "out");
+  write_mesh(mesh, dir / "out" / "quad.glb");
+  const test::Glb glb = test::read_glb(dir / "out" / "quad.glb");
+  const nlohmann::json& stone = glb.doc["materials"][0];
+  EXPECT_EQ(stone["name"], "stone");
+  EXPECT_EQ(stone["pbrMetallicRoughness"]["baseColorFactor"], (std::vector<double>{0.8f, 0.5f, 0.3f, 1}));
+  EXPECT_EQ(stone["pbrMetallicRoughness"]["roughnessFactor"], double(0.4f));
+  const nlohmann::json& image = glb.doc["images"][glb.doc["textures"][stone["pbrMetallicRoughness"]["baseColorTexture"]["index"].get<size_t>()]["source"].get<size_t>()];
+  EXPECT_EQ(image["mimeType"], "image/png");
+  const nlohmann::json& view = glb.doc["bufferViews"][image["bufferView"].get<size_t>()];
+  const size_t offset = view.value("byteOffset", size_t(0));
+  ASSERT_EQ(view["byteLength"], tiny_png.size());
+  EXPECT_TRUE(std::string(glb.bin.begin() + ptrdiff_t(offset), glb.bin.begin() + ptrdiff_t(offset + tiny_png.size())) == tiny_png);
+  EXPECT_FALSE(glb.doc["materials"][1].contains("pbrMetallicRoughness") &&
+               glb.doc["materials"][1]["pbrMetallicRoughness"].contains("baseColorTexture"));
+
+  write_mesh(mesh, dir / "out" / "quad.gltf");
+  const nlohmann::json doc = nlohmann::json::parse(test::read_bytes(dir / "out" / "quad.gltf"));
+  ASSERT_EQ(doc["images"].size(), 1u);
+  EXPECT_EQ(doc["images"][0]["uri"], "../tex.png");
+  test::expect_valid_gltf({dir / "out" / "quad.glb", dir / "out" / "quad.gltf"});
+
+  // Without UVs a texture cannot be drawn (and glTF's validator refuses it): the factors stay.
+  test::write_text(dir / "flat.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl stone\nf 1 2 3\n");
+  write_mesh(read_mesh(dir / "flat.obj"), dir / "out" / "flat.glb");
+  const nlohmann::json flat = test::glb_json(dir / "out" / "flat.glb");
+  EXPECT_FALSE(flat.contains("images"));
+  EXPECT_EQ(flat["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"][0], double(0.8f));
+  test::expect_valid_gltf({dir / "out" / "flat.glb"});
+}
+
+// A library that is not there is a warning: the mesh reads, its materials keep their names.
+TEST(Mtl, AMissingLibraryIsAWarning) {
+  test::TempDir dir;
+  test::write_text(dir / "a.obj", "mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n");
+  std::vector<std::string> warnings;
+  const Mesh mesh = read_mesh(dir / "a.obj", {.warning = [&](const std::string& w) { warnings.push_back(w); }});
+  EXPECT_EQ(mesh.material_names, (std::vector<std::string>{"red"}));
+  EXPECT_TRUE(mesh.material_looks.empty());
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("material library gone.mtl not found"), std::string::npos) << warnings[0];
+}
+
+}  // namespace
+}  // namespace lod
