@@ -116,6 +116,17 @@ TEST(Mtl, ObjMaterialsReachGltf) {
   EXPECT_FALSE(flat.contains("images"));
   EXPECT_EQ(flat["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"][0], double(0.8f));
   test::expect_valid_gltf({dir / "out" / "flat.glb"});
+
+  // The commands that write a glTF from the OBJ keep the looks (lod builds a new document).
+  for (const std::vector<std::string>& args : {std::vector<std::string>{"lod", (dir / "quad.obj").string(), "-o", (dir / "out" / "lod.glb").string()},
+                                               {"simplify", (dir / "quad.obj").string(), "-o", (dir / "out" / "lod.glb").string(), "--ratio", "0.5"}}) {
+    SCOPED_TRACE(args[0]);
+    const test::RunResult r = test::run_cli(args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json out = test::glb_json(dir / "out" / "lod.glb");
+    EXPECT_EQ(out["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"][1], double(0.5f));
+    EXPECT_EQ(out["images"].size(), 1u);
+  }
 }
 
 // A library that is not there is a warning: the mesh reads, its materials keep their names.
