@@ -23,6 +23,12 @@ const char* format_name(FileFormat format);
 // The buffer file write_gltf writes beside a .gltf at `path` (its stem + ".bin"); empty for any other
 // extension, which need not be a mesh format (a .glb holds its buffer).
 std::filesystem::path gltf_buffer_path(const std::filesystem::path& path);
+// Likewise the MTL library write_mesh writes beside an .obj whose mesh has material looks (its stem
+// + ".mtl"); empty for any other extension.
+std::filesystem::path obj_library_path(const std::filesystem::path& path);
+// The MTL libraries the OBJ at `path` names (its mtllib statements, as its reader resolves them),
+// those that are there: files it reads, which writing over would change.
+std::vector<std::filesystem::path> obj_material_libraries(const std::filesystem::path& path);
 
 struct ReadOptions {
   // Called now and then with the fraction of the input consumed, in [0, 1]. May be empty.
@@ -244,9 +250,10 @@ struct Scene {
   // node channels); the writer keeps the source's channels, pointers included.
   std::vector<Animation> animations;
   std::vector<std::string> material_names;  // by glTF material index
-  // By glTF material index, as material_names, in a scene made from a mesh that has them
-  // (scene_from_mesh): what the writer makes those materials look like. Empty otherwise (a glTF
-  // source keeps its own materials).
+  // By glTF material index, as material_names: in a scene made from a mesh that has them
+  // (scene_from_mesh), what the glTF writer makes those materials look like; from a glTF source
+  // (which the writer keeps as it is), its materials' factors and external texture files on UV set
+  // 0, for a mesh flattened from it (an OBJ's MTL library).
   std::vector<MaterialLook> material_looks;
   uint32_t image_count = 0;
   uint32_t texture_count = 0;
@@ -282,7 +289,7 @@ Scene read_scene(const std::filesystem::path& path, const ReadOptions& options =
 
 // What a write did, for reports.
 struct WriteReport {
-  uint64_t bytes = 0;  // every file written (a .gltf's .bin too)
+  uint64_t bytes = 0;  // every file written (a .gltf's .bin, an .obj's .mtl too)
   // WriteOptions::draco: triangle primitives by how they went into Draco. Edgebreaker; sequential,
   // in place (two vertices decode alike while streams outside the Draco stream must follow them,
   // or libdraco's Edgebreaker could not take the mesh); plain, not in Draco (libdraco could not
@@ -367,6 +374,9 @@ struct MtlMaterial {
 };
 std::vector<MtlMaterial> read_mtl(std::span<const uint8_t> bytes, const std::string& name,
                                   const std::filesystem::path& folder = {});
+// The MTL library of `mesh`'s material looks, those its triangles use, for an OBJ in `folder`
+// (texture paths relative to it where they can be): read_mtl gives the looks back.
+void write_mtl(const Mesh& mesh, std::string& out, const std::filesystem::path& folder);
 Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});
 Mesh read_off(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});
 Mesh read_stl(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});

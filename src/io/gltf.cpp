@@ -3898,6 +3898,41 @@ bool has_glb_extension(const std::string& name) {
 
 }  // namespace
 
+std::string uri_decode(const std::string& s);     // (below, with the writer's URI helpers)
+bool relative_file_uri(const std::string& uri);
+
+namespace {
+
+// What a document's materials look like, for a mesh flattened from it and written as an OBJ (its
+// MTL): the factors, and the textures on UV set 0 that are files beside it (an embedded image has
+// no path to give; a transformed one would not map the same).
+std::vector<MaterialLook> material_looks(const tg::Model& model, const std::filesystem::path& base_dir) {
+  const auto file = [&](int texture, int tex_coord, const tg::ExtensionMap& extensions) -> std::string {
+    if (texture < 0 || size_t(texture) >= model.textures.size() || tex_coord != 0 || !extensions.empty()) return {};
+    const int image = model.textures[size_t(texture)].source;
+    if (image < 0 || size_t(image) >= model.images.size() || !relative_file_uri(model.images[size_t(image)].uri)) return {};
+    return (base_dir / uri_decode(model.images[size_t(image)].uri)).lexically_normal().string();
+  };
+  const auto factor = [](const std::vector<double>& v, size_t k, double fallback) { return float(k < v.size() ? v[k] : fallback); };
+  std::vector<MaterialLook> looks;
+  for (const tg::Material& m : model.materials) {
+    const tg::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
+    MaterialLook look;
+    look.base_color = {factor(pbr.baseColorFactor, 0, 1), factor(pbr.baseColorFactor, 1, 1), factor(pbr.baseColorFactor, 2, 1),
+                       m.alphaMode == "BLEND" ? factor(pbr.baseColorFactor, 3, 1) : 1.0f};
+    look.emissive = {factor(m.emissiveFactor, 0, 0), factor(m.emissiveFactor, 1, 0), factor(m.emissiveFactor, 2, 0)};
+    look.metallic = float(std::clamp(pbr.metallicFactor, 0.0, 1.0));
+    look.roughness = float(std::clamp(pbr.roughnessFactor, 0.0, 1.0));
+    look.base_color_texture = file(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, pbr.baseColorTexture.extensions);
+    look.normal_texture = file(m.normalTexture.index, m.normalTexture.texCoord, m.normalTexture.extensions);
+    look.emissive_texture = file(m.emissiveTexture.index, m.emissiveTexture.texCoord, m.emissiveTexture.extensions);
+    looks.push_back(std::move(look));
+  }
+  return looks;
+}
+
+}  // namespace
+
 Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const std::filesystem::path& base_dir,
                 const ReadOptions& options) {
   // tinygltf takes 32-bit lengths.
@@ -3988,6 +4023,7 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
   document.validate();
   Scene scene = SceneBuilder(document).build();
   scene.extensions_used = std::move(extensions_used);
+  scene.material_looks = material_looks(source->model, base_dir);
   if (options.warning)
     for (const std::string& ext : source->model.extensionsRequired)
       if (!known_extension(ext))

@@ -23,31 +23,39 @@ void warn(const ReadOptions& options, const std::string& message) {
 // statement's text is one file name, or failing that several blank-separated ones. A library or a
 // texture that is not there is a warning, not an error: the mesh is whole, and its materials keep
 // their names.
+// The library names of mtllib statements: a statement's text is one file name, or failing that
+// several blank-separated ones.
+std::vector<std::string> library_names(const std::vector<std::string>& statements, const std::filesystem::path& folder) {
+  std::vector<std::string> names;
+  for (const std::string& text : statements) {
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(folder / std::filesystem::path(text), ec)) {
+      names.push_back(text);
+      continue;
+    }
+    for (size_t i = 0; i < text.size();) {
+      const size_t end = std::min(text.find_first_of(" \t", i), text.size());
+      if (end > i) names.push_back(text.substr(i, end - i));
+      i = end + 1;
+    }
+  }
+  return names;
+}
+
 void read_material_looks(Mesh& mesh, const std::vector<std::string>& statements, const std::filesystem::path& obj,
                          const ReadOptions& options) {
   if (mesh.material_names.empty() || statements.empty()) return;
   const std::filesystem::path folder = obj.parent_path();
   std::vector<MtlMaterial> materials;
-  for (const std::string& text : statements) {
-    std::vector<std::string> names{text};
+  for (const std::string& name : library_names(statements, folder)) {
+    const std::filesystem::path file = folder / std::filesystem::path(name);
     std::error_code ec;
-    if (!std::filesystem::is_regular_file(folder / std::filesystem::path(text), ec)) {
-      names.clear();
-      for (size_t i = 0; i < text.size();) {
-        const size_t end = std::min(text.find_first_of(" \t", i), text.size());
-        if (end > i) names.push_back(text.substr(i, end - i));
-        i = end + 1;
-      }
+    if (!std::filesystem::is_regular_file(file, ec)) {
+      warn(options, obj.string() + ": material library " + name + " not found: its materials keep only their names");
+      continue;
     }
-    for (const std::string& name : names) {
-      const std::filesystem::path file = folder / std::filesystem::path(name);
-      if (!std::filesystem::is_regular_file(file, ec)) {
-        warn(options, obj.string() + ": material library " + name + " not found: its materials keep only their names");
-        continue;
-      }
-      std::vector<MtlMaterial> read = read_mtl(read_file_bytes(file), file.string(), file.parent_path());
-      materials.insert(materials.end(), std::make_move_iterator(read.begin()), std::make_move_iterator(read.end()));
-    }
+    std::vector<MtlMaterial> read = read_mtl(read_file_bytes(file), file.string(), file.parent_path());
+    materials.insert(materials.end(), std::make_move_iterator(read.begin()), std::make_move_iterator(read.end()));
   }
   if (materials.empty()) return;
   mesh.material_looks.assign(mesh.material_names.size(), MaterialLook{});
@@ -105,6 +113,36 @@ std::filesystem::path gltf_buffer_path(const std::filesystem::path& path) {
   return path.parent_path() / (path.stem().string() + ".bin");
 }
 
+std::filesystem::path obj_library_path(const std::filesystem::path& path) {
+  if (lower_extension(path) != ".obj") return {};
+  return path.parent_path() / (path.stem().string() + ".mtl");
+}
+
+std::vector<std::filesystem::path> obj_material_libraries(const std::filesystem::path& path) {
+  // The mtllib lines alone (the OBJ reader's keyword at a line's start), not a whole parse.
+  const FileBytes bytes = read_file_bytes(path);
+  const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  std::vector<std::string> statements;
+  for (size_t at = 0; at < text.size();) {
+    const size_t end = std::min(text.find_first_of("\r\n", at), text.size());
+    std::string_view line = text.substr(at, end - at);
+    line.remove_prefix(std::min(line.find_first_not_of(" \t"), line.size()));
+    if (line.starts_with("mtllib") && line.size() > 6 && (line[6] == ' ' || line[6] == '\t')) {
+      line.remove_prefix(6);
+      line.remove_prefix(std::min(line.find_first_not_of(" \t"), line.size()));
+      line.remove_suffix(line.size() - std::min(line.find_last_not_of(" \t") + 1, line.size()));
+      statements.emplace_back(line);
+    }
+    at = end + 1;
+  }
+  std::vector<std::filesystem::path> files;
+  for (const std::string& name : library_names(statements, path.parent_path())) {
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(path.parent_path() / name, ec)) files.push_back(path.parent_path() / name);
+  }
+  return files;
+}
+
 const char* format_name(FileFormat format) {
   switch (format) {
     case FileFormat::obj: return "OBJ";
@@ -137,14 +175,26 @@ WriteReport write_mesh(const Mesh& mesh, const std::filesystem::path& path, cons
   FileFormat format = format_from_path(path);
   if (format == FileFormat::gltf || format == FileFormat::glb) return write_gltf(scene_from_mesh(mesh), path, options);
   std::string out;
+  uint64_t library_bytes = 0;
   switch (format) {
-    case FileFormat::obj: write_obj(mesh, out, options); break;
+    case FileFormat::obj:
+      // The looks go into an MTL library beside it, which the OBJ names first.
+      if (!mesh.material_looks.empty()) {
+        const std::filesystem::path library = obj_library_path(path);
+        std::string mtl;
+        write_mtl(mesh, mtl, path.parent_path());
+        write_file_atomic(library, mtl);
+        library_bytes = mtl.size();
+        out = "mtllib " + library.filename().string() + "\n";
+      }
+      write_obj(mesh, out, options);
+      break;
     case FileFormat::ply: write_ply(mesh, out, options); break;
     case FileFormat::off: write_off(mesh, out, options); break;
     default: write_stl(mesh, out, options); break;
   }
   write_file_atomic(path, out);
-  return {.bytes = out.size()};
+  return {.bytes = out.size() + library_bytes};
 }
 
 WriteReport write_scene(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options) {

@@ -50,7 +50,51 @@ std::string texture_path(io::TextReader& in, const std::filesystem::path& folder
   return (path.is_absolute() ? path : (folder / path).lexically_normal()).string();
 }
 
+// A texture's path as a library in `folder` names it: relative where it can be, '/' separated.
+std::string path_from(const std::string& texture, const std::filesystem::path& folder) {
+  std::error_code ec;
+  const std::filesystem::path file = std::filesystem::absolute(texture, ec).lexically_normal();
+  const std::filesystem::path relative = file.lexically_relative(std::filesystem::absolute(folder.empty() ? "." : folder, ec).lexically_normal());
+  return (ec || relative.empty() ? file : relative).generic_string();
+}
+
+void append_values(std::string& out, const char* key, std::initializer_list<float> values) {
+  out += key;
+  for (float v : values) out += ' ', io::append_float(out, v);
+  out += '\n';
+}
+
 }  // namespace
+
+void write_mtl(const Mesh& mesh, std::string& out, const std::filesystem::path& folder) {
+  out += "# written by lodkit\n";
+  std::vector<bool> used(mesh.material_looks.size(), mesh.materials.empty() && mesh.triangle_count() > 0);
+  for (uint32_t id : mesh.materials)
+    if (id < used.size()) used[id] = true;
+  if (mesh.materials.empty() && !used.empty()) std::fill(used.begin() + 1, used.end(), false);  // (all material 0)
+  std::vector<std::string> written;
+  for (size_t id = 0; id < mesh.material_looks.size(); ++id) {
+    if (!used[id]) continue;
+    // The name usemtl gives it (write_obj): an unnamed material is "default".
+    const std::string name = id < mesh.material_names.size() && !mesh.material_names[id].empty() ? mesh.material_names[id] : "default";
+    if (std::find(written.begin(), written.end(), name) != written.end()) continue;
+    written.push_back(name);
+    const MaterialLook& look = mesh.material_looks[id];
+    out += "\nnewmtl " + name + "\n";
+    append_values(out, "Kd", {look.base_color.x, look.base_color.y, look.base_color.z});
+    append_values(out, "d", {look.base_color.w});
+    append_values(out, "Ke", {look.emissive.x, look.emissive.y, look.emissive.z});
+    append_values(out, "Pm", {look.metallic});
+    append_values(out, "Pr", {look.roughness});
+    // For readers without Pr: the Phong exponent read_mtl maps to this roughness.
+    const double r = std::max(double(look.roughness), 0.0316);  // (Ns 2000 at most)
+    append_values(out, "Ns", {float(2 / (r * r) - 2)});
+    const std::pair<const char*, const std::string*> maps[] = {
+        {"map_Kd", &look.base_color_texture}, {"norm", &look.normal_texture}, {"map_Ke", &look.emissive_texture}};
+    for (const auto& [key, texture] : maps)
+      if (!texture->empty()) out += std::string(key) + ' ' + path_from(*texture, folder) + '\n';
+  }
+}
 
 std::vector<MtlMaterial> read_mtl(std::span<const uint8_t> bytes, const std::string& name, const std::filesystem::path& folder) {
   std::vector<MtlMaterial> out;

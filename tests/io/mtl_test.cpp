@@ -129,6 +129,78 @@ TEST(Mtl, ObjMaterialsReachGltf) {
   }
 }
 
+// An OBJ written from a mesh with looks gets an MTL library beside it, named first by mtllib, with
+// texture paths relative to its folder: read back, the looks are the same (textures the same files).
+// The material no triangle uses is left out.
+TEST(Mtl, ObjOutputWritesItsLibrary) {
+  test::TempDir dir;
+  test::write_text(dir / "tex.png", tiny_png);
+  Mesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  mesh.uvs[0] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  mesh.indices = {0, 1, 2, 0, 2, 3};
+  mesh.materials = {1, 2};
+  mesh.material_names = {"unused", "stone", "glass"};
+  mesh.material_looks.resize(3);
+  mesh.material_looks[1] = {.base_color = {0.8f, 0.5f, 0.3f, 1}, .metallic = 0.25f, .roughness = 0.4f,
+                            .base_color_texture = (dir / "tex.png").string()};
+  mesh.material_looks[2] = {.base_color = {0.1f, 0.2f, 0.3f, 0.5f}, .emissive = {1, 0, 0.5f}, .roughness = 0.05f,
+                            .normal_texture = (dir / "tex.png").string()};
+  std::filesystem::create_directory(dir / "out");
+  write_mesh(mesh, dir / "out" / "q.obj");
+  EXPECT_EQ(test::read_bytes(dir / "out" / "q.obj").rfind("mtllib q.mtl\n", 0), 0u);
+  const std::string library = test::read_bytes(dir / "out" / "q.mtl");
+  EXPECT_NE(library.find("map_Kd ../tex.png\n"), std::string::npos) << library;
+  EXPECT_NE(library.find("norm ../tex.png\n"), std::string::npos) << library;
+  EXPECT_EQ(library.find("unused"), std::string::npos) << library;
+  const Mesh back = read_mesh(dir / "out" / "q.obj");
+  ASSERT_EQ(back.material_names, (std::vector<std::string>{"stone", "glass"}));
+  ASSERT_EQ(back.material_looks.size(), 2u);
+  EXPECT_TRUE(back.material_looks[0] == mesh.material_looks[1]);
+  EXPECT_TRUE(back.material_looks[1] == mesh.material_looks[2]);
+  // Ns, for readers without Pr, is the exponent whose roughness read_mtl gives: 2 / 0.05^2 - 2.
+  EXPECT_NE(library.find("Ns 798\n"), std::string::npos) << library;
+}
+
+// A glTF's materials reach an OBJ's library too: factors, and a texture that is a file beside it.
+TEST(Mtl, GltfMaterialsReachObj) {
+  test::TempDir dir;
+  test::write_text(dir / "tex.png", tiny_png);
+  test::write_text(dir / "m.mtl", "newmtl stone\nKd 0.8 0.5 0.3\nPm 0.5\nPr 0.4\nKe 0 1 0\nmap_Kd tex.png\n");
+  test::write_text(dir / "quad.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nusemtl stone\nf 1/1 2/2 3/3\n");
+  write_mesh(read_mesh(dir / "quad.obj"), dir / "quad.gltf");  // refers to tex.png
+  const Mesh back = read_mesh(dir / "quad.gltf");
+  ASSERT_EQ(back.material_looks.size(), 2u);  // (flattened: id 0 is "no material")
+  const MaterialLook& stone = back.material_looks[1];
+  EXPECT_EQ(stone.base_color, (float4{0.8f, 0.5f, 0.3f, 1}));
+  EXPECT_EQ(stone.metallic, 0.5f);
+  EXPECT_EQ(stone.roughness, 0.4f);
+  EXPECT_EQ(stone.emissive, (float3{0, 1, 0}));
+  EXPECT_EQ(std::filesystem::path(stone.base_color_texture), dir / "tex.png");
+  write_mesh(back, dir / "again.obj");
+  EXPECT_NE(test::read_bytes(dir / "again.mtl").find("map_Kd tex.png\n"), std::string::npos);
+}
+
+// The CLI refuses an .obj output whose library would be written over the one the input reads.
+TEST(Mtl, CommandsRefuseToWriteOverTheInputsLibrary) {
+  test::TempDir dir;
+  test::write_text(dir / "m.mtl", "newmtl stone\nKd 0.8 0.5 0.3\n");
+  test::write_text(dir / "in.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl stone\nf 1 2 3\nf 1 3 4\n");
+  const std::string library = test::read_bytes(dir / "m.mtl");
+  const std::string in = (dir / "in.obj").string(), out = (dir / "m.obj").string();
+  for (const std::vector<std::string>& args : {std::vector<std::string>{"convert", in, out}, {"simplify", in, "-o", out, "--ratio", "0.5"},
+                                               {"optimize", in, "-o", out}}) {
+    SCOPED_TRACE(args[0]);
+    const test::RunResult r = test::run_cli(args);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find("which the input reads"), std::string::npos) << r.err;
+    EXPECT_EQ(test::read_bytes(dir / "m.mtl"), library);
+    EXPECT_FALSE(std::filesystem::exists(out));
+  }
+  EXPECT_EQ(test::run_cli({"convert", in, (dir / "other.obj").string()}).exit_code, 0);
+  EXPECT_NE(test::read_bytes(dir / "other.mtl").find("newmtl stone"), std::string::npos);
+}
+
 // A library that is not there is a warning: the mesh reads, its materials keep their names.
 TEST(Mtl, AMissingLibraryIsAWarning) {
   test::TempDir dir;

@@ -36,6 +36,13 @@ void check_output(const std::string& input, const std::string& output, bool forc
   if (!force && std::filesystem::exists(output, ec) && std::filesystem::equivalent(input, output, ec))
     throw_usage(output + ": refusing to overwrite the input file (use --force)");
   check_output_folder(output);
+  // An .obj output writes its MTL library beside it, which may be the one an OBJ input reads.
+  const std::filesystem::path library = obj_library_path(output);
+  if (!force && !library.empty() && std::filesystem::exists(library, ec) && format_from_path(input) == FileFormat::obj)
+    for (const std::filesystem::path& read : obj_material_libraries(input))
+      if (std::filesystem::equivalent(read, library, ec))
+        throw_usage(output + ": refusing to write " + library.string() + " over " + read.string() +
+                    ", which the input reads (choose another output name)");
 }
 
 void check_output_folder(const std::string& output) {

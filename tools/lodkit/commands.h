@@ -139,7 +139,8 @@ double optional_number(const std::string& flag, const std::string& word, double 
 void require_triangles(std::span<const Mesh* const> meshes, const std::string& input, const std::string& why);
 
 // Checked before any work: refuses to write over the input (it would be lost if anything went wrong)
-// unless `force`, and an output in a folder that does not exist (check_output_folder).
+// or over the MTL library an OBJ input reads (an .obj output's library, obj_library_path) unless
+// `force`, and an output in a folder that does not exist (check_output_folder).
 void check_output(const std::string& input, const std::string& output, bool force);
 // Refuses (bad input, exit 2, as the write itself would say) an output in a folder that does not
 // exist: found only at the end otherwise, after the work.
