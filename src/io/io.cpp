@@ -19,10 +19,6 @@ void warn(const ReadOptions& options, const std::string& message) {
   if (options.warning) options.warning(message);
 }
 
-// Mesh::material_looks of an OBJ from the MTL libraries its mtllib statements name, beside it. A
-// statement's text is one file name, or failing that several blank-separated ones. A library or a
-// texture that is not there is a warning, not an error: the mesh is whole, and its materials keep
-// their names.
 // The library names of mtllib statements: a statement's text is one file name, or failing that
 // several blank-separated ones.
 std::vector<std::string> library_names(const std::vector<std::string>& statements, const std::filesystem::path& folder) {
@@ -42,6 +38,9 @@ std::vector<std::string> library_names(const std::vector<std::string>& statement
   return names;
 }
 
+// Mesh::material_looks of an OBJ from the MTL libraries its mtllib statements name, beside it. A
+// library or a texture that is not there is a warning, not an error: the mesh is whole, and its
+// materials keep their names.
 void read_material_looks(Mesh& mesh, const std::vector<std::string>& statements, const std::filesystem::path& obj,
                          const ReadOptions& options) {
   if (mesh.material_names.empty() || statements.empty()) return;

@@ -14,12 +14,14 @@ namespace lod {
 
 namespace {
 
-// Reads up to three numbers; one given stands for all three (MTL allows `Kd 0.5`).
+// Reads up to three numbers, clamped to [0, 1] as glTF's factors are; one given stands for all
+// three (MTL allows `Kd 0.5`).
 float3 read_rgb(io::TextReader& in, const char* what) {
   float c[3];
   c[0] = in.read_float(what);
-  if (!in.try_read_float(c[1])) return {c[0], c[0], c[0]};
-  c[2] = in.read_float(what);
+  if (!in.try_read_float(c[1])) c[1] = c[2] = c[0];
+  else c[2] = in.read_float(what);
+  for (float& x : c) x = std::clamp(x, 0.0f, 1.0f);
   return {c[0], c[1], c[2]};
 }
 

@@ -30,9 +30,10 @@ TEST(Mtl, ReadsWhatGltfsCoreHasRoomFor) {
       "newmtl stone\nKd 0.8 0.5 0.3\nd 0.5\nNs 98\nKa 0 0 0\nillum 2\n"
       "map_Kd -s 1 1 1 -bm 0.5 -clamp on textures\\stone wall.png\n"
       "newmtl glow\nKd 0.25\nTr 0.75\nKe 1 0.5 0\nPm 0.7\nPr 0.2\nNs 10\nnorm -bm 2 n.png\nmap_Ke /abs/e.png\n"
-      "newmtl plain\n";
+      "newmtl plain\n"
+      "newmtl bright\nKd 2 0.5 -1\nKe 1.5\n";
   const std::vector<MtlMaterial> m = read_mtl(bytes_of(text), "scene.mtl", "/models");
-  ASSERT_EQ(m.size(), 3u);
+  ASSERT_EQ(m.size(), 4u);
   EXPECT_EQ(m[0].name, "stone");
   EXPECT_EQ(m[0].look.base_color, (float4{0.8f, 0.5f, 0.3f, 0.5f}));
   EXPECT_NEAR(m[0].look.roughness, std::sqrt(2.0 / 100.0), 1e-7);  // GGX roughness of Phong exponent 98
@@ -47,6 +48,9 @@ TEST(Mtl, ReadsWhatGltfsCoreHasRoomFor) {
   EXPECT_EQ(m[1].look.emissive_texture, "/abs/e.png");
   EXPECT_EQ(m[2].name, "plain");
   EXPECT_TRUE(m[2].look == MaterialLook{});
+  // Colours are clamped to [0, 1], as glTF's factors must be.
+  EXPECT_EQ(m[3].look.base_color, (float4{1, 0.5f, 0, 1}));
+  EXPECT_EQ(m[3].look.emissive, (float3{1, 1, 1}));
 }
 
 TEST(Mtl, RejectsMalformedStatementsNamingTheLine) {
