@@ -82,6 +82,9 @@ std::string expect_bad_input(const Reader& read, const std::string& input, const
 // where p projects inside (barycentric coordinates from Cramer's rule), else to the nearest edge.
 double triangle_distance(const float3& p, const float3& a, const float3& b, const float3& c);
 
+// A 1x1 RGB PNG's bytes (signature, IHDR, IDAT of one filtered pixel, IEND), made with zlib by hand.
+std::string tiny_png();
+
 // A .glb's two chunks, parsed without lodkit: the JSON and the BIN data (empty when absent).
 struct Glb {
   nlohmann::json doc;

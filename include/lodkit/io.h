@@ -377,7 +377,10 @@ std::vector<MtlMaterial> read_mtl(std::span<const uint8_t> bytes, const std::str
 // The MTL library of `mesh`'s material looks, those its triangles use, for an OBJ in `folder`
 // (texture paths relative to it where they can be): read_mtl gives the looks back.
 void write_mtl(const Mesh& mesh, std::string& out, const std::filesystem::path& folder);
-Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});
+// `textures`, when given, gets the file of each "comment TextureFile" header line (MeshLab's), in order:
+// texnumber k's texture.
+Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {},
+              std::vector<std::string>* textures = nullptr);
 Mesh read_off(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});
 Mesh read_stl(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options = {});
 // External buffer and image URIs are resolved against base_dir; with an empty base_dir only data:

@@ -79,6 +79,26 @@ void read_material_looks(Mesh& mesh, const std::vector<std::string>& statements,
                       (missing > 1 ? ", ...)" : ")") + ": they keep only their names");
 }
 
+// Mesh::material_looks of a PLY from its TextureFile comments (MeshLab's): texnumber k (its
+// material id) takes texture k, beside the file, and the texture's file name as its material's name
+// where it has none. A texture that is not there is a warning.
+void read_texture_looks(Mesh& mesh, const std::vector<std::string>& textures, const std::filesystem::path& ply,
+                        const ReadOptions& options) {
+  if (textures.empty() || mesh.triangle_count() == 0) return;
+  uint32_t ids = 1;
+  for (uint32_t id : mesh.materials) ids = std::max(ids, id + 1);
+  const size_t count = std::max({size_t(ids), textures.size(), mesh.material_names.size()});
+  mesh.material_names.resize(count);
+  mesh.material_looks.assign(count, MaterialLook{});
+  for (size_t k = 0; k < textures.size(); ++k) {
+    const std::filesystem::path file = (ply.parent_path() / std::filesystem::path(textures[k])).lexically_normal();
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec)) warn(options, ply.string() + ": texture " + textures[k] + " not found");
+    mesh.material_looks[k].base_color_texture = file.string();
+    if (mesh.material_names[k].empty()) mesh.material_names[k] = textures[k];
+  }
+}
+
 // OBJ, PLY, OFF or STL.
 Mesh read_plain(const FileBytes& bytes, FileFormat format, const std::filesystem::path& path, const ReadOptions& options) {
   switch (format) {
@@ -88,7 +108,12 @@ Mesh read_plain(const FileBytes& bytes, FileFormat format, const std::filesystem
       read_material_looks(mesh, libraries, path, options);
       return mesh;
     }
-    case FileFormat::ply: return read_ply(bytes, path.string(), options);
+    case FileFormat::ply: {
+      std::vector<std::string> textures;
+      Mesh mesh = read_ply(bytes, path.string(), options, &textures);
+      read_texture_looks(mesh, textures, path, options);
+      return mesh;
+    }
     case FileFormat::off: return read_off(bytes, path.string(), options);
     default: return read_stl(bytes, path.string(), options);
   }

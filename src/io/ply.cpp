@@ -3,7 +3,8 @@
 // skipped. Vertex properties we map: x y z, nx ny nz, u v | s t | texture_u texture_v (uv set 0),
 // u1 v1 .. u3 v3, tx ty tz tw (tangent), red green blue alpha (integer types are normalised to 0..1),
 // joint0..3, weight0..3. Face properties: vertex_indices | vertex_index (triangulated as a fan),
-// material_index.
+// material_index | texnumber, and texcoord (MeshLab's per-corner UVs: a vertex with several becomes
+// one vertex per UV). Header comments "TextureFile NAME" (MeshLab's) name each texnumber's texture.
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -12,6 +13,7 @@
 #include <cstring>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "core/heap.h"
@@ -56,7 +58,7 @@ double type_max(Type t) {
 }
 
 // Where a property's values go.
-enum class Target : uint8_t { skip, float_stream, color, joint, indices, material };
+enum class Target : uint8_t { skip, float_stream, color, joint, indices, material, corner_uvs };
 
 struct Property {
   std::string name;
@@ -194,7 +196,7 @@ class AsciiSource {
 const char* uv_names[max_uv_sets][2] = {{"u", "v"}, {"u1", "v1"}, {"u2", "v2"}, {"u3", "v3"}};
 
 // Parses the header up to and including "end_header"; the reader is left at the first data byte.
-std::vector<Element> parse_header(io::TextReader& in, Format& format) {
+std::vector<Element> parse_header(io::TextReader& in, Format& format, std::vector<std::string>* textures) {
   if (in.at_end()) in.fail("empty file, expected a PLY header");
   if (in.token() != "ply" || !in.at_line_end()) in.fail("not a PLY file: the first line must be 'ply'");
   in.next_line();
@@ -243,7 +245,12 @@ std::vector<Element> parse_header(io::TextReader& in, Format& format) {
       p.name = std::string(in.token());
       if (p.name.empty()) in.fail("property without a name");
       elements.back().properties.push_back(std::move(p));
-    } else if (keyword != "comment" && keyword != "obj_info" && !keyword.empty()) {
+    } else if (keyword == "comment") {
+      if (in.token() == "TextureFile" && textures) {
+        const std::string_view file = in.rest_of_line();
+        if (!file.empty()) textures->emplace_back(file);
+      }
+    } else if (keyword != "obj_info" && !keyword.empty()) {
       in.fail("unexpected header line starting with '" + std::string(keyword.substr(0, 40)) + "'");
     }
     in.next_line();
@@ -356,18 +363,33 @@ uint32_t read_index(Source& src, uint64_t face, uint64_t vertex_count, Type type
 // are range-checked and triangulated, everything else is consumed and dropped.
 template <class Source>
 void read_element(Source& src, const Element& e, bool is_face, uint64_t vertex_count, Mesh& mesh,
-                  const ReadOptions& options) {
-  const bool with_materials =
-      is_face && std::any_of(e.properties.begin(), e.properties.end(), [](const Property& p) { return p.target == Target::material; });
+                  std::vector<float2>& corner_uvs, const ReadOptions& options) {
+  const auto has = [&](Target t) {
+    return is_face && std::any_of(e.properties.begin(), e.properties.end(), [&](const Property& p) { return p.target == t; });
+  };
+  const bool with_materials = has(Target::material), with_uvs = has(Target::corner_uvs);
   std::vector<uint32_t> polygon;
+  std::vector<float2> uvs;  // this face's texcoord list
   for (uint64_t r = 0; r < e.count; ++r) {
     if (options.progress && (r & 0x3ffff) == 0x3ffff) options.progress(src.fraction());
     uint32_t material = 0;
+    uint64_t corners = 0;
     for (const Property& p : e.properties) {
       if (p.list) {
         const double count = src.value(p.count_type);
         if (count < 0) src.fail(e.name + " " + std::to_string(r) + ": negative list length");
         const uint64_t n = uint64_t(count);
+        if (p.target == Target::corner_uvs) {
+          if (n % 2 != 0 || n / 2 > io::max_face_corners)
+            src.fail("face " + std::to_string(r) + ": a texcoord list of " + std::to_string(n) + " values is not a (u, v) per corner");
+          uvs.clear();
+          for (uint64_t i = 0; i < n / 2; ++i) {
+            const float u = float(src.value(p.type)), v = float(src.value(p.type));
+            if (!std::isfinite(u) || !std::isfinite(v)) src.fail("face " + std::to_string(r) + ": texcoord is not a finite number");
+            uvs.push_back({u, v});
+          }
+          continue;
+        }
         if (p.target != Target::indices) {
           if constexpr (std::is_same_v<Source, BinarySource>) {
             if (n > src.remaining() / type_size(p.type))
@@ -379,6 +401,7 @@ void read_element(Source& src, const Element& e, bool is_face, uint64_t vertex_c
           continue;
         }
         if (n < 3 || n > io::max_face_corners) src.fail(io::polygon_size_problem("face " + std::to_string(r), n));
+        corners = n;
         if (n == 3) {  // the common case, without the polygon buffer
           // push_back, not a range insert: that one calls memmove per triangle.
           for (int k = 0; k < 3; ++k) mesh.indices.push_back(read_index(src, r, vertex_count, p.type));
@@ -411,17 +434,57 @@ void read_element(Source& src, const Element& e, bool is_face, uint64_t vertex_c
         default: break;
       }
     }
-    // The material may be listed before or after the corners: apply it once the record is complete.
+    // The material and UVs may be listed before or after the corners: apply them once the record is
+    // complete.
     if (with_materials) mesh.materials.resize(mesh.triangle_count(), material);
+    if (with_uvs) {
+      if (uvs.size() != corners)
+        src.fail("face " + std::to_string(r) + ": texcoord has " + std::to_string(uvs.size()) + " (u, v) pairs for " +
+                 std::to_string(corners) + " corners");
+      io::append_fan(corner_uvs, uvs);
+      uvs.clear();
+    }
   }
+}
+
+// The mesh with `uvs` (one per corner) as its UV set 0: each (vertex, UV) pair one vertex, in order
+// of first use; a vertex no face uses is dropped.
+Mesh with_corner_uvs(const Mesh& mesh, const std::vector<float2>& uvs) {
+  struct Key {
+    uint32_t vertex, u, v;
+    bool operator==(const Key&) const = default;
+  };
+  struct Hash {
+    size_t operator()(const Key& k) const {
+      return std::hash<uint64_t>()((uint64_t(k.vertex) << 32 | k.u) * 0x9E3779B97F4A7C15ull ^ k.v);
+    }
+  };
+  Mesh out;
+  copy_id_tables(out, mesh);
+  out.materials = mesh.materials;
+  out.groups = mesh.groups;
+  out.indices.reserve(mesh.indices.size());
+  std::unordered_map<Key, uint32_t, Hash> vertex_of;
+  for (size_t c = 0; c < mesh.indices.size(); ++c) {
+    const Key key{mesh.indices[c], std::bit_cast<uint32_t>(uvs[c].x), std::bit_cast<uint32_t>(uvs[c].y)};
+    const auto [it, inserted] = vertex_of.try_emplace(key, uint32_t(out.vertex_count()));
+    if (inserted) {
+      append_vertex(out, mesh, key.vertex);
+      out.uvs[0].resize(out.vertex_count());
+      out.uvs[0].back() = uvs[c];
+    }
+    out.indices.push_back(it->second);
+  }
+  return out;
 }
 
 }  // namespace
 
-Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options) {
+Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options,
+              std::vector<std::string>* textures) {
   io::TextReader in(bytes, name, &options);
   Format format = Format::ascii;
-  std::vector<Element> elements = parse_header(in, format);
+  std::vector<Element> elements = parse_header(in, format, textures);
   const bool ascii = format == Format::ascii;
 
   // Bound every declared count by the bytes left before reserving anything, so a 200-byte file
@@ -453,8 +516,11 @@ Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const Rea
         if (is_float(p.type)) throw_bad_input_at_line(name, f.line, "face vertex indices must have an integer type");
         p.target = Target::indices;
         have_indices = true;
-      } else if (!p.list && p.name == "material_index") {
+      } else if (!p.list && (p.name == "material_index" || p.name == "texnumber") &&
+                 std::none_of(f.properties.begin(), f.properties.end(), [](const Property& q) { return q.target == Target::material; })) {
         p.target = Target::material;
+      } else if (p.list && p.name == "texcoord" && is_float(p.type)) {
+        p.target = Target::corner_uvs;
       }
     }
     if (!have_indices && f.count > 0) throw_bad_input_at_line(name, f.line, "the face element has no vertex_indices list");
@@ -464,14 +530,16 @@ Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const Rea
   const size_t data_offset = in.offset();
   BinarySource binary(bytes, data_offset, name, format == Format::binary_be);
   AsciiSource text(in);
+  std::vector<float2> corner_uvs;
   for (const Element& e : elements) {
     if (e.properties.empty()) continue;  // no data to consume
     // A second vertex or face element is read but dropped, like any unknown element.
     const bool is_face = &e == face;
-    if (ascii) read_element(text, e, is_face, vertex->count, mesh, options);
+    if (ascii) read_element(text, e, is_face, vertex->count, mesh, corner_uvs, options);
     else if (!has_lists(e)) read_fixed_element(binary, e);
-    else read_element(binary, e, is_face, vertex->count, mesh, options);
+    else read_element(binary, e, is_face, vertex->count, mesh, corner_uvs, options);
   }
+  if (!corner_uvs.empty()) mesh = with_corner_uvs(mesh, corner_uvs);
   make_unit_directions(mesh);
   return mesh;
 }

@@ -142,6 +142,74 @@ TEST(Ply, TangentsReadAtUnitLength) {
   EXPECT_EQ(t.w, 1.0f);
 }
 
+// MeshLab's textured PLY: UVs per face corner (texcoord) and the texture in a header comment. A
+// vertex with two UVs becomes two vertices, in order of first use: vertex 0 has (0, 0) in the first
+// face and (0.5, 0.5) in the second, vertex 2 the same (1, 1) in both.
+TEST(Ply, PerCornerTexcoordsSplitVertices) {
+  const std::string text =
+      "ply\nformat ascii 1.0\ncomment TextureFile tex.png\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 2\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\n"
+      "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2 6 0 0 1 0 1 1\n3 0 2 3 6 0.5 0.5 1 1 0 1\n";
+  std::vector<std::string> textures;
+  const Mesh m = read_ply(bytes_of(text), "meshlab.ply", {}, &textures);
+  EXPECT_EQ(textures, (std::vector<std::string>{"tex.png"}));
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2, 3, 2, 4}));
+  EXPECT_EQ(m.positions, (std::vector<float3>{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 0, 0}, {0, 1, 0}}));
+  EXPECT_EQ(m.uvs[0], (std::vector<float2>{{0, 0}, {1, 0}, {1, 1}, {0.5f, 0.5f}, {0, 1}}));
+
+  // Binary, a quad (fan-triangulated, its UVs with it), texnumber for the material.
+  std::string b =
+      "ply\nformat binary_little_endian 1.0\ncomment TextureFile a.png\ncomment TextureFile b.png\nelement vertex 4\n"
+      "property float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar float texcoord\n"
+      "property list uchar uint vertex_indices\nproperty int texnumber\nend_header\n";
+  for (int v = 0; v < 4; ++v) put<float>(b, float(v), false), put<float>(b, float(v % 2), false), put<float>(b, 0, false);
+  put<uint8_t>(b, 8, false);
+  for (float f : {0.0f, 0.0f, 0.25f, 0.0f, 0.25f, 0.25f, 0.0f, 0.25f}) put<float>(b, f, false);
+  put<uint8_t>(b, 4, false);
+  for (uint32_t i : {0u, 1u, 2u, 3u}) put<uint32_t>(b, i, false);
+  put<int32_t>(b, 1, false);
+  textures.clear();
+  const Mesh q = read_ply(bytes_of(b), "quad.ply", {}, &textures);
+  EXPECT_EQ(textures, (std::vector<std::string>{"a.png", "b.png"}));
+  EXPECT_EQ(q.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
+  EXPECT_EQ(q.uvs[0], (std::vector<float2>{{0, 0}, {0.25f, 0}, {0.25f, 0.25f}, {0, 0.25f}}));
+  EXPECT_EQ(q.materials, (std::vector<uint32_t>{1, 1}));
+
+  // A list that does not give each corner a (u, v) is bad input, naming the face.
+  for (const char* faces : {"3 0 1 2 4 0 0 1 0\n", "3 0 1 2 5 0 0 1 0 1\n"}) {
+    const std::string bad = text.substr(0, text.find("3 0 1 2")) + faces + "3 0 2 3 6 0.5 0.5 1 1 0 1\n";
+    try {
+      read(bad);
+      ADD_FAILURE() << faces;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("face 0"), std::string::npos) << e.what();
+    }
+  }
+}
+
+// From a file, the textures become material looks (texnumber k: texture k, beside the file), which
+// a .glb embeds.
+TEST(Ply, TextureFilesBecomeMaterialLooks) {
+  test::TempDir dir;
+  test::write_text(dir / "m.ply",
+                   "ply\nformat ascii 1.0\ncomment TextureFile tex.png\nelement vertex 3\nproperty float x\n"
+                   "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                   "property list uchar float texcoord\nend_header\n0 0 0\n1 0 0\n1 1 0\n3 0 1 2 6 0 0 1 0 1 1\n");
+  std::vector<std::string> warnings;
+  const Mesh m = read_mesh(dir / "m.ply", {.warning = [&](const std::string& w) { warnings.push_back(w); }});
+  ASSERT_EQ(m.material_looks.size(), 1u);
+  EXPECT_EQ(std::filesystem::path(m.material_looks[0].base_color_texture), dir / "tex.png");
+  EXPECT_EQ(m.material_names, (std::vector<std::string>{"tex.png"}));
+  ASSERT_EQ(warnings.size(), 1u);  // tex.png is not there yet
+  EXPECT_NE(warnings[0].find("texture tex.png not found"), std::string::npos) << warnings[0];
+  test::write_text(dir / "tex.png", test::tiny_png());
+  write_mesh(read_mesh(dir / "m.ply"), dir / "m.glb");
+  const test::Glb glb = test::read_glb(dir / "m.glb");
+  ASSERT_EQ(glb.doc["images"].size(), 1u);
+  EXPECT_EQ(glb.doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["index"], 0);
+  test::expect_valid_gltf({dir / "m.glb"});
+}
+
 TEST(Ply, AFileWithoutFacesIsAPointSet) {
   Mesh m = read("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
                 "1 2 3\n4 5 6\n");
