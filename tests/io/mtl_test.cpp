@@ -116,6 +116,11 @@ TEST(Mtl, ObjMaterialsReachGltf) {
   EXPECT_EQ(flat["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"][0], double(0.8f));
   test::expect_valid_gltf({dir / "out" / "flat.glb"});
 
+  // `info` lists the texture files the library names.
+  const test::RunResult info = test::run_cli({"info", (dir / "quad.obj").string(), "--json"});
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_EQ(nlohmann::json::parse(info.out)["material_textures"], (std::vector<std::string>{(dir / "tex.png").string()}));
+
   // The commands that write a glTF from the OBJ keep the looks (lod builds a new document).
   for (const std::vector<std::string>& args : {std::vector<std::string>{"lod", (dir / "quad.obj").string(), "-o", (dir / "out" / "lod.glb").string()},
                                                {"simplify", (dir / "quad.obj").string(), "-o", (dir / "out" / "lod.glb").string(), "--ratio", "0.5"}}) {

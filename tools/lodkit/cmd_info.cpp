@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <memory>
@@ -64,6 +65,16 @@ std::string streams_text(const Mesh& m) {
   if (!m.colors.empty()) s += " color";
   if (!m.joints.empty()) s += " joints weights";
   return s;
+}
+
+// The texture files an OBJ's MTL library or a PLY's TextureFile lines give its materials, each
+// once, in material order (a glTF's own textures are counted from the document instead).
+std::vector<std::string> look_textures(const Mesh& m) {
+  std::vector<std::string> files;
+  for (const MaterialLook& look : m.material_looks)
+    for (const std::string* t : {&look.base_color_texture, &look.normal_texture, &look.emissive_texture})
+      if (!t->empty() && std::find(files.begin(), files.end(), *t) == files.end()) files.push_back(*t);
+  return files;
 }
 
 // Morph targets (blend shapes): how many, over how many primitives.
@@ -171,6 +182,14 @@ void print_table(const InfoOptions& o, const std::string& format, const Scene& s
   row("duplicate triangles", std::to_string(s.duplicate_triangles));
   row("seam edges", std::to_string(s.seam_edges));
   row("materials", std::to_string(s.materials));
+  if (!scene.source && !mesh.material_looks.empty()) {
+    std::vector<std::string> shown;
+    for (const std::string& file : look_textures(mesh)) {
+      std::error_code ec;
+      shown.push_back(std::filesystem::is_regular_file(file, ec) ? file : file + " (missing)");
+    }
+    row("material textures", shown.empty() ? "none" : fmt::format("{}", fmt::join(shown, ", ")));
+  }
   row("Euler characteristic", std::to_string(s.euler_characteristic));
   row("bounding box min", fmt::format("{:g} {:g} {:g}", s.bbox_min.x, s.bbox_min.y, s.bbox_min.z));
   row("bounding box max", fmt::format("{:g} {:g} {:g}", s.bbox_max.x, s.bbox_max.y, s.bbox_max.z));
@@ -245,6 +264,7 @@ Command register_info(CLI::App& root) {
                              {"morphing_primitives", morphing_primitives},
                              {"gpu_instances", instances},
                              {"instanced_nodes", instanced_nodes}};
+              if (!scene.source && !mesh.material_looks.empty()) j["material_textures"] = look_textures(mesh);
               if (scene.source) {
                 nlohmann::json chains = nlohmann::json::array();
                 for (const LodChainInfo& c : lod_chains(scene))
