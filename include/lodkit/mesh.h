@@ -35,6 +35,8 @@ struct MaterialLook {
   std::string base_color_texture;     // map_Kd
   std::string normal_texture;         // norm, map_Bump or bump
   std::string emissive_texture;       // map_Ke
+  // The three texture paths, in that order (base colour, normal, emissive).
+  std::array<const std::string*, 3> textures() const { return {&base_color_texture, &normal_texture, &emissive_texture}; }
   friend bool operator==(const MaterialLook&, const MaterialLook&) = default;
 };
 

@@ -68,7 +68,7 @@ void read_material_looks(Mesh& mesh, const std::vector<std::string>& statements,
       continue;
     }
     mesh.material_looks[id] = it->look;
-    for (const std::string* texture : {&it->look.base_color_texture, &it->look.normal_texture, &it->look.emissive_texture}) {
+    for (const std::string* texture : it->look.textures()) {
       std::error_code ec;
       if (!texture->empty() && !std::filesystem::is_regular_file(std::filesystem::path(*texture), ec))
         warn(options, obj.string() + ": material " + it->name + "'s texture " + *texture + " not found");

@@ -91,10 +91,9 @@ void write_mtl(const Mesh& mesh, std::string& out, const std::filesystem::path& 
     // For readers without Pr: the Phong exponent read_mtl maps to this roughness.
     const double r = std::max(double(look.roughness), 0.0316);  // (Ns 2000 at most)
     append_values(out, "Ns", {float(2 / (r * r) - 2)});
-    const std::pair<const char*, const std::string*> maps[] = {
-        {"map_Kd", &look.base_color_texture}, {"norm", &look.normal_texture}, {"map_Ke", &look.emissive_texture}};
-    for (const auto& [key, texture] : maps)
-      if (!texture->empty()) out += std::string(key) + ' ' + path_from(*texture, folder) + '\n';
+    const char* keys[] = {"map_Kd", "norm", "map_Ke"};  // (MaterialLook::textures' order)
+    for (size_t k = 0; k < 3; ++k)
+      if (const std::string& texture = *look.textures()[k]; !texture.empty()) out += std::string(keys[k]) + ' ' + path_from(texture, folder) + '\n';
   }
 }
 

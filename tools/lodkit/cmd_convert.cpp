@@ -29,6 +29,19 @@ struct ConvertOptions {
   bool json = false;
 };
 
+
+// Refuses (usage) to write any of `written`, the files writing `output` makes, over any of
+// `sources`, files an input reads.
+void refuse_writing_over(const std::vector<std::filesystem::path>& sources, const std::vector<std::filesystem::path>& written,
+                         const std::string& output) {
+  for (const std::filesystem::path& read : sources)
+    for (const std::filesystem::path& w : written) {
+      std::error_code ec;
+      if (std::filesystem::exists(w, ec) && std::filesystem::equivalent(read, w, ec))
+        throw_usage(output + ": refusing to write " + w.string() + " over " + read.string() +
+                    ", which the input reads (choose another output name)");
+    }
+}
 }  // namespace
 
 void check_output(const std::string& input, const std::string& output, bool force) {
@@ -39,10 +52,7 @@ void check_output(const std::string& input, const std::string& output, bool forc
   // An .obj output writes its MTL library beside it, which may be the one an OBJ input reads.
   const std::filesystem::path library = obj_library_path(output);
   if (!force && !library.empty() && std::filesystem::exists(library, ec) && format_from_path(input) == FileFormat::obj)
-    for (const std::filesystem::path& read : obj_material_libraries(input))
-      if (std::filesystem::equivalent(read, library, ec))
-        throw_usage(output + ": refusing to write " + library.string() + " over " + read.string() +
-                    ", which the input reads (choose another output name)");
+    refuse_writing_over(obj_material_libraries(input), {library}, output);
 }
 
 void check_output_folder(const std::string& output) {
@@ -56,13 +66,7 @@ void check_not_source(const Scene& scene, const std::string& output, bool force)
   if (force || output.empty()) return;
   std::vector<std::filesystem::path> written = {output};
   if (std::filesystem::path bin = gltf_buffer_path(output); !bin.empty()) written.push_back(std::move(bin));
-  for (const std::filesystem::path& read : source_files(scene))
-    for (const std::filesystem::path& w : written) {
-      std::error_code ec;
-      if (std::filesystem::exists(w, ec) && std::filesystem::equivalent(read, w, ec))
-        throw_usage(output + ": refusing to write " + w.string() + " over " + read.string() +
-                    ", which the input reads (choose another output name)");
-    }
+  refuse_writing_over(source_files(scene), written, output);
 }
 
 void require_triangles(std::span<const Mesh* const> meshes, const std::string& input, const std::string& why) {

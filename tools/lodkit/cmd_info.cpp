@@ -72,7 +72,7 @@ std::string streams_text(const Mesh& m) {
 std::vector<std::string> look_textures(const Mesh& m) {
   std::vector<std::string> files;
   for (const MaterialLook& look : m.material_looks)
-    for (const std::string* t : {&look.base_color_texture, &look.normal_texture, &look.emissive_texture})
+    for (const std::string* t : look.textures())
       if (!t->empty() && std::find(files.begin(), files.end(), *t) == files.end()) files.push_back(*t);
   return files;
 }
