@@ -389,7 +389,9 @@ Scene read_gltf(std::span<const uint8_t> bytes, const std::string& name, const s
                 const ReadOptions& options = {});
 
 void write_obj(const Mesh& mesh, std::string& out, const WriteOptions& options = {});
-void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options = {});
+// A PLY links its materials' base colour textures as MeshLab does (TextureFile comments, texnumber),
+// each texture named by its path from `folder`, where the file goes.
+void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options = {}, const std::filesystem::path& folder = {});
 void write_off(const Mesh& mesh, std::string& out, const WriteOptions& options = {});
 void write_stl(const Mesh& mesh, std::string& out, const WriteOptions& options = {});
 // glTF: `path` decides .gltf (JSON + a .bin beside it) or .glb; every file is written atomically.

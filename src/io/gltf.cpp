@@ -4053,11 +4053,8 @@ std::string uri_decode(const std::string& s) {
 // The URI of `file` from a document in `output_dir`: its relative path, %-escaped; empty when it
 // has none.
 std::string relative_uri(const std::filesystem::path& file, const std::filesystem::path& output_dir) {
-  std::error_code ec;
-  const std::filesystem::path from = std::filesystem::absolute(file, ec).lexically_normal();
-  const std::filesystem::path there = std::filesystem::absolute(output_dir.empty() ? "." : output_dir, ec).lexically_normal();
-  const std::filesystem::path relative = from.lexically_relative(there);
-  if (ec || relative.empty()) return {};
+  const std::filesystem::path relative = io::relative_path(file, output_dir);
+  if (relative.empty()) return {};
   std::string escaped;
   for (const auto& part : relative) escaped += (escaped.empty() ? "" : "/") + uri_escape(part.string());
   return escaped;

@@ -213,7 +213,7 @@ WriteReport write_mesh(const Mesh& mesh, const std::filesystem::path& path, cons
       }
       write_obj(mesh, out, options);
       break;
-    case FileFormat::ply: write_ply(mesh, out, options); break;
+    case FileFormat::ply: write_ply(mesh, out, options, path.parent_path()); break;
     case FileFormat::off: write_off(mesh, out, options); break;
     default: write_stl(mesh, out, options); break;
   }

@@ -52,14 +52,6 @@ std::string texture_path(io::TextReader& in, const std::filesystem::path& folder
   return (path.is_absolute() ? path : (folder / path).lexically_normal()).string();
 }
 
-// A texture's path as a library in `folder` names it: relative where it can be, '/' separated.
-std::string path_from(const std::string& texture, const std::filesystem::path& folder) {
-  std::error_code ec;
-  const std::filesystem::path file = std::filesystem::absolute(texture, ec).lexically_normal();
-  const std::filesystem::path relative = file.lexically_relative(std::filesystem::absolute(folder.empty() ? "." : folder, ec).lexically_normal());
-  return (ec || relative.empty() ? file : relative).generic_string();
-}
-
 void append_values(std::string& out, const char* key, std::initializer_list<float> values) {
   out += key;
   for (float v : values) out += ' ', io::append_float(out, v);
@@ -93,7 +85,7 @@ void write_mtl(const Mesh& mesh, std::string& out, const std::filesystem::path& 
     append_values(out, "Ns", {float(2 / (r * r) - 2)});
     const char* keys[] = {"map_Kd", "norm", "map_Ke"};  // (MaterialLook::textures' order)
     for (size_t k = 0; k < 3; ++k)
-      if (const std::string& texture = *look.textures()[k]; !texture.empty()) out += std::string(keys[k]) + ' ' + path_from(texture, folder) + '\n';
+      if (const std::string& texture = *look.textures()[k]; !texture.empty()) out += std::string(keys[k]) + ' ' + io::path_from(texture, folder) + '\n';
   }
 }
 

@@ -193,7 +193,9 @@ class AsciiSource {
   io::TextReader& in_;
 };
 
-const char* uv_names[max_uv_sets][2] = {{"u", "v"}, {"u1", "v1"}, {"u2", "v2"}, {"u3", "v3"}};
+// What the writer calls each UV set (the reader also takes u v, s t, texture_s texture_t for set 0).
+// Set 0 is MeshLab's name: MeshLab reads no other but s t, and Blender, Assimp and VTK read it too.
+const char* uv_names[max_uv_sets][2] = {{"texture_u", "texture_v"}, {"u1", "v1"}, {"u2", "v2"}, {"u3", "v3"}};
 
 // Parses the header up to and including "end_header"; the reader is left at the first data byte.
 std::vector<Element> parse_header(io::TextReader& in, Format& format, std::vector<std::string>* textures) {
@@ -478,6 +480,38 @@ Mesh with_corner_uvs(const Mesh& mesh, const std::vector<float2>& uvs) {
   return out;
 }
 
+// MeshLab's link from faces to textures, for a mesh with UVs whose materials have base colour
+// textures: "comment TextureFile" lines, one per texture number, and a face's texnumber. PLY keeps
+// no material table, so the ids are free to renumber: the used materials with a texture come
+// first, in id order, each its texture's number (no gap for a line to stand in); the other used
+// ones follow, numbers without a texture (MeshLab draws them untextured). With no texture to name,
+// nothing changes: material_index keeps the mesh's ids.
+struct TextureTable {
+  std::vector<std::string> files;  // texture k's path, as the PLY's folder names it
+  std::vector<uint32_t> used;      // the material ids faces use, ascending
+  std::vector<uint32_t> new_id;    // by position in `used`
+  uint32_t renumber(uint32_t id) const { return new_id[size_t(std::lower_bound(used.begin(), used.end(), id) - used.begin())]; }
+};
+
+TextureTable texture_table(const Mesh& mesh, const std::filesystem::path& folder) {
+  TextureTable table;
+  if (mesh.uvs[0].empty() || mesh.triangle_count() == 0) return table;
+  // (Sorted rather than flagged by id: a bad input's ids go up to 2^32 - 1.)
+  table.used = mesh.materials.empty() ? std::vector<uint32_t>{0} : mesh.materials;
+  std::sort(table.used.begin(), table.used.end());
+  table.used.erase(std::unique(table.used.begin(), table.used.end()), table.used.end());
+  const auto textured = [&](uint32_t id) { return id < mesh.material_looks.size() && !mesh.material_looks[id].base_color_texture.empty(); };
+  table.new_id.assign(table.used.size(), 0);
+  uint32_t next = 0;
+  for (size_t k = 0; k < table.used.size(); ++k)
+    if (textured(table.used[k]))
+      table.new_id[k] = next++, table.files.push_back(io::path_from(mesh.material_looks[table.used[k]].base_color_texture, folder));
+  if (table.files.empty()) return {};
+  for (size_t k = 0; k < table.used.size(); ++k)
+    if (!textured(table.used[k])) table.new_id[k] = next++;
+  return table;
+}
+
 }  // namespace
 
 Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const ReadOptions& options,
@@ -544,11 +578,14 @@ Mesh read_ply(std::span<const uint8_t> bytes, const std::string& name, const Rea
   return mesh;
 }
 
-void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options) {
+void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options, const std::filesystem::path& folder) {
   const bool binary = options.binary;
   out += "ply\nformat ";
   out += binary ? "binary_little_endian" : "ascii";
-  out += " 1.0\ncomment written by lodkit\nelement vertex ";
+  out += " 1.0\ncomment written by lodkit\n";
+  const TextureTable textures = texture_table(mesh, folder);
+  for (const std::string& file : textures.files) out += "comment TextureFile " + file + '\n';
+  out += "element vertex ";
   io::append_uint(out, mesh.vertex_count());
   out += '\n';
   // One list of float components per vertex, in header order; joints are written separately.
@@ -587,11 +624,16 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options) 
   io::append_uint(out, mesh.triangle_count());
   out += "\nproperty list uchar uint vertex_indices\n";
   const bool materials = !mesh.materials.empty();
-  if (materials) out += "property uint material_index\n";
+  // MeshLab takes a face's texnumber only beside per-corner UVs (and with that type): with more
+  // than one texture, the corners repeat their vertices' UVs.
+  const bool corner_uvs = textures.files.size() > 1;
+  if (corner_uvs) out += "property list uchar float texcoord\n";
+  if (materials) out += textures.files.empty() ? "property uint material_index\n" : "property int texnumber\n";
   out += "end_header\n";
+  const auto material = [&](size_t t) { return textures.files.empty() ? mesh.materials[t] : textures.renumber(mesh.materials[t]); };
 
   const size_t vertex_bytes = streams.size() * 4 + 8 * joint_sets.size();
-  out.reserve(out.size() + (binary ? mesh.vertex_count() * vertex_bytes + mesh.triangle_count() * (13 + 4 * materials)
+  out.reserve(out.size() + (binary ? mesh.vertex_count() * vertex_bytes + mesh.triangle_count() * (13 + 4 * materials + 25 * corner_uvs)
                                    : mesh.vertex_count() * streams.size() * 12 + mesh.triangle_count() * 24));
   for (size_t v = 0; v < mesh.vertex_count(); ++v) {
     for (size_t s = 0; s < streams.size(); ++s) {
@@ -620,11 +662,19 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options) 
     if (binary) {
       out += char(3);
       io::append_binary(out, c[0]), io::append_binary(out, c[1]), io::append_binary(out, c[2]);
-      if (materials) io::append_binary(out, mesh.materials[t]);
+      if (corner_uvs) {
+        out += char(6);
+        for (size_t k = 0; k < 3; ++k) io::append_binary(out, mesh.uvs[0][c[k]].x), io::append_binary(out, mesh.uvs[0][c[k]].y);
+      }
+      if (materials) io::append_binary(out, material(t));
     } else {
       out += "3 ";
       io::append_uint(out, c[0]), out += ' ', io::append_uint(out, c[1]), out += ' ', io::append_uint(out, c[2]);
-      if (materials) out += ' ', io::append_uint(out, mesh.materials[t]);
+      if (corner_uvs) {
+        out += " 6";
+        for (size_t k = 0; k < 3; ++k) out += ' ', io::append_float(out, mesh.uvs[0][c[k]].x), out += ' ', io::append_float(out, mesh.uvs[0][c[k]].y);
+      }
+      if (materials) out += ' ', io::append_uint(out, material(t));
       out += '\n';
     }
   }

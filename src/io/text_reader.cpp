@@ -60,6 +60,20 @@ Integer TextReader::read_integer(const char* what, const char* kind) {
 int64_t TextReader::read_int(const char* what) { return read_integer<int64_t>(what, "an integer"); }
 uint64_t TextReader::read_uint(const char* what) { return read_integer<uint64_t>(what, "a non-negative integer"); }
 
+std::filesystem::path relative_path(const std::filesystem::path& file, const std::filesystem::path& folder) {
+  std::error_code ec;
+  const std::filesystem::path from = std::filesystem::absolute(file, ec).lexically_normal();
+  const std::filesystem::path there = std::filesystem::absolute(folder.empty() ? "." : folder, ec).lexically_normal();
+  if (ec) return {};
+  return from.lexically_relative(there);
+}
+
+std::string path_from(const std::filesystem::path& file, const std::filesystem::path& folder) {
+  const std::filesystem::path relative = relative_path(file, folder);
+  std::error_code ec;
+  return (relative.empty() ? std::filesystem::absolute(file, ec).lexically_normal() : relative).generic_string();
+}
+
 void append_float(std::string& out, float value) {
   char buf[32];
   // Shortest round-trip form: reading it back with from_chars gives the same bits.

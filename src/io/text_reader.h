@@ -7,6 +7,7 @@
 #include <charconv>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <span>
 #include <string>
 #include <string_view>
@@ -168,6 +169,14 @@ void append_binary(std::string& out, T value) {
   if constexpr (std::endian::native == std::endian::big) std::reverse(raw, raw + sizeof(T));
   out.append(raw, sizeof(T));
 }
+
+// `file` as a path from `folder` (both made absolute first; an empty folder is the current one),
+// for a file that refers to another one beside it (an MTL's or PLY's texture, a .gltf's image).
+// Empty when there is none (another drive).
+std::filesystem::path relative_path(const std::filesystem::path& file, const std::filesystem::path& folder);
+// How a file in `folder` names `file`: its relative path where it has one, else the absolute path;
+// '/' separated.
+std::string path_from(const std::filesystem::path& file, const std::filesystem::path& folder);
 
 // Largest polygon a reader accepts before triangulating; a face with a million corners is bad input.
 inline constexpr uint64_t max_face_corners = 65536;

@@ -210,6 +210,64 @@ TEST(Ply, TextureFilesBecomeMaterialLooks) {
   test::expect_valid_gltf({dir / "m.glb"});
 }
 
+// Written back, the textures go out as MeshLab links them: TextureFile lines (paths from the PLY's
+// folder) numbered from 0 by the used textured materials in id order, then the untextured used
+// ones; MeshLab's texnumber (an int) beside per-corner UVs when there are several textures.
+TEST(Ply, TexturesGoOutAsMeshLabLinksThem) {
+  test::TempDir dir;
+  std::filesystem::create_directories(dir / "tex");
+  std::filesystem::create_directories(dir / "out");
+  Mesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {2, 0, 0}, {2, 1, 0}};
+  mesh.uvs[0] = {{0, 0}, {0.5f, 0}, {0.5f, 1}, {0, 1}, {1, 0}, {1, 1}};
+  mesh.indices = {0, 1, 2, 0, 2, 3, 1, 4, 5, 1, 5, 2};
+  mesh.materials = {3, 1, 0, 1};
+  mesh.material_looks.resize(4);
+  mesh.material_looks[0].base_color_texture = (dir / "tex" / "a.png").string();
+  mesh.material_looks[2].base_color_texture = (dir / "tex" / "unused.png").string();
+  mesh.material_looks[3].base_color_texture = (dir / "tex" / "b.png").string();
+  for (bool binary : {true, false}) {
+    SCOPED_TRACE(binary ? "binary" : "ascii");
+    const std::filesystem::path file = dir / "out" / "m.ply";
+    write_mesh(mesh, file, {.binary = binary});
+    const std::string text = test::read_bytes(file);
+    const std::string header = text.substr(0, text.find("end_header"));
+    EXPECT_NE(header.find("comment TextureFile ../tex/a.png\ncomment TextureFile ../tex/b.png\nelement vertex"), std::string::npos) << header;
+    EXPECT_EQ(header.find("unused"), std::string::npos) << header;
+    EXPECT_NE(header.find("property float texture_u\nproperty float texture_v\n"), std::string::npos) << header;
+    EXPECT_NE(header.find("property list uchar float texcoord\nproperty int texnumber\n"), std::string::npos) << header;
+    const Mesh back = read_mesh(file);
+    // Material 0 (a.png) is texture 0, material 3 (b.png) texture 1, material 1 (none) number 2.
+    EXPECT_EQ(back.materials, (std::vector<uint32_t>{1, 2, 0, 2}));
+    ASSERT_EQ(back.material_looks.size(), 3u);
+    EXPECT_EQ(std::filesystem::path(back.material_looks[0].base_color_texture), dir / "tex" / "a.png");
+    EXPECT_EQ(std::filesystem::path(back.material_looks[1].base_color_texture), dir / "tex" / "b.png");
+    EXPECT_EQ(back.material_looks[2].base_color_texture, "");
+    ASSERT_EQ(back.indices.size(), mesh.indices.size());
+    for (size_t c = 0; c < mesh.indices.size(); ++c) {
+      EXPECT_EQ(back.positions[back.indices[c]], mesh.positions[mesh.indices[c]]) << "corner " << c;
+      EXPECT_EQ(back.uvs[0][back.indices[c]], mesh.uvs[0][mesh.indices[c]]) << "corner " << c;
+    }
+  }
+  // One texture: no per-corner UVs; every face on material 0 needs no face property at all.
+  Mesh one = mesh;
+  one.materials.clear();
+  write_mesh(one, dir / "one.ply", {.binary = false});
+  const std::string text = test::read_bytes(dir / "one.ply");
+  EXPECT_NE(text.find("comment TextureFile tex/a.png\n"), std::string::npos) << text;
+  EXPECT_EQ(text.find("texcoord"), std::string::npos) << text;
+  EXPECT_EQ(text.find("texnumber"), std::string::npos) << text;
+  const Mesh back = read_mesh(dir / "one.ply");
+  ASSERT_EQ(back.material_looks.size(), 1u);
+  EXPECT_EQ(std::filesystem::path(back.material_looks[0].base_color_texture), dir / "tex" / "a.png");
+  // Without UVs there is nothing to link: the mesh's ids stay as they are, in material_index.
+  Mesh plain = mesh;
+  plain.uvs[0].clear();
+  write_mesh(plain, dir / "plain.ply");
+  EXPECT_EQ(test::read_bytes(dir / "plain.ply").find("TextureFile"), std::string::npos);
+  EXPECT_EQ(read_mesh(dir / "plain.ply").materials, mesh.materials);
+}
+
 TEST(Ply, AFileWithoutFacesIsAPointSet) {
   Mesh m = read("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
                 "1 2 3\n4 5 6\n");
