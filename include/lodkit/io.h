@@ -289,7 +289,7 @@ Scene read_scene(const std::filesystem::path& path, const ReadOptions& options =
 
 // What a write did, for reports.
 struct WriteReport {
-  uint64_t bytes = 0;  // every file written (a .gltf's .bin, an .obj's .mtl too)
+  uint64_t bytes = 0;  // every file written (a .gltf's .bin, an .obj's .mtl, images beside an OBJ or PLY too)
   // WriteOptions::draco: triangle primitives by how they went into Draco. Edgebreaker; sequential,
   // in place (two vertices decode alike while streams outside the Draco stream must follow them,
   // or libdraco's Edgebreaker could not take the mesh); plain, not in Draco (libdraco could not
@@ -298,7 +298,8 @@ struct WriteReport {
 };
 
 // Writes atomically (temporary file in the same folder, then rename). A glTF scene keeps everything
-// it was read with; writing a Mesh to glTF makes a one-node scene.
+// it was read with; writing a Mesh to glTF makes a one-node scene. An OBJ or PLY gets the images its
+// material looks embed as files beside it, OUT_0.png, OUT_1.jpg, ... (MaterialLook::images).
 WriteReport write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& options = {});
 WriteReport write_scene(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options = {});
 

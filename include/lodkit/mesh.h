@@ -4,6 +4,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -25,9 +26,9 @@ using ushort4 = std::array<uint16_t, 4>;
 
 inline constexpr size_t max_uv_sets = 4;
 
-// How a material looks, where the input says so (an OBJ's MTL library), in glTF's
-// metallic-roughness terms: what a glTF written from the mesh gets. Textures are file paths (UTF-8),
-// as resolved against the library's folder; empty for none.
+// How a material looks, where the input says so (an OBJ's MTL library, a PLY's TextureFile lines, a
+// glTF's materials), in glTF's metallic-roughness terms: what a glTF written from the mesh gets.
+// Textures are file paths (UTF-8), as resolved against the library's folder; empty for none.
 struct MaterialLook {
   float4 base_color{1, 1, 1, 1};      // RGB (MTL Kd) and alpha (d, or 1 - Tr)
   float3 emissive{0, 0, 0};           // MTL Ke
@@ -35,9 +36,14 @@ struct MaterialLook {
   std::string base_color_texture;     // map_Kd
   std::string normal_texture;         // norm, map_Bump or bump
   std::string emissive_texture;       // map_Ke
+  // A texture embedded in a glTF (its binary chunk or a data: URI) has no file to name: its encoded
+  // image (PNG or JPEG) instead, by slot in textures()' order, the path then empty; shared by the
+  // looks that use it. An OBJ or PLY written from the mesh gets it as a file beside it (write_mesh).
+  std::array<std::shared_ptr<const std::vector<uint8_t>>, 3> images;
   // The three texture paths, in that order (base colour, normal, emissive).
   std::array<const std::string*, 3> textures() const { return {&base_color_texture, &normal_texture, &emissive_texture}; }
-  friend bool operator==(const MaterialLook&, const MaterialLook&) = default;
+  std::array<std::string*, 3> textures() { return {&base_color_texture, &normal_texture, &emissive_texture}; }
+  friend bool operator==(const MaterialLook& a, const MaterialLook& b);  // (images by their bytes)
 };
 
 // An indexed triangle mesh in structure-of-arrays form.
@@ -81,6 +87,10 @@ struct Mesh {
 // Gives `to` the tables `from` keeps by material and group id (material names and looks, group
 // names), not the per-triangle ids: for a mesh made of another's triangles.
 void copy_id_tables(Mesh& to, const Mesh& from);
+
+// Which of the material ids below `count` some triangle uses (with no per-triangle ids, every
+// triangle uses material 0).
+std::vector<bool> used_materials(const Mesh& mesh, size_t count);
 
 // Copies vertex `from` of `src` (all streams present in `dst`) to the end of `dst`.
 void append_vertex(Mesh& dst, const Mesh& src, uint32_t from);

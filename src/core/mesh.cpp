@@ -6,10 +6,26 @@
 
 namespace lod {
 
+bool operator==(const MaterialLook& a, const MaterialLook& b) {
+  const auto same_image = [](const auto& x, const auto& y) { return x == y || (x && y && *x == *y); };
+  for (size_t k = 0; k < a.images.size(); ++k)
+    if (!same_image(a.images[k], b.images[k])) return false;
+  return a.base_color == b.base_color && a.emissive == b.emissive && a.metallic == b.metallic && a.roughness == b.roughness &&
+         a.base_color_texture == b.base_color_texture && a.normal_texture == b.normal_texture && a.emissive_texture == b.emissive_texture;
+}
+
 void copy_id_tables(Mesh& to, const Mesh& from) {
   to.material_names = from.material_names;
   to.material_looks = from.material_looks;
   to.group_names = from.group_names;
+}
+
+std::vector<bool> used_materials(const Mesh& mesh, size_t count) {
+  std::vector<bool> used(count, false);
+  if (mesh.materials.empty() && mesh.triangle_count() > 0 && count > 0) used[0] = true;
+  for (uint32_t id : mesh.materials)
+    if (id < count) used[id] = true;
+  return used;
 }
 
 size_t Mesh::uv_set_count() const {

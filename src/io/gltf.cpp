@@ -3904,14 +3904,35 @@ bool relative_file_uri(const std::string& uri);
 namespace {
 
 // What a document's materials look like, for a mesh flattened from it and written as an OBJ (its
-// MTL): the factors, and the textures on UV set 0 that are files beside it (an embedded image has
-// no path to give; a transformed one would not map the same).
+// MTL) or a PLY: the factors, and the PNG or JPEG textures on UV set 0 (a transformed one would not
+// map the same), as the files beside it they are or as their embedded bytes (one copy per image).
 std::vector<MaterialLook> material_looks(const tg::Model& model, const std::filesystem::path& base_dir) {
-  const auto file = [&](int texture, int tex_coord, const tg::ExtensionMap& extensions) -> std::string {
-    if (texture < 0 || size_t(texture) >= model.textures.size() || tex_coord != 0 || !extensions.empty()) return {};
+  std::map<size_t, std::shared_ptr<const std::vector<uint8_t>>> embedded;  // by image; null: none to take
+  const auto image_bytes = [&](size_t i) {
+    const auto [it, inserted] = embedded.try_emplace(i);
+    if (!inserted) return it->second;
+    const tg::Image& image = model.images[i];
+    std::vector<uint8_t> bytes = image.image;  // a data: URI's (keep_encoded_image)
+    if (bytes.empty() && image.bufferView >= 0 && size_t(image.bufferView) < model.bufferViews.size()) {
+      const tg::BufferView& view = model.bufferViews[size_t(image.bufferView)];
+      if (view.buffer >= 0 && size_t(view.buffer) < model.buffers.size() && view.byteOffset <= model.buffers[size_t(view.buffer)].data.size() &&
+          view.byteLength <= model.buffers[size_t(view.buffer)].data.size() - view.byteOffset) {
+        const auto data = model.buffers[size_t(view.buffer)].data.begin() + std::ptrdiff_t(view.byteOffset);
+        bytes.assign(data, data + std::ptrdiff_t(view.byteLength));
+      }
+    }
+    const std::string mime = image_mime_type(bytes);
+    if (mime == "image/png" || mime == "image/jpeg") it->second = std::make_shared<const std::vector<uint8_t>>(std::move(bytes));
+    return it->second;
+  };
+  const auto set_texture = [&](MaterialLook& look, size_t slot, int texture, int tex_coord, const tg::ExtensionMap& extensions) {
+    if (texture < 0 || size_t(texture) >= model.textures.size() || tex_coord != 0 || !extensions.empty()) return;
     const int image = model.textures[size_t(texture)].source;
-    if (image < 0 || size_t(image) >= model.images.size() || !relative_file_uri(model.images[size_t(image)].uri)) return {};
-    return (base_dir / uri_decode(model.images[size_t(image)].uri)).lexically_normal().string();
+    if (image < 0 || size_t(image) >= model.images.size()) return;
+    if (const std::string& uri = model.images[size_t(image)].uri; relative_file_uri(uri))
+      *look.textures()[slot] = (base_dir / uri_decode(uri)).lexically_normal().string();
+    else
+      look.images[slot] = image_bytes(size_t(image));
   };
   const auto factor = [](const std::vector<double>& v, size_t k, double fallback) { return float(k < v.size() ? v[k] : fallback); };
   std::vector<MaterialLook> looks;
@@ -3923,9 +3944,9 @@ std::vector<MaterialLook> material_looks(const tg::Model& model, const std::file
     look.emissive = {factor(m.emissiveFactor, 0, 0), factor(m.emissiveFactor, 1, 0), factor(m.emissiveFactor, 2, 0)};
     look.metallic = float(std::clamp(pbr.metallicFactor, 0.0, 1.0));
     look.roughness = float(std::clamp(pbr.roughnessFactor, 0.0, 1.0));
-    look.base_color_texture = file(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, pbr.baseColorTexture.extensions);
-    look.normal_texture = file(m.normalTexture.index, m.normalTexture.texCoord, m.normalTexture.extensions);
-    look.emissive_texture = file(m.emissiveTexture.index, m.emissiveTexture.texCoord, m.emissiveTexture.extensions);
+    set_texture(look, 0, pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, pbr.baseColorTexture.extensions);
+    set_texture(look, 1, m.normalTexture.index, m.normalTexture.texCoord, m.normalTexture.extensions);
+    set_texture(look, 2, m.emissiveTexture.index, m.emissiveTexture.texCoord, m.emissiveTexture.extensions);
     looks.push_back(std::move(look));
   }
   return looks;
@@ -4125,14 +4146,33 @@ void add_look_textures(tg::Model& model, const Scene& scene, bool glb, const std
     model.textures.push_back(t);
     return it->second;
   };
+  // An image a glTF embedded (MaterialLook::images) goes in as its bytes: into the BIN chunk or a
+  // data: URI (relocate_images, write_image_uri).
+  std::map<const std::vector<uint8_t>*, int> texture_of_image;
+  const auto embedded = [&](const std::vector<uint8_t>& bytes) {
+    const auto [it, inserted] = texture_of_image.try_emplace(&bytes, int(model.textures.size()));
+    if (!inserted) return it->second;
+    tg::Image image;
+    image.mimeType = image_mime_type(bytes);
+    image.image = bytes;
+    tg::Texture t;
+    t.source = int(model.images.size());
+    model.images.push_back(std::move(image));
+    model.textures.push_back(t);
+    return it->second;
+  };
+  const auto slot_texture = [&](const MaterialLook& look, size_t slot) {
+    if (look.images[slot]) return embedded(*look.images[slot]);
+    return look.textures()[slot]->empty() ? -1 : texture(*look.textures()[slot]);
+  };
   for (size_t m = 0; m < scene.material_looks.size() && m < model.materials.size(); ++m) {
     if (!has_uvs[m]) continue;
     const MaterialLook& look = scene.material_looks[m];
     tg::Material& material = model.materials[m];
-    if (!look.base_color_texture.empty()) material.pbrMetallicRoughness.baseColorTexture.index = texture(look.base_color_texture);
-    if (!look.normal_texture.empty()) material.normalTexture.index = texture(look.normal_texture);
-    if (!look.emissive_texture.empty()) {
-      material.emissiveTexture.index = texture(look.emissive_texture);
+    material.pbrMetallicRoughness.baseColorTexture.index = slot_texture(look, 0);
+    material.normalTexture.index = slot_texture(look, 1);
+    if (const int emissive = slot_texture(look, 2); emissive >= 0) {
+      material.emissiveTexture.index = emissive;
       // An emissive texture is multiplied by the factor: black (MTL without Ke) would hide it.
       if (material.emissiveTexture.index >= 0 && look.emissive == float3{}) material.emissiveFactor = {1, 1, 1};
     }

@@ -1,6 +1,7 @@
 // Format dispatch: the file-level functions pick the reader or writer from the extension.
 #include <algorithm>
 #include <cctype>
+#include <map>
 
 #include "lodkit/error.h"
 #include "lodkit/io.h"
@@ -195,11 +196,62 @@ Mesh read_mesh(const std::filesystem::path& path, const ReadOptions& options) {
   return read_plain(read_file_bytes(path), format, path, options);
 }
 
-WriteReport write_mesh(const Mesh& mesh, const std::filesystem::path& path, const WriteOptions& options) {
+namespace {
+
+// An OBJ or PLY can only name texture files: the images a glTF embedded (MaterialLook::images) that
+// its triangles' materials use go beside it, OUT_k.png or OUT_k.jpg (k in order of first use; a name
+// a look already uses as its texture file is passed over, so the file it names is not replaced).
+// Returns the mesh to write: `mesh`, or `named`, its copy naming the files.
+const Mesh& with_image_files(const Mesh& mesh, const std::filesystem::path& path, Mesh& named, uint64_t& bytes) {
+  const std::vector<bool> used = used_materials(mesh, mesh.material_looks.size());
+  const auto embeds = [&](size_t id) {
+    const auto& images = mesh.material_looks[id].images;
+    return used[id] && std::any_of(images.begin(), images.end(), [](const auto& image) { return image != nullptr; });
+  };
+  size_t id = 0;
+  while (id < used.size() && !embeds(id)) ++id;
+  if (id == used.size()) return mesh;
+  std::vector<std::filesystem::path> taken;
+  for (const MaterialLook& look : mesh.material_looks)
+    for (const std::string* file : look.textures())
+      if (!file->empty()) taken.push_back(std::filesystem::path(*file).lexically_normal());
+  named = mesh;
+  std::map<const std::vector<uint8_t>*, std::string> file_of;
+  size_t k = 0;
+  for (; id < used.size(); ++id) {
+    if (!embeds(id)) continue;
+    MaterialLook& look = named.material_looks[id];
+    for (size_t slot = 0; slot < look.images.size(); ++slot) {
+      if (!look.images[slot]) continue;
+      const std::vector<uint8_t>& image = *look.images[slot];
+      auto [it, inserted] = file_of.try_emplace(&image);
+      if (inserted) {
+        // (The bytes start as a PNG's or a JPEG's: the glTF reader took no other.)
+        const char* extension = !image.empty() && image[0] == 0x89 ? ".png" : ".jpg";
+        std::filesystem::path file;
+        do {
+          file = (path.parent_path() / (path.stem().string() + "_" + std::to_string(k++) + extension)).lexically_normal();
+        } while (std::find(taken.begin(), taken.end(), file) != taken.end());
+        write_file_atomic(file, std::span<const uint8_t>(image));
+        bytes += image.size();
+        it->second = file.string();
+      }
+      *look.textures()[slot] = it->second;
+      look.images[slot].reset();
+    }
+  }
+  return named;
+}
+
+}  // namespace
+
+WriteReport write_mesh(const Mesh& input, const std::filesystem::path& path, const WriteOptions& options) {
   FileFormat format = format_from_path(path);
-  if (format == FileFormat::gltf || format == FileFormat::glb) return write_gltf(scene_from_mesh(mesh), path, options);
+  if (format == FileFormat::gltf || format == FileFormat::glb) return write_gltf(scene_from_mesh(input), path, options);
   std::string out;
-  uint64_t library_bytes = 0;
+  uint64_t beside_bytes = 0;
+  Mesh named;
+  const Mesh& mesh = format == FileFormat::obj || format == FileFormat::ply ? with_image_files(input, path, named, beside_bytes) : input;
   switch (format) {
     case FileFormat::obj:
       // The looks go into an MTL library beside it, which the OBJ names first.
@@ -208,7 +260,7 @@ WriteReport write_mesh(const Mesh& mesh, const std::filesystem::path& path, cons
         std::string mtl;
         write_mtl(mesh, mtl, path.parent_path());
         write_file_atomic(library, mtl);
-        library_bytes = mtl.size();
+        beside_bytes += mtl.size();
         out = "mtllib " + library.filename().string() + "\n";
       }
       write_obj(mesh, out, options);
@@ -218,7 +270,7 @@ WriteReport write_mesh(const Mesh& mesh, const std::filesystem::path& path, cons
     default: write_stl(mesh, out, options); break;
   }
   write_file_atomic(path, out);
-  return {.bytes = out.size() + library_bytes};
+  return {.bytes = out.size() + beside_bytes};
 }
 
 WriteReport write_scene(const Scene& scene, const std::filesystem::path& path, const WriteOptions& options) {

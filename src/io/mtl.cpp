@@ -62,10 +62,7 @@ void append_values(std::string& out, const char* key, std::initializer_list<floa
 
 void write_mtl(const Mesh& mesh, std::string& out, const std::filesystem::path& folder) {
   out += "# written by lodkit\n";
-  std::vector<bool> used(mesh.material_looks.size(), mesh.materials.empty() && mesh.triangle_count() > 0);
-  for (uint32_t id : mesh.materials)
-    if (id < used.size()) used[id] = true;
-  if (mesh.materials.empty() && !used.empty()) std::fill(used.begin() + 1, used.end(), false);  // (all material 0)
+  const std::vector<bool> used = used_materials(mesh, mesh.material_looks.size());
   std::vector<std::string> written;
   for (size_t id = 0; id < mesh.material_looks.size(); ++id) {
     if (!used[id]) continue;

@@ -185,6 +185,59 @@ TEST(Mtl, GltfMaterialsReachObj) {
   EXPECT_NE(test::read_bytes(dir / "again.mtl").find("map_Kd tex.png\n"), std::string::npos);
 }
 
+// A glTF's embedded images (BIN chunk, data: URI) reach the mesh as bytes; an OBJ or a PLY gets
+// them as files beside it (OUT_k.png), a glTF written from the mesh embeds them again.
+TEST(Mtl, EmbeddedImagesGoBesideAnObjOrPly) {
+  test::TempDir dir;
+  test::write_text(dir / "tex.png", tiny_png);
+  test::write_text(dir / "m.mtl", "newmtl stone\nKd 0.8 0.5 0.3\nmap_Kd tex.png\n");
+  test::write_text(dir / "quad.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nusemtl stone\nf 1/1 2/2 3/3\n");
+  write_mesh(read_mesh(dir / "quad.obj"), dir / "a.glb");  // tex.png into the BIN chunk
+  std::filesystem::remove(dir / "tex.png");
+  const auto image_text = [](const MaterialLook& look, size_t slot) {
+    return look.images[slot] ? std::string(look.images[slot]->begin(), look.images[slot]->end()) : std::string("(none)");
+  };
+  const Mesh mesh = read_mesh(dir / "a.glb");
+  ASSERT_EQ(mesh.material_looks.size(), 2u);  // (flattened: id 0 is "no material")
+  EXPECT_EQ(mesh.material_looks[1].base_color_texture, "");
+  EXPECT_TRUE(image_text(mesh.material_looks[1], 0) == tiny_png);
+  EXPECT_FALSE(mesh.material_looks[1].images[1] || mesh.material_looks[1].images[2]);
+
+  std::filesystem::create_directory(dir / "out");
+  const WriteReport obj = write_mesh(mesh, dir / "out" / "b.obj");
+  EXPECT_EQ(test::read_bytes(dir / "out" / "b_0.png"), tiny_png);
+  EXPECT_NE(test::read_bytes(dir / "out" / "b.mtl").find("map_Kd b_0.png\n"), std::string::npos);
+  EXPECT_EQ(obj.bytes, std::filesystem::file_size(dir / "out" / "b.obj") + std::filesystem::file_size(dir / "out" / "b.mtl") + tiny_png.size());
+  const Mesh from_obj = read_mesh(dir / "out" / "b.obj");
+  ASSERT_EQ(from_obj.material_looks.size(), 1u);
+  EXPECT_EQ(std::filesystem::path(from_obj.material_looks[0].base_color_texture), dir / "out" / "b_0.png");
+
+  write_mesh(mesh, dir / "out" / "c.ply");
+  EXPECT_EQ(test::read_bytes(dir / "out" / "c_0.png"), tiny_png);
+  EXPECT_NE(test::read_bytes(dir / "out" / "c.ply").find("comment TextureFile c_0.png\n"), std::string::npos);
+
+  // A .gltf written from the mesh: a data: URI, which reads back as the same bytes.
+  write_mesh(mesh, dir / "d.gltf");
+  const nlohmann::json doc = nlohmann::json::parse(test::read_bytes(dir / "d.gltf"));
+  ASSERT_EQ(doc["images"].size(), 1u);
+  EXPECT_EQ(doc["images"][0]["uri"].get<std::string>().rfind("data:image/png;base64,", 0), 0u);
+  test::expect_valid_gltf({dir / "d.gltf"});
+  // (Material 0, "no material" in the flattened mesh, became a material of its own: stone is last.)
+  EXPECT_TRUE(image_text(read_mesh(dir / "d.gltf").material_looks.back(), 0) == tiny_png);
+
+  // A name a look already gives a texture file is passed over: that file is not replaced.
+  Mesh taken = mesh;
+  taken.material_looks[1].normal_texture = (dir / "out" / "e_0.png").string();
+  write_mesh(taken, dir / "out" / "e.obj");
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "e_0.png"));
+  EXPECT_EQ(test::read_bytes(dir / "out" / "e_1.png"), tiny_png);
+  // Only the materials triangles use: none here, so no image.
+  Mesh unused = mesh;
+  unused.materials.assign(unused.triangle_count(), 0);
+  write_mesh(unused, dir / "out" / "f.obj");
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "f_0.png"));
+}
+
 // The CLI refuses an .obj output whose library would be written over the one the input reads.
 TEST(Mtl, CommandsRefuseToWriteOverTheInputsLibrary) {
   test::TempDir dir;
