@@ -253,7 +253,8 @@ struct Scene {
   // By glTF material index, as material_names: in a scene made from a mesh that has them
   // (scene_from_mesh), what the glTF writer makes those materials look like; from a glTF source
   // (which the writer keeps as it is), its materials' factors and external texture files on UV set
-  // 0, for a mesh flattened from it (an OBJ's MTL library).
+  // 0, for a mesh flattened from it (an OBJ's MTL library; source_material_looks adds the embedded
+  // images).
   std::vector<MaterialLook> material_looks;
   uint32_t image_count = 0;
   uint32_t texture_count = 0;
@@ -354,6 +355,11 @@ std::vector<uint32_t> source_vertex_classes(const Scene& scene, size_t primitive
 // against its folder (data: URIs and the GLB chunk are none). Writing over one would change the
 // input. Empty for a scene not read from glTF.
 std::vector<std::filesystem::path> source_files(const Scene& scene);
+
+// Scene::material_looks, and for a scene read from glTF the images its document embeds (BIN chunk,
+// data: URIs) as those materials' textures (MaterialLook::images), for a mesh flattened from it:
+// the reader leaves them in the document, which a glTF written from the scene keeps as it is.
+std::vector<MaterialLook> source_material_looks(const Scene& scene);
 
 // The source glTF primitive's morph targets (POSITION, NORMAL and TANGENT displacements; other
 // semantics are not decoded), those it keeps (Primitive::source_target_count), per vertex of the

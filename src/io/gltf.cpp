@@ -3903,37 +3903,26 @@ bool relative_file_uri(const std::string& uri);
 
 namespace {
 
+// The image a material's texture slot shows, when it maps as a mesh's MaterialLook can say: on UV
+// set 0, untransformed (a transformed one would not map the same). -1 otherwise.
+int look_image(const tg::Model& model, int texture, int tex_coord, const tg::ExtensionMap& extensions) {
+  if (texture < 0 || size_t(texture) >= model.textures.size() || tex_coord != 0 || !extensions.empty()) return -1;
+  const int image = model.textures[size_t(texture)].source;
+  return image >= 0 && size_t(image) < model.images.size() ? image : -1;
+}
+
+// A material's three look_image slots, in MaterialLook::textures' order.
+std::array<int, 3> look_images(const tg::Model& model, const tg::Material& m) {
+  const tg::TextureInfo& base = m.pbrMetallicRoughness.baseColorTexture;
+  return {look_image(model, base.index, base.texCoord, base.extensions),
+          look_image(model, m.normalTexture.index, m.normalTexture.texCoord, m.normalTexture.extensions),
+          look_image(model, m.emissiveTexture.index, m.emissiveTexture.texCoord, m.emissiveTexture.extensions)};
+}
+
 // What a document's materials look like, for a mesh flattened from it and written as an OBJ (its
-// MTL) or a PLY: the factors, and the PNG or JPEG textures on UV set 0 (a transformed one would not
-// map the same), as the files beside it they are or as their embedded bytes (one copy per image).
+// MTL) or a PLY: the factors, and the textures that are files beside it (source_material_looks adds
+// the embedded ones, which only a flattened mesh needs).
 std::vector<MaterialLook> material_looks(const tg::Model& model, const std::filesystem::path& base_dir) {
-  std::map<size_t, std::shared_ptr<const std::vector<uint8_t>>> embedded;  // by image; null: none to take
-  const auto image_bytes = [&](size_t i) {
-    const auto [it, inserted] = embedded.try_emplace(i);
-    if (!inserted) return it->second;
-    const tg::Image& image = model.images[i];
-    std::vector<uint8_t> bytes = image.image;  // a data: URI's (keep_encoded_image)
-    if (bytes.empty() && image.bufferView >= 0 && size_t(image.bufferView) < model.bufferViews.size()) {
-      const tg::BufferView& view = model.bufferViews[size_t(image.bufferView)];
-      if (view.buffer >= 0 && size_t(view.buffer) < model.buffers.size() && view.byteOffset <= model.buffers[size_t(view.buffer)].data.size() &&
-          view.byteLength <= model.buffers[size_t(view.buffer)].data.size() - view.byteOffset) {
-        const auto data = model.buffers[size_t(view.buffer)].data.begin() + std::ptrdiff_t(view.byteOffset);
-        bytes.assign(data, data + std::ptrdiff_t(view.byteLength));
-      }
-    }
-    const std::string mime = image_mime_type(bytes);
-    if (mime == "image/png" || mime == "image/jpeg") it->second = std::make_shared<const std::vector<uint8_t>>(std::move(bytes));
-    return it->second;
-  };
-  const auto set_texture = [&](MaterialLook& look, size_t slot, int texture, int tex_coord, const tg::ExtensionMap& extensions) {
-    if (texture < 0 || size_t(texture) >= model.textures.size() || tex_coord != 0 || !extensions.empty()) return;
-    const int image = model.textures[size_t(texture)].source;
-    if (image < 0 || size_t(image) >= model.images.size()) return;
-    if (const std::string& uri = model.images[size_t(image)].uri; relative_file_uri(uri))
-      *look.textures()[slot] = (base_dir / uri_decode(uri)).lexically_normal().string();
-    else
-      look.images[slot] = image_bytes(size_t(image));
-  };
   const auto factor = [](const std::vector<double>& v, size_t k, double fallback) { return float(k < v.size() ? v[k] : fallback); };
   std::vector<MaterialLook> looks;
   for (const tg::Material& m : model.materials) {
@@ -3944,9 +3933,11 @@ std::vector<MaterialLook> material_looks(const tg::Model& model, const std::file
     look.emissive = {factor(m.emissiveFactor, 0, 0), factor(m.emissiveFactor, 1, 0), factor(m.emissiveFactor, 2, 0)};
     look.metallic = float(std::clamp(pbr.metallicFactor, 0.0, 1.0));
     look.roughness = float(std::clamp(pbr.roughnessFactor, 0.0, 1.0));
-    set_texture(look, 0, pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, pbr.baseColorTexture.extensions);
-    set_texture(look, 1, m.normalTexture.index, m.normalTexture.texCoord, m.normalTexture.extensions);
-    set_texture(look, 2, m.emissiveTexture.index, m.emissiveTexture.texCoord, m.emissiveTexture.extensions);
+    const std::array<int, 3> images = look_images(model, m);
+    for (size_t slot = 0; slot < images.size(); ++slot)
+      if (images[slot] >= 0)
+        if (const std::string& uri = model.images[size_t(images[slot])].uri; relative_file_uri(uri))
+          *look.textures()[slot] = (base_dir / uri_decode(uri)).lexically_normal().string();
     looks.push_back(std::move(look));
   }
   return looks;
@@ -4177,6 +4168,37 @@ void add_look_textures(tg::Model& model, const Scene& scene, bool glb, const std
       if (material.emissiveTexture.index >= 0 && look.emissive == float3{}) material.emissiveFactor = {1, 1, 1};
     }
   }
+}
+
+std::vector<MaterialLook> source_material_looks(const Scene& scene) {
+  std::vector<MaterialLook> looks = scene.material_looks;
+  if (!scene.source) return looks;
+  const tg::Model& model = scene.source->model;
+  std::map<size_t, std::shared_ptr<const std::vector<uint8_t>>> embedded;  // by image; null: none to take
+  const auto image_bytes = [&](size_t i) {
+    const auto [it, inserted] = embedded.try_emplace(i);
+    if (!inserted) return it->second;
+    const tg::Image& image = model.images[i];
+    std::vector<uint8_t> bytes = image.image;  // a data: URI's (keep_encoded_image)
+    if (bytes.empty() && image.bufferView >= 0 && size_t(image.bufferView) < model.bufferViews.size()) {
+      const tg::BufferView& view = model.bufferViews[size_t(image.bufferView)];
+      if (view.buffer >= 0 && size_t(view.buffer) < model.buffers.size() && view.byteOffset <= model.buffers[size_t(view.buffer)].data.size() &&
+          view.byteLength <= model.buffers[size_t(view.buffer)].data.size() - view.byteOffset) {
+        const auto data = model.buffers[size_t(view.buffer)].data.begin() + std::ptrdiff_t(view.byteOffset);
+        bytes.assign(data, data + std::ptrdiff_t(view.byteLength));
+      }
+    }
+    const std::string mime = image_mime_type(bytes);
+    if (mime == "image/png" || mime == "image/jpeg") it->second = std::make_shared<const std::vector<uint8_t>>(std::move(bytes));
+    return it->second;
+  };
+  for (size_t m = 0; m < looks.size() && m < model.materials.size(); ++m) {
+    const std::array<int, 3> images = look_images(model, model.materials[m]);
+    for (size_t slot = 0; slot < images.size(); ++slot)
+      if (images[slot] >= 0 && looks[m].textures()[slot]->empty() && !relative_file_uri(model.images[size_t(images[slot])].uri))
+        looks[m].images[slot] = image_bytes(size_t(images[slot]));
+  }
+  return looks;
 }
 
 std::vector<std::filesystem::path> source_files(const Scene& scene) {

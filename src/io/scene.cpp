@@ -336,9 +336,9 @@ Mesh flatten(const Scene& scene, const FlattenOptions& options) {
     out.material_names.assign(std::max<size_t>(max_id, scene.material_names.size()) + 1, std::string());
     for (size_t k = 0; k < scene.material_names.size(); ++k) out.material_names[k + 1] = scene.material_names[k];
     if (!scene.material_looks.empty()) {
+      const std::vector<MaterialLook> looks = source_material_looks(scene);
       out.material_looks.assign(out.material_names.size(), MaterialLook{});
-      for (size_t k = 0; k < scene.material_looks.size() && k + 1 < out.material_looks.size(); ++k)
-        out.material_looks[k + 1] = scene.material_looks[k];
+      for (size_t k = 0; k < looks.size() && k + 1 < out.material_looks.size(); ++k) out.material_looks[k + 1] = looks[k];
     }
   }
   return out;

@@ -202,6 +202,11 @@ TEST(Mtl, EmbeddedImagesGoBesideAnObjOrPly) {
   EXPECT_EQ(mesh.material_looks[1].base_color_texture, "");
   EXPECT_TRUE(image_text(mesh.material_looks[1], 0) == tiny_png);
   EXPECT_FALSE(mesh.material_looks[1].images[1] || mesh.material_looks[1].images[2]);
+  // The scene leaves the image in its document (which a glTF written from it keeps): no copy.
+  const Scene scene = read_scene(dir / "a.glb");
+  ASSERT_EQ(scene.material_looks.size(), 1u);
+  EXPECT_FALSE(scene.material_looks[0].images[0]);
+  EXPECT_TRUE(image_text(source_material_looks(scene)[0], 0) == tiny_png);
 
   std::filesystem::create_directory(dir / "out");
   const WriteReport obj = write_mesh(mesh, dir / "out" / "b.obj");
