@@ -118,7 +118,8 @@ Deviation compare(const Mesh& a, const Mesh& b, const CompareOptions& options = 
 
 // ---- heat maps ------------------------------------------------------------------------------------
 // A fixed colour ramp over [0, 1]: blue, cyan, green, yellow, red (the hottest), linear RGB, alpha 1.
-// Values outside [0, 1] are clamped.
+// Values outside [0, 1] are clamped. Each channel is a multiple of 1/255 (as k * (1.0 / 255) reads
+// it): what a display shows, and what a PLY stores in unsigned bytes, the type every viewer reads.
 float4 heat_color(float t);
 inline constexpr const char* heat_ramp_names[] = {"blue", "cyan", "green", "yellow", "red"};
 

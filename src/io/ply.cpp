@@ -607,10 +607,21 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options, 
   declare(mesh.normals, 3, {"nx", "ny", "nz"});
   declare(mesh.tangents, 4, {"tx", "ty", "tz", "tw"});
   for (size_t k = 0; k < max_uv_sets; ++k) declare(mesh.uvs[k], 2, {uv_names[k][0], uv_names[k][1]});
-  // Float colours keep the values exact; integer colours would round them to 1/255.
-  declare(mesh.colors, 4, {"red", "green", "blue", "alpha"});
+  // Colours in unsigned bytes, PLY's custom and the only type MeshLab reads, when that is exact
+  // (every channel k / 255, as the reader scales it); floats otherwise, which keep any value.
+  const bool byte_colors = std::all_of(mesh.colors.begin(), mesh.colors.end(), [](const float4& c) {
+    return std::all_of(&c.x, &c.x + 4, [](float v) {
+      const double k = std::round(double(v) * 255);
+      return k >= 0 && k <= 255 && float(k * (1.0 / type_max(Type::u8))) == v;
+    });
+  });
+  if (!byte_colors) declare(mesh.colors, 4, {"red", "green", "blue", "alpha"});
   declare(mesh.weights, 4, {"weight0", "weight1", "weight2", "weight3"});
   declare(mesh.weights1, 4, {"weight4", "weight5", "weight6", "weight7"});
+  // Byte colours after the floats (each record is the float streams, then bytes, then joints).
+  const std::vector<float4>* colors = byte_colors && !mesh.colors.empty() ? &mesh.colors : nullptr;
+  if (colors)
+    for (const char* n : {"red", "green", "blue", "alpha"}) out += std::string("property uchar ") + n + '\n';
   // Joint indices last, as ushorts: joint0..3, then joint4..7 for a second influence set.
   std::vector<const std::vector<ushort4>*> joint_sets;
   for (const auto* set : {&mesh.joints, &mesh.joints1})
@@ -632,7 +643,7 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options, 
   out += "end_header\n";
   const auto material = [&](size_t t) { return textures.files.empty() ? mesh.materials[t] : textures.renumber(mesh.materials[t]); };
 
-  const size_t vertex_bytes = streams.size() * 4 + 8 * joint_sets.size();
+  const size_t vertex_bytes = streams.size() * 4 + 4 * (colors != nullptr) + 8 * joint_sets.size();
   out.reserve(out.size() + (binary ? mesh.vertex_count() * vertex_bytes + mesh.triangle_count() * (13 + 4 * materials + 25 * corner_uvs)
                                    : mesh.vertex_count() * streams.size() * 12 + mesh.triangle_count() * 24));
   for (size_t v = 0; v < mesh.vertex_count(); ++v) {
@@ -643,6 +654,18 @@ void write_ply(const Mesh& mesh, std::string& out, const WriteOptions& options, 
       } else {
         if (s) out += ' ';
         io::append_float(out, f);
+      }
+    }
+    if (colors) {
+      const float4& c = (*colors)[v];
+      for (float f : {c.x, c.y, c.z, c.w}) {
+        const auto byte = uint8_t(std::lround(double(f) * 255));
+        if (binary) {
+          out += char(byte);
+        } else {
+          out += ' ';
+          io::append_uint(out, byte);
+        }
       }
     }
     for (const auto* set : joint_sets) {

@@ -15,7 +15,8 @@ float4 heat_color(float t) {
   const int k = std::min(int(t), 3);
   const float f = t - float(k);
   const float3 &a = stops[k], &b = stops[k + 1];
-  return {a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, a.z + (b.z - a.z) * f, 1.0f};
+  const auto byte = [](float c) { return float(std::round(double(c) * 255) * (1.0 / 255)); };
+  return {byte(a.x + (b.x - a.x) * f), byte(a.y + (b.y - a.y) * f), byte(a.z + (b.z - a.z) * f), 1.0f};
 }
 
 Mesh heatmap_mesh(const Mesh& mesh, const std::vector<float>& field, float scale) {

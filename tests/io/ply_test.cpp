@@ -124,6 +124,31 @@ TEST(Ply, RoundTripIsExactWithEveryStream) {
   }
 }
 
+// Colours go in unsigned bytes (PLY's custom, the only type MeshLab reads) when every channel is
+// k / 255 as the reader scales it, so the round trip stays exact; in floats otherwise.
+TEST(Ply, ColoursGoInBytesWhenThatIsExact) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.indices = {0, 1, 2};
+  const auto byte = [](int k) { return float(double(k) * (1.0 / 255)); };
+  m.colors = {{1, 0, byte(128), 1}, {byte(1), byte(254), byte(77), byte(200)}, {0, 0, 0, 0}};
+  std::string text;
+  write_ply(m, text, {.binary = false});
+  EXPECT_NE(text.find("property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("end_header\n0 0 0 255 0 128 255\n1 0 0 1 254 77 200\n0 1 0 0 0 0 0\n"), std::string::npos) << text;
+  for (bool binary : {true, false}) {
+    std::string out;
+    write_ply(m, out, {.binary = binary});
+    EXPECT_EQ(test::mesh_difference(read_ply(bytes_of(out), "bytes.ply"), m), "");
+  }
+  // Half way between two bytes: floats, exact too.
+  m.colors[2].y = 0.5f;
+  std::string out;
+  write_ply(m, out, {.binary = true});
+  EXPECT_NE(out.find("property float red\n"), std::string::npos);
+  EXPECT_EQ(test::mesh_difference(read_ply(bytes_of(out), "floats.ply"), m), "");
+}
+
 // PLY promises nothing of tangents; Mesh's are unit with w = +-1 (make_unit_directions).
 TEST(Ply, TangentsReadAtUnitLength) {
   const std::string text =

@@ -472,7 +472,12 @@ TEST(MeasureHeatmap, FixedRamp) {
   EXPECT_EQ(heat_color(0.5f), (float4{0, 1, 0, 1}));
   EXPECT_EQ(heat_color(0.75f), (float4{1, 1, 0, 1}));
   EXPECT_EQ(heat_color(1.0f), (float4{1, 0, 0, 1}));
-  EXPECT_EQ(heat_color(0.125f), (float4{0, 0.5f, 1, 1}));
+  // Half way from blue to cyan: green 0.5, on the byte grid 127.5 rounded away from zero, 128 / 255.
+  EXPECT_EQ(heat_color(0.125f), (float4{0, float(128 * (1.0 / 255)), 1, 1}));
+  for (float t = 0; t <= 1; t += 1.0f / 64) {
+    const float4 c = heat_color(t);
+    for (float v : {c.x, c.y, c.z}) EXPECT_EQ(float(std::round(double(v) * 255) * (1.0 / 255)), v) << t;
+  }
   EXPECT_EQ(heat_color(-1.0f), heat_color(0.0f));
   EXPECT_EQ(heat_color(7.0f), heat_color(1.0f));
   EXPECT_EQ(heat_color(std::nanf("")), heat_color(0.0f));
