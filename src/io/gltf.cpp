@@ -4165,7 +4165,7 @@ void add_look_textures(tg::Model& model, const Scene& scene, bool glb, const std
     if (const int emissive = slot_texture(look, 2); emissive >= 0) {
       material.emissiveTexture.index = emissive;
       // An emissive texture is multiplied by the factor: black (MTL without Ke) would hide it.
-      if (material.emissiveTexture.index >= 0 && look.emissive == float3{}) material.emissiveFactor = {1, 1, 1};
+      if (look.emissive == float3{}) material.emissiveFactor = {1, 1, 1};
     }
   }
 }

@@ -211,10 +211,12 @@ const Mesh& with_image_files(const Mesh& mesh, const std::filesystem::path& path
   size_t id = 0;
   while (id < used.size() && !embeds(id)) ++id;
   if (id == used.size()) return mesh;
+  std::error_code ec;  // (compared as absolute paths: the output's may be relative, the looks' not)
+  const auto absolute = [&](const std::filesystem::path& file) { return std::filesystem::absolute(file, ec).lexically_normal(); };
   std::vector<std::filesystem::path> taken;
   for (const MaterialLook& look : mesh.material_looks)
     for (const std::string* file : look.textures())
-      if (!file->empty()) taken.push_back(std::filesystem::path(*file).lexically_normal());
+      if (!file->empty()) taken.push_back(absolute(*file));
   named = mesh;
   std::map<const std::vector<uint8_t>*, std::string> file_of;
   size_t k = 0;
@@ -231,7 +233,7 @@ const Mesh& with_image_files(const Mesh& mesh, const std::filesystem::path& path
         std::filesystem::path file;
         do {
           file = (path.parent_path() / (path.stem().string() + "_" + std::to_string(k++) + extension)).lexically_normal();
-        } while (std::find(taken.begin(), taken.end(), file) != taken.end());
+        } while (std::find(taken.begin(), taken.end(), absolute(file)) != taken.end());
         write_file_atomic(file, std::span<const uint8_t>(image));
         bytes += image.size();
         it->second = file.string();

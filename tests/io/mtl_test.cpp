@@ -236,6 +236,15 @@ TEST(Mtl, EmbeddedImagesGoBesideAnObjOrPly) {
   write_mesh(taken, dir / "out" / "e.obj");
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "e_0.png"));
   EXPECT_EQ(test::read_bytes(dir / "out" / "e_1.png"), tiny_png);
+  {  // the same with the output named relative to the current folder
+    const std::filesystem::path was = std::filesystem::current_path();
+    std::filesystem::current_path(dir / "out");
+    taken.material_looks[1].normal_texture = (dir / "out" / "g_0.png").string();
+    write_mesh(taken, "g.obj");
+    std::filesystem::current_path(was);
+    EXPECT_FALSE(std::filesystem::exists(dir / "out" / "g_0.png"));
+    EXPECT_TRUE(std::filesystem::exists(dir / "out" / "g_1.png"));
+  }
   // Only the materials triangles use: none here, so no image.
   Mesh unused = mesh;
   unused.materials.assign(unused.triangle_count(), 0);
