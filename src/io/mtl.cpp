@@ -63,13 +63,12 @@ void append_values(std::string& out, const char* key, std::initializer_list<floa
 void write_mtl(const Mesh& mesh, std::string& out, const std::filesystem::path& folder) {
   out += "# written by lodkit\n";
   const std::vector<bool> used = used_materials(mesh, mesh.material_looks.size());
-  std::vector<std::string> written;
+  const std::vector<uint32_t> all_zero = {0};  // (no per-triangle ids: every triangle uses material 0)
+  // The names usemtl gives the materials (write_obj).
+  const std::map<uint32_t, std::string> names = io::obj_names(mesh.material_names, mesh.materials.empty() ? all_zero : mesh.materials);
   for (size_t id = 0; id < mesh.material_looks.size(); ++id) {
     if (!used[id]) continue;
-    // The name usemtl gives it (write_obj): an unnamed material is "default".
-    const std::string name = id < mesh.material_names.size() && !mesh.material_names[id].empty() ? mesh.material_names[id] : "default";
-    if (std::find(written.begin(), written.end(), name) != written.end()) continue;
-    written.push_back(name);
+    const std::string& name = names.at(uint32_t(id));
     const MaterialLook& look = mesh.material_looks[id];
     out += "\nnewmtl " + name + "\n";
     append_values(out, "Kd", {look.base_color.x, look.base_color.y, look.base_color.z});

@@ -14,6 +14,7 @@
 #include <exception>
 #include <functional>
 #include <limits>
+#include <set>
 #include <string>
 #include <thread>
 #include <unordered_map>
@@ -439,12 +440,19 @@ std::vector<uint32_t> pool_ids(const std::vector<T>& values, std::vector<T>& poo
   return ids;
 }
 
-// A name for usemtl/g: OBJ cannot express an empty one.
-std::string_view printable(const std::vector<std::string>& names, uint32_t id) {
-  return id < names.size() && !names[id].empty() ? std::string_view(names[id]) : std::string_view("default");
-}
-
 }  // namespace
+
+std::map<uint32_t, std::string> io::obj_names(const std::vector<std::string>& names, std::span<const uint32_t> ids) {
+  std::map<uint32_t, std::string> out;
+  for (uint32_t id : ids) out.try_emplace(id);
+  std::set<std::string> taken;
+  for (auto& [id, name] : out) {
+    const std::string own = id < names.size() && !names[id].empty() ? names[id] : "default";
+    name = own;
+    for (int k = 0; !taken.insert(name).second; ++k) name = own + "_" + std::to_string(id) + (k ? "_" + std::to_string(k) : "");
+  }
+  return out;
+}
 
 void write_obj(const Mesh& mesh, std::string& out, const WriteOptions&) {
   out += "# written by lodkit\n";
@@ -494,16 +502,23 @@ void write_obj(const Mesh& mesh, std::string& out, const WriteOptions&) {
   }
   for (const float2& t : vt_pool) append_floats(out, "vt", {t.x, t.y});
   for (const float3& m : vn_pool) append_floats(out, "vn", {m.x, m.y, m.z});
-  // Faces before the first g/usemtl read back as the unnamed group/material: no statement needed there.
-  auto switch_to = [&](const char* statement, const std::vector<std::string>& names, uint32_t id, size_t t) {
-    if (t == 0 && id < names.size() && names[id].empty()) return;
-    out += statement, out += ' ', out += printable(names, id), out += '\n';
+  const std::vector<uint32_t> all_zero = {0};  // (no per-triangle ids: every triangle uses material 0)
+  const std::span<const uint32_t> materials = mesh.materials.empty() ? std::span<const uint32_t>(all_zero) : mesh.materials;
+  const std::map<uint32_t, std::string> material_names = io::obj_names(mesh.material_names, materials);
+  const std::map<uint32_t, std::string> group_names = io::obj_names(mesh.group_names, mesh.groups);
+  // Faces before the first g/usemtl read back as the unnamed group/material: no statement needed
+  // there, unless an MTL library gives that material a look under its printed name.
+  const bool library = !mesh.material_looks.empty();
+  auto switch_to = [&](const char* statement, const std::vector<std::string>& names, const std::map<uint32_t, std::string>& printed,
+                       uint32_t id, size_t t, bool named_anyway) {
+    if (t == 0 && (id >= names.size() || names[id].empty()) && !named_anyway) return;
+    out += statement, out += ' ', out += printed.at(id), out += '\n';
   };
   uint32_t material = absent, group = absent;
   for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    if (!mesh.groups.empty() && mesh.groups[t] != group) switch_to("g", mesh.group_names, group = mesh.groups[t], t);
-    if (!mesh.materials.empty() && mesh.materials[t] != material)
-      switch_to("usemtl", mesh.material_names, material = mesh.materials[t], t);
+    if (!mesh.groups.empty() && mesh.groups[t] != group) switch_to("g", mesh.group_names, group_names, group = mesh.groups[t], t, false);
+    if (const uint32_t id = materials[mesh.materials.empty() ? 0 : t]; id != material)
+      switch_to("usemtl", mesh.material_names, material_names, material = id, t, library);
     out += 'f';
     for (int k = 0; k < 3; ++k) {
       uint32_t v = mesh.indices[3 * t + k];

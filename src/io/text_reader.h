@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <span>
 #include <string>
 #include <string_view>
@@ -177,6 +178,12 @@ std::filesystem::path relative_path(const std::filesystem::path& file, const std
 // How a file in `folder` names `file`: its relative path where it has one, else the absolute path;
 // '/' separated.
 std::string path_from(const std::filesystem::path& file, const std::filesystem::path& folder);
+
+// The names an OBJ's usemtl or g statements (and an MTL's newmtl) give the ids `ids` uses, by id:
+// `names`' own, printable and told apart, since OBJ knows a material or group by its name alone. An
+// empty name is "default"; a name an earlier id took gets "_ID" added (glTF materials may share a
+// name or have none). (Defined in obj.cpp.)
+std::map<uint32_t, std::string> obj_names(const std::vector<std::string>& names, std::span<const uint32_t> ids);
 
 // Largest polygon a reader accepts before triangulating; a face with a million corners is bad input.
 inline constexpr uint64_t max_face_corners = 65536;

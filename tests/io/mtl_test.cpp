@@ -166,6 +166,34 @@ TEST(Mtl, ObjOutputWritesItsLibrary) {
   EXPECT_NE(library.find("Ns 798\n"), std::string::npos) << library;
 }
 
+// OBJ knows a material by its name alone: materials without one, or sharing one (glTF allows
+// both), are told apart ("default", "default_2", "stone_4"), each with its own look.
+TEST(Mtl, ObjOutputTellsNamelessAndSameNamedMaterialsApart) {
+  test::TempDir dir;
+  Mesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  mesh.indices = {0, 1, 2, 0, 2, 3, 0, 1, 3, 1, 2, 3};
+  mesh.materials = {1, 2, 3, 4};
+  mesh.material_names = {"x", "", "", "stone", "stone"};
+  mesh.material_looks.resize(5);
+  for (size_t id = 1; id < 5; ++id) mesh.material_looks[id].roughness = float(id) / 8;
+  write_mesh(mesh, dir / "m.obj");
+  const Mesh back = read_mesh(dir / "m.obj");
+  ASSERT_EQ(back.material_names, (std::vector<std::string>{"default", "default_2", "stone", "stone_4"}));
+  EXPECT_EQ(back.materials, (std::vector<uint32_t>{0, 1, 2, 3}));
+  ASSERT_EQ(back.material_looks.size(), 4u);
+  for (size_t id = 0; id < 4; ++id) EXPECT_EQ(back.material_looks[id].roughness, float(id + 1) / 8) << id;
+  // One material for every triangle (no per-triangle ids), unnamed: its look still reaches the library.
+  Mesh one = mesh;
+  one.materials.clear();
+  one.material_names.clear();
+  one.material_looks = {MaterialLook{.roughness = 0.25f}};
+  write_mesh(one, dir / "one.obj");
+  const Mesh one_back = read_mesh(dir / "one.obj");
+  ASSERT_EQ(one_back.material_looks.size(), 1u);
+  EXPECT_EQ(one_back.material_looks[0].roughness, 0.25f);
+}
+
 // A glTF's materials reach an OBJ's library too: factors, and a texture that is a file beside it.
 TEST(Mtl, GltfMaterialsReachObj) {
   test::TempDir dir;
